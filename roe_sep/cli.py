@@ -1,0 +1,229 @@
+"""``roe-sep``: the command line of roe_sep. Human tables by default, ``--json`` for ground-segment scripts.
+
+Subcommands: ``design`` (nominal double-impulse plan), ``mc`` (Monte Carlo p sweep), ``demo`` (both, with figures
+and a report, the README's main command).
+"""
+
+import argparse
+import dataclasses
+import json
+import math
+import sys
+from pathlib import Path
+
+from .core.config import ConfigError, load_scenario
+from .core.double_impulse import DoubleImpulseDesign, InfeasibleDesignError, design
+from .core.montecarlo import SweepResult, sweep
+
+
+def design_report(d: DoubleImpulseDesign) -> dict:
+    """The machine-readable design: every key the README documents (SI units, angles in deg where named)."""
+    b = d.bounds
+    aimed = d.final_roe() * d.a
+    return {
+        "strategy": "double_impulse",
+        "a": d.a,
+        "n": d.n,
+        "inclination_deg": math.degrees(d.inc),
+        "u1_deg": math.degrees(d.u1),
+        "u2_deg": math.degrees(d.u2),
+        "k": d.k,
+        "k_admissible": list(d.k_admissible),
+        "eta_deg": math.degrees(d.eta),
+        "dv1_rtn": d.dv1_rtn.tolist(),
+        "dv2_rtn": d.dv2_rtn.tolist(),
+        "dv2_carrier_rtn": (0.0 - d.dv2_rtn).tolist(),
+        "a_dl_star": d.a_dl_star,
+        "a_da1": d.a_da1,
+        "a_dl_f": d.a_dl_f,
+        "aimed_roe": aimed.tolist(),
+        "p_sigma_level": d.config.p_sigma_level,
+        "p_min_3sigma": d.p_min,
+        "p_max": d.p_max,
+        "bounds": dataclasses.asdict(b),
+        "config": dataclasses.asdict(d.config),
+    }
+
+
+def _vec(v):
+    return "[" + " ".join(f"{x:+.6f}" for x in v) + "]"
+
+
+def print_design(rep: dict, out=None):
+    b = rep["bounds"]
+    w = (out or sys.stdout).write
+    w("Double-impulse separation design (seeds 000/002, Eqs. 9-21)\n")
+    w(f"  carrier orbit     a = {rep['a']:.1f} m   n = {rep['n']:.6e} rad/s   i = {rep['inclination_deg']:.3f} deg\n")
+    w(f"  ejection (SPL)    u1 = {rep['u1_deg']:8.3f} deg   dv1 RTN = {_vec(rep['dv1_rtn'])} m/s "
+      "(picosat rel. carrier)\n")
+    w(f"  drift-stop        u2 = {rep['u2_deg']:8.3f} deg   dv2 RTN = {_vec(rep['dv2_rtn'])} m/s (relative effect)\n")
+    w(f"                    k = {rep['k']} (admissible {rep['k_admissible']})   carrier burns "
+      f"{_vec(rep['dv2_carrier_rtn'])} m/s\n")
+    w(f"  e/i configuration eta = {rep['eta_deg']:.0f} deg   a*Delta dl* = {rep['a_dl_star']:.1f} m   "
+      f"a da1 = {rep['a_da1']:.1f} m   a dl_F = {rep['a_dl_f']:.1f} m\n")
+    w("  aimed ROE a*[da dl dex dey dix diy] = [" + " ".join(f"{x:.1f}" for x in rep["aimed_roe"]) + "] m\n")
+    w("\nAdmissible sizes of the final relative orbit (Table 2, from Table 1)\n")
+    w(f"  {'':10s}{'min [m]':>12s}{'max [m]':>12s}\n")
+    for key, label in (("dl", "a dl"), ("de", "a de"), ("di", "a di")):
+        w(f"  {label:10s}{b[f'a_{key}_min']:12.2f}{b[f'a_{key}_max']:12.2f}\n")
+    w(f"  a di margin (safety #7) = {b['a_di_margin']:.2f} m\n")
+    w(f"\nDrift-stop reduction (Eq. 21, {rep['p_sigma_level']:g} sigma): "
+      f"{rep['p_min_3sigma']:.7f} <= |p| < {rep['p_max']:.7f} m/s\n")
+
+
+def print_sweep(res: dict, out=None):
+    w = (out or sys.stdout).write
+    w(f"Monte Carlo p sweep: {res['samples']} samples, seed {res['seed']}, drag {'on' if res['drag'] else 'off'}, "
+      f"J2 {'on' if res['j2'] else 'off'}, dB = {res['delta_b']:.5f} m^2/kg\n")
+    cols = (("p", "p [m/s]", "{:9.4f}"), ("p_approach", "P(approach)", "{:11.3%}"),
+            ("p_evaporation", "P(evap.)", "{:9.3%}"), ("p_below_radar_horizon", "P(<5km@24h)", "{:11.3%}"),
+            ("p_min_rn_violation", "P(RN<min)", "{:9.3%}"), ("p_fov_violation", "P(FOV)", "{:8.3%}"),
+            ("p_table2_violation", "P(>Tab.2)", "{:9.3%}"),
+            ("a_dl_horizon_mean", "mean a dl@24h", "{:13.0f}"))
+    w("  " + "  ".join(f"{h:>{len(fmt.format(0.0))}s}" for _, h, fmt in cols) + "\n")
+    for row in res["rows"]:
+        mark = "  <- p_best" if row["p"] == res["p_best"] else ""
+        w("  " + "  ".join(fmt.format(row[k]) for k, _, fmt in cols) + mark + "\n")
+    w(f"  p_best = {res['p_best']:g} m/s (minimum of P(approach) + P(evaporation))\n")
+    w(f"  nearest R=0 transit before the drift-stop: min {res['crossing_min']:.0f} m over all samples, "
+      f"{res['crossing_min_within_3sigma_f1']:.0f} m for f1 >= {res['f1_3sigma']:.2f}\n")
+
+
+def _progress(enabled):
+    if not enabled:
+        return iter
+    from tqdm import tqdm
+
+    return lambda it: tqdm(it, desc="p sweep", unit="p", leave=False)
+
+
+def run_sweep(scenario, args) -> SweepResult:
+    mc = scenario.monte_carlo
+    overrides = {}
+    if args.samples is not None:
+        overrides["samples"] = args.samples
+    if args.seed is not None:
+        overrides["seed"] = args.seed
+    if args.no_drag:
+        overrides["drag"] = False
+    if args.j2:
+        overrides["j2"] = True
+    mc = dataclasses.replace(mc, **overrides)
+    p_values = args.p if args.p is not None else scenario.p_values
+    d = design(scenario.separation)
+    return sweep(d, mc, p_values, progress=_progress(not args.json and sys.stderr.isatty()))
+
+
+def sweep_report(res: SweepResult) -> dict:
+    out = res.to_dict()
+    out["f1_3sigma"] = 1.0 - 3.0 * res.design.config.spl_sigma
+    return out
+
+
+def _p_list(text):
+    try:
+        values = [float(x) for x in text.split(",") if x.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--p expects comma-separated numbers in m/s, got {text!r}") from None
+    if not values or not all(math.isfinite(v) and v >= 0 for v in values):
+        raise argparse.ArgumentTypeError(f"--p expects non-negative finite values in m/s, got {text!r}")
+    return values
+
+
+def _positive_int(text):
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return value
+
+
+def cmd_design(args):
+    rep = design_report(design(load_scenario(args.config).separation))
+    if args.json:
+        json.dump(rep, sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    else:
+        print_design(rep)
+
+
+def cmd_mc(args):
+    res = run_sweep(load_scenario(args.config), args)
+    rep = sweep_report(res)
+    if args.plots:
+        from .plots import write_figures
+
+        rep["figures"] = [str(p) for p in write_figures(res, Path(args.plots))]
+    if args.json:
+        json.dump(rep, sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    else:
+        print_sweep(rep)
+        for f in rep.get("figures", []):
+            print(f"  figure: {f}")
+
+
+def cmd_demo(args):
+    from .plots import write_figures
+
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    scenario = load_scenario(args.config)
+    d_rep = design_report(design(scenario.separation))
+    args.samples = args.seed = args.p = None
+    args.no_drag = args.j2 = args.json = False
+    res = run_sweep(scenario, args)
+    s_rep = sweep_report(res)
+    s_rep["figures"] = [str(p) for p in write_figures(res, out / "figures")]
+    report = {"design": d_rep, "monte_carlo": s_rep}
+    (out / "report.json").write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
+    print_design(d_rep)
+    print()
+    print_sweep(s_rep)
+    print(f"\nreport: {out / 'report.json'}   figures: {out / 'figures'}")
+
+
+def build_parser():
+    parser = argparse.ArgumentParser(prog="roe-sep", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    p = sub.add_parser("design", help="nominal double-impulse separation plan")
+    p.add_argument("--config", help="scenario YAML (default: the embedded BIROS/picosatellite case)")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=cmd_design)
+
+    p = sub.add_parser("mc", help="Monte Carlo sweep over the drift-stop reduction p")
+    p.add_argument("--config", help="scenario YAML")
+    p.add_argument("--samples", type=_positive_int, help="number of samples (default 100000)")
+    p.add_argument("--seed", type=int, help="random seed (default from the scenario: 0)")
+    p.add_argument("--p", type=_p_list, help="comma-separated p values [m/s]")
+    p.add_argument("--no-drag", action="store_true", help="switch differential drag off")
+    p.add_argument("--j2", action="store_true", help="include secular J2 in the propagation")
+    p.add_argument("--plots", metavar="DIR", help="write the figures (PNG) to DIR")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=cmd_mc)
+
+    p = sub.add_parser("demo", help="design + Monte Carlo + figures + report.json for the default scenario")
+    p.add_argument("--config", help="scenario YAML")
+    p.add_argument("--out", default="out/demo", help="output directory (default out/demo)")
+    p.set_defaults(func=cmd_demo)
+    return parser
+
+
+def main(argv=None):
+    args = build_parser().parse_args(argv)
+    try:
+        args.func(args)
+    except (ConfigError, InfeasibleDesignError, ValueError) as exc:
+        print(f"roe-sep: error: {exc}", file=sys.stderr)
+        return 2
+    except BrokenPipeError:  # e.g. `roe-sep mc --json | head`
+        sys.stderr.close()
+        return 0
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,17 @@
+"""Physical constants (SI). Earth values are those of the EGM96/WGS-84 model pair."""
+
+import math
+
+MU_EARTH = 3.986004418e14
+"""Earth gravitational parameter GM [m^3/s^2] (WGS-84)."""
+
+R_EARTH = 6378137.0
+"""Earth equatorial radius [m] (WGS-84); altitude above it defines the circular-orbit semi-major axis."""
+
+J2 = 1.08262668e-3
+"""Second zonal harmonic of the Earth's gravity field (EGM96, unnormalized)."""
+
+ARCSEC = math.pi / (180.0 * 3600.0)
+"""One arc second [rad]."""
+
+SECONDS_PER_DAY = 86400.0

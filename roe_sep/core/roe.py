@@ -1,0 +1,111 @@
+"""Quasi-nonsingular relative orbital elements: definition (seed 002 Eq. 1) and the linear RTN mapping.
+
+Element arrays are ``(..., 6)``:
+
+* Keplerian elements ``[a, e, i, raan, argp, M]`` (m, 1, rad, rad, rad, rad), mean elements.
+* ROE ``[da, dl, dex, dey, dix, diy]``, dimensionless, picosatellite (deputy) w.r.t. carrier (chief).
+"""
+
+import numpy as np
+
+ROE_NAMES = ("da", "dl", "dex", "dey", "dix", "diy")
+
+
+def wrap_angle(x):
+    """Wrap angles [rad] to [-pi, pi)."""
+    return (np.asarray(x, dtype=float) + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def kepler_to_roe(chief, deputy):
+    """ROE of ``deputy`` w.r.t. ``chief`` from mean Keplerian elements, seed 002 Eq. (1).
+
+    da = (a - a_c)/a_c,  dl = (u - u_c) + (raan - raan_c) cos i_c,  de = e_vec - e_vec_c,
+    dix = i - i_c,  diy = (raan - raan_c) sin i_c,  with u = M + argp.
+    """
+    c = np.asarray(chief, dtype=float)
+    d = np.asarray(deputy, dtype=float)
+    a_c, e_c, i_c, raan_c, w_c, m_c = np.moveaxis(c, -1, 0)
+    a, e, i, raan, w, m = np.moveaxis(d, -1, 0)
+    draan = wrap_angle(raan - raan_c)
+    return np.stack(
+        [
+            (a - a_c) / a_c,
+            wrap_angle((m + w) - (m_c + w_c)) + draan * np.cos(i_c),
+            e * np.cos(w) - e_c * np.cos(w_c),
+            e * np.sin(w) - e_c * np.sin(w_c),
+            i - i_c,
+            draan * np.sin(i_c),
+        ],
+        axis=-1,
+    )
+
+
+def roe_to_kepler(chief, roe):
+    """Inverse of :func:`kepler_to_roe`: the deputy's mean Keplerian elements.
+
+    For a deputy with zero eccentricity the argument of perigee is undefined; it is returned as 0 and the mean
+    argument of latitude is carried entirely by M.
+    """
+    c = np.asarray(chief, dtype=float)
+    r = np.asarray(roe, dtype=float)
+    a_c, e_c, i_c, raan_c, w_c, m_c = np.moveaxis(c, -1, 0)
+    da, dl, dex, dey, dix, diy = np.moveaxis(r, -1, 0)
+    draan = diy / np.sin(i_c)
+    ex = e_c * np.cos(w_c) + dex
+    ey = e_c * np.sin(w_c) + dey
+    w = np.arctan2(ey, ex)
+    u = (m_c + w_c) + dl - draan * np.cos(i_c)
+    return np.stack(
+        [a_c * (1.0 + da), np.hypot(ex, ey), i_c + dix, raan_c + draan, w, wrap_angle(u - w)],
+        axis=-1,
+    )
+
+
+def roe_to_rtn(roe, u):
+    """Relative position and velocity in the chief RTN frame from ROE, linear (HCW-equivalent) model.
+
+    Near-circular chief at mean argument of latitude ``u`` [rad]; D'Amico (2010), the mapping behind seed 002
+    Eq. (2):
+
+    r/a     = [da - dex cos u - dey sin u,   dl + 2 dex sin u - 2 dey cos u,   dix sin u - diy cos u]
+    v/(a n) = [dex sin u - dey cos u,   -3/2 da + 2 dex cos u + 2 dey sin u,   dix cos u + diy sin u]
+
+    ``dl`` is the current relative mean longitude (its secular drift is the propagator's job). Returns the
+    dimensionless ``(r/a, v/(a n))``, each ``(..., 3)``: multiply by a and a*n for meters and m/s.
+    """
+    r = np.asarray(roe, dtype=float)
+    da, dl, dex, dey, dix, diy = np.moveaxis(r, -1, 0)
+    s, c = np.sin(u), np.cos(u)
+    pos = np.stack([da - dex * c - dey * s, dl + 2.0 * dex * s - 2.0 * dey * c, dix * s - diy * c], axis=-1)
+    vel = np.stack([dex * s - dey * c, -1.5 * da + 2.0 * dex * c + 2.0 * dey * s, dix * c + diy * s], axis=-1)
+    return pos, vel
+
+
+def rtn_to_roe(pos, vel, u):
+    """Inverse of :func:`roe_to_rtn`: ROE from dimensionless RTN position r/a and velocity v/(a n).
+
+    Closed form: da = 2 vT + 4 rR,  dl = rT - 2 vR,  with A = 2 vT + 3 rR and B = vR the in-plane components
+    dex = A cos u + B sin u, dey = A sin u - B cos u; dix = rN sin u + vN cos u, diy = -rN cos u + vN sin u.
+    """
+    p = np.asarray(pos, dtype=float)
+    v = np.asarray(vel, dtype=float)
+    x, y, z = np.moveaxis(p, -1, 0)
+    vx, vy, vz = np.moveaxis(v, -1, 0)
+    s, c = np.sin(u), np.cos(u)
+    big_a = 2.0 * vy + 3.0 * x
+    return np.stack(
+        [2.0 * vy + 4.0 * x, y - 2.0 * vx, big_a * c + vx * s, big_a * s - vx * c, z * s + vz * c, -z * c + vz * s],
+        axis=-1,
+    )
+
+
+def e_vector_polar(roe):
+    """Magnitude and phase of the relative eccentricity vector: (de, phi) with de = |(dex, dey)|, seed 002 Eq. (1)."""
+    r = np.asarray(roe, dtype=float)
+    return np.hypot(r[..., 2], r[..., 3]), np.arctan2(r[..., 3], r[..., 2])
+
+
+def i_vector_polar(roe):
+    """Magnitude and phase of the relative inclination vector: (di, theta), seed 002 Eq. (1)."""
+    r = np.asarray(roe, dtype=float)
+    return np.hypot(r[..., 4], r[..., 5]), np.arctan2(r[..., 5], r[..., 4])

@@ -1,0 +1,69 @@
+"""Conversions between roe_sep_msgs messages and core quantities (SI, dimensionless ROE <-> a*ROE meters)."""
+
+import math
+
+import numpy as np
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import Vector3
+from roe_sep_msgs.msg import ImpulsiveManeuver, OrbitalElements, RelativeOrbitalElements
+
+ROE_FIELDS = ("a_da", "a_dl", "a_dex", "a_dey", "a_dix", "a_diy")
+KEPLER_FIELDS = ("semi_major_axis", "eccentricity", "inclination", "raan", "arg_perigee", "mean_arg_latitude")
+
+
+def time_to_sec(t: Time) -> float:
+    return t.sec + t.nanosec * 1e-9
+
+
+def sec_to_time(seconds: float) -> Time:
+    if not math.isfinite(seconds):
+        raise ValueError(f"time must be finite, got {seconds}")
+    sec = math.floor(seconds)
+    nanosec = int(round((seconds - sec) * 1e9))
+    if nanosec >= 1_000_000_000:
+        sec, nanosec = sec + 1, nanosec - 1_000_000_000
+    return Time(sec=int(sec), nanosec=nanosec)
+
+
+def vector_to_array(v: Vector3) -> np.ndarray:
+    return np.array([v.x, v.y, v.z], dtype=float)
+
+
+def array_to_vector(a) -> Vector3:
+    x, y, z = (float(c) for c in a)
+    return Vector3(x=x, y=y, z=z)
+
+
+def elements_to_array(el: OrbitalElements) -> np.ndarray:
+    """Mean Keplerian elements ``[a, e, i, raan, argp, M]`` (M = u - argp) from the message."""
+    return np.array([el.semi_major_axis, el.eccentricity, el.inclination, el.raan, el.arg_perigee,
+                     el.mean_arg_latitude - el.arg_perigee], dtype=float)
+
+
+def array_to_elements(kep) -> OrbitalElements:
+    a, e, i, raan, argp, m = (float(x) for x in kep)
+    return OrbitalElements(semi_major_axis=a, eccentricity=e, inclination=i, raan=raan, arg_perigee=argp,
+                           mean_arg_latitude=argp + m)
+
+
+def roe_to_msg(roe, chief: OrbitalElements, stamp: Time, frame_id="carrier_rtn", covariance=None):
+    """Dimensionless ROE -> message in meters (a*delta alpha, a = the chief's semi-major axis)."""
+    a = chief.semi_major_axis
+    msg = RelativeOrbitalElements(chief=chief)
+    msg.header.stamp = stamp
+    msg.header.frame_id = frame_id
+    for name, value in zip(ROE_FIELDS, np.asarray(roe, dtype=float) * a):
+        setattr(msg, name, float(value))
+    if covariance is not None:
+        msg.covariance = (np.asarray(covariance, dtype=float) * a * a).reshape(36)
+    return msg
+
+
+def msg_to_roe(msg: RelativeOrbitalElements) -> np.ndarray:
+    """Message -> dimensionless ROE."""
+    return np.array([getattr(msg, n) for n in ROE_FIELDS], dtype=float) / msg.chief.semi_major_axis
+
+
+def maneuver_msg(epoch: float, u: float, dv_rtn, spacecraft: str, purpose: str) -> ImpulsiveManeuver:
+    return ImpulsiveManeuver(epoch=sec_to_time(epoch), mean_arg_latitude=float(u), dv_rtn=array_to_vector(dv_rtn),
+                             spacecraft=spacecraft, purpose=purpose)

@@ -1,0 +1,15 @@
+"""Helpers for the standard ``/diagnostics`` topic (diagnostic_msgs/DiagnosticArray)."""
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+
+OK, WARN, ERROR = DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR
+
+
+def publish_status(node, publisher, level, message, values=None, hardware_id="roe_sep"):
+    """Publish one DiagnosticStatus named ``roe_sep/<node name>`` with ``values`` as key/value strings."""
+    status = DiagnosticStatus(level=level, name=f"roe_sep/{node.get_name()}", message=message,
+                              hardware_id=hardware_id,
+                              values=[KeyValue(key=str(k), value=str(v)) for k, v in (values or {}).items()])
+    array = DiagnosticArray(status=[status])
+    array.header.stamp = node.get_clock().now().to_msg()
+    publisher.publish(array)

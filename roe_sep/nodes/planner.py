@@ -1,0 +1,130 @@
+"""planner: the carrier's blind drift-stop, planned from the commanded ejection only (never from truth).
+
+Subscribes ``/separation/ejection`` (roe_sep_msgs/EjectionEvent, latched) and publishes the drift-stop
+``/separation/drift_stop_plan`` (roe_sep_msgs/ManeuverPlan, RELIABLE + TRANSIENT_LOCAL, depth 1) as soon as an
+event arrives. Physics: :func:`roe_sep.core.double_impulse.plan_drift_stop` (seed 002 Eqs. 9, 18).
+
+Parameters (YAML via ``--ros-args --params-file``):
+
+* ``k`` (int, 3): odd number of half revolutions from the ejection to the drift-stop.
+* ``p_mode`` (string, ``monte_carlo``): how the tangential reduction |p| is chosen: ``monte_carlo`` (p_best of the
+  Monte Carlo sweep of the scenario, computed at start-up), ``three_sigma`` (e1 + e2 of Eq. 21 for the commanded
+  ejection) or ``fixed`` (``p_reduction``).
+* ``p_reduction`` (double, m/s, 0.0): |p| when ``p_mode`` is ``fixed``.
+* ``scenario_file`` (string, ''): scenario YAML for the Monte Carlo and the Eq. 21 sigmas; '' = embedded default.
+* ``mc_samples`` (int, 100000), ``mc_seed`` (int, 0): the start-up Monte Carlo.
+* ``j2`` (bool, true): secular J2 in the drift-stop epoch and the predicted ROE.
+"""
+
+import dataclasses
+
+import numpy as np
+from diagnostic_msgs.msg import DiagnosticArray
+from rclpy.node import Node
+from roe_sep_msgs.msg import EjectionEvent, ManeuverPlan
+
+from ..core.config import ConfigError, load_scenario
+from ..core.double_impulse import design, plan_drift_stop, reduction_bounds
+from ..core.dynamics import raan_rate
+from ..core.montecarlo import sweep
+from ..core.roe import wrap_angle
+from . import qos
+from .convert import maneuver_msg, roe_to_msg, sec_to_time, time_to_sec, vector_to_array
+from .diagnostics import ERROR, OK, publish_status
+from .params import ParameterError, declare, finite, require
+
+P_MODES = ("monte_carlo", "three_sigma", "fixed")
+
+
+class PlannerNode(Node):
+    def __init__(self):
+        super().__init__("planner")
+        self.k = declare(self, "k", 3, "odd number of half revolutions from ejection to drift-stop")
+        self.p_mode = declare(self, "p_mode", "monte_carlo", f"choice of the reduction |p|: one of {P_MODES}")
+        p_fixed = declare(self, "p_reduction", 0.0, "m/s, |p| used when p_mode is 'fixed'")
+        scenario_file = declare(self, "scenario_file", "", "scenario YAML ('' = embedded default)")
+        samples = declare(self, "mc_samples", 100000, "Monte Carlo samples for p_mode 'monte_carlo'")
+        seed = declare(self, "mc_seed", 0, "Monte Carlo seed for p_mode 'monte_carlo'")
+        self.j2 = declare(self, "j2", True, "secular J2 in the drift-stop epoch and predicted ROE")
+
+        require("k", isinstance(self.k, int) and self.k >= 1 and self.k % 2 == 1, self.k, "an odd natural number")
+        require("p_mode", self.p_mode in P_MODES, self.p_mode, f"one of {P_MODES}")
+        require("p_reduction", finite(p_fixed) and p_fixed >= 0, p_fixed, "a finite non-negative number [m/s]")
+        require("mc_samples", isinstance(samples, int) and samples >= 1, samples, "a positive integer")
+        require("mc_seed", isinstance(seed, int), seed, "an integer")
+        require("j2", isinstance(self.j2, bool), self.j2, "true or false")
+        try:
+            self.scenario = load_scenario(scenario_file or None)
+        except ConfigError as exc:
+            raise ParameterError(f"parameter 'scenario_file': {exc}") from exc
+
+        if self.p_mode == "fixed":
+            self.p = float(p_fixed)
+        elif self.p_mode == "monte_carlo":
+            mc = dataclasses.replace(self.scenario.monte_carlo, samples=samples, seed=seed)
+            result = sweep(design(self.scenario.separation), mc, self.scenario.p_values)
+            self.p = result.p_best
+            self.get_logger().info(f"p = {self.p:g} m/s: p_best of a {samples}-sample Monte Carlo sweep")
+        else:
+            self.p = None  # computed from each commanded ejection
+
+        self.plan_pub = self.create_publisher(ManeuverPlan, qos.DRIFT_STOP_PLAN_TOPIC, qos.LATCHED)
+        self.diag_pub = self.create_publisher(DiagnosticArray, qos.DIAGNOSTICS_TOPIC, qos.DIAGNOSTICS)
+        self.create_subscription(EjectionEvent, qos.EJECTION_TOPIC, self.on_ejection, qos.LATCHED)
+        self.plans = 0
+        publish_status(self, self.diag_pub, OK, "waiting for the ejection event", self._values())
+
+    def _values(self):
+        return {"k": self.k, "p_mode": self.p_mode, "p": "per event" if self.p is None else self.p,
+                "plans": self.plans}
+
+    def on_ejection(self, event: EjectionEvent):
+        try:
+            plan = self.make_plan(event)
+        except ValueError as exc:
+            self.get_logger().error(f"ejection event rejected: {exc}")
+            publish_status(self, self.diag_pub, ERROR, f"ejection event rejected: {exc}", self._values())
+            return
+        self.plan_pub.publish(plan)
+        self.plans += 1
+        burn = plan.maneuvers[0]
+        self.get_logger().info(
+            f"drift-stop planned at t = {time_to_sec(burn.epoch):.1f} s, carrier dv RTN = "
+            f"({burn.dv_rtn.x:+.6f}, {burn.dv_rtn.y:+.6f}, {burn.dv_rtn.z:+.6f}) m/s, p = {plan.p_reduction:g} m/s")
+        publish_status(self, self.diag_pub, OK, "drift-stop plan published", self._values())
+
+    def make_plan(self, event: EjectionEvent) -> ManeuverPlan:
+        """The ManeuverPlan for one event; raises ValueError on a malformed event (NaN, impossible orbit)."""
+        chief = event.chief
+        a, inc = chief.semi_major_axis, chief.inclination
+        if not (finite(a) and a > 6.4e6 and finite(inc) and finite(chief.raan)):
+            raise ValueError(f"chief elements are not a valid low Earth orbit (a = {a} m, i = {inc} rad)")
+        dv1 = vector_to_array(event.ejection.dv_rtn)
+        u1 = event.ejection.mean_arg_latitude
+        epoch1 = time_to_sec(event.header.stamp)
+        if not np.all(np.isfinite(dv1)):
+            raise ValueError(f"ejection dv is not finite: {dv1.tolist()}")
+        p = reduction_bounds(dv1[1], self.scenario.separation)[0] if self.p is None else self.p
+        stop = plan_drift_stop(dv1, u1, epoch1, a, inc, self.k, p, self.j2)
+
+        msg = ManeuverPlan(strategy="double_impulse", ejection_epoch=event.header.stamp, p_reduction=float(stop.p))
+        msg.header.stamp = self.get_clock().now().to_msg()
+        msg.header.frame_id = "carrier_rtn"
+        msg.maneuvers = [maneuver_msg(stop.epoch, stop.u2, stop.dv_carrier_rtn, "carrier", "drift_stop")]
+        dt = stop.epoch - epoch1
+        aimed_chief = type(chief)(
+            semi_major_axis=a, eccentricity=chief.eccentricity, inclination=inc,
+            raan=float(wrap_angle(chief.raan + (raan_rate(a, inc) * dt if self.j2 else 0.0))),
+            arg_perigee=chief.arg_perigee, mean_arg_latitude=float(wrap_angle(stop.u2)))
+        msg.aimed = roe_to_msg(stop.aimed_roe, aimed_chief, sec_to_time(stop.epoch))
+        return msg
+
+
+def main(args=None):
+    from .spin import run
+
+    return run(PlannerNode, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,58 @@
+"""ament_python package roe_sep (see package.xml).
+
+Installed into the project venv by scripts/bootstrap.sh (`pip install -e .`), or built by
+`colcon build` on a ROS 2 Jazzy install. install_requires lists only plain-PyPI deps: the ROS
+packages (rclpy, *_msgs, roe_sep_msgs) come from apt / the ROS wheels / msg_defs.
+"""
+from glob import glob
+
+from setuptools import find_packages, setup
+
+package_name = 'roe_sep'
+
+
+def _data_files():
+    files = [
+        ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+    ]
+    for sub, pattern in (('config', 'config/*.yaml'), ('launch', 'launch/*.py')):
+        matches = sorted(glob(pattern))
+        if matches:  # an empty list would still create an empty dir entry; skip it
+            files.append(('share/{}/{}'.format(package_name, sub), matches))
+    return files
+
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=find_packages(exclude=['test', 'test.*']),
+    data_files=_data_files(),
+    python_requires='>=3.10',
+    install_requires=[
+        'numpy',
+        'scipy',
+        'pyyaml',
+        'mcap',
+        'mcap-ros2-support',
+        'tqdm',
+    ],
+    extras_require={
+        'plots': ['matplotlib'],
+        'test': ['pytest', 'hypothesis', 'rosbags'],
+    },
+    zip_safe=True,
+    maintainer='roe_sep developers',
+    maintainer_email='dev@roe-sep.local',
+    description=(
+        'Safe separation of a picosatellite from a small carrier satellite, designed in '
+        'relative orbital elements: ROS 2 node suite, planners, Monte Carlo.'
+    ),
+    license='Apache-2.0',
+    entry_points={
+        'console_scripts': [
+            'roe-sep = roe_sep.cli:main',
+            'planner = roe_sep.nodes.planner:main',
+        ],
+    },
+)

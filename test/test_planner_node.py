@@ -1,0 +1,104 @@
+"""The planner node as a real process over DDS: latched plan, bad input survived, restart loses nothing."""
+
+import math
+
+import numpy as np
+import pytest
+
+from rosutil import rclpy, spin_until, start_node, stop_node, wait_exit  # noqa: I001  (skips without rclpy)
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus  # noqa: E402
+from roe_sep_msgs.msg import EjectionEvent, ManeuverPlan  # noqa: E402
+
+from roe_sep.core.double_impulse import design  # noqa: E402
+from roe_sep.nodes import qos  # noqa: E402
+from roe_sep.nodes.convert import array_to_vector, sec_to_time, time_to_sec  # noqa: E402
+
+D = design()
+
+
+def ejection_event(dv=None, stamp=1000.0):
+    ev = EjectionEvent()
+    ev.header.stamp = sec_to_time(stamp)
+    ev.ejection.epoch = sec_to_time(stamp)
+    ev.ejection.mean_arg_latitude = D.u1
+    ev.ejection.dv_rtn = array_to_vector(D.dv1_rtn if dv is None else dv)
+    ev.ejection.spacecraft = "picosatellite"
+    ev.ejection.purpose = "ejection"
+    ev.dv_magnitude = 1.41
+    ev.chief.semi_major_axis = D.a
+    ev.chief.inclination = D.inc
+    ev.chief.mean_arg_latitude = D.u1
+    return ev
+
+
+@pytest.fixture()
+def ground():
+    rclpy.init()
+    node = rclpy.create_node("ground_test")
+    node.plans, node.diags = [], []
+    node.create_subscription(ManeuverPlan, qos.DRIFT_STOP_PLAN_TOPIC, node.plans.append, qos.LATCHED)
+    node.create_subscription(DiagnosticArray, qos.DIAGNOSTICS_TOPIC, node.diags.append, qos.DIAGNOSTICS)
+    node.ejection_pub = node.create_publisher(EjectionEvent, qos.EJECTION_TOPIC, qos.LATCHED)
+    yield node
+    node.destroy_node()
+    rclpy.try_shutdown()
+
+
+def test_plan_bad_event_and_restart(ground):
+    planner = start_node("planner", "-p", "p_mode:=fixed", "-p", "p_reduction:=0.06")
+    try:
+        # a NaN ejection is rejected with an ERROR diagnostic; the node keeps running
+        ground.ejection_pub.publish(ejection_event(dv=[math.nan, 0.0, 0.0]))
+        assert spin_until(ground, lambda: any(s.level == DiagnosticStatus.ERROR and "rejected" in s.message
+                                              for d in ground.diags for s in d.status))
+        assert planner.poll() is None
+        ground.ejection_pub.publish(ejection_event())
+        assert spin_until(ground, lambda: len(ground.plans) >= 1)
+        plan = ground.plans[-1]
+        assert plan.strategy == "double_impulse" and plan.p_reduction == pytest.approx(0.06)
+        (burn,) = plan.maneuvers
+        assert (burn.spacecraft, burn.purpose) == ("carrier", "drift_stop")
+        # the carrier burns the opposite of the relative drift-stop (-1.329250, 0.162718 - 0.06, 0)
+        assert [burn.dv_rtn.x, burn.dv_rtn.y, burn.dv_rtn.z] == pytest.approx([1.329250, -0.102718, 0.0], abs=1e-6)
+        assert burn.mean_arg_latitude == pytest.approx(D.u1 + 3 * math.pi)
+        assert time_to_sec(burn.epoch) - 1000.0 == pytest.approx(3 * math.pi / D.n, rel=2e-3)  # ~1.5 orbits
+        assert time_to_sec(plan.ejection_epoch) == pytest.approx(1000.0)
+        assert plan.aimed.a_da == pytest.approx(-2 * 0.06 / D.n, abs=0.5)  # the reduction leaves 2 p / n of da
+        assert plan.aimed.chief.semi_major_axis == pytest.approx(D.a)
+    finally:
+        code, out = stop_node(planner)
+    assert code == 0, out
+
+    # a restarted planner receives the latched ejection again and re-publishes the plan
+    ground.plans.clear()
+    planner = start_node("planner", "-p", "p_mode:=three_sigma")
+    try:
+        assert spin_until(ground, lambda: len(ground.plans) >= 1)
+        assert ground.plans[-1].p_reduction == pytest.approx(D.p_min, rel=1e-9)
+    finally:
+        code, out = stop_node(planner)
+    assert code == 0, out
+
+
+@pytest.mark.parametrize(
+    "args,name",
+    [(["-p", "k:=2"], "'k'"), (["-p", "p_mode:=guess"], "'p_mode'"), (["-p", "p_reduction:=-0.1"], "'p_reduction'"),
+     (["-p", "scenario_file:=/nonexistent.yaml"], "'scenario_file'")],
+)
+def test_bad_parameter_refused_at_startup(args, name):
+    code, out = wait_exit(start_node("planner", *args))
+    assert code == 2, out
+    assert name in out
+
+
+def test_default_p_comes_from_the_monte_carlo(ground):
+    planner = start_node("planner", "-p", "mc_samples:=20000")
+    try:
+        ground.ejection_pub.publish(ejection_event())
+        assert spin_until(ground, lambda: len(ground.plans) >= 1, timeout=40)
+        assert 0.03 <= ground.plans[-1].p_reduction <= 0.08
+        assert np.isfinite(ground.plans[-1].aimed.a_dl)
+    finally:
+        code, out = stop_node(planner)
+    assert code == 0, out
