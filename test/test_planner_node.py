@@ -4,11 +4,9 @@ import math
 
 import numpy as np
 import pytest
-
-from rosutil import rclpy, spin_until, start_node, stop_node, wait_exit  # noqa: I001  (skips without rclpy)
-
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus  # noqa: E402
 from roe_sep_msgs.msg import EjectionEvent, ManeuverPlan  # noqa: E402
+from rosutil import rclpy, spin_until, start_node, stop_node, wait_exit  # noqa: I001  (skips without rclpy)
 
 from roe_sep.core.double_impulse import design  # noqa: E402
 from roe_sep.nodes import qos  # noqa: E402

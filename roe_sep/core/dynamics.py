@@ -101,3 +101,23 @@ def propagate(roe, dt, a, inc, j2=True, da_dot=0.0):
     return np.stack(
         [da + da_dot * dt, dl_new, dex_new, dey_new, dix + 0.0 * dt, diy_new], axis=-1
     )
+
+
+def propagate_chief(kep, dt, j2=True):
+    """Secular propagation of the chief's mean Keplerian elements ``[a, e, i, raan, argp, M]`` over ``dt`` [s].
+
+    raan and argp drift at the J2 rates above, M at n + kappa P (all frozen at the initial a, i; near-circular).
+    """
+    k = np.array(kep, dtype=float)
+    dt = np.asarray(dt, dtype=float)
+    a, inc = k[..., 0], k[..., 2]
+    n = mean_motion(a)
+    out = np.broadcast_to(k, np.broadcast_shapes(k.shape, dt.shape + (6,))).copy()
+    if j2:
+        kap = j2_kappa(a)
+        out[..., 3] = k[..., 3] + raan_rate(a, inc) * dt
+        out[..., 4] = k[..., 4] + kap * (5.0 * np.cos(inc) ** 2 - 1.0) * dt
+        out[..., 5] = k[..., 5] + (n + kap * (3.0 * np.cos(inc) ** 2 - 1.0)) * dt
+    else:
+        out[..., 5] = k[..., 5] + n * dt
+    return out

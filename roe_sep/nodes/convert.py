@@ -67,3 +67,21 @@ def msg_to_roe(msg: RelativeOrbitalElements) -> np.ndarray:
 def maneuver_msg(epoch: float, u: float, dv_rtn, spacecraft: str, purpose: str) -> ImpulsiveManeuver:
     return ImpulsiveManeuver(epoch=sec_to_time(epoch), mean_arg_latitude=float(u), dv_rtn=array_to_vector(dv_rtn),
                              spacecraft=spacecraft, purpose=purpose)
+
+
+def relative_dv(m: ImpulsiveManeuver) -> np.ndarray:
+    """The impulse's effect on the relative motion (picosatellite w.r.t. carrier): +dv for the picosatellite's
+    own velocity change (the ejection), -dv for a carrier burn."""
+    dv = vector_to_array(m.dv_rtn)
+    if m.spacecraft == "carrier":
+        return -dv
+    if m.spacecraft == "picosatellite":
+        return dv
+    raise ValueError(f"unknown spacecraft {m.spacecraft!r} (expected 'carrier' or 'picosatellite')")
+
+
+def plan_burns(maneuvers):
+    """ImpulsiveManeuver messages -> :class:`roe_sep.core.trajectory.Burn` list (relative impulses)."""
+    from ..core.trajectory import Burn
+
+    return [Burn(time_to_sec(m.epoch), tuple(relative_dv(m))) for m in maneuvers]

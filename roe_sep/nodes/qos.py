@@ -16,6 +16,28 @@ DIAGNOSTICS = QoSProfile(
 )
 """``/diagnostics``, as diagnostic_updater publishes it."""
 
-EJECTION_TOPIC = "/separation/ejection"
-DRIFT_STOP_PLAN_TOPIC = "/separation/drift_stop_plan"
+STREAM = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST, depth=100, reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.VOLATILE,
+)
+"""Periodic streams (truth, measurements, safety status): reliable, deep enough for a fast sim clock."""
+
+EXECUTED = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST, depth=50, reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
+)
+"""Executed maneuvers: every burn of the run stays available to late joiners (the report, a replay)."""
+
+CLOCK_TOPIC = "/clock"  # rosgraph_msgs/Clock, published by the sim (rclpy's own sim-time subscriber uses it)
+EJECTION_TOPIC = "/separation/ejection"  # EjectionEvent, LATCHED, ejector
+DRIFT_STOP_PLAN_TOPIC = "/separation/drift_stop_plan"  # ManeuverPlan, LATCHED, planner
+TRUTH_ROE_TOPIC = "/sim/truth/roe"  # RelativeOrbitalElements, STREAM, sim
+TRUTH_RTN_TOPIC = "/sim/truth/rtn"  # RelativeState, STREAM, sim
+EXECUTED_TOPIC = "/sim/executed_maneuvers"  # ImpulsiveManeuver, EXECUTED, sim (as executed, with errors)
+RADAR_TOPIC = "/radar/measurements"  # RadarMeasurement, STREAM, radar_od
+OD_TOPIC = "/od/estimate"  # OrbitDetermination, LATCHED, radar_od
+ACQUISITION_PLAN_TOPIC = "/acquisition/plan"  # ManeuverPlan, LATCHED, ic_planner
+SAFETY_TOPIC = "/safety/status"  # SafetyStatus, STREAM, safety_monitor (truth and estimate)
+PLAN_CHECK_TOPIC = "/safety/plan_check"  # SafetyStatus, EXECUTED (keeps the last 50 checks), safety_monitor
 DIAGNOSTICS_TOPIC = "/diagnostics"
+PLAN_SERVICE = "/separation/plan"  # roe_sep_msgs/srv/PlanSeparation, planner
