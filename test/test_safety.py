@@ -87,5 +87,6 @@ def test_nearest_crossing_none_in_window():
     # da larger than de: the radial offset never vanishes
     best, t = nearest_crossing(np.array([1e-4, 0, 1e-5, 0, 0, 0]), 0.0, 1e4, A, INC)
     assert np.isinf(best) and np.isnan(t)
-    best, _ = nearest_crossing(np.zeros((3, 6)), 0.0, 1e4, A, INC)
-    assert np.all(np.isinf(best))
+    # no radial motion at all: the orbit lies in the R = 0 plane, at its along-track distance
+    best, t = nearest_crossing(np.array([[0, 0, 0, 0, 0, 0], [0, 1e-3, 0, 0, 2e-5, 0]]), 0.0, 1e4, A, INC)
+    assert best[0] == 0.0 and best[1] == pytest.approx(1e-3, rel=1e-4)  # J2 moves dl a little (dix term)

@@ -49,7 +49,8 @@ def nearest_crossing(roe0, u0, duration, a, inc, j2=True, da_dot=0.0, t_min=None
     solution of R/a = da - |de| cos(u - phi) = 0 with the elements at that revolution's start,
     u = phi +- arccos(da/|de|), and are refined by Newton iterations on the full secular model (:func:`propagate`
     then :func:`roe_to_rtn`), so J2 and differential drag are included. ``t_min`` (default: a tenth of an orbit)
-    excludes the trivial transit at t = 0 right after an ejection.
+    excludes the trivial transit at t = 0 right after an ejection. An orbit without radial motion (da = de = 0)
+    lies in the R = 0 plane: its distance is |T| at ``t_min``.
 
     Returns ``(t_abs, t)``: the dimensionless |T|/a (``inf`` where no transit occurs in the window) and the
     transit time [s] (``nan`` there).
@@ -85,4 +86,11 @@ def nearest_crossing(roe0, u0, duration, a, inc, j2=True, da_dot=0.0, t_min=None
     idx = np.argmin(t_abs, axis=-1)[..., None]
     best = np.take_along_axis(t_abs, idx, axis=-1)[..., 0]
     t_best = np.where(np.isfinite(best), np.take_along_axis(t, idx, axis=-1)[..., 0], np.nan)
+    # an orbit with no radial motion at all (da = 0, de = 0) stays in the R = 0 plane: it "transits" everywhere,
+    # at the along-track distance it has at t_min
+    flat = (np.abs(r0[..., 0]) < 1e-12) & (np.hypot(r0[..., 2], r0[..., 3]) < 1e-12)
+    if np.any(flat):
+        pos_min, _ = roe_to_rtn(propagate(r0, t_min, a, inc, j2, dad[..., 0]), u0[..., 0] + u_dot * t_min)
+        best = np.where(flat, np.abs(pos_min[..., 1]), best)
+        t_best = np.where(flat, t_min, t_best)
     return best, t_best
