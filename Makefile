@@ -14,7 +14,7 @@ setup:
 	@bash scripts/bootstrap.sh
 
 demo: setup
-	$(VENV)/bin/roe-sep demo --out out/demo $(ARGS)
+	rm -rf out/demo && $(VENV)/bin/roe-sep run --out out/demo $(ARGS)
 
 test: setup
 	bash scripts/test.sh $(ARGS)

@@ -53,6 +53,12 @@ setup(
         'console_scripts': [
             'roe-sep = roe_sep.cli:main',
             'planner = roe_sep.nodes.planner:main',
+            'sim = roe_sep.nodes.sim:main',
+            'ejector = roe_sep.nodes.ejector:main',
+            'safety_monitor = roe_sep.nodes.safety_monitor:main',
+            'radar_od = roe_sep.nodes.radar_od:main',
+            'ic_planner = roe_sep.nodes.ic_planner:main',
+            'recorder = roe_sep.nodes.recorder:main',
         ],
     },
 )

@@ -1,7 +1,7 @@
 """``roe-sep``: the command line of roe_sep. Human tables by default, ``--json`` for ground-segment scripts.
 
-Subcommands: ``design`` (nominal double-impulse plan), ``mc`` (Monte Carlo p sweep), ``demo`` (both, with figures
-and a report, the README's main command).
+Subcommands: ``design`` (nominal double-impulse plan), ``mc`` (Monte Carlo p sweep), ``run`` (the scenario end to
+end over ROS 2, the README's main command).
 """
 
 import argparse
@@ -165,24 +165,39 @@ def cmd_mc(args):
             print(f"  figure: {f}")
 
 
-def cmd_demo(args):
-    from .plots import write_figures
+def print_run(rep: dict, out=None):
+    w = (out or sys.stdout).write
+    w(f"Run {'SAFE' if rep['safe'] else 'UNSAFE'} ({rep['run']['reason']})\n")
+    for m in rep["maneuvers"]:
+        w(f"  t = {m['epoch']:10.1f} s  u = {m['u_deg'] % 360:7.2f} deg  {m['spacecraft']:13s} {m['purpose']:15s} "
+          f"dv RTN = {_vec(m['dv_rtn'])} m/s  |dv| = {m['dv']:.4f} m/s\n")
+    w(f"  carrier dv total = {rep['dv_total']:.4f} m/s "
+      f"({', '.join(f'{k} {v:.4f}' for k, v in rep['dv_by_purpose'].items())})\n")
+    if rep["time_to_ic"] is not None:
+        w(f"  time to initial conditions = {rep['time_to_ic'] / 3600:.1f} h after the ejection\n")
+    if rep["final_roe"]:
+        w("  final truth a*ROE [da dl dex dey dix diy] = [" + " ".join(f"{x:.1f}" for x in rep["final_roe"]) + "] m\n")
+    w(f"  minimum distance after departure = {rep['min_distance']:.1f} m\n")
+    if rep["od"]:
+        od = rep["od"]
+        w(f"  first OD: t = {od['epoch']:.0f} s, {od['passes']} passes, {od['measurements']} measurements, "
+          f"NEES = {od.get('nees') if od.get('nees') is None else round(od['nees'], 2)}\n")
+    for name, ok in rep["criteria"].items():
+        w(f"  {'pass' if ok else 'FAIL'}  {name}\n")
 
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    scenario = load_scenario(args.config)
-    d_rep = design_report(design(scenario.separation))
-    args.samples = args.seed = args.p = None
-    args.no_drag = args.j2 = args.json = False
-    res = run_sweep(scenario, args)
-    s_rep = sweep_report(res)
-    s_rep["figures"] = [str(p) for p in write_figures(res, out / "figures")]
-    report = {"design": d_rep, "monte_carlo": s_rep}
-    (out / "report.json").write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
-    print_design(d_rep)
-    print()
-    print_sweep(s_rep)
-    print(f"\nreport: {out / 'report.json'}   figures: {out / 'figures'}")
+
+def cmd_run(args):
+    from .run import run
+
+    rep = run(config=args.config, out=args.out, params=args.params, duration=args.duration, seed=args.seed,
+              timeout=args.timeout, progress=not args.json and sys.stderr.isatty())
+    if args.json:
+        json.dump(rep, sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    else:
+        print_run(rep)
+        print(f"\nbag: {Path(args.out) / 'bag'}   report: {Path(args.out) / 'report.json'}")
+    return 0 if rep["safe"] else 1
 
 
 def build_parser():
@@ -205,24 +220,29 @@ def build_parser():
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=cmd_mc)
 
-    p = sub.add_parser("demo", help="design + Monte Carlo + figures + report.json for the default scenario")
+    p = sub.add_parser("run", help="run the scenario end to end (all nodes, sim time), record a bag, write a report")
     p.add_argument("--config", help="scenario YAML")
-    p.add_argument("--out", default="out/demo", help="output directory (default out/demo)")
-    p.set_defaults(func=cmd_demo)
+    p.add_argument("--params", help="ROS parameter YAML overriding node parameters ({node: {ros__parameters: ...}})")
+    p.add_argument("--out", default="out/run", help="output directory: bag/, report.json, logs/ (default out/run)")
+    p.add_argument("--duration", type=float, help="sim seconds to run (default 388800 = 4.5 days)")
+    p.add_argument("--seed", type=int, help="seed of the simulated dispersions (default 0)")
+    p.add_argument("--timeout", type=float, default=1800.0, help="wall-time limit [s] (default 1800)")
+    p.add_argument("--json", action="store_true", help="print the report as JSON")
+    p.set_defaults(func=cmd_run)
     return parser
 
 
 def main(argv=None):
     args = build_parser().parse_args(argv)
     try:
-        args.func(args)
-    except (ConfigError, InfeasibleDesignError, ValueError) as exc:
+        code = args.func(args)
+    except (ConfigError, InfeasibleDesignError, ValueError, FileNotFoundError) as exc:
         print(f"roe-sep: error: {exc}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # e.g. `roe-sep mc --json | head`
         sys.stderr.close()
         return 0
-    return 0
+    return code or 0
 
 
 if __name__ == "__main__":

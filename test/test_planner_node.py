@@ -100,3 +100,36 @@ def test_default_p_comes_from_the_monte_carlo(ground):
     finally:
         code, out = stop_node(planner)
     assert code == 0, out
+
+
+def test_plan_separation_service(ground):
+    from roe_sep_msgs.srv import PlanSeparation
+
+    planner = start_node("planner", "-p", "p_mode:=fixed", "-p", "p_reduction:=0.05")
+    try:
+        client = ground.create_client(PlanSeparation, qos.PLAN_SERVICE)
+        assert client.wait_for_service(timeout_sec=20)
+
+        def call(**fields):
+            req = PlanSeparation.Request(u1=math.radians(88.0), **fields)
+            future = client.call_async(req)
+            assert spin_until(ground, future.done)
+            return future.result()
+
+        res = call(p_reduction=-1.0)  # negative: the planner's own p
+        assert res.success, res.message
+        ejection, stop = res.plan.maneuvers
+        assert (ejection.spacecraft, stop.spacecraft) == ("picosatellite", "carrier")
+        assert [ejection.dv_rtn.x, ejection.dv_rtn.y, ejection.dv_rtn.z] == pytest.approx(
+            [-1.329250, -0.162718, 0.441269], abs=1e-6)
+        assert stop.dv_rtn.y == pytest.approx(-(0.162718 - 0.05), abs=1e-6)
+        assert res.plan.p_reduction == pytest.approx(0.05)
+        assert call(p_reduction=0.0).plan.maneuvers[1].dv_rtn.y == pytest.approx(-0.162718, abs=1e-6)
+        following = call(following=True, k=1, p_reduction=0.0)
+        assert following.success and following.plan.maneuvers[0].dv_rtn.x > 0
+        bad = call(spl_dv=0.3)
+        assert not bad.success and "too small" in bad.message
+        assert planner.poll() is None
+    finally:
+        code, out = stop_node(planner)
+    assert code == 0, out

@@ -7,6 +7,8 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Vector3
 from roe_sep_msgs.msg import ImpulsiveManeuver, OrbitalElements, RelativeOrbitalElements
 
+from ..core.roe import wrap_angle
+
 ROE_FIELDS = ("a_da", "a_dl", "a_dex", "a_dey", "a_dix", "a_diy")
 KEPLER_FIELDS = ("semi_major_axis", "eccentricity", "inclination", "raan", "arg_perigee", "mean_arg_latitude")
 
@@ -41,9 +43,10 @@ def elements_to_array(el: OrbitalElements) -> np.ndarray:
 
 
 def array_to_elements(kep) -> OrbitalElements:
+    """``[a, e, i, raan, argp, M]`` -> message, angles wrapped to [-pi, pi)."""
     a, e, i, raan, argp, m = (float(x) for x in kep)
-    return OrbitalElements(semi_major_axis=a, eccentricity=e, inclination=i, raan=raan, arg_perigee=argp,
-                           mean_arg_latitude=argp + m)
+    return OrbitalElements(semi_major_axis=a, eccentricity=e, inclination=i, raan=float(wrap_angle(raan)),
+                           arg_perigee=float(wrap_angle(argp)), mean_arg_latitude=float(wrap_angle(argp + m)))
 
 
 def roe_to_msg(roe, chief: OrbitalElements, stamp: Time, frame_id="carrier_rtn", covariance=None):

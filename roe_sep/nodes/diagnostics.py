@@ -5,9 +5,10 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 OK, WARN, ERROR = DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR
 
 
-def publish_status(node, publisher, level, message, values=None, hardware_id="roe_sep"):
-    """Publish one DiagnosticStatus named ``roe_sep/<node name>`` with ``values`` as key/value strings."""
-    status = DiagnosticStatus(level=level, name=f"roe_sep/{node.get_name()}", message=message,
+def publish_status(node, publisher, level, message, values=None, hardware_id="roe_sep", part=""):
+    """Publish one DiagnosticStatus named ``roe_sep/<node name>[/<part>]`` with ``values`` as key/value strings."""
+    name = f"roe_sep/{node.get_name()}" + (f"/{part}" if part else "")
+    status = DiagnosticStatus(level=level, name=name, message=message,
                               hardware_id=hardware_id,
                               values=[KeyValue(key=str(k), value=str(v)) for k, v in (values or {}).items()])
     array = DiagnosticArray(status=[status])

@@ -17,11 +17,13 @@ Parameters (YAML via ``--ros-args --params-file``):
 """
 
 import dataclasses
+import math
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.node import Node
 from roe_sep_msgs.msg import EjectionEvent, ManeuverPlan
+from roe_sep_msgs.srv import PlanSeparation
 
 from ..core.config import ConfigError, load_scenario
 from ..core.double_impulse import design, plan_drift_stop, reduction_bounds
@@ -71,6 +73,7 @@ class PlannerNode(Node):
         self.plan_pub = self.create_publisher(ManeuverPlan, qos.DRIFT_STOP_PLAN_TOPIC, qos.LATCHED)
         self.diag_pub = self.create_publisher(DiagnosticArray, qos.DIAGNOSTICS_TOPIC, qos.DIAGNOSTICS)
         self.create_subscription(EjectionEvent, qos.EJECTION_TOPIC, self.on_ejection, qos.LATCHED)
+        self.create_service(PlanSeparation, qos.PLAN_SERVICE, self.on_plan_request)
         self.plans = 0
         publish_status(self, self.diag_pub, OK, "waiting for the ejection event", self._values())
 
@@ -93,7 +96,32 @@ class PlannerNode(Node):
             f"({burn.dv_rtn.x:+.6f}, {burn.dv_rtn.y:+.6f}, {burn.dv_rtn.z:+.6f}) m/s, p = {plan.p_reduction:g} m/s")
         publish_status(self, self.diag_pub, OK, "drift-stop plan published", self._values())
 
-    def make_plan(self, event: EjectionEvent) -> ManeuverPlan:
+    def on_plan_request(self, request, response):
+        """PlanSeparation service: design the separation for a requested configuration (zero = default)."""
+        sep = self.scenario.separation
+        changes = {name: value for name, value in (
+            ("altitude", request.altitude), ("spl_dv", request.spl_dv), ("a_de_f", request.a_de_f),
+            ("a_di_f", request.a_di_f), ("k", request.k or self.k)) if value}
+        changes["u1_deg"] = math.degrees(request.u1)
+        changes["leading"] = not request.following
+        try:
+            d = design(dataclasses.replace(sep, **changes))
+            p = request.p_reduction if request.p_reduction >= 0 else self.p
+            p = reduction_bounds(d.dv1_rtn[1], d.config)[0] if p is None else p
+            event = EjectionEvent(dv_magnitude=d.config.spl_dv)
+            event.header.stamp = request.ejection_epoch
+            event.ejection = maneuver_msg(time_to_sec(request.ejection_epoch), d.u1, d.dv1_rtn, "picosatellite",
+                                          "ejection")
+            event.chief.semi_major_axis, event.chief.inclination = d.a, d.inc
+            event.chief.mean_arg_latitude = float(wrap_angle(d.u1))
+            plan = self.make_plan(event, k=d.k, p=p)
+            plan.maneuvers = [event.ejection, *plan.maneuvers]
+            response.success, response.message, response.plan = True, "ok", plan
+        except ValueError as exc:
+            response.success, response.message = False, str(exc)
+        return response
+
+    def make_plan(self, event: EjectionEvent, k=None, p=None) -> ManeuverPlan:
         """The ManeuverPlan for one event; raises ValueError on a malformed event (NaN, impossible orbit)."""
         chief = event.chief
         a, inc = chief.semi_major_axis, chief.inclination
@@ -104,8 +132,9 @@ class PlannerNode(Node):
         epoch1 = time_to_sec(event.header.stamp)
         if not np.all(np.isfinite(dv1)):
             raise ValueError(f"ejection dv is not finite: {dv1.tolist()}")
-        p = reduction_bounds(dv1[1], self.scenario.separation)[0] if self.p is None else self.p
-        stop = plan_drift_stop(dv1, u1, epoch1, a, inc, self.k, p, self.j2)
+        if p is None:
+            p = reduction_bounds(dv1[1], self.scenario.separation)[0] if self.p is None else self.p
+        stop = plan_drift_stop(dv1, u1, epoch1, a, inc, k or self.k, p, self.j2)
 
         msg = ManeuverPlan(strategy="double_impulse", ejection_epoch=event.header.stamp, p_reduction=float(stop.p))
         msg.header.stamp = self.get_clock().now().to_msg()

@@ -1,0 +1,237 @@
+"""safety_monitor: passive safety, drift direction, along-track crossings, evaporation and field of view.
+
+Evaluates the truth stream and, separately, the OD estimate (propagated to the present with the burns executed
+since its epoch) every ``period`` seconds of sim time, and every plan before its first burn by predicting the
+trajectory under it from the best knowledge the ground has (the OD estimate, else the commanded ejection; never
+truth). Criteria and thresholds: :mod:`roe_sep.core.monitor`. Publishes ``/safety/status`` (truth and estimate),
+``/safety/plan_check`` (one verdict per plan; the simulator executes only approved plans) and ``/diagnostics``.
+"""
+
+import math
+
+import numpy as np
+from diagnostic_msgs.msg import DiagnosticArray
+from rclpy.node import Node
+from roe_sep_msgs.msg import (
+    EjectionEvent,
+    ImpulsiveManeuver,
+    ManeuverPlan,
+    OrbitDetermination,
+    RelativeOrbitalElements,
+    SafetyStatus,
+)
+
+from ..core.config import ConfigError, load_scenario
+from ..core.dynamics import drag_da_dot
+from ..core.maneuvers import delta_roe
+from ..core.monitor import MonitorLimits, assess
+from ..core.orbit import mean_motion
+from ..core.trajectory import Chief, state_at
+from . import qos
+from .convert import msg_to_roe, plan_burns, sec_to_time, time_to_sec, vector_to_array
+from .diagnostics import publish_status
+from .params import ParameterError, declare, finite, require
+
+PLAN_TOPICS = (qos.DRIFT_STOP_PLAN_TOPIC, qos.ACQUISITION_PLAN_TOPIC)
+
+
+class Knowledge:
+    """A relative state the ground knows: dimensionless ROE at an epoch, the chief then, and a drag drift."""
+
+    def __init__(self, roe, t, chief: Chief, da_dot):
+        self.roe, self.t, self.chief, self.da_dot = roe, t, chief, da_dot
+
+
+def chief_of(msg: RelativeOrbitalElements, t):
+    c = msg.chief
+    return Chief(c.semi_major_axis, c.inclination, c.mean_arg_latitude, t)
+
+
+class SafetyMonitorNode(Node):
+    def __init__(self):
+        super().__init__("safety_monitor")
+        scenario_file = declare(self, "scenario_file", "", "scenario YAML ('' = embedded default)")
+        self.period = declare(self, "period", 600.0, "s of sim time between state assessments")
+        lim = MonitorLimits()
+        values = {
+            "keep_out": declare(self, "keep_out", lim.keep_out, "m, keep-out sphere radius"),
+            "min_rn_distance": declare(self, "min_rn_distance", lim.min_rn_distance, "m, e/i separation minimum"),
+            "crossing_min": declare(self, "crossing_min", lim.crossing_min, "m, minimum |T| at an R = 0 transit"),
+            "evaporation": declare(self, "evaporation", lim.evaporation, "m, formation evaporation distance"),
+            "a_dl_min": declare(self, "a_dl_min", lim.a_dl_min, "m, radar separability"),
+            "a_dl_max": declare(self, "a_dl_max", lim.a_dl_max, "m, camera detection range"),
+            "window": declare(self, "window", lim.window, "s, prediction window of a state assessment"),
+            "plan_horizon": declare(self, "plan_horizon", lim.plan_horizon, "s, prediction after a plan's last burn"),
+        }
+        fov_r = declare(self, "fov_half_r_deg", math.degrees(lim.fov_half_r), "deg, camera half FOV, radial")
+        fov_n = declare(self, "fov_half_n_deg", math.degrees(lim.fov_half_n), "deg, camera half FOV, normal")
+        self.j2 = declare(self, "j2", True, "secular J2 in the predictions")
+        for name, value in list(values.items()) + [("period", self.period), ("fov_half_r_deg", fov_r),
+                                                   ("fov_half_n_deg", fov_n)]:
+            require(name, finite(value) and value > 0, value, "a positive number")
+        require("j2", isinstance(self.j2, bool), self.j2, "true or false")
+        self.limits = MonitorLimits(fov_half_r=math.radians(fov_r), fov_half_n=math.radians(fov_n),
+                                    **{k: float(v) for k, v in values.items()})
+        try:
+            self.scenario = load_scenario(scenario_file or None)
+        except ConfigError as exc:
+            raise ParameterError(f"parameter 'scenario_file': {exc}") from exc
+
+        self.last_truth = -math.inf
+        self.last_estimate = -math.inf
+        self.estimate = None  # Knowledge from the OD
+        self.ejection = None  # Knowledge from the commanded ejection
+        self.executed = []  # Burns executed so far
+        self.checked = set()
+        self.pending_plans = {}
+
+        self.status_pub = self.create_publisher(SafetyStatus, qos.SAFETY_TOPIC, qos.STREAM)
+        self.check_pub = self.create_publisher(SafetyStatus, qos.PLAN_CHECK_TOPIC, qos.EXECUTED)
+        self.diag_pub = self.create_publisher(DiagnosticArray, qos.DIAGNOSTICS_TOPIC, qos.DIAGNOSTICS)
+        self.create_subscription(RelativeOrbitalElements, qos.TRUTH_ROE_TOPIC, self.on_truth, qos.STREAM)
+        self.create_subscription(OrbitDetermination, qos.OD_TOPIC, self.on_estimate, qos.LATCHED)
+        self.create_subscription(EjectionEvent, qos.EJECTION_TOPIC, self.on_ejection, qos.LATCHED)
+        self.create_subscription(ImpulsiveManeuver, qos.EXECUTED_TOPIC, self.on_executed, qos.EXECUTED)
+        for topic in PLAN_TOPICS:
+            self.create_subscription(ManeuverPlan, topic, lambda m, tp=topic: self.on_plan(tp, m), qos.LATCHED)
+
+    # ---------------------------------------------------------------- helpers
+    def nominal_da_dot(self, a):
+        mc = self.scenario.monte_carlo
+        return float(drag_da_dot(mc.delta_b, mc.density, a)) if mc.drag else 0.0
+
+    def publish(self, source, t, res, plan_stamp=None, pub=None):
+        msg = SafetyStatus(source=source, safe=res.safe, approaching=res.approaching,
+                           along_track_separation=res.along_track_separation, distance=res.distance,
+                           min_rn_distance=res.min_rn_distance, nearest_crossing=res.nearest_crossing,
+                           evaporated=res.evaporated, in_fov=res.in_fov, violations=list(res.failed))
+        msg.header.stamp = sec_to_time(t)
+        if plan_stamp is not None:
+            msg.plan_stamp = plan_stamp
+        (pub or self.status_pub).publish(msg)
+        text = "all criteria pass" if not res.failed else "failed: " + ", ".join(res.failed)
+        publish_status(self, self.diag_pub, res.level, f"{source}: {text}", {
+            "t_s": f"{t:.0f}", "along_track_m": f"{res.along_track_separation:.1f}",
+            "min_distance_m": f"{res.min_distance:.1f}", "min_rn_m": f"{res.min_rn_distance:.1f}",
+            "nearest_crossing_m": f"{res.nearest_crossing:.1f}"}, part=source.split(":")[0])
+
+    def reject(self, what, exc):
+        self.get_logger().error(f"{what} rejected: {exc}")
+        publish_status(self, self.diag_pub, 2, f"{what} rejected: {exc}", part="input")
+
+    def knowledge(self):
+        """The newest ground knowledge: the OD estimate, else the commanded ejection."""
+        return self.estimate or self.ejection
+
+    # ----------------------------------------------------------------- inputs
+    def on_truth(self, msg: RelativeOrbitalElements):
+        try:
+            t = time_to_sec(msg.header.stamp)
+            roe = msg_to_roe(msg)
+            if not (math.isfinite(t) and np.all(np.isfinite(roe))):
+                raise ValueError("non-finite state")
+            if t - self.last_truth < self.period or not np.any(roe):  # nothing to assess before the release
+                return
+            self.last_truth = t
+            chief = chief_of(msg, t)
+            da_dot = self.estimate.da_dot if self.estimate else self.nominal_da_dot(chief.a)
+            self.publish("truth", t, assess(roe, t, chief, self.limits, j2=self.j2, da_dot=da_dot))
+            self.assess_estimate(t)
+        except (ValueError, ZeroDivisionError) as exc:
+            self.reject("truth state", exc)
+
+    def assess_estimate(self, t_now):
+        k = self.estimate
+        if k is None or t_now - self.last_estimate < self.period:
+            return
+        self.last_estimate = t_now
+        burns = [b for b in self.executed if b.epoch > k.t]
+        roe = state_at(k.roe, k.t, burns, t_now, k.chief, self.j2, k.da_dot)
+        chief = Chief(k.chief.a, k.chief.inc, float(k.chief.u_at(t_now, self.j2)), t_now)
+        self.publish("estimate", t_now, assess(roe, t_now, chief, self.limits, j2=self.j2, da_dot=k.da_dot))
+
+    def on_estimate(self, od: OrbitDetermination):
+        try:
+            est = od.estimate
+            t = time_to_sec(est.header.stamp)
+            roe = msg_to_roe(est)
+            da_dot = od.a_da_dot / est.chief.semi_major_axis
+            if not (math.isfinite(t) and np.all(np.isfinite(roe)) and math.isfinite(da_dot)):
+                raise ValueError("non-finite estimate")
+            self.estimate = Knowledge(roe, t, chief_of(est, t), da_dot)
+            self.last_estimate = -math.inf
+            self.assess_estimate(t)
+            self.recheck_pending()
+        except (ValueError, ZeroDivisionError) as exc:
+            self.reject("OD estimate", exc)
+
+    def on_ejection(self, ev: EjectionEvent):
+        try:
+            t = time_to_sec(ev.header.stamp)
+            c = ev.chief
+            chief = Chief(c.semi_major_axis, c.inclination, c.mean_arg_latitude, t)
+            dv = vector_to_array(ev.ejection.dv_rtn)
+            roe = delta_roe(dv, chief.u0, chief.a, mean_motion(chief.a))
+            if not (math.isfinite(t) and np.all(np.isfinite(roe))):
+                raise ValueError("non-finite ejection")
+            self.ejection = Knowledge(roe, t, chief, self.nominal_da_dot(chief.a))
+            self.recheck_pending()
+        except (ValueError, ZeroDivisionError) as exc:
+            self.reject("ejection event", exc)
+
+    def on_executed(self, m: ImpulsiveManeuver):
+        try:
+            if m.purpose != "ejection":
+                self.executed.append(plan_burns([m])[0])
+        except ValueError as exc:
+            self.reject("executed maneuver", exc)
+
+    def on_plan(self, topic, plan: ManeuverPlan):
+        key = (topic, time_to_sec(plan.header.stamp))
+        if key in self.checked:
+            return
+        self.pending_plans[key] = plan
+        self.recheck_pending()
+
+    def recheck_pending(self):
+        for key, plan in list(self.pending_plans.items()):
+            if self.check_plan(key, plan):
+                del self.pending_plans[key]
+                self.checked.add(key)
+
+    def check_plan(self, key, plan: ManeuverPlan):
+        """Predict the trajectory under ``plan`` from the newest knowledge; False while there is none."""
+        topic, _ = key
+        k = self.knowledge()
+        if k is None:
+            return False
+        source = f"plan:{topic}"
+        try:
+            burns = plan_burns(plan.maneuvers)
+            if not burns or not all(math.isfinite(b.epoch) and np.all(np.isfinite(b.dv_rel)) for b in burns):
+                raise ValueError("empty plan or non-finite burn")
+            done = [b for b in self.executed if b.epoch > k.t]
+            future = [b for b in burns if b.epoch >= k.t]
+            t_end = max(b.epoch for b in burns) + self.limits.plan_horizon
+            res = assess(k.roe, k.t, k.chief, self.limits, done + future, t_end, self.j2, k.da_dot)
+        except ValueError as exc:
+            self.reject(f"plan on {topic}", exc)
+            res = None
+        if res is None:
+            msg = SafetyStatus(source=source, safe=False, violations=["invalid_plan"], plan_stamp=plan.header.stamp)
+            msg.header.stamp = plan.header.stamp
+            self.check_pub.publish(msg)
+            return True
+        self.publish(source, k.t, res, plan_stamp=plan.header.stamp, pub=self.check_pub)
+        self.get_logger().info(f"{source} checked: {'safe' if res.safe else 'UNSAFE'} {res.failed or ''}")
+        return True
+
+
+def main(args=None):
+    from .spin import run
+
+    return run(SafetyMonitorNode, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,292 @@
+"""sim: the dynamics simulator that closes the loop on sim time.
+
+Publishes ``/clock`` faster than real time, propagates the truth relative orbit (:class:`roe_sep.core.truth.
+TruthModel`: J2 + true differential drag), applies the commanded ejection with its real dispersion and executes
+every planned carrier burn at its epoch with execution and attitude errors (seed 002 Eq. 22, seeded). A plan's
+burns are executed only once the safety monitor has approved that plan (``require_plan_approval``); while a burn
+waits for its approval the clock holds, up to ``approval_timeout`` wall seconds, after which the burn is dropped.
+
+Publishes the truth ROE (``/sim/truth/roe``) and RTN state (``/sim/truth/rtn``) every ``truth_period`` and right after
+each burn, every executed burn on ``/sim/executed_maneuvers`` (as executed, errors included) and ``/diagnostics``
+with the running minimum distance.
+"""
+
+import dataclasses
+import math
+import time
+
+import numpy as np
+from diagnostic_msgs.msg import DiagnosticArray
+from rclpy.node import Node
+from roe_sep_msgs.msg import (
+    EjectionEvent,
+    ImpulsiveManeuver,
+    ManeuverPlan,
+    RelativeOrbitalElements,
+    RelativeState,
+    SafetyStatus,
+)
+from rosgraph_msgs.msg import Clock
+
+from ..core.config import ConfigError, load_scenario
+from ..core.constants import ARCSEC
+from ..core.double_impulse import InfeasibleDesignError, design
+from ..core.dynamics import drag_da_dot
+from ..core.truth import ExecutionErrors, TruthModel, chief_from_u
+from . import qos
+from .convert import (
+    array_to_elements,
+    array_to_vector,
+    maneuver_msg,
+    relative_dv,
+    roe_to_msg,
+    sec_to_time,
+    time_to_sec,
+    vector_to_array,
+)
+from .diagnostics import ERROR, OK, WARN, publish_status
+from .params import ParameterError, declare, finite, require
+
+PLAN_TOPICS = (qos.DRIFT_STOP_PLAN_TOPIC, qos.ACQUISITION_PLAN_TOPIC)
+
+
+@dataclasses.dataclass
+class PendingBurn:
+    epoch: float
+    maneuver: ImpulsiveManeuver
+    topic: str
+    plan_stamp: float
+
+
+class SimNode(Node):
+    def __init__(self):
+        super().__init__("sim")
+        scenario_file = declare(self, "scenario_file", "", "scenario YAML ('' = embedded default)")
+        self.seed = declare(self, "seed", 0, "seed of the ejection/burn/drag dispersions")
+        self.disperse = declare(self, "disperse", True, "apply execution errors and the drag uncertainty")
+        self.duration = declare(self, "duration", 388800.0, "s, sim time at which the run ends")
+        self.time_step = declare(self, "time_step", 60.0, "s of sim time per clock tick")
+        tick_period = declare(self, "tick_period", 0.01, "wall s between clock ticks")
+        self.truth_period = declare(self, "truth_period", 60.0, "s, sim-time period of the truth topics")
+        u0_deg = declare(self, "u0_deg", 50.0, "deg, carrier mean argument of latitude at sim time 0")
+        raan_deg = declare(self, "raan_deg", 0.0, "deg, carrier right ascension of the ascending node at t = 0")
+        self.require_approval = declare(self, "require_plan_approval", True,
+                                        "execute a plan only after the safety monitor approved it")
+        self.approval_timeout = declare(self, "approval_timeout", 10.0, "wall s a burn may wait for its approval")
+        self.distance_step = declare(self, "distance_step", 10.0, "s, sampling of the minimum-distance tracking")
+        self.departure = declare(self, "departure_distance", 1000.0,
+                                 "m, the minimum distance is tracked once the picosatellite is this far away")
+        self.j2 = declare(self, "j2", True, "secular J2 in the truth dynamics")
+
+        for name, value in (("duration", self.duration), ("time_step", self.time_step),
+                            ("tick_period", tick_period), ("truth_period", self.truth_period),
+                            ("approval_timeout", self.approval_timeout), ("distance_step", self.distance_step),
+                            ("departure_distance", self.departure)):
+            require(name, finite(value) and value > 0, value, "a positive number")
+        for name, value in (("u0_deg", u0_deg), ("raan_deg", raan_deg)):
+            require(name, finite(value), value, "a finite angle [deg]")
+        require("seed", isinstance(self.seed, int), self.seed, "an integer")
+        for name, value in (("disperse", self.disperse), ("require_plan_approval", self.require_approval),
+                            ("j2", self.j2)):
+            require(name, isinstance(value, bool), value, "true or false")
+        try:
+            scenario = load_scenario(scenario_file or None)
+            carrier = design(scenario.separation)
+        except (ConfigError, InfeasibleDesignError) as exc:
+            raise ParameterError(f"parameter 'scenario_file': {exc}") from exc
+
+        sep, mc = scenario.separation, scenario.monte_carlo
+        a, inc = carrier.a, carrier.inc
+        rng = np.random.default_rng(self.seed)
+        db_factor = rng.normal(1.0, mc.ballistic_sigma) if self.disperse else 1.0
+        da_dot = float(drag_da_dot(mc.delta_b * db_factor, mc.density, a)) if mc.drag else 0.0
+        self.truth = TruthModel(chief_from_u(a, inc, math.radians(raan_deg), math.radians(u0_deg)), 0.0, da_dot,
+                                self.j2)
+        self.errors = ExecutionErrors(rng, sep.spl_sigma if self.disperse else 0.0,
+                                      sep.thruster_sigma if self.disperse else 0.0,
+                                      mc.attitude_sigma_arcsec * ARCSEC if self.disperse else 0.0)
+
+        self.t = 0.0
+        self.next_truth = 0.0
+        self.ejections = {}  # stamp -> epoch of pending ejection events
+        self.seen_ejections = set()
+        self.pending: list[PendingBurn] = []
+        self.plan_stamps = {}  # topic -> stamp of the plan in force
+        self.approvals = {}  # (topic, plan stamp) -> bool
+        self.hold_since = None
+        self.burns = 0
+        self.min_dist = (math.inf, math.nan)
+        self.departed = False
+        self.next_status = 3600.0
+        self.done = False
+
+        self.clock_pub = self.create_publisher(Clock, qos.CLOCK_TOPIC, 10)
+        self.roe_pub = self.create_publisher(RelativeOrbitalElements, qos.TRUTH_ROE_TOPIC, qos.STREAM)
+        self.rtn_pub = self.create_publisher(RelativeState, qos.TRUTH_RTN_TOPIC, qos.STREAM)
+        self.exec_pub = self.create_publisher(ImpulsiveManeuver, qos.EXECUTED_TOPIC, qos.EXECUTED)
+        self.diag_pub = self.create_publisher(DiagnosticArray, qos.DIAGNOSTICS_TOPIC, qos.DIAGNOSTICS)
+        self.create_subscription(EjectionEvent, qos.EJECTION_TOPIC, self.on_ejection, qos.LATCHED)
+        for topic in PLAN_TOPICS:
+            self.create_subscription(ManeuverPlan, topic, lambda m, tp=topic: self.on_plan(tp, m), qos.LATCHED)
+        self.create_subscription(SafetyStatus, qos.PLAN_CHECK_TOPIC, self.on_plan_check, qos.EXECUTED)
+        self.timer = self.create_timer(tick_period, self.tick)
+        self.get_logger().info(
+            f"truth: a = {a:.1f} m, i = {math.degrees(inc):.3f} deg, differential drag a*da_dot = "
+            f"{da_dot * a * 86400:.1f} m/day, {self.duration / 86400:.2f} days at {self.time_step / tick_period:.0f}x")
+        self._status(OK, "running")
+
+    # ----------------------------------------------------------------- inputs
+    def on_ejection(self, ev: EjectionEvent):
+        key = time_to_sec(ev.header.stamp)
+        dv = vector_to_array(ev.ejection.dv_rtn)
+        if key in self.seen_ejections:
+            return
+        if not (math.isfinite(key) and np.all(np.isfinite(dv))) or ev.ejection.spacecraft != "picosatellite":
+            self._status(ERROR, f"ejection event rejected (epoch {key}, dv {dv.tolist()}, "
+                                f"spacecraft {ev.ejection.spacecraft!r})")
+            return
+        if self.truth.separated:
+            self._status(WARN, "second ejection event ignored: the picosatellite is already released")
+            return
+        self.seen_ejections.add(key)
+        self.pending.append(PendingBurn(key, ev.ejection, qos.EJECTION_TOPIC, key))
+
+    def on_plan(self, topic, plan: ManeuverPlan):
+        stamp = time_to_sec(plan.header.stamp)
+        if self.plan_stamps.get(topic) == stamp:
+            return
+        try:
+            burns = [PendingBurn(time_to_sec(m.epoch), m, topic, stamp) for m in plan.maneuvers]
+            for b in burns:
+                relative_dv(b.maneuver)
+                if not (math.isfinite(b.epoch) and np.all(np.isfinite(vector_to_array(b.maneuver.dv_rtn)))):
+                    raise ValueError("non-finite epoch or dv")
+        except ValueError as exc:
+            self._status(ERROR, f"plan on {topic} rejected: {exc}")
+            return
+        # a new plan replaces the burns of the previous plan on the same topic that are not executed yet
+        self.pending = [b for b in self.pending if b.topic != topic] + burns
+        self.plan_stamps[topic] = stamp
+        self.get_logger().info(f"plan on {topic}: {len(burns)} burn(s) from t = "
+                               f"{min((b.epoch for b in burns), default=math.nan):.0f} s")
+
+    def on_plan_check(self, check: SafetyStatus):
+        if check.source.startswith("plan:"):
+            self.approvals[(check.source[5:], time_to_sec(check.plan_stamp))] = bool(check.safe)
+
+    # ------------------------------------------------------------------ loop
+    def tick(self):
+        if self.done:
+            return
+        t_next = min(self.t + self.time_step, self.duration)
+        while True:
+            due = sorted((b for b in self.pending if b.epoch <= t_next), key=lambda b: b.epoch)
+            if not due:
+                break
+            burn = due[0]
+            verdict = self._approval(burn)
+            if verdict is None:  # hold the clock until the monitor has spoken or the wait times out
+                self._advance(max(self.t, min(burn.epoch, t_next)))
+                self.clock_pub.publish(Clock(clock=sec_to_time(self.t)))
+                return
+            self.pending.remove(burn)
+            if verdict:
+                self._execute(burn)
+        self._advance(t_next)
+        self.clock_pub.publish(Clock(clock=sec_to_time(self.t)))
+        if self.t >= self.next_status:
+            self.next_status += 3600.0
+            self._status(OK, "running")
+        if self.t >= self.duration:
+            self.done = True
+            self._status(OK, "scenario complete")
+            self.get_logger().info("scenario complete")
+
+    def _approval(self, burn):
+        """True: execute; False: drop; None: wait."""
+        if burn.topic == qos.EJECTION_TOPIC or not self.require_approval:
+            return True
+        verdict = self.approvals.get((burn.topic, burn.plan_stamp))
+        if verdict is not None:
+            self.hold_since = None
+            if not verdict:
+                self._status(ERROR, f"burn at t = {burn.epoch:.0f} s of the plan on {burn.topic} not executed: "
+                                    "the safety monitor flagged the plan")
+            return verdict
+        now = time.monotonic()
+        if self.hold_since is None:
+            self.hold_since = now
+        if now - self.hold_since > self.approval_timeout:
+            self.hold_since = None
+            self._status(ERROR, f"burn at t = {burn.epoch:.0f} s of the plan on {burn.topic} not executed: no safety "
+                                f"check within {self.approval_timeout:g} s")
+            return False
+        return None
+
+    def _advance(self, t_to):
+        """Move the truth to ``t_to``, publishing the truth samples and tracking the minimum distance."""
+        if t_to <= self.t:
+            return
+        if self.truth.separated:
+            times, dist = self.truth.distances(self.t, t_to, self.distance_step)
+            if not self.departed:
+                out = np.nonzero(dist >= self.departure)[0]
+                self.departed = out.size > 0
+                times, dist = (times[out[0]:], dist[out[0]:]) if self.departed else (times[:0], dist[:0])
+            if dist.size and dist.min() < self.min_dist[0]:
+                k = int(np.argmin(dist))
+                self.min_dist = (float(dist[k]), float(times[k]))
+        while self.next_truth <= t_to:
+            self._publish_truth(self.next_truth)
+            self.next_truth += self.truth_period
+        self.t = t_to
+
+    def _execute(self, burn: PendingBurn):
+        m = burn.maneuver
+        t_exec = max(burn.epoch, self.t)
+        if burn.epoch < self.t - 1e-6:
+            self._status(WARN, f"{m.purpose} burn executed late at t = {self.t:.0f} s (planned {burn.epoch:.0f} s)")
+        self._advance(t_exec)
+        executed = self.errors.executed(vector_to_array(m.dv_rtn), m.spacecraft)
+        done = maneuver_msg(t_exec, float(self.truth.u_at(t_exec)), executed, m.spacecraft, m.purpose)
+        self.truth.apply(t_exec, relative_dv(done))
+        self.burns += 1
+        self.exec_pub.publish(done)
+        self._publish_truth(t_exec)
+        self.get_logger().info(f"t = {t_exec:.0f} s: executed {m.purpose} of the {m.spacecraft}, dv RTN = "
+                               f"({executed[0]:+.4f}, {executed[1]:+.4f}, {executed[2]:+.4f}) m/s")
+        self._status(OK, f"executed {m.purpose} burn")
+
+    def _publish_truth(self, t):
+        stamp = sec_to_time(t)
+        chief = array_to_elements(self.truth.chief_elements(t))
+        roe = self.truth.roe_at(t)
+        self.roe_pub.publish(roe_to_msg(roe, chief, stamp, frame_id="truth"))
+        pos, vel = self.truth.rtn_at(t)
+        state = RelativeState(position=array_to_vector(pos), velocity=array_to_vector(vel))
+        state.header.stamp = stamp
+        state.header.frame_id = "carrier_rtn"
+        self.rtn_pub.publish(state)
+
+    def _status(self, level, message):
+        publish_status(self, self.diag_pub, level, message, {
+            "sim_time_s": f"{self.t:.1f}",
+            "burns_executed": self.burns,
+            "min_distance_m": f"{self.min_dist[0]:.3f}",
+            "min_distance_time_s": f"{self.min_dist[1]:.1f}",
+            "truth_a_da_dot_m_per_day": f"{self.truth.da_dot * self.truth.a * 86400:.3f}",
+        })
+        if level == WARN:
+            self.get_logger().warning(message)
+        elif level == ERROR:
+            self.get_logger().error(message)
+
+
+def main(args=None):
+    from .spin import run
+
+    return run(SimNode, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,165 @@
+"""``roe-sep run``: the default scenario end to end, every node its own process, as a deployment runs them.
+
+Starts the recorder, safety_monitor, planner, radar_od, ic_planner, ejector and sim (last: it owns ``/clock``) with
+one generated parameter file, waits until the simulator reports the scenario complete, stops every node with
+SIGINT (the recorder last, so the bag closes cleanly) and writes ``report.json`` from the recorded bag.
+"""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import yaml
+
+NODES = ("recorder", "safety_monitor", "planner", "radar_od", "ic_planner", "ejector", "sim")
+
+
+def ros_environment(domain_id=None):
+    """This process's environment with DDS kept on loopback and a domain id of its own."""
+    env = dict(os.environ)
+    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    env.pop("ROS_LOCALHOST_ONLY", None)
+    env.pop("_ROS_WHEELS_BOOTSTRAP_COMPLETE", None)
+    if domain_id is not None:
+        env["ROS_DOMAIN_ID"] = str(domain_id)
+    else:
+        env.setdefault("ROS_DOMAIN_ID", str(os.getpid() % 100 + 1))
+    env["PYTHONUNBUFFERED"] = "1"
+    return env
+
+
+def parameters(config, bag_dir, overrides):
+    """The run's ROS parameter file content: shared values for every node, then per-node values."""
+    shared = {"use_sim_time": True, "scenario_file": str(Path(config).resolve()) if config else ""}
+    per_node = {
+        "sim": {"use_sim_time": False},
+        "recorder": {"output": str(bag_dir)},
+    }
+    for node, values in (overrides or {}).items():
+        if node not in NODES and node != "/**":
+            raise ValueError(f"--params: unknown node {node!r}; nodes: {list(NODES)}")
+        target = shared if node == "/**" else per_node.setdefault(node, {})
+        target.update(values)
+    out = {"/**": {"ros__parameters": shared}}
+    out.update({node: {"ros__parameters": values} for node, values in per_node.items()})
+    return out
+
+
+def load_overrides(path):
+    """A params YAML in the ROS layout ``{node: {ros__parameters: {...}}}``."""
+    if not path:
+        return {}
+    with open(path, encoding="utf-8") as fh:
+        data = yaml.safe_load(fh) or {}
+    try:
+        return {node: dict(v["ros__parameters"]) for node, v in data.items()}
+    except (TypeError, KeyError) as exc:
+        raise ValueError(f"--params {path}: expected {{node: {{ros__parameters: {{...}}}}}}") from exc
+
+
+class Deployment:
+    """The node processes of one run, their logs, and an orderly shutdown."""
+
+    def __init__(self, out: Path, params_file: Path, env):
+        self.out, self.params_file, self.env = out, params_file, env
+        self.procs = {}
+        (out / "logs").mkdir(parents=True, exist_ok=True)
+
+    def start(self, node):
+        log = open(self.out / "logs" / f"{node}.log", "w", encoding="utf-8")
+        cmd = [sys.executable, "-m", f"roe_sep.nodes.{node}", "--ros-args", "--params-file", str(self.params_file)]
+        self.procs[node] = (subprocess.Popen(cmd, env=self.env, stdout=log, stderr=subprocess.STDOUT), log)
+
+    def dead(self):
+        return [n for n, (p, _) in self.procs.items() if p.poll() is not None]
+
+    def stop(self, nodes, timeout=20.0):
+        for n in nodes:
+            p, _ = self.procs[n]
+            if p.poll() is None:
+                p.send_signal(signal.SIGINT)
+        codes = {}
+        for n in nodes:
+            p, log = self.procs[n]
+            try:
+                codes[n] = p.wait(timeout=timeout)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                codes[n] = p.wait()
+            log.close()
+        return codes
+
+
+def wait_for_completion(duration, deployment, timeout, progress):
+    """Spin a small observer node until the sim's clock reaches ``duration``; returns (reached, reason)."""
+    import rclpy
+    from rosgraph_msgs.msg import Clock
+
+    rclpy.init()
+    node = rclpy.create_node("roe_sep_run")
+    now = {"t": 0.0}
+    node.create_subscription(Clock, "/clock", lambda m: now.update(t=m.clock.sec + m.clock.nanosec * 1e-9), 10)
+    start = time.monotonic()
+    shown = -1
+    try:
+        while True:
+            rclpy.spin_once(node, timeout_sec=0.1)
+            if now["t"] >= duration:
+                return True, "scenario complete"
+            dead = deployment.dead()
+            if dead:
+                return False, f"node(s) exited early: {dead} (see logs/)"
+            if time.monotonic() - start > timeout:
+                return False, f"wall-time limit of {timeout:g} s reached at sim time {now['t']:.0f} s"
+            day = int(now["t"] // 21600)
+            if progress and day != shown:
+                shown = day
+                print(f"\r  sim time {now['t'] / 86400:5.2f} d of {duration / 86400:.2f} d", end="", file=sys.stderr)
+    finally:
+        if progress:
+            print(file=sys.stderr)
+        node.destroy_node()
+        rclpy.try_shutdown()
+
+
+def run(config=None, out="out/run", params=None, duration=None, seed=None, timeout=1800.0, domain_id=None,
+        progress=False):
+    """Run the scenario; returns the report dict (``report['safe']``) and writes it to ``out/report.json``."""
+    from .report import build_report
+
+    out = Path(out)
+    bag_dir = out / "bag"
+    if bag_dir.exists():
+        raise ValueError(f"output bag {bag_dir} exists already: choose another --out or remove it")
+    out.mkdir(parents=True, exist_ok=True)
+    overrides = load_overrides(params)
+    sim = overrides.setdefault("sim", {})
+    if duration is not None:
+        sim["duration"] = float(duration)
+    if seed is not None:
+        sim["seed"] = int(seed)
+    params_file = out / "params.yaml"
+    params_file.write_text(yaml.safe_dump(parameters(config, bag_dir.resolve(), overrides), sort_keys=False))
+    sim_duration = float(sim.get("duration", 388800.0))
+
+    deployment = Deployment(out, params_file, ros_environment(domain_id))
+    try:
+        for node in NODES:
+            deployment.start(node)
+            if node == "recorder":
+                time.sleep(1.0)  # let the recorder discover the graph before the clock starts
+        reached, reason = wait_for_completion(sim_duration, deployment, timeout, progress)
+        time.sleep(1.0)  # last messages reach the recorder
+    finally:
+        codes = deployment.stop([n for n in NODES if n != "recorder"])
+        codes.update(deployment.stop(["recorder"]))
+    report = build_report(bag_dir, sim_duration)
+    report["run"] = {"completed": reached, "reason": reason, "exit_codes": codes, "params_file": str(params_file)}
+    if not reached:
+        report["safe"] = False
+    (out / "report.json").write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
+    return report

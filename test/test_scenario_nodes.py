@@ -1,0 +1,61 @@
+"""The separation loop as real processes: ejector -> planner -> safety_monitor -> sim executes the drift-stop."""
+
+import math
+
+import pytest
+
+from rosutil import rclpy, spin_until, start_node, stop_node  # noqa: I001  (skips without rclpy)
+
+from roe_sep_msgs.msg import ImpulsiveManeuver, RelativeOrbitalElements, SafetyStatus  # noqa: E402
+from rosgraph_msgs.msg import Clock  # noqa: E402
+
+from roe_sep.core.double_impulse import design  # noqa: E402
+from roe_sep.nodes import qos  # noqa: E402
+from roe_sep.nodes.convert import time_to_sec  # noqa: E402
+
+D = design()
+SIM_ARGS = ["-p", "duration:=30000.0", "-p", "time_step:=30.0", "-p", "seed:=3"]
+
+
+@pytest.fixture()
+def observer():
+    rclpy.init()
+    node = rclpy.create_node("observer")
+    node.got = {"executed": [], "checks": [], "truth": [], "status": [], "clock": []}
+    node.create_subscription(ImpulsiveManeuver, qos.EXECUTED_TOPIC, node.got["executed"].append, qos.EXECUTED)
+    node.create_subscription(SafetyStatus, qos.PLAN_CHECK_TOPIC, node.got["checks"].append, qos.EXECUTED)
+    node.create_subscription(SafetyStatus, qos.SAFETY_TOPIC, node.got["status"].append, qos.STREAM)
+    node.create_subscription(RelativeOrbitalElements, qos.TRUTH_ROE_TOPIC, node.got["truth"].append, qos.STREAM)
+    node.create_subscription(Clock, qos.CLOCK_TOPIC, node.got["clock"].append, 10)
+    yield node
+    node.destroy_node()
+    rclpy.try_shutdown()
+
+
+def test_ejection_drift_stop_loop(observer):
+    sim_time = ["-p", "use_sim_time:=true"]
+    procs = [start_node("safety_monitor", *sim_time), start_node("planner", *sim_time, "-p", "p_mode:=fixed",
+                                                                  "-p", "p_reduction:=0.06"),
+             start_node("ejector", *sim_time)]
+    spin_until(observer, lambda: False, timeout=2.0)  # let discovery settle before the clock starts
+    procs.append(start_node("sim", *SIM_ARGS))
+    try:
+        g = observer.got
+        assert spin_until(observer, lambda: g["clock"] and g["clock"][-1].clock.sec >= 30000, timeout=90)
+        purposes = [m.purpose for m in g["executed"]]
+        assert purposes == ["ejection", "drift_stop"], purposes
+        ejection, stop = g["executed"]
+        # the ejection at u1 = 88 deg, the drift-stop 3 half revolutions later
+        assert math.degrees(ejection.mean_arg_latitude) % 360 == pytest.approx(88.0, abs=0.05)
+        assert time_to_sec(stop.epoch) - time_to_sec(ejection.epoch) == pytest.approx(3 * math.pi / D.n, rel=2e-3)
+        # executed with dispersion: close to, not equal to, the commanded burns
+        assert math.hypot(ejection.dv_rtn.x, ejection.dv_rtn.y, ejection.dv_rtn.z) == pytest.approx(1.41, rel=0.35)
+        assert [c.safe for c in g["checks"]] == [True]
+        assert g["checks"][0].source == f"plan:{qos.DRIFT_STOP_PLAN_TOPIC}"
+        after = [t for t in g["truth"] if time_to_sec(t.header.stamp) > time_to_sec(stop.epoch)]
+        assert after and all(t.a_da * t.a_dl < 0 for t in after)  # receding after the drift-stop
+        assert all(s.safe for s in g["status"] if s.source == "truth")
+        assert {s.source for s in g["status"]} == {"truth"}
+    finally:
+        codes = [stop_node(p) for p in procs]
+    assert all(code == 0 for code, _ in codes), codes
