@@ -49,15 +49,15 @@ def test_nan_inputs_are_survived(tester):
         bad_plan = ManeuverPlan(strategy="double_impulse")
         bad_plan.header.stamp = sec_to_time(5.0)
         bad_plan.maneuvers = [maneuver_msg(9000.0, 0.0, [math.inf, 0.0, 0.0], "carrier", "drift_stop")]
-        tester.pubs["ejection"].publish(bad_event)
-        tester.pubs["plan"].publish(bad_plan)
-
         def bad_truth_seen():  # a volatile stream: publish until both subscribers have had one
             tester.pubs["truth"].publish(bad_truth)
             return errors(tester, "ejector", "carrier state rejected") and \
                 errors(tester, "safety_monitor", "truth state rejected")
 
         assert spin_until(tester, bad_truth_seen, timeout=30)
+        # (after the truth: an ejection event on the topic, even a bad one, tells the ejector not to eject again)
+        tester.pubs["ejection"].publish(bad_event)
+        tester.pubs["plan"].publish(bad_plan)
         assert spin_until(tester, lambda: errors(tester, "sim", "ejection event rejected")
                           and errors(tester, "sim", f"plan on {qos.DRIFT_STOP_PLAN_TOPIC} rejected")
                           and errors(tester, "safety_monitor", "ejection event rejected"), timeout=30)
