@@ -3,6 +3,7 @@
 import math
 
 from rcl_interfaces.msg import ParameterDescriptor
+from rclpy.exceptions import ParameterException
 
 
 class ParameterError(ValueError):
@@ -10,8 +11,15 @@ class ParameterError(ValueError):
 
 
 def declare(node, name, default, description):
-    """Declare a parameter with a description (shown by ``ros2 param describe``) and return its value."""
-    return node.declare_parameter(name, default, ParameterDescriptor(description=description)).value
+    """Declare a parameter with a description (shown by ``ros2 param describe``) and return its value.
+
+    A value of the wrong type (e.g. an integer for a double) raises :class:`ParameterError` naming the parameter.
+    """
+    try:
+        value = node.declare_parameter(name, default, ParameterDescriptor(description=description)).value
+    except ParameterException as exc:
+        raise ParameterError(f"parameter '{name}' must have the type of its default {default!r}: {exc}") from exc
+    return list(value) if isinstance(default, list) else value
 
 
 def require(name, ok, value, what):

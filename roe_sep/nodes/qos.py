@@ -28,6 +28,13 @@ EXECUTED = QoSProfile(
 )
 """Executed maneuvers: every burn of the run stays available to late joiners (the report, a replay)."""
 
+CLOCK_SUB = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST, depth=10, reliability=ReliabilityPolicy.BEST_EFFORT,
+    durability=DurabilityPolicy.VOLATILE,
+)
+"""Subscribing to ``/clock``: best effort matches a reliable or best-effort publisher; a node that processes every
+epoch in (last, now] at each tick loses nothing when a tick is dropped."""
+
 CLOCK_TOPIC = "/clock"  # rosgraph_msgs/Clock, published by the sim (rclpy's own sim-time subscriber uses it)
 EJECTION_TOPIC = "/separation/ejection"  # EjectionEvent, LATCHED, ejector
 DRIFT_STOP_PLAN_TOPIC = "/separation/drift_stop_plan"  # ManeuverPlan, LATCHED, planner

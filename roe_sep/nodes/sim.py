@@ -32,6 +32,7 @@ from ..core.config import ConfigError, load_scenario
 from ..core.constants import ARCSEC
 from ..core.double_impulse import InfeasibleDesignError, design
 from ..core.dynamics import drag_da_dot
+from ..core.radar import julian_date, raan_from_ltan
 from ..core.truth import ExecutionErrors, TruthModel, chief_from_u
 from . import qos
 from .convert import (
@@ -69,7 +70,8 @@ class SimNode(Node):
         tick_period = declare(self, "tick_period", 0.01, "wall s between clock ticks")
         self.truth_period = declare(self, "truth_period", 60.0, "s, sim-time period of the truth topics")
         u0_deg = declare(self, "u0_deg", 50.0, "deg, carrier mean argument of latitude at sim time 0")
-        raan_deg = declare(self, "raan_deg", 0.0, "deg, carrier right ascension of the ascending node at t = 0")
+        ltan = declare(self, "ltan_hours", 9.5, "h, local time of the carrier's ascending node (BIROS: 09:30)")
+        epoch = declare(self, "epoch_utc", "2016-07-01T00:00:00", "ISO-8601 UTC calendar epoch of sim time 0")
         self.require_approval = declare(self, "require_plan_approval", True,
                                         "execute a plan only after the safety monitor approved it")
         self.approval_timeout = declare(self, "approval_timeout", 10.0, "wall s a burn may wait for its approval")
@@ -83,8 +85,13 @@ class SimNode(Node):
                             ("approval_timeout", self.approval_timeout), ("distance_step", self.distance_step),
                             ("departure_distance", self.departure)):
             require(name, finite(value) and value > 0, value, "a positive number")
-        for name, value in (("u0_deg", u0_deg), ("raan_deg", raan_deg)):
-            require(name, finite(value), value, "a finite angle [deg]")
+        require("u0_deg", finite(u0_deg), u0_deg, "a finite angle [deg]")
+        require("ltan_hours", finite(ltan) and 0 <= ltan < 24, ltan, "a local time in [0, 24) h")
+        try:
+            raan = float(raan_from_ltan(ltan, julian_date(epoch)))
+        except ValueError as exc:
+            raise ParameterError(f"parameter 'epoch_utc' must be an ISO-8601 UTC date-time, got {epoch!r}: {exc}") \
+                from exc
         require("seed", isinstance(self.seed, int), self.seed, "an integer")
         for name, value in (("disperse", self.disperse), ("require_plan_approval", self.require_approval),
                             ("j2", self.j2)):
@@ -100,7 +107,7 @@ class SimNode(Node):
         rng = np.random.default_rng(self.seed)
         db_factor = rng.normal(1.0, mc.ballistic_sigma) if self.disperse else 1.0
         da_dot = float(drag_da_dot(mc.delta_b * db_factor, mc.density, a)) if mc.drag else 0.0
-        self.truth = TruthModel(chief_from_u(a, inc, math.radians(raan_deg), math.radians(u0_deg)), 0.0, da_dot,
+        self.truth = TruthModel(chief_from_u(a, inc, raan, math.radians(u0_deg)), 0.0, da_dot,
                                 self.j2)
         self.errors = ExecutionErrors(rng, sep.spl_sigma if self.disperse else 0.0,
                                       sep.thruster_sigma if self.disperse else 0.0,
@@ -131,7 +138,8 @@ class SimNode(Node):
         self.create_subscription(SafetyStatus, qos.PLAN_CHECK_TOPIC, self.on_plan_check, qos.EXECUTED)
         self.timer = self.create_timer(tick_period, self.tick)
         self.get_logger().info(
-            f"truth: a = {a:.1f} m, i = {math.degrees(inc):.3f} deg, differential drag a*da_dot = "
+            f"truth: a = {a:.1f} m, i = {math.degrees(inc):.3f} deg, raan = {math.degrees(raan):.2f} deg, "
+            f"differential drag a*da_dot = "
             f"{da_dot * a * 86400:.1f} m/day, {self.duration / 86400:.2f} days at {self.time_step / tick_period:.0f}x")
         self._status(OK, "running")
 

@@ -1,0 +1,298 @@
+"""radar_od: radar tracking of the picosatellite (simulated from truth) and batch orbit determination (seed 001 Sec. 5).
+
+Seed 001: TIRA can distinguish the two spacecraft only once they are at least 5 km apart, and a reliable orbit
+determination needs several passes over about 12 h. This stub simulates those measurements and runs the OD:
+
+* ``/clock`` (rosgraph_msgs/Clock, the node runs with ``use_sim_time``): for every measurement epoch k *
+  ``sample_interval`` in (last, now], the latest ``/sim/truth/roe`` is propagated to the epoch
+  (:func:`~roe_sep.core.dynamics.propagate` with J2, :func:`~roe_sep.core.dynamics.propagate_chief`); where a
+  station sees the picosatellite above its mask and the spacecraft are >= ``min_separation`` apart a noisy
+  ``roe_sep_msgs/RadarMeasurement`` is published on ``/radar/measurements`` (STREAM).
+* A pass is a run of consecutive measurement epochs of one station; it counts once closed with >=
+  ``min_pass_measurements`` measurements. When >= ``passes_required`` counted passes since the latest executed
+  maneuver span >= ``min_arc`` (first measurement of the first to last of the last), the batch least squares of
+  :mod:`roe_sep.core.od` runs on their measurements and ``roe_sep_msgs/OrbitDetermination`` is published on
+  ``/od/estimate`` (latched); it runs again after every further counted pass.
+* ``/sim/executed_maneuvers`` (latched history): measurements before the latest burn, and those simulated from a
+  truth message older than the burn, are not used.
+
+Parameters: see :class:`RadarODNode` and the README's parameter table.
+"""
+
+import math
+
+import numpy as np
+from diagnostic_msgs.msg import DiagnosticArray
+from rclpy.node import Node
+from roe_sep_msgs.msg import ImpulsiveManeuver, OrbitDetermination, RadarMeasurement, RelativeOrbitalElements
+from rosgraph_msgs.msg import Clock
+
+from ..core.constants import R_EARTH, SECONDS_PER_DAY
+from ..core.dynamics import propagate, propagate_chief
+from ..core.od import RadarBatch, batch_least_squares
+from ..core.radar import Station, add_noise, gmst, julian_date, observe, relative_distance, visible
+from ..core.roe import wrap_angle
+from . import qos
+from .convert import array_to_elements, elements_to_array, msg_to_roe, roe_to_msg, sec_to_time, time_to_sec
+from .diagnostics import ERROR, OK, WARN, publish_status
+from .params import ParameterError, declare, finite, require
+
+MAX_SAMPLE_INTERVAL = 600.0  # s: a pass above 10 deg lasts a few minutes
+CHUNK = 10000  # measurement epochs propagated at once
+
+
+class RadarODNode(Node):
+    """Parameters (name, default, unit):
+
+    * ``stations`` ["TIRA"], ``station_latitudes_deg`` [50.6166], ``station_longitudes_deg`` [7.1296],
+      ``station_altitudes_m`` [300.0]: geodetic WGS-84 coordinates, one entry per station.
+    * ``elevation_mask_deg`` 10.0; ``sigma_range_m`` 10.0; ``sigma_angle_deg`` 0.01 (azimuth and elevation).
+    * ``sample_interval`` 10.0 s; ``min_separation`` 5000.0 m; ``passes_required`` 2; ``min_arc`` 36000.0 s;
+      ``min_pass_measurements`` 5; ``seed`` 0 (measurement noise); ``epoch_utc`` "2016-07-01T00:00:00" (UTC
+      calendar epoch of sim time 0, as the simulator's).
+    """
+
+    def __init__(self):
+        super().__init__("radar_od")
+        names = declare(self, "stations", ["TIRA"], "radar station names")
+        lats = declare(self, "station_latitudes_deg", [50.6166], "deg, geodetic latitude of each station (WGS-84)")
+        lons = declare(self, "station_longitudes_deg", [7.1296], "deg, east longitude of each station")
+        alts = declare(self, "station_altitudes_m", [300.0], "m, height of each station above the WGS-84 ellipsoid")
+        mask = declare(self, "elevation_mask_deg", 10.0, "deg, elevation mask of every station")
+        sigma_range = declare(self, "sigma_range_m", 10.0, "m, 1-sigma range noise")
+        # TIRA's L-band tracking beam is 0.45 deg wide. Monopulse angle noise is about
+        # theta_B / (1.6 sqrt(2 SNR)): 0.01 deg (theta_B / 45) needs an SNR of about 26 dB after pulse integration,
+        # which a 10 cm picosatellite at ~1000 km gives (TIRA detects 2 cm objects at 1000 km). Mount, refraction
+        # and other systematic errors of the same order are not modeled in this stub.
+        sigma_angle = declare(self, "sigma_angle_deg", 0.01, "deg, 1-sigma azimuth and elevation noise")
+        self.dt = declare(self, "sample_interval", 10.0, "s, measurement interval during a pass")
+        self.min_sep = declare(self, "min_separation", 5000.0, "m, smallest separation the radar resolves")
+        self.passes_required = declare(self, "passes_required", 2, "counted passes needed for an estimate")
+        self.min_arc = declare(self, "min_arc", 36000.0, "s, smallest span of the passes of an estimate")
+        self.min_pass = declare(self, "min_pass_measurements", 5, "measurements for a pass to count")
+        seed = declare(self, "seed", 0, "seed of the measurement noise")
+        epoch = declare(self, "epoch_utc", "2016-07-01T00:00:00", "ISO-8601 UTC calendar epoch of sim time 0")
+
+        n = len(names)
+        require("stations", n >= 1 and all(isinstance(s, str) and s for s in names) and len(set(names)) == n,
+                list(names), "a non-empty list of distinct station names")
+        for name, values, lo, hi in (("station_latitudes_deg", lats, -90.0, 90.0),
+                                     ("station_longitudes_deg", lons, -180.0, 360.0),
+                                     ("station_altitudes_m", alts, -500.0, 9000.0)):
+            require(name, len(values) == n and all(finite(v) and lo <= v <= hi for v in values), list(values),
+                    f"{n} value(s), one per station, each in [{lo:g}, {hi:g}]")
+        require("elevation_mask_deg", finite(mask) and 0.0 <= mask < 90.0, mask, "in [0, 90) deg")
+        require("sigma_range_m", finite(sigma_range) and sigma_range > 0.0, sigma_range, "a positive number [m]")
+        require("sigma_angle_deg", finite(sigma_angle) and 0.0 < sigma_angle < 1.0, sigma_angle, "in (0, 1) deg")
+        require("sample_interval", finite(self.dt) and 0.0 < self.dt <= MAX_SAMPLE_INTERVAL, self.dt,
+                f"in (0, {MAX_SAMPLE_INTERVAL:g}] s")
+        require("min_separation", finite(self.min_sep) and self.min_sep >= 0.0, self.min_sep,
+                "a non-negative number [m]")
+        require("passes_required", self.passes_required >= 1, self.passes_required, "a positive integer")
+        require("min_arc", finite(self.min_arc) and self.min_arc >= 0.0, self.min_arc, "a non-negative number [s]")
+        require("min_pass_measurements", self.min_pass >= 1, self.min_pass, "a positive integer")
+        require("seed", seed >= 0, seed, "a non-negative integer")
+        try:
+            self.jd0 = julian_date(epoch)
+        except (ValueError, TypeError) as exc:
+            raise ParameterError(f"parameter 'epoch_utc' must be an ISO-8601 UTC date-time, got {epoch!r}: {exc}") \
+                from exc
+
+        self.stations = [Station(s, math.radians(la), math.radians(lo), float(h))
+                         for s, la, lo, h in zip(names, lats, lons, alts)]
+        self.site_ef = [s.ecef for s in self.stations]
+        self.site_enu = [s.enu for s in self.stations]
+        self.mask = math.radians(mask)
+        self.sigma = np.array([sigma_range, math.radians(sigma_angle), math.radians(sigma_angle)])
+        self.rng = np.random.default_rng(seed)
+
+        self.truth = None  # (t [s], dimensionless ROE, chief mean Keplerian elements)
+        self.t_last = None  # last processed measurement epoch [s]
+        self.last_burn = -math.inf
+        self.pass_ids = [0] * n  # passes started per station
+        self.open_pass = [False] * n
+        self.too_close = False  # a station sees the picosatellite, but closer than min_separation
+        self.records = []  # (t, station, pass_id, z, chief, theta, truth_t)
+        self.estimates = 0
+        self.published = 0
+
+        self.meas_pub = self.create_publisher(RadarMeasurement, qos.RADAR_TOPIC, qos.STREAM)
+        self.od_pub = self.create_publisher(OrbitDetermination, qos.OD_TOPIC, qos.LATCHED)
+        self.diag_pub = self.create_publisher(DiagnosticArray, qos.DIAGNOSTICS_TOPIC, qos.DIAGNOSTICS)
+        self.create_subscription(RelativeOrbitalElements, qos.TRUTH_ROE_TOPIC, self.on_truth, qos.STREAM)
+        self.create_subscription(ImpulsiveManeuver, qos.EXECUTED_TOPIC, self.on_maneuver, qos.EXECUTED)
+        self.create_subscription(Clock, qos.CLOCK_TOPIC, self.on_clock, qos.CLOCK_SUB)
+        publish_status(self, self.diag_pub, OK, "waiting for truth", self._values())
+
+    def _values(self):
+        return {"measurements": self.published, "passes_tracked": sum(self.pass_ids),
+                "passes_since_burn": len(self.usable()[1]), "estimates": self.estimates,
+                "last_burn_s": self.last_burn}
+
+    # --- inputs ---------------------------------------------------------------------------------------------
+    def on_truth(self, msg: RelativeOrbitalElements):
+        try:
+            truth = self.parse_truth(msg)
+        except ValueError as exc:
+            self.get_logger().error(f"truth message rejected: {exc}")
+            publish_status(self, self.diag_pub, ERROR, f"truth message rejected: {exc}", self._values())
+            return
+        if self.truth is None:
+            self.get_logger().info(f"first truth at t = {truth[0]:.1f} s")
+            publish_status(self, self.diag_pub, OK, "tracking", self._values())
+        if self.truth is None or truth[0] >= self.truth[0]:
+            self.truth = truth
+
+    @staticmethod
+    def parse_truth(msg: RelativeOrbitalElements):
+        """(t, dimensionless ROE, chief elements); ValueError on NaN or an impossible orbit."""
+        kep = elements_to_array(msg.chief)
+        t = time_to_sec(msg.header.stamp)
+        a = kep[0]
+        if not (np.all(np.isfinite(kep)) and R_EARTH + 1e5 < a < R_EARTH + 5e6 and 0.0 <= kep[1] < 0.1
+                and 0.0 <= kep[2] <= math.pi):
+            raise ValueError(f"chief elements are not a near-circular low Earth orbit: {kep.tolist()}")
+        roe = msg_to_roe(msg)
+        if not np.all(np.isfinite(roe)):
+            raise ValueError(f"ROE are not finite: {(roe * a).tolist()} m")
+        return t, roe, kep
+
+    def on_maneuver(self, msg: ImpulsiveManeuver):
+        t = time_to_sec(msg.epoch)
+        if t > self.last_burn:
+            self.last_burn = t
+            self.get_logger().info(f"{msg.spacecraft} {msg.purpose} burn at t = {t:.1f} s: earlier measurements "
+                                   "are no longer used")
+
+    def on_clock(self, msg: Clock):
+        now = time_to_sec(msg.clock)
+        if self.t_last is not None and now < self.t_last - self.dt:
+            self.get_logger().warn(f"sim time jumped back from {self.t_last:.1f} s to {now:.1f} s: restarting")
+            self.reset()
+        if self.truth is None or self.t_last is None:
+            self.t_last = now  # start: no back-fill
+            return
+        first = math.floor(self.t_last / self.dt) + 1
+        last = math.floor(now / self.dt)
+        self.t_last = now
+        for k0 in range(first, last + 1, CHUNK):  # a long clock jump in bounded pieces
+            self.track(np.arange(k0, min(k0 + CHUNK, last + 1)) * self.dt)
+
+    def reset(self):
+        """Forget the run (a restarted simulator publishes its truth and burns again)."""
+        self.truth, self.t_last, self.last_burn = None, None, -math.inf
+        self.open_pass = [False] * len(self.stations)
+        self.records.clear()
+
+    # --- measurements --------------------------------------------------------------------------------------
+    def track(self, epochs):
+        t_tr, roe_tr, kep_tr = self.truth
+        if self.last_burn > t_tr:  # burn executed, post-burn truth not in yet: no valid truth after the burn
+            epochs = epochs[epochs < self.last_burn]
+        if not epochs.size:
+            return
+        chief = propagate_chief(kep_tr, epochs - t_tr)
+        roe = propagate(roe_tr, epochs - t_tr, kep_tr[0], kep_tr[2], True, 0.0)
+        theta = gmst(self.jd0 + epochs / SECONDS_PER_DAY)
+        sep = relative_distance(roe, kep_tr[0], chief[:, 4] + chief[:, 5])
+        close_seen = False
+        for s, station in enumerate(self.stations):
+            z = observe(roe, chief, theta, self.site_ef[s], self.site_enu[s])
+            seen = visible(z[:, 2], self.mask)
+            close_seen |= bool(np.any(seen & (sep < self.min_sep)))
+            for j, t in enumerate(epochs):
+                if seen[j] and sep[j] >= self.min_sep:
+                    if not self.open_pass[s]:
+                        self.open_pass[s] = True
+                        self.pass_ids[s] += 1
+                    self.measure(t, s, z[j], chief[j], theta[j], t_tr)
+                elif self.open_pass[s]:
+                    self.open_pass[s] = False
+                    self.pass_closed(s, self.pass_ids[s])
+        if close_seen and not self.too_close:
+            msg = f"waiting for separation: picosatellite visible but closer than {self.min_sep:g} m"
+            self.get_logger().warn(msg)
+            publish_status(self, self.diag_pub, WARN, msg, self._values())
+        self.too_close = close_seen
+
+    def measure(self, t, s, z_true, chief, theta, truth_t):
+        z = add_noise(z_true, self.sigma, self.rng)
+        self.records.append((float(t), s, self.pass_ids[s], z, chief, float(theta), truth_t))
+        name = self.stations[s].name
+        m = RadarMeasurement(station=name, pass_id=self.pass_ids[s], range=float(z[0]), azimuth=float(z[1]),
+                             elevation=float(z[2]), sigma_range=float(self.sigma[0]),
+                             sigma_angle=float(self.sigma[1]))
+        m.header.stamp = sec_to_time(t)
+        m.header.frame_id = name
+        self.meas_pub.publish(m)
+        self.published += 1
+
+    def pass_closed(self, s, pass_id):
+        count = sum(1 for r in self.records if r[1] == s and r[2] == pass_id)
+        name = self.stations[s].name
+        self.get_logger().info(f"{name} pass {pass_id} closed: {count} measurements")
+        if count < self.min_pass:
+            return
+        publish_status(self, self.diag_pub, OK, f"{name} pass {pass_id}: {count} measurements", self._values())
+        self.estimate()
+
+    # --- orbit determination -------------------------------------------------------------------------------
+    def usable(self):
+        """Records after the latest burn (and from post-burn truth) in counted passes; (records, passes)."""
+        recs = [r for r in self.records if r[0] >= self.last_burn and r[6] >= self.last_burn]
+        counts = {}
+        for r in recs:
+            counts[(r[1], r[2])] = counts.get((r[1], r[2]), 0) + 1
+        open_now = {(s, self.pass_ids[s]) for s in range(len(self.stations)) if self.open_pass[s]}
+        good = {key for key, c in counts.items() if c >= self.min_pass and key not in open_now}
+        return [r for r in recs if (r[1], r[2]) in good], good
+
+    def estimate(self):
+        recs, passes = self.usable()
+        if len(passes) < self.passes_required:
+            return
+        recs.sort(key=lambda r: r[0])
+        if recs[-1][0] - recs[0][0] < self.min_arc:
+            return
+        s_idx = [r[1] for r in recs]
+        batch = RadarBatch(t=np.array([r[0] for r in recs]), z=np.array([r[3] for r in recs]),
+                           sigma=np.tile(self.sigma, (len(recs), 1)), chief=np.array([r[4] for r in recs]),
+                           theta=np.array([r[5] for r in recs]), site_ef=np.array([self.site_ef[s] for s in s_idx]),
+                           site_enu=np.array([self.site_enu[s] for s in s_idx]))
+        try:
+            result = batch_least_squares(batch)
+        except ValueError as exc:
+            self.get_logger().error(f"orbit determination failed: {exc}")
+            publish_status(self, self.diag_pub, ERROR, f"orbit determination failed: {exc}", self._values())
+            return
+        self.od_pub.publish(self.od_msg(result, batch.chief[-1], len(passes)))
+        self.estimates += 1
+        a = batch.chief[-1, 0]
+        self.get_logger().info(
+            f"OD #{self.estimates} at t = {result.t_est:.0f} s from {len(passes)} passes / {result.measurements} "
+            f"measurements: a*ROE = {np.array2string(result.x[:6] * a, precision=1)} m, a*da_dot = "
+            f"{result.x[6] * a:.3e} m/s, residual RMS {result.residual_rms:.2f}")
+        publish_status(self, self.diag_pub, OK, f"estimate {self.estimates} published", self._values())
+
+    def od_msg(self, result, chief_kep, passes):
+        kep = np.array(chief_kep, dtype=float)
+        kep[3:] = wrap_angle(kep[3:])
+        chief = array_to_elements(kep)
+        a = chief.semi_major_axis
+        msg = OrbitDetermination(passes=passes, measurements=result.measurements,
+                                 residual_rms=float(result.residual_rms), a_da_dot=float(result.x[6] * a),
+                                 a_da_dot_sigma=float(math.sqrt(result.cov[6, 6]) * a))
+        msg.header.stamp = sec_to_time(self.t_last)
+        msg.header.frame_id = "carrier_rtn"
+        msg.estimate = roe_to_msg(result.x[:6], chief, sec_to_time(result.t_est), covariance=result.cov[:6, :6])
+        return msg
+
+
+def main(args=None):
+    from .spin import run
+
+    return run(RadarODNode, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

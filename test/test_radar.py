@@ -1,0 +1,202 @@
+"""Radar geometry against hand and published values: time, Earth rotation, WGS-84, look angles, passes over TIRA."""
+
+import math
+from datetime import datetime, timedelta, timezone
+
+import numpy as np
+import pytest
+
+from roe_sep.core.constants import MU_EARTH
+from roe_sep.core.dynamics import propagate_chief, sun_synchronous_inclination
+from roe_sep.core.orbit import semi_major_axis
+from roe_sep.core.radar import (
+    TIRA,
+    WGS84_A,
+    WGS84_E2,
+    Station,
+    add_noise,
+    chief_elevation,
+    chief_position_velocity,
+    deputy_position,
+    earth_rotation_matrix,
+    enu_matrix,
+    geodetic_to_ecef,
+    gmst,
+    julian_date,
+    look_angles,
+    look_position,
+    observe,
+    pass_windows,
+    raan_from_ltan,
+    relative_distance,
+    rtn_matrix,
+    sun_right_ascension,
+    visible,
+)
+from roe_sep.core.roe import roe_to_rtn
+
+A = float(semi_major_axis(515e3))
+INC = float(sun_synchronous_inclination(A))
+JD0 = julian_date("2016-07-01T00:00:00")
+MASK = math.radians(10.0)
+
+
+def test_julian_date():
+    assert julian_date("2000-01-01T12:00:00") == 2451545.0
+    assert julian_date("2016-07-01T00:00:00") == 2457570.5
+    assert julian_date("2016-07-01T00:00:00Z") == 2457570.5
+    assert julian_date("2016-07-01T02:00:00+02:00") == 2457570.5
+    assert julian_date(datetime(2016, 7, 1, 6, tzinfo=timezone.utc)) == 2457570.75
+    with pytest.raises(ValueError):
+        julian_date("first of July")
+
+
+def test_gmst_iau1982():
+    # J2000.0: 67310.54841 s of time = 18h 41m 50.54841s = 280.46061837 deg
+    assert math.degrees(gmst(2451545.0)) == pytest.approx(280.46061837, abs=1e-8)
+    # Vallado, Fundamentals of Astrodynamics, Example 3-5: 1992 Aug 20 12:14 UT1 -> 152.578787886 deg
+    assert math.degrees(gmst(2448854.5 + (12 + 14 / 60) / 24)) == pytest.approx(152.578787886, abs=1e-6)
+    # one solar day advances GMST by 360.9856 deg; vectorized
+    g = gmst(np.array([JD0, JD0 + 1.0]))
+    assert math.degrees((g[1] - g[0]) % (2 * math.pi)) == pytest.approx(0.98564736, abs=1e-6)
+
+
+def test_sun_right_ascension_and_ltan():
+    # March equinox 2016-03-20 04:30 UTC (RA 0), June solstice 2016-06-20 22:34 UTC (RA 6 h)
+    assert math.degrees(sun_right_ascension(julian_date("2016-03-20T04:30:00"))) == pytest.approx(0.0, abs=0.02)
+    assert math.degrees(sun_right_ascension(julian_date("2016-06-20T22:34:00"))) == pytest.approx(90.0, abs=0.02)
+    # the apparent solar noon at TIRA on 2016-07-01 is 12:24 UTC (longitude 28.5 min, equation of time -4 min)
+    jd = julian_date("2016-07-01T12:00:00")
+    hour_angle = (gmst(jd) + TIRA.lon - sun_right_ascension(jd) + math.pi) % (2 * math.pi) - math.pi
+    assert math.degrees(hour_angle) * 4.0 == pytest.approx(24.5, abs=0.5)  # minutes of time
+    # LTAN 12:00 puts the node at the Sun, 09:30 2.5 h (37.5 deg) west of it
+    assert raan_from_ltan(12.0, jd) == pytest.approx(sun_right_ascension(jd) % (2 * math.pi))
+    assert math.degrees((raan_from_ltan(9.5, jd) - sun_right_ascension(jd)) % (2 * math.pi)) == \
+        pytest.approx(360.0 - 37.5)
+
+
+def test_wgs84_station_positions():
+    np.testing.assert_allclose(geodetic_to_ecef(0.0, 0.0, 0.0), [WGS84_A, 0.0, 0.0], atol=1e-9)
+    np.testing.assert_allclose(geodetic_to_ecef(math.pi / 2, 0.0, 0.0), [0.0, 0.0, 6356752.314245], atol=1e-6)
+    np.testing.assert_allclose(geodetic_to_ecef(0.0, math.pi / 2, 1000.0), [0.0, WGS84_A + 1000.0, 0.0],
+                               atol=1e-6)
+    # TIRA: on the ellipsoid's normal, geocentric latitude from tan(phi') = (1 - e^2 N/(N + h)) tan(phi)
+    r = TIRA.ecef
+    n = WGS84_A / math.sqrt(1 - WGS84_E2 * math.sin(TIRA.lat) ** 2)
+    assert math.atan2(r[2], math.hypot(r[0], r[1])) == pytest.approx(
+        math.atan((1 - WGS84_E2 * n / (n + TIRA.alt)) * math.tan(TIRA.lat)), abs=1e-12)
+    assert math.degrees(math.atan2(r[1], r[0])) == pytest.approx(7.1296)
+    np.testing.assert_allclose(r, [4023921.553, 503317.140, 4906824.539], atol=1e-3)
+    # the local up vector is the ellipsoid normal at the station
+    up = enu_matrix(TIRA.lat, TIRA.lon)[2]
+    np.testing.assert_allclose(np.cross(up, geodetic_to_ecef(TIRA.lat, TIRA.lon, 1300.0) - r), 0.0, atol=1e-6)
+
+
+def test_look_angles_simple_configurations():
+    site = Station("eq", 0.0, 0.0, 0.0)
+    s, enu = site.ecef, site.enu
+    np.testing.assert_allclose(enu @ enu.T, np.eye(3), atol=1e-15)
+    rng, az, el = look_angles(s + [500e3, 0.0, 0.0], s, enu)
+    assert (rng, math.degrees(el)) == (pytest.approx(500e3), pytest.approx(90.0))
+    d = 100e3
+    for offset, az_deg in (([0, 0, d], 0.0), ([0, d, 0], 90.0), ([0, 0, -d], 180.0), ([0, -d, 0], 270.0)):
+        rng, az, el = look_angles(s + np.array(offset, dtype=float), s, enu)
+        assert math.degrees(az) == pytest.approx(az_deg, abs=1e-9)
+        assert el == pytest.approx(0.0, abs=1e-12) and rng == pytest.approx(d)
+    # 45 deg elevation towards the north-east
+    rng, az, el = look_angles(s + np.array([d, d / math.sqrt(2), d / math.sqrt(2)]), s, enu)
+    assert (math.degrees(az), math.degrees(el), rng) == (pytest.approx(45.0), pytest.approx(45.0),
+                                                          pytest.approx(d * math.sqrt(2)))
+    # round trip at TIRA, vectorized
+    z = np.array([[1.2e6, 0.1, 0.3], [6e5, 6.2, 1.4], [2e6, 3.0, 0.0]])
+    np.testing.assert_allclose(look_angles(look_position(z, TIRA.ecef, TIRA.enu), TIRA.ecef, TIRA.enu), z,
+                               rtol=1e-12, atol=1e-9)
+
+
+def test_chief_orbit_and_rtn_frame():
+    raan, u = 0.7, np.array([0.0, math.pi / 2, 2.0])
+    r, v = chief_position_velocity(A, INC, raan, u)
+    np.testing.assert_allclose(np.linalg.norm(r, axis=-1), A)
+    np.testing.assert_allclose(np.linalg.norm(v, axis=-1), math.sqrt(MU_EARTH / A))
+    np.testing.assert_allclose(np.sum(r * v, axis=-1), 0.0, atol=1e-3)
+    np.testing.assert_allclose(r[0], A * np.array([math.cos(raan), math.sin(raan), 0.0]), atol=1e-6)
+    assert r[1, 2] == pytest.approx(A * math.sin(INC))
+    q = rtn_matrix(r, v)
+    np.testing.assert_allclose(np.einsum("kji,kjl->kil", q, q), np.broadcast_to(np.eye(3), (3, 3, 3)), atol=1e-15)
+    np.testing.assert_allclose(q[..., 1], v / np.linalg.norm(v, axis=-1, keepdims=True), atol=1e-15)
+    assert np.all(np.linalg.det(q) > 0.999)
+
+
+def test_deputy_position_is_chief_plus_rtn_offset():
+    kep = np.array([A, 0.0, INC, 0.4, 0.0, 1.1])
+    roe = np.array([-20.0, 9000.0, -20.6, -589.6, 14.0, 399.8]) / A
+    rc, vc = chief_position_velocity(A, INC, 0.4, 1.1)
+    rel = roe_to_rtn(roe, 1.1)[0] * A
+    np.testing.assert_allclose(deputy_position(roe, kep), rc + rtn_matrix(rc, vc) @ rel, atol=1e-6)
+    np.testing.assert_allclose(np.linalg.norm(deputy_position(roe, kep) - rc), np.linalg.norm(rel))
+    assert relative_distance(roe, A, 1.1) == pytest.approx(np.linalg.norm(rel))
+    # a pure along-track offset lies along the velocity
+    along = deputy_position(np.array([0, 5000.0 / A, 0, 0, 0, 0]), kep) - rc
+    np.testing.assert_allclose(along, 5000.0 * vc / np.linalg.norm(vc), atol=1e-6)
+    # observe = deputy_position -> Earth-fixed -> look angles, broadcast over samples
+    theta = 1.3
+    z = observe(np.stack([roe, 0 * roe]), kep, theta, TIRA.ecef, TIRA.enu)
+    r_ef = earth_rotation_matrix(theta) @ deputy_position(roe, kep)
+    np.testing.assert_allclose(z[0], look_angles(r_ef, TIRA.ecef, TIRA.enu))
+    assert z[1, 2] == pytest.approx(chief_elevation(kep, theta, TIRA.ecef, TIRA.enu))
+    # the Earth-fixed frame turns eastwards: a fixed inertial point drifts west (R3(theta) = R3(-theta)^T)
+    np.testing.assert_allclose(earth_rotation_matrix(0.5) @ [1.0, 0.0, 0.0], [math.cos(0.5), -math.sin(0.5), 0.0])
+
+
+def _elevation(kep0, station):
+    return lambda t: chief_elevation(propagate_chief(kep0, t), gmst(JD0 + t / 86400.0), station.ecef, station.enu)
+
+
+def test_passes_of_the_515km_sso_over_tira():
+    kep0 = np.array([A, 0.0, INC, raan_from_ltan(9.5, JD0), 0.0, 0.3])
+    elevation = _elevation(kep0, TIRA)
+    days = 3
+    windows = pass_windows(elevation, 0.0, days * 86400.0, MASK)
+    assert np.all(windows[:, 1] > windows[:, 0])
+    assert 3 * days <= len(windows) <= 6 * days  # a 515 km SSO sees a mid-latitude site 3-6 times a day above 10 deg
+    duration = windows[:, 1] - windows[:, 0]
+    assert np.all(duration > 60.0) and np.all(duration < 11 * 60.0) and np.max(duration) > 6 * 60.0
+    np.testing.assert_allclose(elevation(windows.reshape(-1)), MASK, atol=2e-5)  # 0.01 s x ~1 mrad/s near the horizon
+    hours = (windows[:, 0] % 86400.0) / 3600.0
+    # LTAN 09:30: morning (ascending) and evening (descending) passes only, as in seed 001 Fig. 7
+    assert np.all(((hours > 6) & (hours < 11)) | ((hours > 19) & (hours < 24)))
+    # against a brute-force 1 s scan of the first day
+    t = np.arange(0.0, 86400.0, 1.0)
+    up = visible(elevation(t), MASK)
+    rises = t[1:][up[1:] & ~up[:-1]]
+    first = windows[windows[:, 0] < 86400.0]
+    assert len(rises) == len(first)
+    np.testing.assert_allclose(first[:, 0], rises, atol=1.0)
+
+
+def test_pass_in_progress_at_the_window_edges():
+    windows = pass_windows(lambda t: np.sin(2 * math.pi * t / 1000.0), 0.0, 1500.0, 0.0, step=7.0)
+    np.testing.assert_allclose(windows, [[0.0, 500.0], [1000.0, 1500.0]], atol=0.01)
+    assert pass_windows(lambda t: -1.0 + 0 * t, 0.0, 100.0, 0.0).shape == (0, 2)
+
+
+def test_noise_is_seeded_and_wraps_azimuth():
+    z = np.tile([1e6, 2 * math.pi - 1e-5, 0.3], (20000, 1))
+    sigma = np.array([10.0, math.radians(0.01), math.radians(0.01)])
+    a = add_noise(z, sigma, np.random.default_rng(5))
+    np.testing.assert_array_equal(a, add_noise(z, sigma, np.random.default_rng(5)))
+    assert np.all((a[:, 1] >= 0) & (a[:, 1] < 2 * math.pi))
+    assert np.any(a[:, 1] < 1.0)  # wrapped through north
+    dev = a - z
+    dev[:, 1] = (dev[:, 1] + math.pi) % (2 * math.pi) - math.pi
+    np.testing.assert_allclose(dev.std(axis=0), sigma, rtol=0.03)
+    np.testing.assert_allclose(dev.mean(axis=0) / sigma, 0.0, atol=0.03)
+
+
+def test_utc_epoch_of_a_pass_is_reasonable():
+    # seed 001: TIRA passes of BIROS on 01-02/07/2016 in the evening and the next morning (~19:35-21:10, ~8:30-10:10)
+    kep0 = np.array([A, 0.0, INC, raan_from_ltan(9.5, JD0), 0.0, 0.3])
+    windows = pass_windows(_elevation(kep0, TIRA), 0.0, 86400.0, MASK)
+    start = datetime(2016, 7, 1, tzinfo=timezone.utc)
+    evening = [start + timedelta(seconds=float(r)) for r, _ in windows if r > 12 * 3600]
+    assert len(evening) >= 2 and all(18 <= e.hour <= 23 for e in evening)
