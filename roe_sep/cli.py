@@ -200,6 +200,31 @@ def cmd_run(args):
     return 0 if rep["safe"] else 1
 
 
+def _delegated(argv):
+    """``replay`` and ``bag recover`` own their argument parsing (and ``--help``): hand them the rest."""
+    if argv[:1] == ["replay"]:
+        from .bag import replay
+
+        return replay.main(argv[1:])
+    if argv[:2] == ["bag", "recover"]:
+        from .bag import recover
+
+        return recover.main(argv[2:])
+    return None
+
+
+def cmd_bag_info(args):
+    from .bag import BagError, info
+    from .bag.reader import format_info
+
+    try:
+        d = info(args.bag)
+    except (BagError, OSError) as exc:
+        raise ValueError(str(exc)) from exc
+    print(json.dumps(d, indent=2) if args.json else format_info(d))
+    return 0
+
+
 def build_parser():
     parser = argparse.ArgumentParser(prog="roe-sep", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
@@ -229,10 +254,24 @@ def build_parser():
     p.add_argument("--timeout", type=float, default=1800.0, help="wall-time limit [s] (default 1800)")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
     p.set_defaults(func=cmd_run)
+
+    sub.add_parser("replay", add_help=False, help="play a bag back onto its topics (roe-sep replay --help)")
+
+    bag = sub.add_parser("bag", help="inspect or recover a bag").add_subparsers(dest="bag_command", required=True)
+    p = bag.add_parser("info", help="topics, types, counts, QoS and duration of a bag")
+    p.add_argument("bag", help="bag directory or .mcap file")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=cmd_bag_info)
+    bag.add_parser("recover", add_help=False, help="rebuild a complete bag from an unfinished recording "
+                   "(roe-sep bag recover --help)")
     return parser
 
 
 def main(argv=None):
+    argv = sys.argv[1:] if argv is None else list(argv)
+    delegated = _delegated(argv)
+    if delegated is not None:
+        return delegated
     args = build_parser().parse_args(argv)
     try:
         code = args.func(args)

@@ -1,0 +1,19 @@
+"""Bags: rosbag2-compatible MCAP recording, reading, recovery and replay.
+
+Modules, one job each: :mod:`.definitions` (schema text and type hash of a message type), :mod:`.qos` (QoS
+profiles <-> rosbag2 dictionaries), :mod:`.metadata` (``metadata.yaml``), :mod:`.writer` (the MCAP bag writer),
+:mod:`.reader` (topics, messages, :func:`info`), :mod:`.recover` (rebuild a bag from an unfinished file) and
+:mod:`.replay` (``roe-sep replay``, the only one that needs rclpy). The recorder node is
+:mod:`roe_sep.nodes.recorder`.
+"""
+
+
+class BagError(Exception):
+    """A bag cannot be read or written; the message says which path and why."""
+
+
+def info(path) -> dict:
+    """Summary of a bag directory or ``.mcap`` file: topics, types, counts, duration (see :func:`.reader.info`)."""
+    from .reader import info as _info
+
+    return _info(path)

@@ -1,0 +1,146 @@
+"""Reading bags written by :mod:`roe_sep.bag.writer` (or rosbag2 with the mcap storage plugin), no rclpy.
+
+A bag is a directory with ``metadata.yaml`` and one ``.mcap`` file, or a bare ``.mcap`` file. :func:`topics` and
+:func:`messages` need a complete file (summary section); :func:`info` also describes an unfinished one (recorder
+killed) by scanning it record by record, and says ``complete: false`` -- ``roe-sep bag recover`` repairs it.
+"""
+
+import collections
+from pathlib import Path
+
+from mcap.reader import make_reader
+
+from . import BagError, metadata
+
+Message = collections.namedtuple("Message", "topic type data log_time publish_time sequence")
+
+
+def resolve(path):
+    """``(bag directory or None, .mcap file)`` for a bag directory or an ``.mcap`` file; BagError if neither."""
+    p = Path(path)
+    if p.is_file():
+        return None, p
+    if not p.is_dir():
+        raise BagError(f"{path}: no such bag (expected a bag directory or an .mcap file)")
+    names = []
+    if (p / metadata.FILE_NAME).is_file():
+        try:
+            names = metadata.read(p).get("relative_file_paths") or []
+        except Exception as exc:  # noqa: BLE001  (a damaged metadata.yaml: fall back to the directory listing)
+            names = []
+            _ = exc
+    files = [p / n for n in names if (p / n).is_file()] or sorted(p.glob("*.mcap"))
+    if not files:
+        raise BagError(f"{path}: not a bag (no .mcap file in the directory)")
+    if len(files) > 1:
+        raise BagError(f"{path}: split bags are not supported ({len(files)} .mcap files)")
+    return p, files[0]
+
+
+def _summary(fh, file):
+    try:
+        reader = make_reader(fh)
+        summary = reader.get_summary()
+    except Exception as exc:  # noqa: BLE001  (truncated or not an MCAP file)
+        raise BagError(f"{file}: no MCAP summary ({exc.__class__.__name__}: {exc}); the recording did not "
+                       f"finish -- recover it with `roe-sep bag recover`") from None
+    if summary is None or summary.statistics is None:
+        raise BagError(f"{file}: MCAP file without summary/statistics; recover it with `roe-sep bag recover`")
+    return reader, summary
+
+
+def topics(path) -> list:
+    """Per topic: name, type, offered_qos_profiles (list of dicts), type_description_hash, message_count,
+    definition (schema text), in channel order."""
+    _, file = resolve(path)
+    with open(file, "rb") as fh:
+        _, summary = _summary(fh, file)
+    counts = summary.statistics.channel_message_counts
+    out = []
+    for cid, ch in sorted(summary.channels.items()):
+        schema = summary.schemas.get(ch.schema_id)
+        out.append({"name": ch.topic, "type": schema.name if schema else "",
+                    "serialization_format": ch.message_encoding,
+                    "offered_qos_profiles": metadata.parse_qos(ch.metadata.get("offered_qos_profiles", "")),
+                    "type_description_hash": ch.metadata.get("topic_type_hash", ""),
+                    "message_count": counts.get(cid, 0),
+                    "definition": schema.data.decode("utf-8", "replace") if schema else ""})
+    return out
+
+
+def messages(path, topics=None):
+    """Messages in log-time order as :class:`Message` (serialized CDR ``data``, times in ns)."""
+    _, file = resolve(path)
+    with open(file, "rb") as fh:
+        reader, _ = _summary(fh, file)
+        for schema, channel, msg in reader.iter_messages(topics=topics, log_time_order=True):
+            yield Message(channel.topic, schema.name if schema else "", bytes(msg.data), msg.log_time,
+                          msg.publish_time, msg.sequence)
+
+
+def info(path) -> dict:
+    """Topics, types, counts and times of a bag; an unfinished file is scanned (``complete`` false)."""
+    bag_dir, file = resolve(path)
+    result = {"path": str(bag_dir or file), "file": str(file), "storage_identifier": metadata.STORAGE_ID,
+              "size_bytes": file.stat().st_size}
+    try:
+        with open(file, "rb") as fh:
+            reader, summary = _summary(fh, file)
+            header = reader.get_header()
+        stats = summary.statistics
+        counts = stats.channel_message_counts
+        chans = [(ch, summary.schemas.get(ch.schema_id), counts.get(cid, 0))
+                 for cid, ch in sorted(summary.channels.items())]
+        count, start, end = stats.message_count, stats.message_start_time, stats.message_end_time
+        result.update(complete=True, profile=header.profile, library=header.library)
+    except BagError:
+        from .recover import Scan
+
+        scan = Scan(file)
+        chans_by_id, schemas, per = {}, {}, collections.Counter()
+        start = end = None
+        for rec in scan.records():
+            kind = type(rec).__name__
+            if kind == "Schema":
+                schemas[rec.id] = rec
+            elif kind == "Channel":
+                chans_by_id[rec.id] = rec
+            elif kind == "Message":
+                per[rec.channel_id] += 1
+                start = rec.log_time if start is None else min(start, rec.log_time)
+                end = rec.log_time if end is None else max(end, rec.log_time)
+        chans = [(ch, schemas.get(ch.schema_id), per[cid]) for cid, ch in sorted(chans_by_id.items())]
+        count = sum(per.values())
+        result.update(complete=False, profile=scan.profile, library=scan.library,
+                      recoverable_bytes=scan.valid_bytes, damage=scan.reason)
+    if count == 0:
+        start = end = 0
+    result.update(
+        message_count=count, start_ns=start, end_ns=end, duration_s=(end - start) * 1e-9,
+        topics=[{"name": ch.topic, "type": schema.name if schema else "", "message_count": n,
+                 "serialization_format": ch.message_encoding,
+                 "qos": [{k: q[k] for k in ("reliability", "durability", "history", "depth")}
+                         for q in metadata.parse_qos(ch.metadata.get("offered_qos_profiles", ""))],
+                 "type_description_hash": ch.metadata.get("topic_type_hash", "")}
+                for ch, schema, n in chans])
+    if bag_dir is not None and (bag_dir / metadata.FILE_NAME).is_file():
+        result["ros_distro"] = metadata.read(bag_dir).get("ros_distro")
+    return result
+
+
+def format_info(d: dict) -> str:
+    """Human-readable :func:`info` (the layout of ``ros2 bag info``)."""
+    lines = [f"Files:             {d['file']}",
+             f"Bag size:          {d['size_bytes'] / 1024:.1f} KiB",
+             f"Storage id:        {d['storage_identifier']}" + ("" if d["complete"] else
+                                                                "   (UNFINISHED: run `roe-sep bag recover`)"),
+             f"Duration:          {d['duration_s']:.3f}s",
+             f"Start:             {d['start_ns'] * 1e-9:.9f}",
+             f"End:               {d['end_ns'] * 1e-9:.9f}",
+             f"Messages:          {d['message_count']}"]
+    for i, t in enumerate(d["topics"]):
+        qos = ", ".join(f"{q['reliability']}/{q['durability']}" for q in t["qos"]) or "-"
+        lines.append(("Topic information: " if i == 0 else " " * 19)
+                     + f"Topic: {t['name']} | Type: {t['type']} | Count: {t['message_count']} | "
+                       f"Serialization Format: {t['serialization_format']} | QoS: {qos}")
+    return "\n".join(lines)

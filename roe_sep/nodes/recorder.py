@@ -1,0 +1,220 @@
+"""recorder: logs topics to a rosbag2-compatible MCAP bag directory (``ros2 bag record -s mcap`` equivalent).
+
+Every 0.5 s (wall time) it looks for new topics that have a publisher and subscribes to them with ``raw=True``
+(serialized CDR bytes, never deserialized, so a bad message cannot stop it), with a QoS that matches every
+publisher's offer: RELIABLE if all publishers are reliable, TRANSIENT_LOCAL if all are transient-local -- latched
+messages published before the recorder started are recorded too. Each message is written with
+``log_time`` = the node clock at reception (sim time under ``use_sim_time``; messages arriving before the first
+``/clock`` wait and take the first clock time) and ``publish_time`` = the DDS source timestamp.
+File format and crash safety: :mod:`roe_sep.bag.writer` (flushed and fsync'ed every ``flush_period``);
+SIGINT/SIGTERM close the file (summary, footer, ``metadata.yaml``); after a SIGKILL run
+``roe-sep bag recover``.
+
+Parameters:
+
+* ``output`` (string, ''): bag directory to create; '' = ``rosbag2_YYYY_MM_DD-HH_MM_SS`` in the working directory.
+  An existing non-empty directory is refused (exit code 2).
+* ``topics`` (string array, empty): topics to record; empty = every topic (hidden ``_``-topics excluded).
+* ``exclude`` (string array, empty): topics never recorded.
+* ``flush_period`` (double, s, 1.0): wall-time period of forced chunk completion + ``fsync``.
+
+Publishes ``/diagnostics`` (1 Hz wall time) with the message counts per topic.
+"""
+
+import sys
+import time
+from datetime import datetime
+
+from diagnostic_msgs.msg import DiagnosticArray
+from rcl_interfaces.msg import ParameterDescriptor
+from rclpy.clock import Clock, ClockType
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+from ..bag import BagError, definitions
+from ..bag import qos as bag_qos
+from ..bag.writer import BagWriter
+from . import qos
+from .diagnostics import ERROR, OK, WARN, publish_status
+from .params import ParameterError, finite, require
+
+DISCOVERY_PERIOD = 0.5  # s, wall time
+DIAGNOSTICS_PERIOD = 1.0  # s, wall time
+SUBSCRIPTION_DEPTH = 1000
+PENDING_LIMIT = 10000  # messages held while waiting for the first /clock
+
+
+def absolute(name: str) -> str:
+    return name if name.startswith("/") else "/" + name
+
+
+def hidden(name: str) -> bool:
+    return any(part.startswith("_") for part in name.split("/"))
+
+
+class RecorderNode(Node):
+    def __init__(self):
+        super().__init__("recorder")
+
+        def declare(name, default, description):
+            return self.declare_parameter(name, default, ParameterDescriptor(description=description,
+                                                                             dynamic_typing=True)).value
+
+        output = declare("output", "", "bag directory to create ('' = rosbag2_YYYY_MM_DD-HH_MM_SS)")
+        topics = self.declare_parameter("topics", Parameter.Type.STRING_ARRAY, ParameterDescriptor(
+            description="topics to record (empty = all)")).value
+        exclude = self.declare_parameter("exclude", Parameter.Type.STRING_ARRAY, ParameterDescriptor(
+            description="topics not to record")).value
+        self.flush_period = declare("flush_period", 1.0, "s (wall time) between forced flushes to the disk")
+
+        require("output", isinstance(output, str), output, "a directory path (string)")
+        for name, value in (("topics", topics), ("exclude", exclude)):
+            require(name, value is None or all(isinstance(t, str) and t.strip() for t in value), value,
+                    "a list of topic names")
+        require("flush_period", finite(self.flush_period) and self.flush_period > 0, self.flush_period,
+                "a finite positive number of seconds")
+        self.topics = {absolute(t.strip()) for t in topics or []}
+        self.exclude = {absolute(t.strip()) for t in exclude or []}
+        self.sim_time = bool(self.get_parameter("use_sim_time").value)
+        try:
+            self.writer = BagWriter(output or datetime.now().strftime("rosbag2_%Y_%m_%d-%H_%M_%S"))
+        except (BagError, OSError) as exc:
+            raise ParameterError(f"parameter 'output': {exc}") from exc
+
+        self.subs = {}
+        self.skipped = set()
+        self.pending = []  # (topic, data, publish_time) received before the first /clock under sim time
+        self.errors = 0
+        self.last_error = ""
+        self._last_error_log = 0.0
+        self.diag_pub = self.create_publisher(DiagnosticArray, qos.DIAGNOSTICS_TOPIC, qos.DIAGNOSTICS)
+        wall = Clock(clock_type=ClockType.STEADY_TIME)
+        self.create_timer(DISCOVERY_PERIOD, self.discover, clock=wall)
+        self.create_timer(float(self.flush_period), self.flush, clock=wall)
+        self.create_timer(DIAGNOSTICS_PERIOD, self.report, clock=wall)
+        self.get_logger().info(
+            f"recording to {self.writer.path} ({'all topics' if not self.topics else sorted(self.topics)}"
+            f"{', excluding ' + str(sorted(self.exclude)) if self.exclude else ''}), "
+            f"flush every {self.flush_period:g} s")
+        self.discover()
+
+    # -- topics --------------------------------------------------------------------------------------------------
+    def wanted(self, name: str) -> bool:
+        if name in self.exclude:
+            return False
+        return name in self.topics if self.topics else not hidden(name)
+
+    def discover(self):
+        try:
+            for name, types in self.get_topic_names_and_types():
+                if name in self.subs or name in self.skipped or not self.wanted(name):
+                    continue
+                publishers = self.get_publishers_info_by_topic(name)
+                if publishers:
+                    self.subscribe(name, types, publishers)
+        except Exception as exc:  # noqa: BLE001  (graph queries fail during shutdown)
+            self._error(f"topic discovery failed: {exc}")
+
+    def subscribe(self, name, types, publishers):
+        type_name = types[0]
+        if len(types) > 1:
+            self.get_logger().warning(f"{name} has several types {types}; recording {type_name}")
+        try:
+            cls = definitions.message_class(type_name)
+        except Exception as exc:  # noqa: BLE001
+            self.skipped.add(name)
+            self._error(f"not recording {name}: type {type_name} is not available ({exc})")
+            return
+        try:
+            definition = definitions.full_text(type_name)
+        except (definitions.DefinitionNotFound, ValueError, RecursionError) as exc:
+            definition = ""
+            self.get_logger().warning(f"{name}: no message definition for {type_name} ({exc}); schema left empty")
+        offers = [bag_qos.from_rclpy(p.qos_profile) for p in publishers]
+        hashes = [str(p.topic_type_hash) for p in publishers if str(p.topic_type_hash) != "INVALID"]
+        reliable, transient = bag_qos.request_for_offers(offers)
+        profile = QoSProfile(
+            history=HistoryPolicy.KEEP_LAST, depth=SUBSCRIPTION_DEPTH,
+            reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
+            durability=DurabilityPolicy.TRANSIENT_LOCAL if transient else DurabilityPolicy.VOLATILE)
+        self.writer.add_topic(name, type_name, offers, hashes[0] if hashes else "", definition)
+        self.subs[name] = self.create_subscription(
+            cls, name, lambda data, info, topic=name: self.on_message(topic, data, info), profile, raw=True)
+        self.get_logger().info(f"recording {name} [{type_name}] "
+                               f"({'reliable' if reliable else 'best_effort'}, "
+                               f"{'transient_local' if transient else 'volatile'})")
+
+    # -- messages ------------------------------------------------------------------------------------------------
+    def on_message(self, topic, data, info):
+        try:
+            source = info.get("source_timestamp") if isinstance(info, dict) else None
+            now = self.get_clock().now().nanoseconds
+            if self.sim_time and now == 0 and len(self.pending) < PENDING_LIMIT:
+                self.pending.append((topic, data, source))
+                return
+            self._write_pending(now)
+            self.writer.write(topic, data, now, source or now)
+        except Exception as exc:  # noqa: BLE001  (a node never dies on a bad message)
+            self._error(f"message on {topic} not recorded: {exc}")
+
+    def _write_pending(self, now):
+        pending, self.pending = self.pending, []
+        for topic, data, source in pending:
+            self.writer.write(topic, data, now, source or now)
+
+    def flush(self):
+        try:
+            now = self.get_clock().now().nanoseconds
+            if self.pending and (now or not self.sim_time):
+                self._write_pending(now)
+            if self.writer.dirty:
+                self.writer.flush()
+        except Exception as exc:  # noqa: BLE001  (disk full, ...): keep the node alive and say so
+            self._error(f"flush to {self.writer.path} failed: {exc}")
+
+    # -- status --------------------------------------------------------------------------------------------------
+    def _error(self, text):
+        self.errors += 1
+        self.last_error = text
+        if time.monotonic() - self._last_error_log > 1.0:
+            self._last_error_log = time.monotonic()
+            self.get_logger().error(text)
+
+    def report(self):
+        values = {"output": str(self.writer.path), "topics": len(self.subs), "messages": self.writer.message_count,
+                  "errors": self.errors}
+        values.update({name: t["message_count"] for name, t in sorted(self.writer.topics.items())})
+        if self.errors:
+            level, text = (ERROR if "flush" in self.last_error else WARN), self.last_error
+        else:
+            level, text = OK, f"recording {len(self.subs)} topics, {self.writer.message_count} messages"
+        try:
+            publish_status(self, self.diag_pub, level, text, values)
+        except Exception:  # noqa: BLE001  (context shutting down)
+            pass
+
+    def destroy_node(self):
+        writer = getattr(self, "writer", None)
+        if writer is not None:
+            try:
+                self._write_pending(self.get_clock().now().nanoseconds)
+            except Exception:  # noqa: BLE001
+                pass
+            writer.close()
+            text = f"bag closed: {writer.path} ({writer.message_count} messages, {len(writer.topics)} topics)"
+            if self.context.ok():
+                self.get_logger().info(text)
+            else:  # after SIGINT/SIGTERM the context is already shut down: no /rosout any more
+                print(f"[INFO] [recorder]: {text}", file=sys.stderr)
+        return super().destroy_node()
+
+
+def main(args=None):
+    from .spin import run
+
+    return run(RecorderNode, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
