@@ -77,7 +77,7 @@ class SimNode(Node):
         self.approval_timeout = declare(self, "approval_timeout", 10.0, "wall s a burn may wait for its approval")
         self.distance_step = declare(self, "distance_step", 10.0, "s, sampling of the minimum-distance tracking")
         self.departure = declare(self, "departure_distance", 1000.0,
-                                 "m, the minimum distance is tracked once the picosatellite is this far away")
+                                 "m, closest approaches are tracked once the picosatellite is this far away")
         self.j2 = declare(self, "j2", True, "secular J2 in the truth dynamics")
 
         for name, value in (("duration", self.duration), ("time_step", self.time_step),
@@ -124,6 +124,7 @@ class SimNode(Node):
         self.burns = 0
         self.min_dist = (math.inf, math.nan)
         self.departed = False
+        self.tail = (np.empty(0), np.empty(0))  # last samples of the previous step (local minima across steps)
         self.next_status = 3600.0
         self.done = False
 
@@ -237,17 +238,30 @@ class SimNode(Node):
             return
         if self.truth.separated:
             times, dist = self.truth.distances(self.t, t_to, self.distance_step)
-            if not self.departed:
-                out = np.nonzero(dist >= self.departure)[0]
-                self.departed = out.size > 0
-                times, dist = (times[out[0]:], dist[out[0]:]) if self.departed else (times[:0], dist[:0])
-            if dist.size and dist.min() < self.min_dist[0]:
-                k = int(np.argmin(dist))
-                self.min_dist = (float(dist[k]), float(times[k]))
+            self._track_closest_approach(times, dist)
         while self.next_truth <= t_to:
             self._publish_truth(self.next_truth)
             self.next_truth += self.truth_period
         self.t = t_to
+
+    def _track_closest_approach(self, times, dist):
+        """Closest approach after the departure: the smallest local minimum of |r| once it exceeded
+        ``departure_distance`` (the receding start of the separation itself is no approach)."""
+        times = np.concatenate([self.tail[0], times])
+        dist = np.concatenate([self.tail[1], dist])
+        if not self.departed:
+            out = np.nonzero(dist >= self.departure)[0]
+            if out.size == 0:
+                self.tail = (times[-2:], dist[-2:])
+                return
+            self.departed = True
+            times, dist = times[out[0]:], dist[out[0]:]
+        inner = np.nonzero((dist[1:-1] <= dist[:-2]) & (dist[1:-1] < dist[2:]))[0] + 1
+        if inner.size:
+            k = inner[np.argmin(dist[inner])]
+            if dist[k] < self.min_dist[0]:
+                self.min_dist = (float(dist[k]), float(times[k]))
+        self.tail = (times[-2:], dist[-2:])
 
     def _execute(self, burn: PendingBurn):
         m = burn.maneuver
