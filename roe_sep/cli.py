@@ -177,7 +177,12 @@ def print_run(rep: dict, out=None):
         w(f"  time to initial conditions = {rep['time_to_ic'] / 3600:.1f} h after the ejection\n")
     if rep["final_roe"]:
         w("  final truth a*ROE [da dl dex dey dix diy] = [" + " ".join(f"{x:.1f}" for x in rep["final_roe"]) + "] m\n")
-    w(f"  minimum distance after departure = {rep['min_distance']:.1f} m\n")
+    md = rep["min_distance"]
+    w(f"  closest approach after departure = {'none' if md is None else f'{md:.1f} m'}\n")
+    if rep["ic"]:
+        ic = rep["ic"]
+        w(f"  truth at the IC epoch t = {ic['epoch']:.0f} s: a*ROE = [" + " ".join(f"{x:.1f}" for x in ic["roe"])
+          + f"] m, e/i angle {ic['ei_angle_deg']:.1f} deg, min R-N {ic['min_rn_distance']:.0f} m\n")
     if rep["od"]:
         od = rep["od"]
         w(f"  first OD: t = {od['epoch']:.0f} s, {od['passes']} passes, {od['measurements']} measurements, "
@@ -249,7 +254,7 @@ def build_parser():
     p.add_argument("--config", help="scenario YAML")
     p.add_argument("--params", help="ROS parameter YAML overriding node parameters ({node: {ros__parameters: ...}})")
     p.add_argument("--out", default="out/run", help="output directory: bag/, report.json, logs/ (default out/run)")
-    p.add_argument("--duration", type=float, help="sim seconds to run (default 388800 = 4.5 days)")
+    p.add_argument("--duration", type=float, help="sim seconds to run (default 280800 = 3.25 days)")
     p.add_argument("--seed", type=int, help="seed of the simulated dispersions (default 0)")
     p.add_argument("--timeout", type=float, default=1800.0, help="wall-time limit [s] (default 1800)")
     p.add_argument("--json", action="store_true", help="print the report as JSON")

@@ -3,7 +3,9 @@
 Keys: ``maneuvers`` (each executed burn: purpose, spacecraft, epoch, u, dv RTN and |dv|), ``dv_total`` and
 ``dv_by_purpose`` (carrier burns, m/s), ``final_roe`` (truth a*ROE at the end, m), ``min_distance`` (closest
 approach after the initial departure, m, with its epoch), ``time_to_ic`` (ejection to the last acquisition burn, s),
-``od`` (first solution: epoch, passes, 1-sigma and error against truth), ``criteria`` (each pass/fail) and ``safe``.
+``od`` (first solution: epoch, passes, 1-sigma and error against truth), ``ic`` (truth at the IC epoch and each
+initial condition), ``criteria`` (each pass/fail) and ``safe`` (the safety criteria only: keep-out, passive safety,
+evaporation, closest approach, every plan approved by the monitor).
 """
 
 import math
@@ -12,7 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from .core.dynamics import propagate
-from .core.monitor import ERROR_CRITERIA, MonitorLimits
+from .core.monitor import ERROR_CRITERIA, MonitorLimits, in_fov
+from .core.safety import min_rn_distance
 from .nodes import qos
 
 ROE_KEYS = ("a_da", "a_dl", "a_dex", "a_dey", "a_dix", "a_diy")
@@ -34,6 +37,43 @@ def read_topics(bag_dir, topics):
         for m in read_ros2_messages(str(path), topics=list(topics)):
             out[m.channel.topic].append((m.log_time_ns * 1e-9, m.ros_msg))
     return out
+
+
+def truth_at(truth, t, truth_da_dot):
+    """Truth a*ROE [m] at ``t`` from the last truth sample at or before it (the simulator publishes one right after
+    every burn, so none lies in between) and the true drag drift [m/day]; None without a sample."""
+    before = [m for _, m in truth if _stamp(m.header.stamp) <= t]
+    if not before or not math.isfinite(truth_da_dot):
+        return None
+    ref = before[-1]
+    a = ref.chief.semi_major_axis
+    roe = np.array([getattr(ref, k) for k in ROE_KEYS]) / a
+    return propagate(roe, t - _stamp(ref.header.stamp), a, ref.chief.inclination, True,
+                     truth_da_dot / a / 86400.0) * a
+
+
+def initial_conditions(truth, plans, ic_burns, truth_da_dot, limits, drift_tolerance=5.0, ei_tolerance_deg=10.0):
+    """The experiment's initial conditions checked on truth at the IC epoch of the last acquisition plan: mean
+    along-track separation in [a_dl_min, a_dl_max], |a da| <= ``drift_tolerance`` m, e/i (anti-)parallel within
+    ``ei_tolerance_deg`` with the minimum R-N distance (Eq. 25) of at least ``min_rn_distance``, in the FOV."""
+    if not plans or not ic_burns:
+        return None
+    t_ic = _stamp(plans[-1][1].aimed.header.stamp)
+    roe = truth_at(truth, t_ic, truth_da_dot)
+    if roe is None:
+        return None
+    ei = math.degrees(math.atan2(roe[2] * roe[5] - roe[3] * roe[4], roe[2] * roe[4] + roe[3] * roe[5]))
+    ei_off = min(abs(ei), 180.0 - abs(ei))  # deviation from parallel or anti-parallel
+    rn = float(min_rn_distance(roe))
+    checks = {
+        "along_track": bool(limits.a_dl_min <= abs(roe[1]) <= limits.a_dl_max),
+        "drift": bool(abs(roe[0]) <= drift_tolerance),
+        "ei_parallel": bool(ei_off <= ei_tolerance_deg),
+        "min_rn_distance": bool(rn >= limits.min_rn_distance),
+        "fov": bool(in_fov(roe, limits)),
+    }
+    return {"epoch": t_ic, "roe": roe.tolist(), "ei_angle_deg": ei, "min_rn_distance": rn, "checks": checks,
+            "reached": all(checks.values())}
 
 
 def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()):
@@ -67,17 +107,13 @@ def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()
     last = truth_checks[-1] if truth_checks else None
     plan_checks = [s for _, s in data[qos.PLAN_CHECK_TOPIC]]
     criteria = {name: bool(truth_checks) and name not in failed_ever for name in ERROR_CRITERIA}
-    criteria["min_distance"] = math.isfinite(min_distance) and min_distance >= limits.keep_out
+    criteria["min_distance"] = not math.isnan(min_distance) and min_distance >= limits.keep_out  # inf: no approach
     criteria["plans_approved"] = bool(plan_checks) and all(s.safe for s in plan_checks)
-    if last is not None:
-        for name in ("drift_direction", "radar_separability", "fov"):
-            criteria[f"{name}_at_end"] = name not in last.violations
-    ic_reached = bool(ic_burns) and final_roe is not None and \
-        limits.a_dl_min <= abs(final_roe[1]) <= limits.a_dl_max and last is not None and last.in_fov
-    criteria["ic_reached"] = ic_reached
     safe = all(criteria[name] for name in (*ERROR_CRITERIA, "min_distance", "plans_approved"))
-
     truth_da_dot = float(values.get("truth_a_da_dot_m_per_day", "nan"))
+    ic = initial_conditions(truth, data[qos.ACQUISITION_PLAN_TOPIC], ic_burns, truth_da_dot, limits)
+    criteria["ic_reached"] = bool(ic and ic["reached"])
+
     od = data[qos.OD_TOPIC]
     od_report = None
     if od:
@@ -90,13 +126,8 @@ def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()
                      "estimate": [getattr(est, k) for k in ROE_KEYS],
                      "sigma": np.sqrt(np.clip(np.diag(cov), 0, None)).tolist(),
                      "solutions": len(od)}
-        before = [m for _, m in truth if _stamp(m.header.stamp) <= t_od]
-        if before and math.isfinite(truth_da_dot):
-            ref = before[-1]  # the sim publishes right after every burn: no burn between ref and t_od
-            a = ref.chief.semi_major_axis
-            roe = np.array([getattr(ref, k) for k in ROE_KEYS]) / a
-            at_od = propagate(roe, t_od - _stamp(ref.header.stamp), a, ref.chief.inclination, True,
-                              truth_da_dot / a / 86400.0) * a
+        at_od = truth_at(truth, t_od, truth_da_dot)
+        if at_od is not None:
             err = np.array(od_report["estimate"]) - at_od
             od_report["error"] = err.tolist()
             od_report["nees"] = float(err @ np.linalg.solve(cov, err)) if np.any(cov) else None
@@ -111,10 +142,12 @@ def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()
         "time_to_ic": (ic_burns[-1]["epoch"] - ejection["epoch"]) if (ic_burns and ejection) else None,
         "final_roe": final_roe,
         "final_epoch": _stamp(final.header.stamp) if final else None,
-        "min_distance": min_distance,
+        "min_distance": min_distance if math.isfinite(min_distance) else None,  # None: no approach after departure
         "min_distance_epoch": float(values.get("min_distance_time_s", "nan")),
         "truth_drag_a_da_dot_m_per_day": truth_da_dot,
         "od": od_report,
+        "ic": ic,
+        "end_violations": list(last.violations) if last is not None else None,  # informational (drag drift on)
         "plan_checks": [{"source": s.source, "plan_stamp": _stamp(s.plan_stamp), "safe": s.safe,
                          "violations": list(s.violations)} for s in plan_checks],
         "duration": duration,

@@ -144,7 +144,7 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
         sim["seed"] = int(seed)
     params_file = out / "params.yaml"
     params_file.write_text(yaml.safe_dump(parameters(config, bag_dir.resolve(), overrides), sort_keys=False))
-    sim_duration = float(sim.get("duration", 388800.0))
+    sim_duration = float(sim.get("duration", 280800.0))
 
     deployment = Deployment(out, params_file, ros_environment(domain_id))
     try:

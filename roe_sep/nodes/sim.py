@@ -65,7 +65,7 @@ class SimNode(Node):
         scenario_file = declare(self, "scenario_file", "", "scenario YAML ('' = embedded default)")
         self.seed = declare(self, "seed", 0, "seed of the ejection/burn/drag dispersions")
         self.disperse = declare(self, "disperse", True, "apply execution errors and the drag uncertainty")
-        self.duration = declare(self, "duration", 388800.0, "s, sim time at which the run ends")
+        self.duration = declare(self, "duration", 280800.0, "s, sim time at which the run ends")
         self.time_step = declare(self, "time_step", 60.0, "s of sim time per clock tick")
         tick_period = declare(self, "tick_period", 0.01, "wall s between clock ticks")
         self.truth_period = declare(self, "truth_period", 60.0, "s, sim-time period of the truth topics")
@@ -247,6 +247,8 @@ class SimNode(Node):
     def _track_closest_approach(self, times, dist):
         """Closest approach after the departure: the smallest local minimum of |r| once it exceeded
         ``departure_distance`` (the receding start of the separation itself is no approach)."""
+        if self.tail[0].size and times.size and times[0] <= self.tail[0][-1]:  # consecutive steps share an end
+            times, dist = times[1:], dist[1:]
         times = np.concatenate([self.tail[0], times])
         dist = np.concatenate([self.tail[1], dist])
         if not self.departed:

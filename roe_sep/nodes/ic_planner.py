@@ -1,0 +1,236 @@
+"""ic_planner: the carrier's burns from the radar OD estimate to the experiment's initial conditions (seed 001).
+
+Subscribes ``/od/estimate`` (roe_sep_msgs/OrbitDetermination, latched) and publishes the minimum-delta-v carrier
+plan on ``/acquisition/plan`` (roe_sep_msgs/ManeuverPlan, RELIABLE + TRANSIENT_LOCAL, depth 1; strategy
+``ic_acquisition``, one ``carrier``/``ic_acquisition`` maneuver per burn epoch, ``aimed`` = the predicted ROE at the
+IC epoch t_F with the chief's elements there) and ``/diagnostics``. Physics: :func:`roe_sep.core.acquisition.
+plan_acquisition` (linear program + quantized re-solve, verified with the shared trajectory). Run it with
+``use_sim_time:=true``: "now" is the simulator's clock.
+
+When a plan is (re)computed -- what a flight-dynamics team wants from a stream of OD solutions:
+
+* Every *newer* solution (ordered by ``header.stamp``, then ``estimate.header.stamp``) is the best knowledge and
+  re-plans; a re-delivered or older one is ignored. The plan starts from the estimate propagated to now with every
+  carrier burn flown since its epoch (``/sim/executed_maneuvers``, latched), so a correction never repeats a burn.
+* The first plan fixes the IC epoch t_F (the last grid epoch within OD epoch + ``window``); later solutions
+  re-plan the rest of the acquisition as corrections aimed at the same t_F, as a real campaign does. Within two
+  planning margins of t_F the acquisition is complete and further solutions are not used.
+* A re-plan never moves a burn that is committed: one of the plan in force due within ``planning_margin`` from
+  now (or executed without its record having arrived yet) keeps the plan in force (WARN on /diagnostics).
+* The first burn of a new plan is at or after max(OD epoch, now) + planning_margin.
+* A bad estimate (NaN, impossible orbit) or an infeasible acquisition is logged and reported as ERROR on
+  /diagnostics; the node keeps running and the plan in force (if any) stays published.
+
+A restarted ic_planner recovers the IC epoch from its own latched plan and the flown burns from the latched
+executed-maneuver topic, so it continues the acquisition in progress.
+
+Parameters (YAML via ``--ros-args --params-file``): see :class:`IcPlannerNode` and the README's table.
+"""
+
+import dataclasses
+import math
+import traceback
+
+from diagnostic_msgs.msg import DiagnosticArray
+from rclpy.node import Node
+from roe_sep_msgs.msg import ImpulsiveManeuver, ManeuverPlan, OrbitDetermination
+
+from ..core.acquisition import (
+    AcquisitionConfig,
+    InvalidAcquisitionConfig,
+    check_inputs,
+    plan_acquisition,
+    validate_config,
+)
+from ..core.dynamics import propagate_chief
+from ..core.roe import wrap_angle
+from ..core.trajectory import Chief, state_at
+from . import qos
+from .convert import (
+    array_to_elements,
+    elements_to_array,
+    maneuver_msg,
+    msg_to_roe,
+    plan_burns,
+    roe_to_msg,
+    sec_to_time,
+    time_to_sec,
+)
+from .diagnostics import ERROR, OK, WARN, publish_status
+from .params import ParameterError, declare
+
+
+class IcPlannerNode(Node):
+    """Parameters (name, default, unit):
+
+    * ``a_dl_min`` 5000.0 m, ``a_dl_max`` 10000.0 m: mean along-track separation at the ICs (and >= a_dl_min
+      throughout the acquisition).
+    * ``a_dl_target`` 7500.0 m: aimed |a dl_F| (mid-range: room for drag and OD errors either way); 0 = free in
+      [a_dl_min, a_dl_max], where the program picks the cheapest; ``a_dl_target_tol`` 200.0 m after quantization.
+    * ``min_ei`` 150.0 m: minimum |a de|, |a di| and R-N distance (seed 002 Eq. 25).
+    * ``fov_half_r_deg`` 6.8, ``fov_half_n_deg`` 9.15 deg: camera half field of view (seed 002 Eq. 11).
+    * ``max_burn_dv`` 0.3 m/s per burn, ``dv_quantum`` 0.001 m/s (seed 001 Sec. 2.1).
+    * ``axes`` "TN": candidate burn axes (letters of R, T, N).
+    * ``planning_margin`` 5700.0 s (about one orbit): first burn >= max(OD epoch, now) + margin.
+    * ``window`` 172800.0 s: ICs reached at the last grid epoch within OD epoch + window.
+    * ``grid_per_orbit`` 16: candidate burn epochs per orbit (at round values of u).
+    * ``drift_tolerance`` 1.0 m: |a da| at the ICs (>= dv_quantum / n, about 0.9 m, to be always reachable).
+    * ``ei_angle_tol_deg`` 1.0 deg: e/i deviation from (anti-)parallel allowed after quantization.
+    * ``j2`` true: secular J2 in the prediction.
+    """
+
+    def __init__(self):
+        super().__init__("ic_planner")
+        d = AcquisitionConfig()
+        values = {
+            "a_dl_min": declare(self, "a_dl_min", d.a_dl_min, "m, minimum mean along-track separation"),
+            "a_dl_max": declare(self, "a_dl_max", d.a_dl_max, "m, maximum mean along-track separation at the ICs"),
+            "a_dl_target": declare(self, "a_dl_target", d.a_dl_target, "m, aimed |a dl| at the ICs; 0 = free"),
+            "a_dl_target_tol": declare(self, "a_dl_target_tol", d.a_dl_target_tol,
+                                             "m, |a dl - a_dl_target| allowed after quantization"),
+            "min_ei": declare(self, "min_ei", d.min_ei, "m, minimum |a de|, |a di| and R-N distance"),
+            "fov_half_r_deg": declare(self, "fov_half_r_deg", d.fov_half_r_deg, "deg, camera half FOV, radial"),
+            "fov_half_n_deg": declare(self, "fov_half_n_deg", d.fov_half_n_deg, "deg, camera half FOV, normal"),
+            "max_burn_dv": declare(self, "max_burn_dv", d.max_burn_dv, "m/s, largest carrier burn"),
+            "dv_quantum": declare(self, "dv_quantum", d.dv_quantum, "m/s, burn quantization"),
+            "axes": declare(self, "axes", d.axes, "candidate burn axes, letters of R, T, N"),
+            "planning_margin": declare(self, "planning_margin", 5700.0,
+                                             "s, first burn >= max(OD epoch, now) + margin"),
+            "window": declare(self, "window", d.window, "s, ICs reached within OD epoch + window"),
+            "grid_per_orbit": declare(self, "grid_per_orbit", d.grid_per_orbit, "candidate burn epochs per orbit"),
+            "drift_tolerance": declare(self, "drift_tolerance", d.drift_tolerance, "m, |a da| allowed at the ICs"),
+            "ei_angle_tol_deg": declare(self, "ei_angle_tol_deg", d.ei_angle_tol_deg,
+                                              "deg, e/i deviation from (anti-)parallel allowed"),
+            "j2": declare(self, "j2", d.j2, "secular J2 in the prediction"),
+        }
+        try:
+            self.cfg = AcquisitionConfig(**values)
+            validate_config(self.cfg)
+        except InvalidAcquisitionConfig as exc:
+            raise ParameterError(f"parameter '{exc.name}' must be {exc.must}, got {exc.value!r}") from exc
+
+        self.plan_pub = self.create_publisher(ManeuverPlan, qos.ACQUISITION_PLAN_TOPIC, qos.LATCHED)
+        self.diag_pub = self.create_publisher(DiagnosticArray, qos.DIAGNOSTICS_TOPIC, qos.DIAGNOSTICS)
+        self.create_subscription(OrbitDetermination, qos.OD_TOPIC, self.on_estimate, qos.LATCHED)
+        self.create_subscription(ImpulsiveManeuver, qos.EXECUTED_TOPIC, self.on_executed, qos.EXECUTED)
+        # a restarted ic_planner keeps the IC epoch of the acquisition in progress: its own latched plan
+        self.create_subscription(ManeuverPlan, qos.ACQUISITION_PLAN_TOPIC, self.on_own_plan, qos.LATCHED)
+        self.executed = []  # carrier burns flown so far (relative impulses), from the simulator/executor
+        self.t_final = None  # s, IC epoch of the acquisition in progress (fixed by its first plan)
+        self.last_key = None  # (solution stamp, estimate epoch) of the newest OD seen
+        self.burn_epochs = None  # s, burn epochs of the plan in force (None: no plan yet)
+        self.summary = {}
+        self.plans = 0
+        publish_status(self, self.diag_pub, OK, "waiting for an OD estimate", self._values())
+
+    def _values(self):
+        return {"plans": self.plans, **{k: (f"{v:.6g}" if isinstance(v, float) else v)
+                                        for k, v in self.summary.items()}}
+
+    def on_executed(self, m: ImpulsiveManeuver):
+        if m.spacecraft == "carrier":
+            try:
+                self.executed.extend(plan_burns([m]))
+            except ValueError as exc:
+                publish_status(self, self.diag_pub, ERROR, f"executed maneuver rejected: {exc}", self._values())
+
+    def on_own_plan(self, plan: ManeuverPlan):
+        if self.t_final is None and plan.maneuvers:
+            self.t_final = time_to_sec(plan.aimed.header.stamp)
+            self.burn_epochs = [time_to_sec(m.epoch) for m in plan.maneuvers]
+
+    def now(self):
+        return self.get_clock().now().nanoseconds * 1e-9
+
+    def on_estimate(self, msg: OrbitDetermination):
+        key = (time_to_sec(msg.header.stamp), time_to_sec(msg.estimate.header.stamp))
+        if self.last_key is not None and key <= self.last_key:
+            self.get_logger().debug(f"OD solution {key} is not newer than {self.last_key}: ignored")
+            return
+        self.last_key = key
+        t_od, now = key[1], self.now()
+        blocking = self._committed_burn(t_od, now)
+        if blocking is not None:
+            text = (f"OD at t = {t_od:.1f} s not used: the burn at t = {blocking:.1f} s of the plan in force is "
+                    f"{'executed after the OD epoch' if blocking < now else 'committed (within planning_margin)'}")
+            self.get_logger().warn(text)
+            publish_status(self, self.diag_pub, WARN, text, self._values())
+            return
+        try:
+            plan_msg, plan = self.make_plan(msg, now)
+        except ValueError as exc:
+            self.get_logger().error(f"OD estimate rejected: {exc}")
+            publish_status(self, self.diag_pub, ERROR, f"OD estimate rejected: {exc}", self._values())
+            return
+        except Exception as exc:  # noqa: BLE001 -- a planning bug must not take the node down; it is reported
+            self.get_logger().error(f"acquisition planning failed: {exc!r}\n{traceback.format_exc()}")
+            publish_status(self, self.diag_pub, ERROR, f"acquisition planning failed: {exc!r}", self._values())
+            return
+        self.plan_pub.publish(plan_msg)
+        self.burn_epochs = [float(t) for t in plan.epochs]
+        if self.t_final is None:
+            self.t_final = float(plan.t_final)
+        self.plans += 1
+        self.summary = {k: v for k, v in plan.summary().items()
+                        if k in ("total_dv", "n_burns", "time_to_ic", "a_dl_f", "a_da_f", "min_rn", "fov_ok",
+                                 "solve_time")}
+        self.get_logger().info(
+            f"IC acquisition planned from the OD at t = {t_od:.1f} s: {plan.n_burns} burns, total dv = "
+            f"{plan.total_dv:.3f} m/s (LP {plan.lp_dv:.4f}), ICs at t = {plan.t_final:.1f} s, "
+            f"a dl_F = {plan.final_roe[1] * plan.a:.0f} m, min R-N = {plan.min_rn:.0f} m")
+        publish_status(self, self.diag_pub, OK, "acquisition plan published", self._values())
+
+    def _committed_burn(self, t_od, now):
+        """A burn of the plan in force that a re-plan must not touch: due within ``planning_margin`` from now, or
+        executed after the OD epoch without the executed-maneuver record having arrived yet (see the module
+        docstring); None when re-planning is free."""
+        flown = {round(b.epoch, 3) for b in self.executed}
+        for t in self.burn_epochs or ():
+            if now <= t < now + self.cfg.planning_margin or (t_od <= t < now and round(t, 3) not in flown):
+                return t
+        if self.t_final is not None and now + 2.0 * self.cfg.planning_margin > self.t_final:
+            return self.t_final  # the acquisition is (nearly) complete: no new acquisition from here
+        return None
+
+    def make_plan(self, msg: OrbitDetermination, now):
+        """ManeuverPlan and core plan for one OD solution; raises ValueError on a bad estimate or no solution."""
+        el = msg.estimate.chief
+        a = el.semi_major_axis
+        if not (math.isfinite(a) and a > 6.4e6):
+            raise ValueError(f"chief semi-major axis {a} m is not a valid low Earth orbit")
+        t_od = time_to_sec(msg.estimate.header.stamp)
+        od_chief = Chief(a=a, inc=el.inclination, u0=el.mean_arg_latitude, t0=t_od)
+        roe_od = msg_to_roe(msg.estimate)
+        da_dot = msg.a_da_dot / a
+        check_inputs(roe_od, od_chief, da_dot)
+        # the best knowledge now: the estimate plus every carrier burn flown since its epoch
+        t_start = max(t_od, now)
+        flown = [b for b in self.executed if t_od < b.epoch <= t_start]
+        roe0 = state_at(roe_od, t_od, flown, t_start, od_chief, self.cfg.j2, da_dot)
+        chief = Chief(a=a, inc=el.inclination, u0=float(od_chief.u_at(t_start, self.cfg.j2)), t0=t_start)
+        # corrections of an acquisition in progress aim at its IC epoch; a first plan opens a new window
+        cfg = self.cfg if self.t_final is None else dataclasses.replace(self.cfg, window=self.t_final - t_start)
+        plan = plan_acquisition(roe0, chief, da_dot, cfg, t_earliest=t_start + self.cfg.planning_margin)
+
+        out = ManeuverPlan(strategy="ic_acquisition", p_reduction=0.0)
+        out.header.stamp = self.get_clock().now().to_msg()
+        out.header.frame_id = "carrier_rtn"
+        out.maneuvers = [maneuver_msg(float(t), float(wrap_angle(u)), dv, "carrier", "ic_acquisition")
+                         for t, u, dv in zip(plan.epochs, plan.u, plan.dv_carrier)]
+        kep = propagate_chief(elements_to_array(el), plan.t_final - t_od, self.cfg.j2)
+        kep[3:] = wrap_angle(kep[3:])
+        aimed_chief = array_to_elements(kep)
+        aimed_chief.mean_arg_latitude = float(wrap_angle(aimed_chief.mean_arg_latitude))
+        out.aimed = roe_to_msg(plan.final_roe, aimed_chief, sec_to_time(plan.t_final))
+        return out, plan
+
+
+def main(args=None):
+    from .spin import run
+
+    return run(IcPlannerNode, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
+

@@ -1,0 +1,131 @@
+"""The ic_planner node as a real process over DDS: latched OD in, latched acquisition plan out, a NaN estimate
+survived with an ERROR diagnostic, the re-plan policy under sim time, bad parameters refused at start-up."""
+
+import math
+
+import numpy as np
+import pytest
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus  # noqa: E402
+from roe_sep_msgs.msg import ManeuverPlan, OrbitalElements, OrbitDetermination  # noqa: E402
+from rosgraph_msgs.msg import Clock  # noqa: E402
+from rosutil import rclpy, spin_until, start_node, stop_node, wait_exit  # noqa: I001  (skips without rclpy)
+
+from roe_sep.core.acquisition import AcquisitionConfig, plan_acquisition  # noqa: E402
+from roe_sep.core.double_impulse import design  # noqa: E402
+from roe_sep.core.dynamics import drag_da_dot  # noqa: E402
+from roe_sep.core.trajectory import Chief, state_at  # noqa: E402
+from roe_sep.nodes import qos  # noqa: E402
+from roe_sep.nodes.convert import msg_to_roe, roe_to_msg, sec_to_time, time_to_sec  # noqa: E402
+
+D = design()
+A = D.a
+DA_DOT = float(drag_da_dot(0.0151, 1e-12, A))  # 1/s
+ROE0 = np.array([-180.0, 25000.0, -30.0, -540.0, 10.0, 400.0]) / A
+T_OD = 1000.0
+U0 = 1.0
+MARGIN = 5700.0
+
+
+def od_message(roe, t_est, solved=None, u=U0):
+    msg = OrbitDetermination(a_da_dot=DA_DOT * A, a_da_dot_sigma=1e-4, passes=3, measurements=120,
+                             residual_rms=1.0)
+    msg.header.stamp = sec_to_time(t_est + 600.0 if solved is None else solved)
+    chief = OrbitalElements(semi_major_axis=A, eccentricity=0.0, inclination=D.inc, raan=0.3, arg_perigee=0.0,
+                            mean_arg_latitude=u)
+    msg.estimate = roe_to_msg(roe, chief, sec_to_time(t_est), covariance=np.eye(6) * 1e-12)
+    return msg
+
+
+def errors(node, text, level=DiagnosticStatus.ERROR):
+    return any(s.level == level and s.name == "roe_sep/ic_planner" and text in s.message
+               for d in node.diags for s in d.status)
+
+
+@pytest.fixture()
+def ground():
+    rclpy.init()
+    node = rclpy.create_node("ic_ground_test")
+    node.plans, node.diags = [], []
+    node.create_subscription(ManeuverPlan, qos.ACQUISITION_PLAN_TOPIC, node.plans.append, qos.LATCHED)
+    node.create_subscription(DiagnosticArray, qos.DIAGNOSTICS_TOPIC, node.diags.append, qos.DIAGNOSTICS)
+    node.od_pub = node.create_publisher(OrbitDetermination, qos.OD_TOPIC, qos.LATCHED)
+    clock_pub = node.create_publisher(Clock, qos.CLOCK_TOPIC, 10)
+    node.sim_time = None  # published at 20 Hz once set
+
+    def tick():
+        if node.sim_time is not None:
+            clock_pub.publish(Clock(clock=sec_to_time(node.sim_time)))
+
+    node.create_timer(0.05, tick)
+    yield node
+    node.destroy_node()
+    rclpy.try_shutdown()
+
+
+def test_plan_bad_estimate_and_replan_policy(ground):
+    proc = start_node("ic_planner", "-p", "use_sim_time:=true", "-p", f"planning_margin:={MARGIN}")
+    try:
+        # a NaN estimate: ERROR diagnostic, no plan, the node keeps running
+        ground.od_pub.publish(od_message(np.full(6, math.nan), T_OD - 500.0))
+        assert spin_until(ground, lambda: errors(ground, "OD estimate rejected"), timeout=30)
+        assert proc.poll() is None and not ground.plans
+
+        ground.od_pub.publish(od_message(ROE0, T_OD))
+        assert spin_until(ground, lambda: len(ground.plans) >= 1, timeout=30)
+        plan = ground.plans[-1]
+        assert plan.strategy == "ic_acquisition" and plan.p_reduction == 0.0
+        # the same plan as the core computes (no /clock yet: sim time 0, first burn >= OD epoch + margin)
+        chief = Chief(a=A, inc=D.inc, u0=U0, t0=T_OD)
+        cfg = AcquisitionConfig(planning_margin=MARGIN)
+        ref = plan_acquisition(ROE0, chief, DA_DOT, cfg)
+        assert len(plan.maneuvers) == ref.n_burns >= 1
+        for m, t, dv in zip(plan.maneuvers, ref.epochs, ref.dv_carrier):
+            assert (m.spacecraft, m.purpose) == ("carrier", "ic_acquisition")
+            assert time_to_sec(m.epoch) == pytest.approx(t, abs=1e-6)
+            got = np.array([m.dv_rtn.x, m.dv_rtn.y, m.dv_rtn.z])
+            np.testing.assert_allclose(got, dv, atol=1e-12)
+            assert np.linalg.norm(got) <= 0.3 + 1e-12
+            np.testing.assert_allclose(got / 1e-3, np.round(got / 1e-3), atol=1e-6)
+            assert math.cos(m.mean_arg_latitude - chief.u_at(t)) == pytest.approx(1.0)
+        assert time_to_sec(plan.maneuvers[0].epoch) >= T_OD + MARGIN
+        aimed = plan.aimed
+        assert time_to_sec(aimed.header.stamp) == pytest.approx(ref.t_final, abs=1e-6)
+        assert aimed.chief.semi_major_axis == pytest.approx(A)
+        assert math.cos(aimed.chief.mean_arg_latitude - chief.u_at(ref.t_final)) == pytest.approx(1.0)
+        np.testing.assert_allclose(msg_to_roe(aimed) * A, ref.final_roe * A, atol=1e-6)
+        assert abs(aimed.a_da) <= 1.0 and 7300.0 <= aimed.a_dl <= 7700.0
+        assert spin_until(ground, lambda: errors(ground, "acquisition plan published", DiagnosticStatus.OK))
+
+        # sim time passes the first burns: a newer OD whose epoch precedes an executed burn is not used
+        t_exec = time_to_sec(plan.maneuvers[0].epoch)
+        early = [time_to_sec(m.epoch) for m in plan.maneuvers if time_to_sec(m.epoch) < T_OD + 86400.0]
+        ground.sim_time = max(early) + 2000.0
+        spin_until(ground, lambda: False, timeout=1.5)  # the node's clock follows /clock
+        ground.od_pub.publish(od_message(ROE0, t_exec - 100.0, solved=t_exec + 1000.0))
+        assert spin_until(ground, lambda: errors(ground, "not used", DiagnosticStatus.WARN), timeout=30)
+        assert len(ground.plans) == 1
+
+        # an OD made after the executed burns re-plans the rest of the acquisition (correction), burns in the future
+        t_new = max(early) + 1000.0
+        roe_new = state_at(ROE0, T_OD, ref.burns(), t_new, chief, True, DA_DOT)
+        ground.od_pub.publish(od_message(roe_new, t_new, solved=t_new + 500.0, u=float(chief.u_at(t_new))))
+        assert spin_until(ground, lambda: len(ground.plans) >= 2, timeout=30)
+        new = ground.plans[-1]
+        assert all(time_to_sec(m.epoch) >= ground.sim_time + MARGIN - 1.0 for m in new.maneuvers)
+        assert abs(new.aimed.a_da) <= 1.0
+        assert proc.poll() is None
+    finally:
+        code, out = stop_node(proc)
+    assert code == 0, out
+
+
+@pytest.mark.parametrize("args,name", [
+    (["-p", "a_dl_max:=4000.0"], "'a_dl_max'"),
+    (["-p", "axes:=TX"], "'axes'"),
+    (["-p", "max_burn_dv:=1"], "'max_burn_dv'"),  # an integer for a double parameter
+    (["-p", "window:=1000.0"], "'window'"),  # shorter than the planning margin
+])
+def test_bad_parameter_refused_at_startup(args, name):
+    code, out = wait_exit(start_node("ic_planner", *args))
+    assert code == 2, out
+    assert name in out
