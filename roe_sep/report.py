@@ -99,6 +99,7 @@ def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()
     final_roe = [getattr(final, k) for k in ROE_KEYS] if final else None
 
     sim_status = [s for _, d in data[qos.DIAGNOSTICS_TOPIC] for s in d.status if s.name == "roe_sep/sim"]
+    late = [s.message for s in sim_status if "executed late" in s.message or "not executed" in s.message]
     values = {kv.key: kv.value for kv in sim_status[-1].values} if sim_status else {}
     min_distance = float(values.get("min_distance_m", "nan"))
 
@@ -147,6 +148,7 @@ def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()
         "truth_drag_a_da_dot_m_per_day": truth_da_dot,
         "od": od_report,
         "ic": ic,
+        "execution_warnings": late,  # burns executed late or dropped (unapproved), from the simulator
         "end_violations": list(last.violations) if last is not None else None,  # informational (drag drift on)
         "plan_checks": [{"source": s.source, "plan_stamp": _stamp(s.plan_stamp), "safe": s.safe,
                          "violations": list(s.violations)} for s in plan_checks],

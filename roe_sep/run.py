@@ -36,7 +36,8 @@ def parameters(config, bag_dir, overrides):
     """The run's ROS parameter file content: shared values for every node, then per-node values."""
     shared = {"use_sim_time": True, "scenario_file": str(Path(config).resolve()) if config else ""}
     per_node = {
-        "sim": {"use_sim_time": False},
+        # the truth stream's subscribers: ejector, safety_monitor, radar_od and the recorder
+        "sim": {"use_sim_time": False, "min_subscribers": 4},
         "recorder": {"output": str(bag_dir)},
     }
     for node, values in (overrides or {}).items():
@@ -129,6 +130,7 @@ def wait_for_completion(duration, deployment, timeout, progress):
 def run(config=None, out="out/run", params=None, duration=None, seed=None, timeout=1800.0, domain_id=None,
         progress=False):
     """Run the scenario; returns the report dict (``report['safe']``) and writes it to ``out/report.json``."""
+    from .nodes.sim import DEFAULT_DURATION
     from .report import build_report
 
     out = Path(out)
@@ -144,7 +146,7 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
         sim["seed"] = int(seed)
     params_file = out / "params.yaml"
     params_file.write_text(yaml.safe_dump(parameters(config, bag_dir.resolve(), overrides), sort_keys=False))
-    sim_duration = float(sim.get("duration", 280800.0))
+    sim_duration = float(sim.setdefault("duration", DEFAULT_DURATION))
 
     deployment = Deployment(out, params_file, ros_environment(domain_id))
     try:

@@ -59,3 +59,34 @@ def test_ejection_drift_stop_loop(observer):
     finally:
         codes = [stop_node(p) for p in procs]
     assert all(code == 0 for code, _ in codes), codes
+
+
+def test_restarting_planner_and_monitor_loses_nothing(observer):
+    sim_time = ["-p", "use_sim_time:=true"]
+    planner_args = [*sim_time, "-p", "p_mode:=fixed", "-p", "p_reduction:=0.06"]
+    procs = {"planner": start_node("planner", *planner_args), "ejector": start_node("ejector", *sim_time),
+             "sim": start_node("sim", "-p", "duration:=40000.0", "-p", "time_step:=20.0", "-p",
+                               "approval_timeout:=60.0")}
+    try:
+        g = observer.got
+        # no monitor yet: the drift-stop waits for its approval with the clock held
+        assert spin_until(observer, lambda: g["clock"] and g["clock"][-1].clock.sec > 8000, timeout=60)
+        spin_until(observer, lambda: False, timeout=2.0)
+        held = g["clock"][-1].clock.sec
+        assert held < 3 * math.pi / D.n + 700 and [m.purpose for m in g["executed"]] == ["ejection"]
+        # the monitor (as if restarted) gets the latched ejection and plan again, checks it: the burn is flown
+        procs["monitor"] = start_node("safety_monitor", *sim_time)
+        assert spin_until(observer, lambda: [m.purpose for m in g["executed"]] == ["ejection", "drift_stop"],
+                          timeout=60)
+        # kill and restart the planner and the monitor: plan and check come again, nothing is flown twice
+        for name in ("planner", "monitor"):
+            stop_node(procs.pop(name))
+        checks_before = len(g["checks"])
+        procs["planner"] = start_node("planner", *planner_args)
+        procs["monitor"] = start_node("safety_monitor", *sim_time)
+        assert spin_until(observer, lambda: len(g["checks"]) > checks_before, timeout=60)
+        assert spin_until(observer, lambda: g["clock"][-1].clock.sec >= 40000, timeout=90)
+        assert [m.purpose for m in g["executed"]] == ["ejection", "drift_stop"]
+    finally:
+        codes = [stop_node(p) for p in procs.values()]
+    assert all(code == 0 for code, _ in codes), codes

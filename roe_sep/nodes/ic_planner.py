@@ -71,7 +71,8 @@ class IcPlannerNode(Node):
     * ``fov_half_r_deg`` 6.8, ``fov_half_n_deg`` 9.15 deg: camera half field of view (seed 002 Eq. 11).
     * ``max_burn_dv`` 0.3 m/s per burn, ``dv_quantum`` 0.001 m/s (seed 001 Sec. 2.1).
     * ``axes`` "TN": candidate burn axes (letters of R, T, N).
-    * ``planning_margin`` 5700.0 s (about one orbit): first burn >= max(OD epoch, now) + margin.
+    * ``planning_margin`` 11400.0 s (two orbits: the uplink, at the next ground contact): first burn >=
+      max(OD epoch, now) + margin.
     * ``window`` 172800.0 s: ICs reached at the last grid epoch within OD epoch + window.
     * ``grid_per_orbit`` 16: candidate burn epochs per orbit (at round values of u).
     * ``drift_tolerance`` 1.0 m: |a da| at the ICs (>= dv_quantum / n, about 0.9 m, to be always reachable).
@@ -94,7 +95,7 @@ class IcPlannerNode(Node):
             "max_burn_dv": declare(self, "max_burn_dv", d.max_burn_dv, "m/s, largest carrier burn"),
             "dv_quantum": declare(self, "dv_quantum", d.dv_quantum, "m/s, burn quantization"),
             "axes": declare(self, "axes", d.axes, "candidate burn axes, letters of R, T, N"),
-            "planning_margin": declare(self, "planning_margin", 5700.0,
+            "planning_margin": declare(self, "planning_margin", 11400.0,
                                              "s, first burn >= max(OD epoch, now) + margin"),
             "window": declare(self, "window", d.window, "s, ICs reached within OD epoch + window"),
             "grid_per_orbit": declare(self, "grid_per_orbit", d.grid_per_orbit, "candidate burn epochs per orbit"),

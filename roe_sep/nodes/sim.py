@@ -49,6 +49,7 @@ from .diagnostics import ERROR, OK, WARN, publish_status
 from .params import ParameterError, declare, finite, require
 
 PLAN_TOPICS = (qos.DRIFT_STOP_PLAN_TOPIC, qos.ACQUISITION_PLAN_TOPIC)
+DEFAULT_DURATION = 280800.0  # s: 3.25 days, through OD and the initial-condition acquisition and half a day on
 
 
 @dataclasses.dataclass
@@ -65,8 +66,8 @@ class SimNode(Node):
         scenario_file = declare(self, "scenario_file", "", "scenario YAML ('' = embedded default)")
         self.seed = declare(self, "seed", 0, "seed of the ejection/burn/drag dispersions")
         self.disperse = declare(self, "disperse", True, "apply execution errors and the drag uncertainty")
-        self.duration = declare(self, "duration", 280800.0, "s, sim time at which the run ends")
-        self.time_step = declare(self, "time_step", 60.0, "s of sim time per clock tick")
+        self.duration = declare(self, "duration", DEFAULT_DURATION, "s, sim time at which the run ends")
+        self.time_step = declare(self, "time_step", 40.0, "s of sim time per clock tick")
         tick_period = declare(self, "tick_period", 0.01, "wall s between clock ticks")
         self.truth_period = declare(self, "truth_period", 60.0, "s, sim-time period of the truth topics")
         u0_deg = declare(self, "u0_deg", 50.0, "deg, carrier mean argument of latitude at sim time 0")
@@ -79,6 +80,9 @@ class SimNode(Node):
         self.departure = declare(self, "departure_distance", 1000.0,
                                  "m, closest approaches are tracked once the picosatellite is this far away")
         self.j2 = declare(self, "j2", True, "secular J2 in the truth dynamics")
+        self.min_subscribers = declare(self, "min_subscribers", 0,
+                                       "hold the clock at 0 until the truth topic has this many subscribers")
+        self.start_timeout = declare(self, "start_timeout", 30.0, "wall s to wait for those subscribers at most")
 
         for name, value in (("duration", self.duration), ("time_step", self.time_step),
                             ("tick_period", tick_period), ("truth_period", self.truth_period),
@@ -93,6 +97,10 @@ class SimNode(Node):
             raise ParameterError(f"parameter 'epoch_utc' must be an ISO-8601 UTC date-time, got {epoch!r}: {exc}") \
                 from exc
         require("seed", isinstance(self.seed, int), self.seed, "an integer")
+        require("min_subscribers", isinstance(self.min_subscribers, int) and self.min_subscribers >= 0,
+                self.min_subscribers, "a non-negative integer")
+        require("start_timeout", finite(self.start_timeout) and self.start_timeout >= 0, self.start_timeout,
+                "a non-negative number [s]")
         for name, value in (("disperse", self.disperse), ("require_plan_approval", self.require_approval),
                             ("j2", self.j2)):
             require(name, isinstance(value, bool), value, "true or false")
@@ -118,6 +126,7 @@ class SimNode(Node):
         self.ejections = {}  # stamp -> epoch of pending ejection events
         self.seen_ejections = set()
         self.pending: list[PendingBurn] = []
+        self.flown = set()  # (topic, purpose, epoch) of every executed burn
         self.plan_stamps = {}  # topic -> stamp of the plan in force
         self.approvals = {}  # (topic, plan stamp) -> bool
         self.hold_since = None
@@ -127,6 +136,7 @@ class SimNode(Node):
         self.tail = (np.empty(0), np.empty(0))  # last samples of the previous step (local minima across steps)
         self.next_status = 3600.0
         self.done = False
+        self.waiting_since = time.monotonic()
 
         self.clock_pub = self.create_publisher(Clock, qos.CLOCK_TOPIC, 10)
         self.roe_pub = self.create_publisher(RelativeOrbitalElements, qos.TRUTH_ROE_TOPIC, qos.STREAM)
@@ -173,19 +183,41 @@ class SimNode(Node):
         except ValueError as exc:
             self._status(ERROR, f"plan on {topic} rejected: {exc}")
             return
-        # a new plan replaces the burns of the previous plan on the same topic that are not executed yet
+        # a new plan replaces the burns of the previous plan on the same topic that are not executed yet; a burn
+        # already flown is never flown again (a restarted planner re-publishes the plan it made before)
+        burns = [b for b in burns if self._key(b) not in self.flown]
         self.pending = [b for b in self.pending if b.topic != topic] + burns
         self.plan_stamps[topic] = stamp
         self.get_logger().info(f"plan on {topic}: {len(burns)} burn(s) from t = "
                                f"{min((b.epoch for b in burns), default=math.nan):.0f} s")
+
+    @staticmethod
+    def _key(burn: PendingBurn):
+        return burn.topic, burn.maneuver.purpose, round(burn.epoch, 3)
 
     def on_plan_check(self, check: SafetyStatus):
         if check.source.startswith("plan:"):
             self.approvals[(check.source[5:], time_to_sec(check.plan_stamp))] = bool(check.safe)
 
     # ------------------------------------------------------------------ loop
+    def ready(self):
+        """Start the clock once the expected subscribers (e.g. the recorder, the monitor) are matched, so that no
+        one misses the first seconds; after ``start_timeout`` start anyway (WARN)."""
+        if self.waiting_since is None:
+            return True
+        if self.roe_pub.get_subscription_count() >= self.min_subscribers:
+            self.waiting_since = None
+            return True
+        if time.monotonic() - self.waiting_since > self.start_timeout:
+            self.waiting_since = None
+            self._status(WARN, f"started after {self.start_timeout:g} s with only "
+                               f"{self.roe_pub.get_subscription_count()} of {self.min_subscribers} truth subscribers")
+            return True
+        self.clock_pub.publish(Clock(clock=sec_to_time(self.t)))
+        return False
+
     def tick(self):
-        if self.done:
+        if self.done or not self.ready():
             return
         t_next = min(self.t + self.time_step, self.duration)
         while True:
@@ -274,6 +306,7 @@ class SimNode(Node):
         executed = self.errors.executed(vector_to_array(m.dv_rtn), m.spacecraft)
         done = maneuver_msg(t_exec, float(self.truth.u_at(t_exec)), executed, m.spacecraft, m.purpose)
         self.truth.apply(t_exec, relative_dv(done))
+        self.flown.add(self._key(burn))
         self.burns += 1
         self.exec_pub.publish(done)
         self._publish_truth(t_exec)
