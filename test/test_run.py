@@ -1,0 +1,106 @@
+"""The default scenario end to end (every node its own process over DDS, sim time), as `roe-sep run` runs it:
+the report, the recorded plans, the bag read by two independent readers, and a replay of the run."""
+
+import io
+import json
+import math
+
+import numpy as np
+import pytest
+
+from rosutil import rclpy, spin_until  # noqa: I001  (skips without rclpy)
+from test_bag import bag_replay_process, mcap_file, norm, read_mcap_ros2, read_rosbags  # noqa: E402
+
+from roe_sep_msgs.msg import ManeuverPlan, RelativeOrbitalElements  # noqa: E402
+
+from roe_sep.cli import main, print_run  # noqa: E402
+from roe_sep.nodes import qos  # noqa: E402
+from roe_sep.run import run  # noqa: E402
+
+CHI2_6_999 = 22.458  # 99.9 % quantile of chi-square with 6 degrees of freedom
+
+
+@pytest.fixture(scope="module")
+def scenario(tmp_path_factory):
+    out = tmp_path_factory.mktemp("run")
+    report = run(out=out, timeout=900)
+    return out, report
+
+
+def test_default_run_is_safe_and_reaches_the_initial_conditions(scenario):
+    out, rep = scenario
+    assert json.loads((out / "report.json").read_text()) == json.loads(json.dumps(rep))
+    assert rep["run"]["completed"], rep["run"]
+    assert all(code == 0 for code in rep["run"]["exit_codes"].values()), rep["run"]["exit_codes"]
+    assert rep["safe"] and all(rep["criteria"].values()), rep["criteria"]
+    assert rep["execution_warnings"] == []
+    purposes = [m["purpose"] for m in rep["maneuvers"]]
+    assert purposes[:2] == ["ejection", "drift_stop"] and set(purposes[2:]) == {"ic_acquisition"}
+    assert 24 * 3600 < rep["time_to_ic"] < 96 * 3600
+    ic = rep["ic"]
+    assert 5000 <= ic["roe"][1] <= 10000 and abs(ic["roe"][0]) <= 5.0 and ic["min_rn_distance"] >= 150
+    assert rep["min_distance"] is None or rep["min_distance"] >= 1000.0
+    od = rep["od"]
+    assert od["passes"] >= 2 and 0.5 < od["residual_rms"] < 1.5
+    assert od["nees"] < CHI2_6_999
+    # the drift-stop is the big one (seed 002: a consistent radial burn), the acquisition is cheap
+    assert rep["dv_by_purpose"]["drift_stop"] == pytest.approx(1.33, rel=0.1)
+    assert rep["dv_by_purpose"]["ic_acquisition"] < 0.5
+    text = io.StringIO()
+    print_run(rep, text)
+    assert "Run SAFE" in text.getvalue() and "pass  ic_reached" in text.getvalue()
+
+
+def test_recorded_acquisition_plans_respect_burn_limits_and_quantization(scenario):
+    out, _ = scenario
+    plans = [m for m, _, _ in read_mcap_ros2(mcap_file(out / "bag"))[qos.ACQUISITION_PLAN_TOPIC]]
+    burns = [b for p in plans for b in p.maneuvers]
+    assert burns
+    for b in burns:
+        dv = np.array([b.dv_rtn.x, b.dv_rtn.y, b.dv_rtn.z])
+        assert np.linalg.norm(dv) <= 0.3 + 1e-12
+        np.testing.assert_allclose(dv / 1e-3, np.round(dv / 1e-3), atol=1e-6)
+        assert (b.spacecraft, b.purpose) == ("carrier", "ic_acquisition")
+
+
+def test_run_bag_reads_the_same_with_two_independent_readers(scenario):
+    out, _ = scenario
+    bag = out / "bag"
+    first = read_mcap_ros2(mcap_file(bag))
+    second, conns = read_rosbags(bag)
+    assert {t: len(v) for t, v in first.items()} == {t: len(v) for t, v in second.items()}
+    truth_a = [norm(m) for m, _, _ in first[qos.TRUTH_ROE_TOPIC]]
+    truth_b = [norm(m) for m in second[qos.TRUTH_ROE_TOPIC]]
+    assert truth_a == truth_b and len(truth_a) > 4000
+    assert conns[qos.DRIFT_STOP_PLAN_TOPIC].ext.offered_qos_profiles[0].durability.name == "TRANSIENT_LOCAL"
+    assert main(["bag", "info", str(bag)]) == 0
+
+
+def test_replay_of_the_run(scenario):
+    out, _ = scenario
+    bag = out / "bag"
+    recorded = [m for m, _, _ in read_mcap_ros2(mcap_file(bag))[qos.TRUTH_ROE_TOPIC]]
+    rclpy.init()
+    node = rclpy.create_node("replay_check")
+    got = []
+    node.create_subscription(RelativeOrbitalElements, qos.TRUTH_ROE_TOPIC, got.append, 10000)
+    proc = bag_replay_process(str(bag), "--rate", "40000", "--delay", "10", "--linger", "3", "--topics",
+                              qos.TRUTH_ROE_TOPIC, qos.DRIFT_STOP_PLAN_TOPIC)
+    try:
+        assert spin_until(node, lambda: len(got) >= len(recorded), timeout=60), (len(got), len(recorded))
+        assert [norm(m) for m in got] == [norm(m) for m in recorded]
+        plans = []
+        node.create_subscription(ManeuverPlan, qos.DRIFT_STOP_PLAN_TOPIC, plans.append, qos.LATCHED)
+        assert spin_until(node, lambda: len(plans) == 1, timeout=10)
+        assert math.isclose(plans[0].p_reduction, 0.06, abs_tol=0.03)
+    finally:
+        proc.wait(timeout=60)
+        node.destroy_node()
+        rclpy.try_shutdown()
+    assert proc.returncode == 0
+
+
+def test_run_refuses_to_overwrite_a_bag(scenario, capsys):
+    out, _ = scenario
+    assert main(["run", "--out", str(out)]) == 2
+    assert "exists already" in capsys.readouterr().err
