@@ -14,7 +14,7 @@ from roe_sep.nodes import qos  # noqa: E402
 from roe_sep.nodes.convert import time_to_sec  # noqa: E402
 
 D = design()
-SIM_ARGS = ["-p", "duration:=30000.0", "-p", "time_step:=30.0", "-p", "seed:=3"]
+SIM_ARGS = ["-p", "duration:=30000.0", "-p", "time_step:=30.0", "-p", "seed:=3", "-p", "truth_period:=300.0"]
 
 
 @pytest.fixture()

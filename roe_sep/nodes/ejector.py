@@ -7,7 +7,8 @@ carrier knows its own orbit from GPS). Publishes ``/separation/ejection`` (roe_s
 a little ahead of the epoch; the simulator applies it at the epoch with the mechanism's real dispersion.
 
 Parameters: ``scenario_file`` ('' = embedded default), ``ejection_epoch`` (s, sim time; negative: at u1),
-``not_before`` (s), ``lead_time`` (s, how early the event is published, default 120).
+``not_before`` (s), ``lead_time`` (s, how early the time-tagged event may be published, default 1800; it must
+exceed the spacing of the truth samples).
 """
 
 import math
@@ -32,7 +33,7 @@ class EjectorNode(Node):
         scenario_file = declare(self, "scenario_file", "", "scenario YAML ('' = embedded default)")
         self.epoch = declare(self, "ejection_epoch", -1.0, "s, sim-time epoch of the ejection; negative: at u1")
         self.not_before = declare(self, "not_before", 0.0, "s, earliest sim time of an ejection at u1")
-        self.lead = declare(self, "lead_time", 120.0, "s, the event is published this long before its epoch")
+        self.lead = declare(self, "lead_time", 1800.0, "s, the time-tagged event is published up to this long ahead")
         for name, value in (("ejection_epoch", self.epoch), ("not_before", self.not_before)):
             require(name, finite(value), value, "a finite time [s]")
         require("lead_time", finite(self.lead) and self.lead >= 0, self.lead, "a non-negative time [s]")
@@ -67,7 +68,12 @@ class EjectorNode(Node):
             t_ej = t_from + time_to_arg_latitude(at_from[4] + at_from[5], self.design.u1, kep[0], kep[2])
         if t_ej - t > self.lead:
             return
-        self.publish_event(max(t_ej, t), kep, t)
+        if t_ej < t:
+            publish_status(self, self.diag_pub, ERROR, f"ejection epoch {t_ej:.1f} s already passed at t = {t:.1f} s: "
+                           "not ejecting late (check lead_time against the truth sample spacing)")
+            self.sent = True
+            return
+        self.publish_event(t_ej, kep, t)
 
     def publish_event(self, t_ej, kep, t_state):
         chief = array_to_elements(propagate_chief(kep, t_ej - t_state))
