@@ -38,6 +38,9 @@ WGS84_F = 1.0 / 298.257223563
 WGS84_E2 = WGS84_F * (2.0 - WGS84_F)
 """WGS-84 first eccentricity squared."""
 
+DEFAULT_EPOCH_UTC = "2016-07-01T00:00:00"
+"""Calendar epoch of sim time 0 in the default scenario (the date of seed 001's operational plan)."""
+
 JD_J2000 = 2451545.0
 """Julian date of the J2000.0 epoch (2000-01-01 12:00)."""
 

@@ -30,7 +30,7 @@ from rosgraph_msgs.msg import Clock
 from ..core.constants import R_EARTH, SECONDS_PER_DAY
 from ..core.dynamics import propagate, propagate_chief
 from ..core.od import RadarBatch, batch_least_squares
-from ..core.radar import Station, add_noise, gmst, julian_date, observe, relative_distance, visible
+from ..core.radar import DEFAULT_EPOCH_UTC, Station, add_noise, gmst, julian_date, observe, relative_distance, visible
 from ..core.roe import wrap_angle
 from . import qos
 from .convert import array_to_elements, elements_to_array, msg_to_roe, roe_to_msg, sec_to_time, time_to_sec
@@ -71,7 +71,7 @@ class RadarODNode(Node):
         self.min_arc = declare(self, "min_arc", 36000.0, "s, smallest span of the passes of an estimate")
         self.min_pass = declare(self, "min_pass_measurements", 5, "measurements for a pass to count")
         seed = declare(self, "seed", 0, "seed of the measurement noise")
-        epoch = declare(self, "epoch_utc", "2016-07-01T00:00:00", "ISO-8601 UTC calendar epoch of sim time 0")
+        epoch = declare(self, "epoch_utc", DEFAULT_EPOCH_UTC, "ISO-8601 UTC calendar epoch of sim time 0")
 
         n = len(names)
         require("stations", n >= 1 and all(isinstance(s, str) and s for s in names) and len(set(names)) == n,

@@ -32,7 +32,7 @@ from ..core.config import ConfigError, load_scenario
 from ..core.constants import ARCSEC
 from ..core.double_impulse import InfeasibleDesignError, design
 from ..core.dynamics import drag_da_dot
-from ..core.radar import julian_date, raan_from_ltan
+from ..core.radar import DEFAULT_EPOCH_UTC, julian_date, raan_from_ltan
 from ..core.truth import ExecutionErrors, TruthModel, chief_from_u
 from . import qos
 from .convert import (
@@ -72,7 +72,7 @@ class SimNode(Node):
         self.truth_period = declare(self, "truth_period", 60.0, "s, sim-time period of the truth topics")
         u0_deg = declare(self, "u0_deg", 50.0, "deg, carrier mean argument of latitude at sim time 0")
         ltan = declare(self, "ltan_hours", 9.5, "h, local time of the carrier's ascending node (BIROS: 09:30)")
-        epoch = declare(self, "epoch_utc", "2016-07-01T00:00:00", "ISO-8601 UTC calendar epoch of sim time 0")
+        epoch = declare(self, "epoch_utc", DEFAULT_EPOCH_UTC, "ISO-8601 UTC calendar epoch of sim time 0")
         self.require_approval = declare(self, "require_plan_approval", True,
                                         "execute a plan only after the safety monitor approved it")
         self.approval_timeout = declare(self, "approval_timeout", 10.0, "wall s a burn may wait for its approval")
