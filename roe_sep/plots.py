@@ -18,6 +18,13 @@ def _pyplot():
     return plt
 
 
+def _save(fig, path):
+    """Lay out, write the PNG and release the figure."""
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    _pyplot().close(fig)
+
+
 def _subset(n):
     return np.random.default_rng(12345).choice(n, size=min(n, PLOTTED_SAMPLES), replace=False)
 
@@ -44,9 +51,7 @@ def fig_drift(res: SweepResult, p, path):
     axes[0].set_ylabel("a da [m]")
     fig.suptitle(f"Residual a da vs mean tangential separation (p = {p:g} m/s, "
                  f"drag {'on' if res.mc.drag else 'off'})")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _save(fig, path)
 
 
 def fig_ei(res: SweepResult, p, path):
@@ -66,9 +71,7 @@ def fig_ei(res: SweepResult, p, path):
     ax.set_title(f"Relative e/i after drift-stop (p = {p:g} m/s)")
     ax.legend(loc="lower right", fontsize=8)
     ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _save(fig, path)
 
 
 def fig_min_rn(res: SweepResult, p, path):
@@ -83,9 +86,7 @@ def fig_min_rn(res: SweepResult, p, path):
     ax.set_ylabel("minimum R-N distance [m]")
     ax.set_title(f"Minimum cross-track distance (p = {p:g} m/s)")
     ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _save(fig, path)
 
 
 def fig_crossing(res: SweepResult, path):
@@ -100,9 +101,7 @@ def fig_crossing(res: SweepResult, path):
     ax.set_title("Nearest crossing of the R = 0 plane")
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _save(fig, path)
 
 
 def fig_p_sweep(res: SweepResult, path):
@@ -122,9 +121,7 @@ def fig_p_sweep(res: SweepResult, path):
     ax.set_title(f"p sweep ({res.mc.samples} samples)")
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3, which="both")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _save(fig, path)
 
 
 def write_figures(res: SweepResult, directory: Path):
