@@ -53,12 +53,12 @@ class EjectorNode(Node):
         self.sent = True
 
     def on_state(self, msg: RelativeOrbitalElements):
-        if self.sent:
-            return
         t = time_to_sec(msg.header.stamp)
         kep = elements_to_array(msg.chief)
         if not (math.isfinite(t) and all(math.isfinite(x) for x in kep) and kep[0] > 0):
             publish_status(self, self.diag_pub, ERROR, "carrier state rejected: not finite")
+            return
+        if self.sent:
             return
         if self.epoch >= 0:
             t_ej = self.epoch
