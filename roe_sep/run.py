@@ -36,8 +36,11 @@ def parameters(config, bag_dir, overrides):
     """The run's ROS parameter file content: shared values for every node, then per-node values."""
     shared = {"use_sim_time": True, "scenario_file": str(Path(config).resolve()) if config else ""}
     per_node = {
-        # the truth stream's subscribers: ejector, safety_monitor, radar_od and the recorder
-        "sim": {"use_sim_time": False, "min_subscribers": 4},
+        # start the clock once every node is up: the truth stream's subscribers (ejector, safety_monitor,
+        # radar_od, recorder), the ejection's (planner after its start-up Monte Carlo, sim, safety_monitor, ejector)
+        # and the OD's (ic_planner, safety_monitor)
+        "sim": {"use_sim_time": False,
+                "wait_for": ["/sim/truth/roe=4", "/separation/ejection=4", "/od/estimate=2"]},
         "recorder": {"output": str(bag_dir)},
     }
     for node, values in (overrides or {}).items():

@@ -1,7 +1,9 @@
 """sim: the dynamics simulator that closes the loop on sim time.
 
-Publishes ``/clock`` faster than real time, propagates the truth relative orbit (:class:`roe_sep.core.truth.
-TruthModel`: J2 + true differential drag), applies the commanded ejection with its real dispersion and executes
+Publishes ``/clock`` faster than real time, propagates the truth relative orbit (``dynamics: secular``, the
+default: :class:`roe_sep.core.truth.TruthModel`, J2 + true differential drag; ``dynamics: nonlinear``:
+:class:`roe_sep.core.nonlinear.NonlinearTruth`, both spacecraft integrated numerically with J2-J4 and drag, ROE
+published as mean ROE of the numerical states), applies the commanded ejection with its real dispersion and executes
 every planned carrier burn at its epoch with execution and attitude errors (seed 002 Eq. 22, seeded). A plan's
 burns are executed only once the safety monitor has approved that plan (``require_plan_approval``); while a burn
 waits for its approval the clock holds, up to ``approval_timeout`` wall seconds, after which the burn is dropped.
@@ -22,6 +24,7 @@ from roe_sep_msgs.msg import (
     EjectionEvent,
     ImpulsiveManeuver,
     ManeuverPlan,
+    OrbitDetermination,
     RelativeOrbitalElements,
     RelativeState,
     SafetyStatus,
@@ -49,6 +52,7 @@ from .diagnostics import ERROR, OK, WARN, publish_status
 from .params import ParameterError, declare, finite, require
 
 PLAN_TOPICS = (qos.DRIFT_STOP_PLAN_TOPIC, qos.ACQUISITION_PLAN_TOPIC)
+ACQUISITION_PLANNER = "roe_sep/ic_planner"  # its /diagnostics status name
 DEFAULT_DURATION = 280800.0  # s: 3.25 days, through OD and the initial-condition acquisition and half a day on
 
 
@@ -79,10 +83,12 @@ class SimNode(Node):
         self.distance_step = declare(self, "distance_step", 10.0, "s, sampling of the minimum-distance tracking")
         self.departure = declare(self, "departure_distance", 1000.0,
                                  "m, closest approaches are tracked once the picosatellite is this far away")
-        self.j2 = declare(self, "j2", True, "secular J2 in the truth dynamics")
-        self.min_subscribers = declare(self, "min_subscribers", 0,
-                                       "hold the clock at 0 until the truth topic has this many subscribers")
-        self.start_timeout = declare(self, "start_timeout", 30.0, "wall s to wait for those subscribers at most")
+        self.j2 = declare(self, "j2", True, "secular J2 in the truth dynamics (secular dynamics only)")
+        self.dynamics = declare(self, "dynamics", "secular",
+                                "truth: 'secular' (ROE model) or 'nonlinear' (both spacecraft integrated numerically)")
+        wait_for = declare(self, "wait_for", [""], "'topic=count' items: hold the clock at 0 until each topic has "
+                                                  "that many subscribers (every node up)")
+        self.start_timeout = declare(self, "start_timeout", 60.0, "wall s to wait for those subscribers at most")
 
         for name, value in (("duration", self.duration), ("time_step", self.time_step),
                             ("tick_period", tick_period), ("truth_period", self.truth_period),
@@ -97,8 +103,13 @@ class SimNode(Node):
             raise ParameterError(f"parameter 'epoch_utc' must be an ISO-8601 UTC date-time, got {epoch!r}: {exc}") \
                 from exc
         require("seed", isinstance(self.seed, int), self.seed, "an integer")
-        require("min_subscribers", isinstance(self.min_subscribers, int) and self.min_subscribers >= 0,
-                self.min_subscribers, "a non-negative integer")
+        require("dynamics", self.dynamics in ("secular", "nonlinear"), self.dynamics, "'secular' or 'nonlinear'")
+        self.wait_for = {}
+        for item in (w for w in wait_for if w):
+            topic, _, count = item.partition("=")
+            require("wait_for", topic.startswith("/") and count.isdigit(), wait_for,
+                    "a list of 'topic=count' items, e.g. ['/sim/truth/roe=4']")
+            self.wait_for[topic] = int(count)
         require("start_timeout", finite(self.start_timeout) and self.start_timeout >= 0, self.start_timeout,
                 "a non-negative number [s]")
         for name, value in (("disperse", self.disperse), ("require_plan_approval", self.require_approval),
@@ -115,8 +126,16 @@ class SimNode(Node):
         rng = np.random.default_rng(self.seed)
         db_factor = rng.normal(1.0, mc.ballistic_sigma) if self.disperse else 1.0
         da_dot = float(drag_da_dot(mc.delta_b * db_factor, mc.density, a)) if mc.drag else 0.0
-        self.truth = TruthModel(chief_from_u(a, inc, raan, math.radians(u0_deg)), 0.0, da_dot,
-                                self.j2)
+        chief0 = chief_from_u(a, inc, raan, math.radians(u0_deg))
+        if self.dynamics == "nonlinear":
+            from ..core.nonlinear import Atmosphere, NonlinearTruth
+
+            b_c = mc.carrier.ballistic if mc.drag else 0.0
+            b_d = b_c + mc.delta_b * db_factor if mc.drag else 0.0
+            self.truth = NonlinearTruth(chief0, 0.0, b_c, b_d, Atmosphere.scaled(mc.density, sep.altitude),
+                                        da_dot=da_dot)
+        else:
+            self.truth = TruthModel(chief0, 0.0, da_dot, self.j2)
         self.errors = ExecutionErrors(rng, sep.spl_sigma if self.disperse else 0.0,
                                       sep.thruster_sigma if self.disperse else 0.0,
                                       mc.attitude_sigma_arcsec * ARCSEC if self.disperse else 0.0)
@@ -137,6 +156,9 @@ class SimNode(Node):
         self.next_status = 3600.0
         self.done = False
         self.waiting_since = time.monotonic()
+        self.ejected_at = None  # set by the ejection until the drift-stop plan answering it arrives
+        self.od_seen = set()
+        self.owed_acquisition = None  # wall time since which the acquisition planner owes a decision
 
         self.clock_pub = self.create_publisher(Clock, qos.CLOCK_TOPIC, 10)
         self.roe_pub = self.create_publisher(RelativeOrbitalElements, qos.TRUTH_ROE_TOPIC, qos.STREAM)
@@ -147,6 +169,8 @@ class SimNode(Node):
         for topic in PLAN_TOPICS:
             self.create_subscription(ManeuverPlan, topic, lambda m, tp=topic: self.on_plan(tp, m), qos.LATCHED)
         self.create_subscription(SafetyStatus, qos.PLAN_CHECK_TOPIC, self.on_plan_check, qos.EXECUTED)
+        self.create_subscription(OrbitDetermination, qos.OD_TOPIC, self.on_od, qos.LATCHED)
+        self.create_subscription(DiagnosticArray, qos.DIAGNOSTICS_TOPIC, self.on_diagnostics, 100)
         self.timer = self.create_timer(tick_period, self.tick)
         self.get_logger().info(
             f"truth: a = {a:.1f} m, i = {math.degrees(inc):.3f} deg, raan = {math.degrees(raan):.2f} deg, "
@@ -188,6 +212,8 @@ class SimNode(Node):
         burns = [b for b in burns if self._key(b) not in self.flown]
         self.pending = [b for b in self.pending if b.topic != topic] + burns
         self.plan_stamps[topic] = stamp
+        if topic == qos.DRIFT_STOP_PLAN_TOPIC:
+            self.hold_since = None
         self.get_logger().info(f"plan on {topic}: {len(burns)} burn(s) from t = "
                                f"{min((b.epoch for b in burns), default=math.nan):.0f} s")
 
@@ -201,23 +227,62 @@ class SimNode(Node):
 
     # ------------------------------------------------------------------ loop
     def ready(self):
-        """Start the clock once the expected subscribers (e.g. the recorder, the monitor) are matched, so that no
-        one misses the first seconds; after ``start_timeout`` start anyway (WARN)."""
+        """Start the clock once every node is up (``wait_for``: subscribers per topic, from the ROS graph), so that
+        nobody misses the first seconds; after ``start_timeout`` start anyway (WARN)."""
         if self.waiting_since is None:
             return True
-        if self.roe_pub.get_subscription_count() >= self.min_subscribers:
+        missing = {t: n for t, n in self.wait_for.items() if self.count_subscribers(t) < n}
+        if not missing:
             self.waiting_since = None
             return True
         if time.monotonic() - self.waiting_since > self.start_timeout:
             self.waiting_since = None
-            self._status(WARN, f"started after {self.start_timeout:g} s with only "
-                               f"{self.roe_pub.get_subscription_count()} of {self.min_subscribers} truth subscribers")
+            self._status(WARN, f"started after {self.start_timeout:g} s without the subscribers {missing}")
             return True
         self.clock_pub.publish(Clock(clock=sec_to_time(self.t)))
         return False
 
+    def awaiting_drift_stop(self):
+        """After the ejection the ground owes the drift-stop plan: hold the clock until one answering it has
+        arrived (at most ``approval_timeout`` wall seconds), as for a plan awaiting its safety check."""
+        if self.ejected_at is None or qos.DRIFT_STOP_PLAN_TOPIC in self.plan_stamps:
+            return False
+        now = time.monotonic()
+        if self.hold_since is None:
+            self.hold_since = now
+        if now - self.hold_since > self.approval_timeout:
+            self.hold_since = None
+            self.ejected_at = None
+            self._status(ERROR, f"no drift-stop plan within {self.approval_timeout:g} s of the ejection")
+            return False
+        self.clock_pub.publish(Clock(clock=sec_to_time(self.t)))
+        return True
+
+    def on_od(self, od: OrbitDetermination):
+        stamp = time_to_sec(od.header.stamp)
+        if stamp not in self.od_seen:
+            self.od_seen.add(stamp)
+            self.owed_acquisition = time.monotonic()
+
+    def on_diagnostics(self, array: DiagnosticArray):
+        if any(s.name == ACQUISITION_PLANNER for s in array.status):
+            self.owed_acquisition = None  # the acquisition planner has decided on the newest OD solution
+
+    def awaiting_acquisition(self):
+        """After a new OD solution the acquisition planner owes a decision (a plan, or why not: it ends every
+        decision with a /diagnostics status): hold the clock until it arrives, at most ``approval_timeout``."""
+        if self.owed_acquisition is None:
+            return False
+        if time.monotonic() - self.owed_acquisition > self.approval_timeout:
+            self.owed_acquisition = None
+            self._status(ERROR, f"no decision of {ACQUISITION_PLANNER} within {self.approval_timeout:g} s of an "
+                                "OD solution")
+            return False
+        self.clock_pub.publish(Clock(clock=sec_to_time(self.t)))
+        return True
+
     def tick(self):
-        if self.done or not self.ready():
+        if self.done or not self.ready() or self.awaiting_drift_stop() or self.awaiting_acquisition():
             return
         t_next = min(self.t + self.time_step, self.duration)
         while True:
@@ -305,8 +370,13 @@ class SimNode(Node):
         self._advance(t_exec)
         executed = self.errors.executed(vector_to_array(m.dv_rtn), m.spacecraft)
         done = maneuver_msg(t_exec, float(self.truth.u_at(t_exec)), executed, m.spacecraft, m.purpose)
-        self.truth.apply(t_exec, relative_dv(done))
+        if self.dynamics == "nonlinear":
+            self.truth.apply(t_exec, relative_dv(done), m.spacecraft)
+        else:
+            self.truth.apply(t_exec, relative_dv(done))
         self.flown.add(self._key(burn))
+        if m.purpose == "ejection":
+            self.ejected_at = t_exec
         self.burns += 1
         self.exec_pub.publish(done)
         self._publish_truth(t_exec)
