@@ -36,6 +36,10 @@ setup(
         'mcap',
         'mcap-ros2-support',
         'tqdm',
+        'skyfield',
+        'skyfield-data',
+        'sgp4',
+        'heyoka',
     ],
     extras_require={
         'plots': ['matplotlib'],
@@ -59,6 +63,7 @@ setup(
             'radar_od = roe_sep.nodes.radar_od:main',
             'ic_planner = roe_sep.nodes.ic_planner:main',
             'recorder = roe_sep.nodes.recorder:main',
+            'analysis_server = roe_sep.nodes.analysis_server:main',
         ],
     },
 )

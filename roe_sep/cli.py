@@ -140,8 +140,59 @@ def _positive_int(text):
     return value
 
 
+STRATEGIES = ("double_impulse", "multi_impulse")
+
+
+def _multi_design(scenario, args):
+    from .core import multi_impulse
+
+    overrides = {k: v for k, v in (("spl_dv", args.spl_dv), ("u1_deg", args.u1)) if v is not None}
+    mcfg = dataclasses.replace(multi_impulse.MultiImpulseConfig(), **overrides)
+    return multi_impulse.design(scenario.separation, mcfg, scenario.monte_carlo)
+
+
+def print_multi_design(rep: dict, out=None):
+    w = (out or sys.stdout).write
+    a = rep["a"]
+    w("Multi-impulse separation design (seed 001 Sec. 3)\n")
+    w(f"  carrier orbit     a = {a:.1f} m   n = {rep['n']:.6e} rad/s   i = {rep['inclination_deg']:.3f} deg\n")
+    w(f"  ejection (SPL)    u1 = {rep['u1_deg']:8.3f} deg   dv RTN = {_vec(rep['ejection_dv_rtn'])} m/s "
+      f"(|dv| = {rep['spl_dv']:g} m/s, picosat rel. carrier)\n")
+    w(f"    tangential: max(Eq. 10 e~ = {rep['dv_t_min_eq10']:.4f}, AC3 drift-free = {rep['dv_t_min_ac3']:.4f}) m/s;"
+      f" normal: a di_F = {rep['a_di_f']:.1f} m; radial: the rest (Eq. 12)\n")
+    w(f"  carrier burns (tangential, <= {rep['max_burn']:g} m/s, quantum {rep['dv_quantum'] * 1e3:g} mm/s)\n")
+    w(f"    {'purpose':16s}{'u [deg]':>10s}{'u mod 360':>10s}{'t [h]':>9s}{'dvT carrier [m/s]':>19s}\n")
+    for m in rep["maneuvers"]:
+        w(f"    {m['purpose']:16s}{m['u_deg']:10.2f}{m['u_deg'] % 360:10.2f}{m['epoch'] / 3600:9.3f}"
+          f"{m['dv_rtn'][1]:+19.3f}\n")
+    w(f"  thrusted dv = {rep['thrusted_dv_total']:.3f} m/s = {rep['thrusted_to_ejection_ratio']:.1%} of the ejection dv"
+      f"   (drift reduction |p| = {rep['p']:.4f} m/s)\n")
+    for key, label in (("roe_after_ejection", "after ejection"), ("roe_after_reduction", "after drift reduction"),
+                       ("roe_final", "after the pair (IC)")):
+        w(f"  a*ROE {label:22s} [" + " ".join(f"{x:.1f}" for x in rep[key]) + "] m\n")
+    w(f"  final e/i angle {rep['final_ei_angle_deg']:.2f} deg   "
+      f"min R-N distance {rep['final_min_rn_distance']:.1f} m\n")
+    j = rep["j2"]
+    w("J2 (seed 001 Sec. 2.2 item 3)\n")
+    w(f"  de rotation {j['e_vector_rotation_deg_per_day']:+.3f} deg/day (clockwise)\n")
+    w(f"  a diy drift {j['a_diy_drift_per_m_dix_m_per_day']:.4f} m/day per m of a dix; a dix at u1 = "
+      f"{j['a_dix_at_ejection']:.3f} m -> {j['a_diy_drift_m_per_day']:.3f} m/day "
+      f"(u1 = 88 deg would give {j['a_diy_drift_m_per_day_if_u1_88deg']:.2f} m/day): eject at u = 90/270 deg\n")
+
+
 def cmd_design(args):
-    rep = design_report(design(load_scenario(args.config).separation))
+    scenario = load_scenario(args.config)
+    if args.strategy == "multi_impulse":
+        from .core.multi_impulse import design_report as multi_report
+
+        rep = multi_report(_multi_design(scenario, args))
+        if args.json:
+            json.dump(rep, sys.stdout, indent=2)
+            sys.stdout.write("\n")
+        else:
+            print_multi_design(rep)
+        return
+    rep = design_report(design(scenario.separation))
     if args.json:
         json.dump(rep, sys.stdout, indent=2)
         sys.stdout.write("\n")
@@ -149,7 +200,45 @@ def cmd_design(args):
         print_design(rep)
 
 
+def print_acceptance(rep: dict, out=None):
+    w = (out or sys.stdout).write
+    w(f"Multi-impulse Monte Carlo (seed 001 Sec. 4): {rep['samples']} samples, seed {rep['seed']}, "
+      f"drag {'on' if rep['drag'] else 'off'}, J2 {'on' if rep['j2'] else 'off'}\n")
+    w(f"  AC1  a da < 0 after the drift reduction          {rep['ac1']:9.3%}  ({rep['n_ac1_fail']} fail; "
+      f"max a da = {rep['a_da_after_reduction_max']:.1f} m)\n")
+    w(f"  AC2  nearest R=0 transit >= {rep['ac2_distance']:.0f} m              {rep['ac2']:9.3%}  "
+      f"({rep['n_ac2_fail']} fail; min {rep['crossing_min']:.0f} m)\n")
+    w(f"  AC3  min R-N > 150 m, |a da| < {rep['drift_free_a_da']:.1f} m         {rep['ac3']:9.3%}  "
+      f"({rep['n_ac3_fail']} fail of {rep['n_drift_free']} drift-free)\n")
+
+
 def cmd_mc(args):
+    if args.strategy == "multi_impulse":
+        from .core.acceptance import run as run_acceptance
+
+        scenario = load_scenario(args.config)
+        overrides = {k: v for k, v in (("samples", args.samples), ("seed", args.seed)) if v is not None}
+        if args.no_drag:
+            overrides["drag"] = False
+        if args.j2:
+            overrides["j2"] = True
+        if args.p is not None:
+            raise ValueError("--p applies to the double_impulse sweep only (multi_impulse sizes p by Eq. 21)")
+        mc = dataclasses.replace(scenario.monte_carlo, **overrides)
+        res = run_acceptance(_multi_design(scenario, args), mc)
+        rep = res.to_dict()
+        if args.plots:
+            from .plots_ops import write_acceptance_figures
+
+            rep["figures"] = [str(p) for p in write_acceptance_figures(res, Path(args.plots))]
+        if args.json:
+            json.dump(rep, sys.stdout, indent=2)
+            sys.stdout.write("\n")
+        else:
+            print_acceptance(rep)
+            for f in rep.get("figures", []):
+                print(f"  figure: {f}")
+        return
     res = run_sweep(load_scenario(args.config), args)
     rep = sweep_report(res)
     if args.plots:
@@ -230,6 +319,41 @@ def cmd_bag_info(args):
     return 0
 
 
+def _strategy_args(p):
+    p.add_argument("--strategy", choices=STRATEGIES, default="double_impulse",
+                   help="separation strategy (default double_impulse; multi_impulse: seed 001)")
+    p.add_argument("--spl-dv", type=float, help="multi_impulse: SPL |dv| [m/s] (default 1.53)")
+    p.add_argument("--u1", type=float, help="multi_impulse: ejection argument of latitude [deg] (default 90)")
+
+
+def _date(text):
+    import datetime
+
+    try:
+        return datetime.date.fromisoformat(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--date expects YYYY-MM-DD, got {text!r}") from None
+
+
+def cmd_ops(args):
+    from .core import ops
+
+    cfg = ops.load_ops_config(args.ops_config)
+    if args.tle:
+        cfg = ops.with_tle(cfg, args.tle)
+    rep = ops.plan(cfg, args.date, days=args.days)
+    if args.plot:
+        from .plots_ops import fig_timeline
+
+        fig_timeline(rep, Path(args.plot))
+        rep["figure"] = args.plot
+    if args.json:
+        json.dump(rep, sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    else:
+        ops.print_plan(rep, sys.stdout)
+
+
 def build_parser():
     parser = argparse.ArgumentParser(prog="roe-sep", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
@@ -237,6 +361,7 @@ def build_parser():
     p = sub.add_parser("design", help="nominal double-impulse separation plan")
     p.add_argument("--config", help="scenario YAML (default: the embedded BIROS/picosatellite case)")
     p.add_argument("--json", action="store_true", help="machine-readable output")
+    _strategy_args(p)
     p.set_defaults(func=cmd_design)
 
     p = sub.add_parser("mc", help="Monte Carlo sweep over the drift-stop reduction p")
@@ -248,7 +373,17 @@ def build_parser():
     p.add_argument("--j2", action="store_true", help="include secular J2 in the propagation")
     p.add_argument("--plots", metavar="DIR", help="write the figures (PNG) to DIR")
     p.add_argument("--json", action="store_true", help="machine-readable output")
+    _strategy_args(p)
     p.set_defaults(func=cmd_mc)
+
+    p = sub.add_parser("ops", help="operational plan of the separation day (seed 001 Sec. 5)")
+    p.add_argument("--date", required=True, type=_date, help="separation date YYYY-MM-DD (UTC)")
+    p.add_argument("--tle", help="carrier TLE file (2 or 3 lines); default: mean elements of config/ops.yaml")
+    p.add_argument("--ops-config", help="stations/radar/camera/orbit YAML (default: config/ops.yaml)")
+    p.add_argument("--days", type=float, default=2.0, help="length of the plan [days] (default 2)")
+    p.add_argument("--plot", metavar="PNG", help="write the timeline figure (like seed 001 Fig. 7)")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=cmd_ops)
 
     p = sub.add_parser("run", help="run the scenario end to end (all nodes, sim time), record a bag, write a report")
     p.add_argument("--config", help="scenario YAML")
@@ -261,6 +396,11 @@ def build_parser():
     p.set_defaults(func=cmd_run)
 
     sub.add_parser("replay", add_help=False, help="play a bag back onto its topics (roe-sep replay --help)")
+
+    from . import cli_analysis, cli_nonlinear
+
+    cli_nonlinear.register(sub)
+    cli_analysis.register(sub)
 
     bag = sub.add_parser("bag", help="inspect or recover a bag").add_subparsers(dest="bag_command", required=True)
     p = bag.add_parser("info", help="topics, types, counts, QoS and duration of a bag")

@@ -2,7 +2,7 @@
 
 Keys: ``maneuvers`` (each executed burn: purpose, spacecraft, epoch, u, dv RTN and |dv|), ``dv_total`` and
 ``dv_by_purpose`` (carrier burns, m/s), ``final_roe`` (truth a*ROE at the end, m), ``min_distance`` (closest
-approach after the initial departure, m, with its epoch), ``time_to_ic`` (ejection to the last acquisition burn, s),
+approach after the initial departure, m, with its epoch), ``time_to_ic`` (ejection to the IC epoch, s),
 ``od`` (first solution: epoch, passes, 1-sigma and error against truth), ``ic`` (truth at the IC epoch and each
 initial condition), ``criteria`` (each pass/fail) and ``safe`` (the safety criteria only: keep-out, passive safety,
 evaporation, closest approach, every plan approved by the monitor).
@@ -52,7 +52,8 @@ def truth_at(truth, t, truth_da_dot):
                      truth_da_dot / a / 86400.0) * a
 
 
-def initial_conditions(truth, plans, ic_burns, truth_da_dot, limits, drift_tolerance=5.0, ei_tolerance_deg=10.0):
+def initial_conditions(truth, plans, ic_burns, truth_da_dot, limits, drift_tolerance=5.0, ei_tolerance_deg=10.0,
+                       run_end=None):
     """The experiment's initial conditions checked on truth at the IC epoch of the last acquisition plan: mean
     along-track separation in [a_dl_min, a_dl_max], |a da| <= ``drift_tolerance`` m, e/i (anti-)parallel within
     ``ei_tolerance_deg`` with the minimum R-N distance (Eq. 25) of at least ``min_rn_distance``, in the FOV."""
@@ -66,6 +67,7 @@ def initial_conditions(truth, plans, ic_burns, truth_da_dot, limits, drift_toler
     ei_off = min(abs(ei), 180.0 - abs(ei))  # deviation from parallel or anti-parallel
     rn = float(min_rn_distance(roe))
     checks = {
+        "within_run": run_end is None or t_ic <= run_end,  # an IC epoch after the run's end is not reached yet
         "along_track": bool(limits.a_dl_min <= abs(roe[1]) <= limits.a_dl_max),
         "drift": bool(abs(roe[0]) <= drift_tolerance),
         "ei_parallel": bool(ei_off <= ei_tolerance_deg),
@@ -112,7 +114,8 @@ def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()
     criteria["plans_approved"] = bool(plan_checks) and all(s.safe for s in plan_checks)
     safe = all(criteria[name] for name in (*ERROR_CRITERIA, "min_distance", "plans_approved"))
     truth_da_dot = float(values.get("truth_a_da_dot_m_per_day", "nan"))
-    ic = initial_conditions(truth, data[qos.ACQUISITION_PLAN_TOPIC], ic_burns, truth_da_dot, limits)
+    ic = initial_conditions(truth, data[qos.ACQUISITION_PLAN_TOPIC], ic_burns, truth_da_dot, limits,
+                            run_end=duration)
     criteria["ic_reached"] = bool(ic and ic["reached"])
 
     od = data[qos.OD_TOPIC]
@@ -140,7 +143,7 @@ def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()
         "dv_total": float(sum(m["dv"] for m in carrier)),
         "dv_by_purpose": by_purpose,
         "ejection_epoch": ejection["epoch"] if ejection else None,
-        "time_to_ic": (ic_burns[-1]["epoch"] - ejection["epoch"]) if (ic_burns and ejection) else None,
+        "time_to_ic": (ic["epoch"] - ejection["epoch"]) if (ic and ejection) else None,  # to the IC epoch
         "final_roe": final_roe,
         "final_epoch": _stamp(final.header.stamp) if final else None,
         "min_distance": min_distance if math.isfinite(min_distance) else None,  # None: no approach after departure

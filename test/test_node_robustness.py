@@ -4,11 +4,9 @@ import math
 import time
 
 import pytest
-
-from rosutil import rclpy, spin_until, start_node, stop_node, wait_exit  # noqa: I001  (skips without rclpy)
-
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus  # noqa: E402
 from roe_sep_msgs.msg import EjectionEvent, ManeuverPlan, RelativeOrbitalElements, SafetyStatus  # noqa: E402
+from rosutil import rclpy, spin_until, start_node, stop_node, wait_exit  # noqa: I001  (skips without rclpy)
 
 from roe_sep.nodes import qos  # noqa: E402
 from roe_sep.nodes.convert import maneuver_msg, sec_to_time  # noqa: E402

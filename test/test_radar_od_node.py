@@ -11,9 +11,13 @@ import time
 import numpy as np
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus  # noqa: E402
+from roe_sep_msgs.msg import (  # noqa: E402
+    ImpulsiveManeuver,
+    OrbitDetermination,
+    RadarMeasurement,
+    RelativeOrbitalElements,  # noqa: E402
+)
 from rosgraph_msgs.msg import Clock  # noqa: E402
-from roe_sep_msgs.msg import ImpulsiveManeuver, OrbitDetermination, RadarMeasurement  # noqa: E402
-from roe_sep_msgs.msg import RelativeOrbitalElements  # noqa: E402
 from rosutil import rclpy, spin_until, start_node, stop_node, wait_exit  # noqa: I001  (skips without rclpy)
 
 from roe_sep.core.dynamics import propagate_chief, sun_synchronous_inclination  # noqa: E402

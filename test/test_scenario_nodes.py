@@ -3,11 +3,9 @@
 import math
 
 import pytest
-
-from rosutil import rclpy, spin_until, start_node, stop_node  # noqa: I001  (skips without rclpy)
-
 from roe_sep_msgs.msg import ImpulsiveManeuver, RelativeOrbitalElements, SafetyStatus  # noqa: E402
 from rosgraph_msgs.msg import Clock  # noqa: E402
+from rosutil import rclpy, spin_until, start_node, stop_node  # noqa: I001  (skips without rclpy)
 
 from roe_sep.core.double_impulse import design  # noqa: E402
 from roe_sep.nodes import qos  # noqa: E402

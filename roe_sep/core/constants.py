@@ -11,6 +11,15 @@ R_EARTH = 6378137.0
 J2 = 1.08262668e-3
 """Second zonal harmonic of the Earth's gravity field (EGM96, unnormalized)."""
 
+J3 = -2.53265649e-6
+"""Third zonal harmonic, EGM96 unnormalized (J3 = -sqrt(7) C30)."""
+
+J4 = -1.61962159e-6
+"""Fourth zonal harmonic, EGM96 unnormalized (J4 = -3 C40)."""
+
+EARTH_ROTATION = 7.292115e-5
+"""Earth rotation rate omega_E [rad/s] (WGS-84 / Vallado)."""
+
 ARCSEC = math.pi / (180.0 * 3600.0)
 """One arc second [rad]."""
 

@@ -91,15 +91,19 @@ def sun_right_ascension(jd):
     return np.arctan2(np.cos(eps) * np.sin(lam), np.cos(lam))
 
 
-def raan_from_ltan(ltan_hours, jd):
-    """RAAN [rad, 0..2pi) of an orbit whose ascending node is at local time ``ltan_hours`` on date ``jd``.
-
-    raan = alpha_sun + (LTAN - 12 h) * 15 deg/h: the node is (LTAN - 12 h) of hour angle east of the Sun.
-    ``alpha_sun`` is the *apparent* Sun (:func:`sun_right_ascension`), i.e. LTAN in apparent solar time; for mean
-    solar time add the equation of time (at most 16 min, 4 deg of RAAN). BIROS: LTAN 09:30 (seed 002).
-    """
-    return np.mod(sun_right_ascension(jd) + (np.asarray(ltan_hours, dtype=float) - 12.0) * (np.pi / 12.0),
+def raan_from_sun(sun_ra, ltan_hours):
+    """RAAN [rad, 0..2pi) of an orbit whose ascending node is at local time ``ltan_hours`` when the Sun is at right
+    ascension ``sun_ra``: raan = alpha_sun + (LTAN - 12 h) * 15 deg/h (the node is LTAN - 12 h of hour angle east
+    of the Sun)."""
+    return np.mod(np.asarray(sun_ra, dtype=float) + (np.asarray(ltan_hours, dtype=float) - 12.0) * (np.pi / 12.0),
                   2.0 * np.pi)
+
+
+def raan_from_ltan(ltan_hours, jd):
+    """:func:`raan_from_sun` with the low-precision *apparent* Sun of :func:`sun_right_ascension` on date ``jd``,
+    i.e. LTAN in apparent solar time; for mean solar time add the equation of time (at most 16 min, 4 deg of RAAN).
+    BIROS: LTAN 09:30 (seed 002)."""
+    return raan_from_sun(sun_right_ascension(jd), ltan_hours)
 
 
 def geodetic_to_ecef(lat, lon, alt):

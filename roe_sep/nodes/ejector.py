@@ -8,7 +8,8 @@ a little ahead of the epoch; the simulator applies it at the epoch with the mech
 
 Parameters: ``scenario_file`` ('' = embedded default), ``ejection_epoch`` (s, sim time; negative: at u1),
 ``not_before`` (s), ``lead_time`` (s, how early the time-tagged event may be published, default 1800; it must
-exceed the spacing of the truth samples).
+exceed the spacing of the truth samples), ``strategy`` (``double_impulse`` default, or ``multi_impulse``: the SPL
+ejection of :func:`roe_sep.core.multi_impulse.design`, 1.53 m/s at u1 = 90 deg, seed 001 Sec. 3).
 """
 
 import math
@@ -37,8 +38,17 @@ class EjectorNode(Node):
         for name, value in (("ejection_epoch", self.epoch), ("not_before", self.not_before)):
             require(name, finite(value), value, "a finite time [s]")
         require("lead_time", finite(self.lead) and self.lead >= 0, self.lead, "a non-negative time [s]")
+        strategy = declare(self, "strategy", "double_impulse", "separation strategy: double_impulse|multi_impulse")
+        require("strategy", strategy in ("double_impulse", "multi_impulse"), strategy,
+                "one of ('double_impulse', 'multi_impulse')")
         try:
-            self.design = design(load_scenario(scenario_file or None).separation)
+            scenario = load_scenario(scenario_file or None)
+            if strategy == "multi_impulse":
+                from ..core import multi_impulse
+
+                self.design = multi_impulse.design(scenario.separation, mc=scenario.monte_carlo)
+            else:
+                self.design = design(scenario.separation)
         except (ConfigError, InfeasibleDesignError) as exc:
             raise ParameterError(f"parameter 'scenario_file': {exc}") from exc
         self.sent = False

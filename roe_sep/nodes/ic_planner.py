@@ -17,7 +17,9 @@ When a plan is (re)computed -- what a flight-dynamics team wants from a stream o
   planning margins of t_F the acquisition is complete and further solutions are not used.
 * A re-plan never moves a burn that is committed: one of the plan in force due within ``planning_margin`` from
   now (or executed without its record having arrived yet) keeps the plan in force (WARN on /diagnostics).
-* The first burn of a new plan is at or after max(OD epoch, now) + planning_margin.
+* The first burn of a new plan is at or after max(OD epoch, now) + planning_margin; only an OD made after the
+  separation plan's last burn (``/separation/drift_stop_plan``: the drift-stop, or the multi-impulse burns) starts
+  the acquisition.
 * A bad estimate (NaN, impossible orbit) or an infeasible acquisition is logged and reported as ERROR on
   /diagnostics; the node keeps running and the plan in force (if any) stays published.
 
@@ -114,6 +116,9 @@ class IcPlannerNode(Node):
         self.diag_pub = self.create_publisher(DiagnosticArray, qos.DIAGNOSTICS_TOPIC, qos.DIAGNOSTICS)
         self.create_subscription(OrbitDetermination, qos.OD_TOPIC, self.on_estimate, qos.LATCHED)
         self.create_subscription(ImpulsiveManeuver, qos.EXECUTED_TOPIC, self.on_executed, qos.EXECUTED)
+        # the acquisition starts once the separation plan (drift-stop, or the multi-impulse burns) is flown
+        self.create_subscription(ManeuverPlan, qos.DRIFT_STOP_PLAN_TOPIC, self.on_separation_plan, qos.LATCHED)
+        self.separation_end = -math.inf  # s, epoch of the separation plan's last burn
         # a restarted ic_planner keeps the IC epoch of the acquisition in progress: its own latched plan
         self.create_subscription(ManeuverPlan, qos.ACQUISITION_PLAN_TOPIC, self.on_own_plan, qos.LATCHED)
         self.executed = []  # carrier burns flown so far (relative impulses), from the simulator/executor
@@ -135,6 +140,9 @@ class IcPlannerNode(Node):
             except ValueError as exc:
                 publish_status(self, self.diag_pub, ERROR, f"executed maneuver rejected: {exc}", self._values())
 
+    def on_separation_plan(self, plan: ManeuverPlan):
+        self.separation_end = max((time_to_sec(m.epoch) for m in plan.maneuvers), default=-math.inf)
+
     def on_own_plan(self, plan: ManeuverPlan):
         if self.t_final is None and plan.maneuvers:
             self.t_final = time_to_sec(plan.aimed.header.stamp)
@@ -150,6 +158,12 @@ class IcPlannerNode(Node):
             return
         self.last_key = key
         t_od, now = key[1], self.now()
+        if self.separation_end >= t_od:
+            text = (f"OD at t = {t_od:.1f} s not used: the separation plan flies until t = {self.separation_end:.1f} s;"
+                    " the acquisition starts from an OD made after it")
+            self.get_logger().info(text)
+            publish_status(self, self.diag_pub, OK, text, self._values())
+            return
         blocking = self._committed_burn(t_od, now)
         if blocking is not None:
             text = (f"OD at t = {t_od:.1f} s not used: the burn at t = {blocking:.1f} s of the plan in force is "

@@ -14,6 +14,11 @@ Parameters (YAML via ``--ros-args --params-file``):
 * ``scenario_file`` (string, ''): scenario YAML for the Monte Carlo and the Eq. 21 sigmas; '' = embedded default.
 * ``mc_samples`` (int, 100000), ``mc_seed`` (int, 0): the start-up Monte Carlo.
 * ``j2`` (bool, true): secular J2 in the drift-stop epoch and the predicted ROE.
+* ``strategy`` (string, ``double_impulse``): ``double_impulse`` (the drift-stop above) or ``multi_impulse``
+  (seed 001 Sec. 3, :func:`roe_sep.core.multi_impulse.plan_carrier_burns`): every carrier burn of the multi-impulse
+  plan (blind drift reduction with |p| of Eq. 21, then the tangential e-vector pair), each <= 0.3 m/s and quantized
+  to 1 mm/s, published as one ManeuverPlan with strategy "multi_impulse" on the same topic; ``k`` and ``p_mode``
+  do not apply to it.
 """
 
 import dataclasses
@@ -27,8 +32,9 @@ from roe_sep_msgs.srv import PlanSeparation
 
 from ..core.config import ConfigError, load_scenario
 from ..core.double_impulse import design, plan_drift_stop, reduction_bounds
-from ..core.dynamics import raan_rate
+from ..core.dynamics import drag_da_dot, raan_rate
 from ..core.montecarlo import sweep
+from ..core.multi_impulse import MultiImpulseConfig, multi_config, plan_carrier_burns
 from ..core.roe import wrap_angle
 from . import qos
 from .convert import maneuver_msg, roe_to_msg, sec_to_time, time_to_sec, vector_to_array
@@ -36,6 +42,7 @@ from .diagnostics import ERROR, OK, publish_status
 from .params import ParameterError, declare, finite, require
 
 P_MODES = ("monte_carlo", "three_sigma", "fixed")
+STRATEGIES = ("double_impulse", "multi_impulse")
 
 
 class PlannerNode(Node):
@@ -48,6 +55,8 @@ class PlannerNode(Node):
         samples = declare(self, "mc_samples", 100000, "Monte Carlo samples for p_mode 'monte_carlo'")
         seed = declare(self, "mc_seed", 0, "Monte Carlo seed for p_mode 'monte_carlo'")
         self.j2 = declare(self, "j2", True, "secular J2 in the drift-stop epoch and predicted ROE")
+        self.strategy = declare(self, "strategy", "double_impulse", f"separation strategy: one of {STRATEGIES}")
+        require("strategy", self.strategy in STRATEGIES, self.strategy, f"one of {STRATEGIES}")
 
         require("k", isinstance(self.k, int) and self.k >= 1 and self.k % 2 == 1, self.k, "an odd natural number")
         require("p_mode", self.p_mode in P_MODES, self.p_mode, f"one of {P_MODES}")
@@ -60,7 +69,10 @@ class PlannerNode(Node):
         except ConfigError as exc:
             raise ParameterError(f"parameter 'scenario_file': {exc}") from exc
 
-        if self.p_mode == "fixed":
+        if self.strategy == "multi_impulse":
+            self.multi = MultiImpulseConfig()
+            self.p = None  # Eq. (21) from each commanded ejection
+        elif self.p_mode == "fixed":
             self.p = float(p_fixed)
         elif self.p_mode == "monte_carlo":
             mc = dataclasses.replace(self.scenario.monte_carlo, samples=samples, seed=seed)
@@ -78,7 +90,8 @@ class PlannerNode(Node):
         publish_status(self, self.diag_pub, OK, "waiting for the ejection event", self._values())
 
     def _values(self):
-        return {"k": self.k, "p_mode": self.p_mode, "p": "per event" if self.p is None else self.p,
+        return {"strategy": self.strategy, "k": self.k, "p_mode": self.p_mode,
+                "p": "per event" if self.p is None else self.p,
                 "plans": self.plans}
 
     def on_ejection(self, event: EjectionEvent):
@@ -105,6 +118,8 @@ class PlannerNode(Node):
         changes["u1_deg"] = math.degrees(request.u1)
         changes["leading"] = not request.following
         try:
+            if self.strategy == "multi_impulse":
+                return self._multi_request(request, response)
             d = design(dataclasses.replace(sep, **changes))
             p = request.p_reduction if request.p_reduction >= 0 else self.p
             p = reduction_bounds(d.dv1_rtn[1], d.config)[0] if p is None else p
@@ -121,6 +136,27 @@ class PlannerNode(Node):
             response.success, response.message = False, str(exc)
         return response
 
+    def _multi_request(self, request, response):
+        """PlanSeparation for the multi-impulse strategy: SPL size, u1, a_di_f, altitude, side from the request
+        (zero = default; ``k``, ``a_de_f`` and ``p_reduction`` do not apply)."""
+        from ..core import multi_impulse
+
+        sep = dataclasses.replace(self.scenario.separation, leading=not request.following,
+                                  **({"altitude": request.altitude} if request.altitude else {}))
+        mcfg = dataclasses.replace(self.multi, u1_deg=math.degrees(request.u1),
+                                   **{k: v for k, v in (("spl_dv", request.spl_dv), ("a_di_f", request.a_di_f)) if v})
+        d = multi_impulse.design(sep, mcfg, self.scenario.monte_carlo, self.j2)
+        event = EjectionEvent(dv_magnitude=d.config.spl_dv)
+        event.header.stamp = request.ejection_epoch
+        event.ejection = maneuver_msg(time_to_sec(request.ejection_epoch), d.u1, d.dv1_rtn, "picosatellite",
+                                      "ejection")
+        event.chief.semi_major_axis, event.chief.inclination = d.a, d.inc
+        event.chief.mean_arg_latitude = float(wrap_angle(d.u1))
+        plan = self.make_plan(event)
+        plan.maneuvers = [event.ejection, *plan.maneuvers]
+        response.success, response.message, response.plan = True, "ok", plan
+        return response
+
     def make_plan(self, event: EjectionEvent, k=None, p=None) -> ManeuverPlan:
         """The ManeuverPlan for one event; raises ValueError on a malformed event (NaN, impossible orbit)."""
         chief = event.chief
@@ -132,6 +168,8 @@ class PlannerNode(Node):
         epoch1 = time_to_sec(event.header.stamp)
         if not np.all(np.isfinite(dv1)):
             raise ValueError(f"ejection dv is not finite: {dv1.tolist()}")
+        if self.strategy == "multi_impulse":
+            return self._multi_plan(event, dv1, u1, epoch1, a, inc)
         if p is None:
             p = reduction_bounds(dv1[1], self.scenario.separation)[0] if self.p is None else self.p
         stop = plan_drift_stop(dv1, u1, epoch1, a, inc, k or self.k, p, self.j2)
@@ -146,6 +184,25 @@ class PlannerNode(Node):
             raan=float(wrap_angle(chief.raan + (raan_rate(a, inc) * dt if self.j2 else 0.0))),
             arg_perigee=chief.arg_perigee, mean_arg_latitude=float(wrap_angle(stop.u2)))
         msg.aimed = roe_to_msg(stop.aimed_roe, aimed_chief, sec_to_time(stop.epoch))
+        return msg
+
+    def _multi_plan(self, event, dv1, u1, epoch1, a, inc) -> ManeuverPlan:
+        """Every carrier burn of the multi-impulse plan for the commanded ejection (seed 001 Sec. 3)."""
+        sep = multi_config(self.scenario.separation, self.multi)
+        mc = self.scenario.monte_carlo  # the pair is planned on the nominal differential drag
+        da_dot = float(drag_da_dot(mc.delta_b, mc.density, a)) if mc.drag else 0.0
+        plan = plan_carrier_burns(dv1, u1, epoch1, a, inc, sep, self.multi, self.j2, da_dot)
+        msg = ManeuverPlan(strategy="multi_impulse", ejection_epoch=event.header.stamp, p_reduction=float(plan.p))
+        msg.header.stamp = self.get_clock().now().to_msg()
+        msg.header.frame_id = "carrier_rtn"
+        msg.maneuvers = [maneuver_msg(b.epoch, b.u, b.dv_carrier_rtn, "carrier", b.purpose) for b in plan.burns]
+        chief = event.chief
+        dt = plan.ic_epoch - epoch1
+        aimed_chief = type(chief)(
+            semi_major_axis=a, eccentricity=chief.eccentricity, inclination=inc,
+            raan=float(wrap_angle(chief.raan + (raan_rate(a, inc) * dt if self.j2 else 0.0))),
+            arg_perigee=chief.arg_perigee, mean_arg_latitude=float(wrap_angle(plan.burns[-1].u)))
+        msg.aimed = roe_to_msg(plan.roe_final, aimed_chief, sec_to_time(plan.ic_epoch))
         return msg
 
 
