@@ -185,18 +185,9 @@ def load_cluster_config(path=None) -> ClusterConfig:
     """Read a cluster YAML (config/cluster.yaml layout); ``None`` gives the embedded Soyuz-stage example."""
     if path is None:
         return ClusterConfig()
-    import yaml
+    from .config import read_yaml
 
-    from .config import ConfigError
-
-    try:
-        with open(path, encoding="utf-8") as fh:
-            data = yaml.safe_load(fh)
-    except OSError as exc:
-        raise ConfigError(f"cannot read configuration {path}: {exc.strerror}") from exc
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"configuration {path} is not valid YAML: {exc}") from exc
-    return cluster_config_from_dict(data)
+    return cluster_config_from_dict(read_yaml(path))
 
 
 # ---------------------------------------------------------------- dynamics (the only propagation of this module)

@@ -93,20 +93,22 @@ def scenario_from_dict(data) -> Scenario:
     )
 
 
-def load_scenario(path=None) -> Scenario:
-    """Read a scenario YAML file; ``None`` gives the embedded default scenario."""
-    if path is None:
-        return Scenario()
+def read_yaml(path):
+    """The parsed content of a YAML configuration file; unreadable or invalid files raise :class:`ConfigError`."""
     import yaml
 
     try:
         with open(path, encoding="utf-8") as fh:
-            data = yaml.safe_load(fh)
+            return yaml.safe_load(fh)
     except OSError as exc:
         raise ConfigError(f"cannot read configuration {path}: {exc.strerror}") from exc
     except yaml.YAMLError as exc:
         raise ConfigError(f"configuration {path} is not valid YAML: {exc}") from exc
-    return scenario_from_dict(data)
 
 
-__all__ = ["ConfigError", "Scenario", "load_scenario", "scenario_from_dict"]
+def load_scenario(path=None) -> Scenario:
+    """Read a scenario YAML file; ``None`` gives the embedded default scenario."""
+    return Scenario() if path is None else scenario_from_dict(read_yaml(path))
+
+
+__all__ = ["ConfigError", "Scenario", "load_scenario", "read_yaml", "scenario_from_dict"]
