@@ -30,16 +30,17 @@ def observer():
     rclpy.try_shutdown()
 
 
-def test_ejection_drift_stop_loop(observer):
+@pytest.mark.parametrize("dynamics", ["secular", "nonlinear"])
+def test_ejection_drift_stop_loop(observer, dynamics):
     sim_time = ["-p", "use_sim_time:=true"]
     procs = [start_node("safety_monitor", *sim_time), start_node("planner", *sim_time, "-p", "p_mode:=fixed",
                                                                   "-p", "p_reduction:=0.06"),
              start_node("ejector", *sim_time)]
     spin_until(observer, lambda: False, timeout=2.0)  # let discovery settle before the clock starts
-    procs.append(start_node("sim", *SIM_ARGS))
+    procs.append(start_node("sim", *SIM_ARGS, "-p", f"dynamics:={dynamics}"))
     try:
         g = observer.got
-        assert spin_until(observer, lambda: g["clock"] and g["clock"][-1].clock.sec >= 30000, timeout=90)
+        assert spin_until(observer, lambda: g["clock"] and g["clock"][-1].clock.sec >= 30000, timeout=180)
         purposes = [m.purpose for m in g["executed"]]
         assert purposes == ["ejection", "drift_stop"], purposes
         ejection, stop = g["executed"]
