@@ -48,8 +48,7 @@ def _pyplot():
 def deployment_figures(res, out_dir):
     """deploy_distance_<i>.png (seed 003 Fig. 5: distance vs time per angle, both dv) for each inclination and
     deploy_first_orbits.png (Figs. 4, 6b: the first three orbits after a radial and a V-bar deployment)."""
-    from .core.deployment import relative_distance, relative_motion
-    from .core.dynamics import arg_latitude_rate, drag_da_dot
+    from .core.deployment import distance_curves
     from .core.orbit import mean_motion
 
     plt = _pyplot()
@@ -81,18 +80,16 @@ def deployment_figures(res, out_dir):
         plt.close(fig)
         paths.append(path)
     # first three orbits (baseline inclination): radial vs V-bar deployments, both dv
-    a, n = cfg.a, mean_motion(cfg.a)
-    t = np.linspace(0.0, 3 * 2 * np.pi / n, 1500)
-    inc = np.radians(cfg.inclinations_deg[0])
+    n = mean_motion(cfg.a)
+    t = np.linspace(0.0, 3 * 2 * np.pi / n, 1501)[1:]  # the departure (distance 0) is off the log scale
     fig, ax = plt.subplots(figsize=(7, 4))
-    da_dot = drag_da_dot(cfg.delta_b, cfg.density, a) if cfg.drag else 0.0
-    for k, ang in enumerate(cfg.angles_deg):
-        if ang % 90 != 0:
-            continue
-        for jd, dv in enumerate(cfg.dv):
-            roe = relative_motion(res.roe0[0, jd, k], t, a, inc, da_dot, cfg.j2)
-            d = relative_distance(roe, np.radians(cfg.u0_deg) + arg_latitude_rate(a, inc, cfg.j2) * t, a)
-            ax.plot(t * n / (2 * np.pi), d / 1e3, label=f"{ang:g} deg, {dv:g} m/s")
+    shown = [(k, jd) for k, ang in enumerate(cfg.angles_deg) if ang % 90 == 0 for jd in range(len(cfg.dv))]
+    if shown:
+        dv_rtn = np.stack([res.dv_rtn[0, jd, k] for k, jd in shown])
+        curves = distance_curves(cfg, dv_rtn, np.radians(cfg.inclinations_deg[0]), t)
+        for (k, jd), d in zip(shown, curves):
+            ax.plot(t * n / (2 * np.pi), d / 1e3,
+                    label=f"{cfg.angles_deg[k]:g} deg, {cfg.dv[jd]:g} m/s")
     ax.set_xlabel("orbits after deployment")
     ax.set_ylabel("distance [km]")
     ax.set_yscale("log")
@@ -199,6 +196,8 @@ def deploy_config(args):
         changes["drag"] = False
     if args.no_j2:
         changes["j2"] = False
+    if args.model is not None:
+        changes["model"] = args.model
     return dataclasses.replace(cfg, **changes).validate()
 
 
@@ -206,7 +205,7 @@ def print_deploy(rep, out=None):
     w = (out or sys.stdout).write
     cfg = rep["config"]
     w(f"Deployment sweep (seed 003 Sec. 4.2): circular {cfg['altitude'] / 1e3:.0f} km, {rep['days']:g} days, "
-      f"drag {'on' if cfg['drag'] else 'off'} (dB = {rep['delta_b']:.5f} m^2/kg, rho = {cfg['density']:.3e} kg/m^3), "
+      f"{rep['propagation']}; drag {'on' if cfg['drag'] else 'off'} (dB = {rep['delta_b']:.5f} m^2/kg, rho = {cfg['density']:.3e} kg/m^3), "
       f"J2 {'on' if cfg['j2'] else 'off'}\n")
     w("  angle from +V-bar, clockwise: 90 = +R-bar (nadir), 180 = -V-bar; first-orbit minimum over [T/2, 3T/2]\n")
     for s in rep["summary"]:
@@ -341,7 +340,9 @@ def register(subparsers):
     p.add_argument("--step", type=float, help="s between samples of the distance curves (default 600)")
     p.add_argument("--density", type=float, help="atmospheric density [kg/m^3] (default 2.803e-12, USSA76 400 km)")
     p.add_argument("--no-drag", action="store_true", help="switch differential drag off")
-    p.add_argument("--no-j2", action="store_true", help="switch J2 off")
+    p.add_argument("--no-j2", action="store_true", help="switch J2 off (needs --model linear)")
+    p.add_argument("--model", choices=("nonlinear", "linear"), help="relative motion: numerical J2-J4 + drag "
+                   "(default) or the secular ROE model")
     p.add_argument("--curves", action="store_true", help="include the full distance-vs-time curves in --json")
     p.add_argument("--plots", metavar="DIR", help="write the figures (PNG) to DIR")
     p.add_argument("--json", action="store_true", help="machine-readable output")

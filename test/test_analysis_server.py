@@ -41,6 +41,8 @@ def test_services(ground, tmp_path):
         assert len(radial.times) == len(radial.distances) and radial.times[-1] == pytest.approx(10 * 86400)
         bad = _call(ground, dep, DeploymentAssessment.Request(inclination=incl, dv=-1.0))
         assert not bad.success and "dv" in bad.message
+        high = _call(ground, dep, DeploymentAssessment.Request(altitude=1500e3, inclination=incl, dv=1.0))
+        assert not high.success and "1100 km" in high.message
 
         prog = _call(ground, clu, ClusterProgram.Request(samples=500))
         assert prog.success, prog.message
@@ -59,3 +61,6 @@ def test_bad_parameter_refused_at_startup():
     code, out = wait_exit(start_node("analysis_server", "-p", "cluster_file:=/nonexistent.yaml"))
     assert code == 2, out
     assert "'cluster_file'" in out
+    code, out = wait_exit(start_node("analysis_server", "-p", "deploy_model:=gmat"))
+    assert code == 2, out
+    assert "'deploy_model'" in out

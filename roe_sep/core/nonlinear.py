@@ -18,7 +18,8 @@ Integrator: heyoka's adaptive Taylor method (Biscani & Izzo, MNRAS 2021), JIT-co
 form one 12-dimensional system so that they share every step: integration error is then common-mode and largely
 cancels in the relative state. The compiled integrator is cached per process and configuration
 (:func:`pair_integrator`, about 2-5 s to compile on first use); batch mode (SIMD lanes, one sample pair each) and a
-thread pool over blocks of lanes run the Monte Carlo (:func:`propagate_pairs`).
+thread pool over blocks of lanes run the Monte Carlo (:func:`propagate_pairs`) and the sweeps
+(:func:`propagate_pairs_grid`).
 
 State layout: ``(..., 12)`` = chief (carrier) position [m], velocity [m/s], then deputy (picosatellite) likewise.
 Parameters: ``[B_chief, B_deputy, rho_ref, h_ref, H]`` (m^2/kg, m^2/kg, kg/m^3, m, m).
@@ -306,28 +307,32 @@ def _check(outcome):
         raise RuntimeError(f"nonlinear propagation failed: {outcome}")
 
 
-# ---------------------------------------------------------------- many pairs (Monte Carlo)
-def _batch_worker(template, states, pars, t0, t1, lo, hi):
-    """Propagate lanes ``lo:hi`` of ``states`` ``(12, N)`` from t0 to t1 in place, ``batch_size`` lanes at a time
-    (one integrator per worker thread; heyoka releases the GIL while it integrates)."""
+# ---------------------------------------------------------------- many pairs (Monte Carlo, sweeps)
+def _batch_worker(template, states, pars, t0, grid, out, lo, hi):
+    """Propagate lanes ``lo:hi`` of ``states`` ``(12, N)`` from t0, ``batch_size`` lanes at a time (one integrator
+    per worker thread; heyoka releases the GIL while it integrates). ``grid`` is the end time (float: ``states`` is
+    overwritten with the final states) or sorted output times ``(n_t,)`` (states at those times go to ``out``
+    ``(n_t, 12, N)``)."""
     ta = copy.deepcopy(template)
     bs = ta.batch_size
     for j in range(lo, hi, bs):
         ta.set_time(float(t0))
         ta.state[:] = states[:, j:j + bs]
         ta.pars[:] = pars[:, j:j + bs]
-        ta.propagate_until(float(t1))
+        if out is None:
+            ta.propagate_until(float(grid))
+        else:
+            ta.propagate_until(float(grid[0]))
+            out[:, :, j:j + bs] = ta.propagate_grid(np.repeat(grid[:, None], bs, axis=1))[1]
         if not all(o[0].name in ("time_limit", "success") for o in ta.propagate_res):
             raise RuntimeError(f"nonlinear propagation failed in lanes {j}..{j + bs}: {ta.propagate_res}")
         states[:, j:j + bs] = ta.state
 
 
-def propagate_pairs(states0, t0, t1, b_chief, b_deputy, atmosphere: Atmosphere, zonals=4, tol=DEFAULT_TOL,
-                    workers=None):
-    """Propagate N pairs ``(N, 12)`` from ``t0`` to ``t1`` [s]: heyoka batch mode (``simd_size`` pairs per
-    integrator call, each lane with its own adaptive steps) over a thread pool of ``workers`` (default: the
-    cores available), the sample axis padded to a multiple of the batch size. ``b_chief``/``b_deputy`` broadcast
-    to ``(N,)``. Returns ``(N, 12)``."""
+def _run_lanes(states0, t0, grid, b_chief, b_deputy, atmosphere, zonals, tol, workers):
+    """The lane layout shared by :func:`propagate_pairs` and :func:`propagate_pairs_grid`: states and parameters
+    ``(12 | 5, N)`` padded to a multiple of the batch size, blocks of lanes over a thread pool of ``workers``
+    (default: the cores available). Returns ``(final states (12, N_pad), grid output (n_t, 12, N_pad) or None)``."""
     s0 = np.asarray(states0, dtype=float)
     n = s0.shape[0]
     template = pair_integrator(zonals, simd_size(), tol)
@@ -341,14 +346,38 @@ def propagate_pairs(states0, t0, t1, b_chief, b_deputy, atmosphere: Atmosphere, 
     pars[1, :n] = np.broadcast_to(np.asarray(b_deputy, dtype=float), (n,))
     pars[:2, n:] = pars[:2, n - 1:n]
     pars[2:] = np.asarray(atmosphere.pars())[:, None]
+    out = None if np.ndim(grid) == 0 else np.empty((len(grid), 12, npad))
     workers = workers or len(os.sched_getaffinity(0))
     blocks = np.linspace(0, npad // bs, workers + 1).astype(int) * bs
     with ThreadPoolExecutor(max_workers=workers) as pool:
-        futures = [pool.submit(_batch_worker, template, states, pars, t0, t1, lo, hi)
+        futures = [pool.submit(_batch_worker, template, states, pars, t0, grid, out, lo, hi)
                    for lo, hi in zip(blocks[:-1], blocks[1:]) if hi > lo]
         for f in futures:
             f.result()
+    return states, out
+
+
+def propagate_pairs(states0, t0, t1, b_chief, b_deputy, atmosphere: Atmosphere, zonals=4, tol=DEFAULT_TOL,
+                    workers=None):
+    """Propagate N pairs ``(N, 12)`` from ``t0`` to ``t1`` [s]: heyoka batch mode (``simd_size`` pairs per
+    integrator call, each lane with its own adaptive steps) over a thread pool of ``workers`` (default: the
+    cores available), the sample axis padded to a multiple of the batch size. ``b_chief``/``b_deputy`` broadcast
+    to ``(N,)``. Returns ``(N, 12)``."""
+    n = np.shape(states0)[0]
+    states, _ = _run_lanes(states0, t0, float(t1), b_chief, b_deputy, atmosphere, zonals, tol, workers)
     return states[:, :n].T.copy()
+
+
+def propagate_pairs_grid(states0, t0, times, b_chief, b_deputy, atmosphere: Atmosphere, zonals=4, tol=DEFAULT_TOL,
+                         workers=None):
+    """As :func:`propagate_pairs`, but the states of every pair at the sorted ``times`` >= ``t0`` [s] (heyoka's
+    dense output, exact to the integrator tolerance between steps). Returns ``(N, len(times), 12)``."""
+    times = np.asarray(times, dtype=float)
+    if times.ndim != 1 or times.size == 0 or times[0] < t0 or np.any(np.diff(times) < 0.0):
+        raise ValueError("times must be a non-empty sorted 1-D array starting at or after t0")
+    n = np.shape(states0)[0]
+    _, out = _run_lanes(states0, t0, times, b_chief, b_deputy, atmosphere, zonals, tol, workers)
+    return np.moveaxis(out[:, :, :n], -1, 0).copy()
 
 
 # ---------------------------------------------------------------- numpy reference (cross-check and benchmark)

@@ -3,7 +3,8 @@
 Services:
 
 * ``/analysis/deployment`` (roe_sep_msgs/srv/DeploymentAssessment): one in-plane deployment of a CubeSat from its
-  mother craft, distance vs time over N days (J2 + differential drag), first-orbit closest approach.
+  mother craft, distance vs time over N days (numerical J2-J4 + drag, or the secular ROE model), first-orbit
+  closest approach.
   Physics: :mod:`roe_sep.core.deployment`.
 * ``/analysis/cluster_program`` (roe_sep_msgs/srv/ClusterProgram): delays of a nanosatellite group separated from a
   tumbling platform, minimax over the feasible regions, optional statistical check. Physics:
@@ -14,6 +15,7 @@ Parameters:
 * ``cluster_file`` (string, ''): cluster YAML ('' = the embedded Soyuz-stage example, config/cluster.yaml).
 * ``deploy_density`` (double, 2.803e-12 kg/m^3): density of the deployment assessment when a request gives 0.
 * ``deploy_step`` (double, 600.0 s): sampling of the returned distance curve.
+* ``deploy_model`` (string, 'nonlinear'): 'nonlinear' (heyoka, J2-J4 + drag) or 'linear' (secular ROE model).
 
 A bad request is answered with ``success = false`` and the reason; the node keeps serving.
 """
@@ -26,7 +28,7 @@ from roe_sep_msgs.srv import ClusterProgram, DeploymentAssessment
 
 from ..core.cluster import Nanosatellite, draw, load_cluster_config, select_program, simulate_program
 from ..core.config import ConfigError
-from ..core.deployment import USSA76_DENSITY_400KM, DeploymentConfig, sweep
+from ..core.deployment import MODELS, USSA76_DENSITY_400KM, DeploymentConfig, sweep
 from .params import ParameterError, declare, finite, require
 
 DEPLOYMENT_SERVICE = "/analysis/deployment"
@@ -43,6 +45,8 @@ class AnalysisServer(Node):
         require("deploy_density", finite(self.density) and self.density >= 0, self.density,
                 "a finite non-negative number [kg/m^3]")
         require("deploy_step", finite(self.step) and self.step >= 1.0, self.step, "a number >= 1 [s]")
+        self.model = declare(self, "deploy_model", "nonlinear", "relative motion of the deployment assessment")
+        require("deploy_model", self.model in MODELS, self.model, f"one of {MODELS}")
         try:
             self.cluster = load_cluster_config(cluster_file or None)
         except ConfigError as exc:
@@ -60,7 +64,7 @@ class AnalysisServer(Node):
                 inclinations_deg=(math.degrees(req.inclination),), dv=(req.dv,),
                 angles_deg=(math.degrees(req.angle),), days=req.days or DeploymentConfig.days,
                 density=self.density if req.density == 0 else max(req.density, 0.0), drag=req.density >= 0,
-                step=self.step)
+                step=self.step, model=self.model)
             r = sweep(cfg)
             res.min_distance_first_orbit = float(r.min_first_orbit[0, 0, 0])
             res.time_min_first_orbit = float(r.t_min_first_orbit[0, 0, 0])
