@@ -112,6 +112,7 @@ def cluster_figures(prog, out_dir, samples=2000, seed=0):
         drag_acceleration,
         draw,
         pair_moments,
+        platform_safe,
         quantile_factor,
         simulated_platform_safety,
         simulated_positions,
@@ -121,17 +122,20 @@ def cluster_figures(prog, out_dir, samples=2000, seed=0):
     out_dir.mkdir(parents=True, exist_ok=True)
     cfg, paths = prog.config, []
     dr = draw(cfg, samples, seed)
-    d = cfg.delays
+    # the regions over a delay range wide enough to show where the analytical one ends
+    wide = dataclasses.replace(cfg, max_delay=max(cfg.max_delay, 150.0), delay_step=5.0)
+    d = wide.delays
     fig, ax = plt.subplots(figsize=(7, 4))
     for k, s in enumerate(cfg.sats):
-        p = simulated_platform_safety(cfg, dr, s, d)
+        p = simulated_platform_safety(wide, dr, s, d)
         line, = ax.plot(d, p, label=f"{s.name} statistical (V = {s.velocity:g} m/s)")
-        ok = prog.platform_safe[k]
+        ok = platform_safe(wide, s, d)
         ax.plot(d[ok], np.full(ok.sum(), 1.0 + 0.002 * (k + 1)), "s", ms=3, color=line.get_color(),
                 label=f"{s.name} analytical: safe with P*")
     ax.axhline(cfg.p_required, color="k", ls="--", lw=0.8)
     ax.set_xlabel("separation delay [s]")
     ax.set_ylabel("P(safe from the OS)")
+    ax.set_title("safe from the OS: analytical regions (squares) inside the statistical ones", fontsize=10)
     ax.legend(fontsize=7)
     ax.grid(alpha=0.3)
     path = out_dir / "cluster_regions.png"
@@ -205,8 +209,8 @@ def print_deploy(rep, out=None):
     w = (out or sys.stdout).write
     cfg = rep["config"]
     w(f"Deployment sweep (seed 003 Sec. 4.2): circular {cfg['altitude'] / 1e3:.0f} km, {rep['days']:g} days, "
-      f"{rep['propagation']}; drag {'on' if cfg['drag'] else 'off'} (dB = {rep['delta_b']:.5f} m^2/kg, rho = {cfg['density']:.3e} kg/m^3), "
-      f"J2 {'on' if cfg['j2'] else 'off'}\n")
+      f"{rep['propagation']}\n  drag {'on' if cfg['drag'] else 'off'} (dB = {rep['delta_b']:.5f} m^2/kg, "
+      f"rho = {cfg['density']:.3e} kg/m^3), J2 {'on' if cfg['j2'] else 'off'}\n")
     w("  angle from +V-bar, clockwise: 90 = +R-bar (nadir), 180 = -V-bar; first-orbit minimum over [T/2, 3T/2]\n")
     for s in rep["summary"]:
         w(f"\n  i = {s['inclination_deg']:.2f} deg, dv = {s['dv']:g} m/s\n")
