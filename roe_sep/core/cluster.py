@@ -219,15 +219,17 @@ def hcw_matrix(tau, n):
     x = vx (4 sin(n tau)/n - 3 tau) + vy 2 (cos(n tau) - 1)/n,  y = vx 2 (1 - cos(n tau))/n + vy sin(n tau)/n,
     z = vz sin(n tau)/n.  Zero for tau < 0 (the NS is still on the OS).
     """
-    tau = np.asarray(tau, dtype=float)
-    on = tau > 0.0
-    t = np.where(on, tau, 0.0)
+    m00, m01, m10, m11, m22 = _hcw_terms(tau, n)
+    z = np.zeros_like(m00)
+    return np.stack([np.stack([m00, m01, z], -1), np.stack([m10, m11, z], -1), np.stack([z, z, m22], -1)], -2)
+
+
+def _hcw_terms(tau, n):
+    """The non-zero entries (m00, m01, m10, m11, m22) of :func:`hcw_matrix`, zero for tau < 0 (block structure:
+    the moment and bound functions use the entries directly)."""
+    t = np.where(np.asarray(tau, dtype=float) > 0.0, tau, 0.0)
     s, c = np.sin(n * t), np.cos(n * t)
-    z = np.zeros_like(t)
-    m = np.stack([np.stack([4.0 * s / n - 3.0 * t, 2.0 * (c - 1.0) / n, z], -1),
-                  np.stack([2.0 * (1.0 - c) / n, s / n, z], -1),
-                  np.stack([z, z, s / n], -1)], -2)
-    return m
+    return 4.0 * s / n - 3.0 * t, 2.0 * (c - 1.0) / n, 2.0 * (1.0 - c) / n, s / n, s / n
 
 
 def drag_offset(tau, n, p_x):
@@ -272,13 +274,6 @@ def velocity_covariance(vi, dti, vj, dtj, sigma):
     cx = vv * (0.5 * (cm + cp) - mean_cos(sigma, dti) * mean_cos(sigma, dtj))
     cy = vv * 0.25 * (cm - cp)
     return np.stack([cx, cy, cy], axis=-1)
-
-
-def _hcw_terms(tau, n):
-    """The non-zero entries (m00, m01, m10, m11, m22) of :func:`hcw_matrix` (block structure, for speed)."""
-    t = np.where(np.asarray(tau, dtype=float) > 0.0, tau, 0.0)
-    s, c = np.sin(n * t), np.cos(n * t)
-    return 4.0 * s / n - 3.0 * t, 2.0 * (c - 1.0) / n, 2.0 * (1.0 - c) / n, s / n, s / n
 
 
 def position_moments(t, v, dt, p_x, sigma, n):
