@@ -11,6 +11,7 @@ import math
 import sys
 from pathlib import Path
 
+from .cli_output import emit
 from .core.config import ConfigError, load_scenario
 from .core.double_impulse import DoubleImpulseDesign, InfeasibleDesignError, design
 from .core.montecarlo import SweepResult, sweep
@@ -185,19 +186,9 @@ def cmd_design(args):
     if args.strategy == "multi_impulse":
         from .core.multi_impulse import design_report as multi_report
 
-        rep = multi_report(_multi_design(scenario, args))
-        if args.json:
-            json.dump(rep, sys.stdout, indent=2)
-            sys.stdout.write("\n")
-        else:
-            print_multi_design(rep)
+        emit(multi_report(_multi_design(scenario, args)), args.json, print_multi_design)
         return
-    rep = design_report(design(scenario.separation))
-    if args.json:
-        json.dump(rep, sys.stdout, indent=2)
-        sys.stdout.write("\n")
-    else:
-        print_design(rep)
+    emit(design_report(design(scenario.separation)), args.json, print_design)
 
 
 def print_acceptance(rep: dict, out=None):
@@ -231,13 +222,7 @@ def cmd_mc(args):
             from .plots_ops import write_acceptance_figures
 
             rep["figures"] = [str(p) for p in write_acceptance_figures(res, Path(args.plots))]
-        if args.json:
-            json.dump(rep, sys.stdout, indent=2)
-            sys.stdout.write("\n")
-        else:
-            print_acceptance(rep)
-            for f in rep.get("figures", []):
-                print(f"  figure: {f}")
+        emit(rep, args.json, print_acceptance)
         return
     res = run_sweep(load_scenario(args.config), args)
     rep = sweep_report(res)
@@ -245,13 +230,7 @@ def cmd_mc(args):
         from .plots import write_figures
 
         rep["figures"] = [str(p) for p in write_figures(res, Path(args.plots))]
-    if args.json:
-        json.dump(rep, sys.stdout, indent=2)
-        sys.stdout.write("\n")
-    else:
-        print_sweep(rep)
-        for f in rep.get("figures", []):
-            print(f"  figure: {f}")
+    emit(rep, args.json, print_sweep)
 
 
 def print_run(rep: dict, out=None):
@@ -285,12 +264,12 @@ def cmd_run(args):
 
     rep = run(config=args.config, out=args.out, params=args.params, duration=args.duration, seed=args.seed,
               timeout=args.timeout, progress=not args.json and sys.stderr.isatty())
-    if args.json:
-        json.dump(rep, sys.stdout, indent=2)
-        sys.stdout.write("\n")
-    else:
-        print_run(rep)
+
+    def human(r):
+        print_run(r)
         print(f"\nbag: {Path(args.out) / 'bag'}   report: {Path(args.out) / 'report.json'}")
+
+    emit(rep, args.json, human)
     return 0 if rep["safe"] else 1
 
 
@@ -347,11 +326,7 @@ def cmd_ops(args):
 
         fig_timeline(rep, Path(args.plot))
         rep["figure"] = args.plot
-    if args.json:
-        json.dump(rep, sys.stdout, indent=2)
-        sys.stdout.write("\n")
-    else:
-        ops.print_plan(rep, sys.stdout)
+    emit(rep, args.json, lambda r: ops.print_plan(r, sys.stdout))
 
 
 def build_parser():

@@ -7,12 +7,13 @@ turns into exit status 2 with the message.
 
 import argparse
 import dataclasses
-import json
 import math
 import sys
 from pathlib import Path
 
 import numpy as np
+
+from .cli_output import emit
 
 
 def _float_list(what):
@@ -26,11 +27,6 @@ def _float_list(what):
         return tuple(values)
 
     return parse
-
-
-def _dump(rep):
-    json.dump(rep, sys.stdout, indent=2)
-    sys.stdout.write("\n")
 
 
 # ------------------------------------------------------------------------------------------------ figures
@@ -233,12 +229,7 @@ def cmd_deploy_sweep(args):
     rep = res.to_dict(curves=args.curves)
     if args.plots:
         rep["figures"] = [str(p) for p in deployment_figures(res, Path(args.plots))]
-    if args.json:
-        _dump(rep)
-    else:
-        print_deploy(rep)
-        for f in rep.get("figures", []):
-            print(f"  figure: {f}")
+    emit(rep, args.json, print_deploy)
     return 0
 
 
@@ -322,12 +313,7 @@ def cmd_cluster(args):
     if args.plots:
         rep["figures"] = [str(p) for p in cluster_figures(prog, Path(args.plots), samples=args.samples or 2000,
                                                           seed=args.seed)]
-    if args.json:
-        _dump(rep)
-    else:
-        print_cluster(rep)
-        for f in rep.get("figures", []):
-            print(f"  figure: {f}")
+    emit(rep, args.json, print_cluster)
     return 0 if prog.feasible else 1
 
 

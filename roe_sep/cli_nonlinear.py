@@ -6,11 +6,12 @@
 
 import argparse
 import dataclasses
-import json
 import math
 import sys
 
 import numpy as np
+
+from .cli_output import emit
 
 MODELS = ("keplerian", "j2", "j2drag", "nonlinear")
 
@@ -89,20 +90,21 @@ def cmd_propagate(args):
 
     rep = propagate_report(args.roe, args.alt, args.inc, args.u, args.days, args.step, args.model,
                            load_scenario(args.config))
-    if args.json:
-        json.dump(rep, sys.stdout, indent=2)
-        sys.stdout.write("\n")
-        return 0
-    w = sys.stdout.write
+    emit(rep, args.json, lambda r: print_propagate(r, args.step))
+    return 0
+
+
+def print_propagate(rep, step, out=None):
+    """The ROE table of ``roe-sep propagate``, one row every 3 h (``step`` [s] the sampling) and the last."""
+    w = (out or sys.stdout).write
     w(f"ROE propagation, model {rep['model']}: a = {rep['a']:.1f} m, i = {rep['inclination_deg']:.3f} deg, "
       f"u0 = {rep['u0_deg']:g} deg, dB = {rep['delta_b']:.5f} m^2/kg, rho = {rep['density']:.3g} kg/m^3\n")
     w(f"  {'t [h]':>8s}" + "".join(f"{'a ' + n + ' [m]':>14s}" for n in ("da", "dl", "dex", "dey", "dix", "diy"))
       + "\n")
     t = np.asarray(rep["t"])
-    stride = max(1, int(round(3 * 3600.0 / args.step)))
+    stride = max(1, int(round(3 * 3600.0 / step)))
     for k in list(range(0, len(t), stride)) + ([len(t) - 1] if (len(t) - 1) % stride else []):
         w(f"  {t[k] / 3600:8.2f}" + "".join(f"{x:14.2f}" for x in rep["roe"][k]) + "\n")
-    return 0
 
 
 def validate_report(scenario, days, mc_samples=0, p_values=None, seed=None):
@@ -161,11 +163,7 @@ def cmd_validate(args):
     from .core.config import load_scenario
 
     rep = validate_report(load_scenario(args.config), args.days, args.mc or 0, args.p, args.seed)
-    if args.json:
-        json.dump(rep, sys.stdout, indent=2)
-        sys.stdout.write("\n")
-    else:
-        print_validate(rep)
+    emit(rep, args.json, print_validate)
     return 0
 
 
