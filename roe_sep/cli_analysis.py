@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from .cli_output import emit
+from .plots import _pyplot, _save
 
 
 def _float_list(what):
@@ -30,15 +31,6 @@ def _float_list(what):
 
 
 # ------------------------------------------------------------------------------------------------ figures
-
-
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def deployment_figures(res, out_dir):
@@ -71,9 +63,7 @@ def deployment_figures(res, out_dir):
             ax.set_ylabel("distance [km]")
         fig.suptitle(f"CubeSat-mother craft distance, i = {inc:g} deg, {cfg.altitude / 1e3:.0f} km")
         path = out_dir / ("deploy_distance_i" + f"{inc:g}".replace(".", "p") + ".png")
-        fig.tight_layout()
-        fig.savefig(path, dpi=100)
-        plt.close(fig)
+        _save(fig, path, dpi=100)
         paths.append(path)
     # first three orbits (baseline inclination): radial vs V-bar deployments, both dv
     n = mean_motion(cfg.a)
@@ -93,9 +83,7 @@ def deployment_figures(res, out_dir):
     ax.legend(fontsize=7, ncol=2)
     ax.set_title("first three orbits: radial deployments return to the mother craft")
     path = out_dir / "deploy_first_orbits.png"
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+    _save(fig, path, dpi=100)
     paths.append(path)
     return paths
 
@@ -135,9 +123,7 @@ def cluster_figures(prog, out_dir, samples=2000, seed=0):
     ax.legend(fontsize=7)
     ax.grid(alpha=0.3)
     path = out_dir / "cluster_regions.png"
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+    _save(fig, path, dpi=100)
     paths.append(path)
     if prog.feasible:
         members = [i for i, s in enumerate(cfg.sats) if s.cluster]
@@ -164,9 +150,7 @@ def cluster_figures(prog, out_dir, samples=2000, seed=0):
         ax.legend(fontsize=7)
         ax.grid(alpha=0.3)
         path = out_dir / "cluster_program.png"
-        fig.tight_layout()
-        fig.savefig(path, dpi=100)
-        plt.close(fig)
+        _save(fig, path, dpi=100)
         paths.append(path)
     return paths
 

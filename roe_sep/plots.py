@@ -18,10 +18,10 @@ def _pyplot():
     return plt
 
 
-def _save(fig, path):
+def _save(fig, path, dpi=110):
     """Lay out, write the PNG and release the figure."""
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=dpi)
     _pyplot().close(fig)
 
 

@@ -191,3 +191,21 @@ def test_cli_json(capsys, small_config):
     args = parser.parse_args(["cluster", "--p", "1.5"])
     with pytest.raises(ValueError, match="p_required"):
         args.func(args)
+
+
+def test_cli_plots(capsys, small_config, tmp_path):
+    """--plots writes the regions figure (seed 004 Figs. 3-4) and the program figure (Fig. 5)."""
+    import argparse
+
+    from roe_sep import cli_analysis
+
+    parser = argparse.ArgumentParser()
+    cli_analysis.register(parser.add_subparsers(dest="command"))
+    args = parser.parse_args(["cluster", "--json", "--samples", "200", "--config", str(small_config),
+                              "--plots", str(tmp_path)])
+    assert args.func(args) == 0
+    figures = json.loads(capsys.readouterr().out)["figures"]
+    assert sorted(p.split("/")[-1] for p in figures) == ["cluster_program.png", "cluster_regions.png"]
+    for f in figures:
+        with open(f, "rb") as fh:
+            assert fh.read(8) == b"\x89PNG\r\n\x1a\n"

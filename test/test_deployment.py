@@ -150,3 +150,22 @@ def test_cli_json_and_bad_input(capsys):
     args = parser.parse_args(["deploy-sweep", "--dv", "-1"])
     with pytest.raises(ValueError, match="dv"):
         args.func(args)
+
+
+def test_cli_plots(capsys, tmp_path):
+    """--plots writes seed 003 Fig. 5 per inclination and the first-orbits figure, and lists them in --json."""
+    import argparse
+
+    from roe_sep import cli_analysis
+
+    parser = argparse.ArgumentParser()
+    cli_analysis.register(parser.add_subparsers(dest="command"))
+    args = parser.parse_args(["deploy-sweep", "--json", "--inclinations", "97.03,5", "--angle-step", "90",
+                              "--days", "2", "--plots", str(tmp_path)])
+    assert args.func(args) == 0
+    figures = json.loads(capsys.readouterr().out)["figures"]
+    assert sorted(p.split("/")[-1] for p in figures) == ["deploy_distance_i5.png", "deploy_distance_i97p03.png",
+                                                         "deploy_first_orbits.png"]
+    for f in figures:
+        with open(f, "rb") as fh:
+            assert fh.read(8) == b"\x89PNG\r\n\x1a\n"
