@@ -191,6 +191,25 @@ def test_planner_node_multi_impulse_strategy():
             assert time_to_sec(m.epoch) == pytest.approx(1000.0 + b.epoch, abs=1e-3)
             assert abs(vector_to_array(m.dv_rtn)[1]) <= 0.3
         assert plan.p_reduction == pytest.approx(D.plan.p)
+        # the PlanSeparation service designs the same plan (zero fields = the defaults), ejection first
+        from roe_sep_msgs.srv import PlanSeparation
+
+        client = node.create_client(PlanSeparation, qos.PLAN_SERVICE)
+        assert client.wait_for_service(timeout_sec=20)
+        future = client.call_async(PlanSeparation.Request(u1=D.u1, ejection_epoch=sec_to_time(1000.0)))
+        assert spin_until(node, future.done, timeout=30)
+        res = future.result()
+        assert res.success, res.message
+        assert res.plan.strategy == "multi_impulse"
+        ejection, *burns = res.plan.maneuvers
+        assert ejection.purpose == "ejection"
+        np.testing.assert_allclose(vector_to_array(ejection.dv_rtn), D.dv1_rtn, atol=1e-12)
+        assert [m.purpose for m in burns] == [b.purpose for b in D.plan.burns]
+        for m, b in zip(burns, D.plan.burns):
+            np.testing.assert_allclose(vector_to_array(m.dv_rtn), b.dv_carrier_rtn, atol=1e-12)
+        future = client.call_async(PlanSeparation.Request(u1=D.u1, spl_dv=-1.0))
+        assert spin_until(node, future.done, timeout=30)
+        assert not future.result().success and "spl_dv" in future.result().message
     finally:
         code, out = stop_node(planner)
         node.destroy_node()

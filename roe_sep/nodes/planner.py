@@ -111,51 +111,41 @@ class PlannerNode(Node):
 
     def on_plan_request(self, request, response):
         """PlanSeparation service: design the separation for a requested configuration (zero = default)."""
-        sep = self.scenario.separation
-        changes = {name: value for name, value in (
-            ("altitude", request.altitude), ("spl_dv", request.spl_dv), ("a_de_f", request.a_de_f),
-            ("a_di_f", request.a_di_f), ("k", request.k or self.k)) if value}
-        changes["u1_deg"] = math.degrees(request.u1)
-        changes["leading"] = not request.following
         try:
             if self.strategy == "multi_impulse":
-                return self._multi_request(request, response)
-            d = design(dataclasses.replace(sep, **changes))
-            p = request.p_reduction if request.p_reduction >= 0 else self.p
-            p = reduction_bounds(d.dv1_rtn[1], d.config)[0] if p is None else p
+                d, plan_kw = self._multi_design(request), {}
+            else:
+                changes = {name: value for name, value in (
+                    ("altitude", request.altitude), ("spl_dv", request.spl_dv), ("a_de_f", request.a_de_f),
+                    ("a_di_f", request.a_di_f), ("k", request.k or self.k)) if value}
+                changes["u1_deg"] = math.degrees(request.u1)
+                changes["leading"] = not request.following
+                d = design(dataclasses.replace(self.scenario.separation, **changes))
+                p = request.p_reduction if request.p_reduction >= 0 else self.p
+                plan_kw = {"k": d.k, "p": reduction_bounds(d.dv1_rtn[1], d.config)[0] if p is None else p}
             event = EjectionEvent(dv_magnitude=d.config.spl_dv)
             event.header.stamp = request.ejection_epoch
             event.ejection = maneuver_msg(time_to_sec(request.ejection_epoch), d.u1, d.dv1_rtn, "picosatellite",
                                           "ejection")
             event.chief.semi_major_axis, event.chief.inclination = d.a, d.inc
             event.chief.mean_arg_latitude = float(wrap_angle(d.u1))
-            plan = self.make_plan(event, k=d.k, p=p)
+            plan = self.make_plan(event, **plan_kw)
             plan.maneuvers = [event.ejection, *plan.maneuvers]
             response.success, response.message, response.plan = True, "ok", plan
         except ValueError as exc:
             response.success, response.message = False, str(exc)
         return response
 
-    def _multi_request(self, request, response):
-        """PlanSeparation for the multi-impulse strategy: SPL size, u1, a_di_f, altitude, side from the request
-        (zero = default; ``k``, ``a_de_f`` and ``p_reduction`` do not apply)."""
+    def _multi_design(self, request):
+        """The multi-impulse design of a PlanSeparation request: SPL size, u1, a_di_f, altitude, side from the
+        request (zero = default; ``k``, ``a_de_f`` and ``p_reduction`` do not apply)."""
         from ..core import multi_impulse
 
         sep = dataclasses.replace(self.scenario.separation, leading=not request.following,
                                   **({"altitude": request.altitude} if request.altitude else {}))
         mcfg = dataclasses.replace(self.multi, u1_deg=math.degrees(request.u1),
                                    **{k: v for k, v in (("spl_dv", request.spl_dv), ("a_di_f", request.a_di_f)) if v})
-        d = multi_impulse.design(sep, mcfg, self.scenario.monte_carlo, self.j2)
-        event = EjectionEvent(dv_magnitude=d.config.spl_dv)
-        event.header.stamp = request.ejection_epoch
-        event.ejection = maneuver_msg(time_to_sec(request.ejection_epoch), d.u1, d.dv1_rtn, "picosatellite",
-                                      "ejection")
-        event.chief.semi_major_axis, event.chief.inclination = d.a, d.inc
-        event.chief.mean_arg_latitude = float(wrap_angle(d.u1))
-        plan = self.make_plan(event)
-        plan.maneuvers = [event.ejection, *plan.maneuvers]
-        response.success, response.message, response.plan = True, "ok", plan
-        return response
+        return multi_impulse.design(sep, mcfg, self.scenario.monte_carlo, self.j2)
 
     def make_plan(self, event: EjectionEvent, k=None, p=None) -> ManeuverPlan:
         """The ManeuverPlan for one event; raises ValueError on a malformed event (NaN, impossible orbit)."""
