@@ -148,7 +148,7 @@ class SimNode(Node):
         self.flown = set()  # (topic, purpose, epoch) of every executed burn
         self.plan_stamps = {}  # topic -> stamp of the plan in force
         self.approvals = {}  # (topic, plan stamp) -> bool
-        self.hold_since = None
+        self.holds = {}  # what the clock waits for -> wall time the wait began (see _holding)
         self.burns = 0
         self.min_dist = (math.inf, math.nan)
         self.departed = False
@@ -158,7 +158,6 @@ class SimNode(Node):
         self.waiting_since = time.monotonic()
         self.ejected_at = None  # set by the ejection until the drift-stop plan answering it arrives
         self.od_seen = set()
-        self.owed_acquisition = None  # wall time since which the acquisition planner owes a decision
 
         self.clock_pub = self.create_publisher(Clock, qos.CLOCK_TOPIC, 10)
         self.roe_pub = self.create_publisher(RelativeOrbitalElements, qos.TRUTH_ROE_TOPIC, qos.STREAM)
@@ -213,7 +212,7 @@ class SimNode(Node):
         self.pending = [b for b in self.pending if b.topic != topic] + burns
         self.plan_stamps[topic] = stamp
         if topic == qos.DRIFT_STOP_PLAN_TOPIC:
-            self.hold_since = None
+            self.holds.pop("drift_stop", None)
         self.get_logger().info(f"plan on {topic}: {len(burns)} burn(s) from t = "
                                f"{min((b.epoch for b in burns), default=math.nan):.0f} s")
 
@@ -242,16 +241,22 @@ class SimNode(Node):
         self.clock_pub.publish(Clock(clock=sec_to_time(self.t)))
         return False
 
+    def _holding(self, reason):
+        """The one wall-clock wait of the clock: True while ``reason`` (the drift-stop plan, an approval, the
+        acquisition decision) has been awaited for at most ``approval_timeout`` wall seconds (the wait starts now
+        unless it began earlier); False once that has run out, and the wait is forgotten."""
+        since = self.holds.setdefault(reason, time.monotonic())
+        if time.monotonic() - since > self.approval_timeout:
+            del self.holds[reason]
+            return False
+        return True
+
     def awaiting_drift_stop(self):
         """After the ejection the ground owes the drift-stop plan: hold the clock until one answering it has
         arrived (at most ``approval_timeout`` wall seconds), as for a plan awaiting its safety check."""
         if self.ejected_at is None or qos.DRIFT_STOP_PLAN_TOPIC in self.plan_stamps:
             return False
-        now = time.monotonic()
-        if self.hold_since is None:
-            self.hold_since = now
-        if now - self.hold_since > self.approval_timeout:
-            self.hold_since = None
+        if not self._holding("drift_stop"):
             self.ejected_at = None
             self._status(ERROR, f"no drift-stop plan within {self.approval_timeout:g} s of the ejection")
             return False
@@ -262,19 +267,18 @@ class SimNode(Node):
         stamp = time_to_sec(od.header.stamp)
         if stamp not in self.od_seen:
             self.od_seen.add(stamp)
-            self.owed_acquisition = time.monotonic()
+            self.holds["acquisition"] = time.monotonic()
 
     def on_diagnostics(self, array: DiagnosticArray):
         if any(s.name == ACQUISITION_PLANNER for s in array.status):
-            self.owed_acquisition = None  # the acquisition planner has decided on the newest OD solution
+            self.holds.pop("acquisition", None)  # the acquisition planner has decided on the newest OD solution
 
     def awaiting_acquisition(self):
         """After a new OD solution the acquisition planner owes a decision (a plan, or why not: it ends every
         decision with a /diagnostics status): hold the clock until it arrives, at most ``approval_timeout``."""
-        if self.owed_acquisition is None:
+        if "acquisition" not in self.holds:
             return False
-        if time.monotonic() - self.owed_acquisition > self.approval_timeout:
-            self.owed_acquisition = None
+        if not self._holding("acquisition"):
             self._status(ERROR, f"no decision of {ACQUISITION_PLANNER} within {self.approval_timeout:g} s of an "
                                 "OD solution")
             return False
@@ -314,16 +318,12 @@ class SimNode(Node):
             return True
         verdict = self.approvals.get((burn.topic, burn.plan_stamp))
         if verdict is not None:
-            self.hold_since = None
+            self.holds.pop("approval", None)
             if not verdict:
                 self._status(ERROR, f"burn at t = {burn.epoch:.0f} s of the plan on {burn.topic} not executed: "
                                     "the safety monitor flagged the plan")
             return verdict
-        now = time.monotonic()
-        if self.hold_since is None:
-            self.hold_since = now
-        if now - self.hold_since > self.approval_timeout:
-            self.hold_since = None
+        if not self._holding("approval"):
             self._status(ERROR, f"burn at t = {burn.epoch:.0f} s of the plan on {burn.topic} not executed: no safety "
                                 f"check within {self.approval_timeout:g} s")
             return False
