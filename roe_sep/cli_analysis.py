@@ -220,7 +220,7 @@ def cmd_deploy_sweep(args):
 # ------------------------------------------------------------------------------------------------ cluster
 
 
-def cluster_report(prog, stat=None, stat_regions=None):
+def cluster_report(prog, stat=None):
     """The machine-readable program (README keys)."""
     cfg = prog.config
     names = [s.name for s in cfg.sats]
@@ -246,8 +246,6 @@ def cluster_report(prog, stat=None, stat_regions=None):
             "p_pairs": [{"pair": [names[i], names[j]], **v} for (i, j), v in stat["p_pairs"].items()],
             "max_pair_distance_quantile_m": stat["max_pair_distance_quantile"],
         }
-    if stat_regions is not None:
-        rep.setdefault("statistical", {})["platform_delay_max_s"] = stat_regions
     return rep
 
 

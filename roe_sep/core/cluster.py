@@ -619,13 +619,6 @@ def simulate_program(cfg: ClusterConfig, delays, draws: Draws):
             "max_pair_distance_quantile": float(np.quantile(worst, cfg.p_required))}
 
 
-def statistical_delay_max(cfg, draws, sat, delays=None):
-    """Statistical counterpart of :attr:`ClusterProgram.platform_delay_max`: P_safe per delay and the bound."""
-    d = cfg.delays if delays is None else np.asarray(delays, dtype=float)
-    p = simulated_platform_safety(cfg, draws, sat, d)
-    return p, _contiguous_max(d, p >= cfg.p_required)
-
-
 def statistical_min_delay_difference(cfg, draws, si, sj, dt_i, differences):
     """Smallest delay difference dt_j - dt_i (from ``differences``) with P(r_ij >= r* throughout) >= P*."""
     t_len = cfg.horizon
