@@ -99,10 +99,16 @@ class Deployment:
 
 
 def wait_for_completion(duration, deployment, timeout, progress):
-    """Spin a small observer node until the sim's clock reaches ``duration``; returns (reached, reason)."""
+    """Spin a small observer node until the sim's clock reaches ``duration``; returns (reached, reason).
+
+    The observer joins the nodes' DDS domain on loopback: rclpy reads both from this process's environment, which
+    may carry neither (a plain shell), so the deployment's values are set here before ``rclpy.init``."""
     import rclpy
     from rosgraph_msgs.msg import Clock
 
+    for key in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE"):
+        os.environ[key] = deployment.env[key]
+    os.environ.pop("ROS_LOCALHOST_ONLY", None)
     rclpy.init()
     node = rclpy.create_node("roe_sep_run")
     now = {"t": 0.0}

@@ -104,6 +104,19 @@ def test_run_refuses_to_overwrite_a_bag(scenario, capsys):
     assert "exists already" in capsys.readouterr().err
 
 
+def test_run_observes_its_own_domain(tmp_path, monkeypatch):
+    """`roe-sep run` from a shell with another (or no) ROS_DOMAIN_ID: the run's completion observer must join the
+    nodes' domain, else it never sees /clock reach the end (the run then stops at its wall-time limit)."""
+    import os
+
+    mine = int(os.environ["ROS_DOMAIN_ID"])
+    monkeypatch.setenv("ROS_DOMAIN_ID", str((mine + 37) % 100 + 1))  # the shell's domain, not the run's
+    monkeypatch.delenv("ROS_AUTOMATIC_DISCOVERY_RANGE")
+    rep = run(out=tmp_path / "short", duration=3000.0, domain_id=mine, timeout=120)
+    assert rep["run"]["completed"], rep["run"]["reason"]
+    assert os.environ["ROS_DOMAIN_ID"] == str(mine) and os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST"
+
+
 def test_multi_impulse_scenario_runs_end_to_end(tmp_path):
     """Issue 4: the node suite takes the strategy as a parameter; the default scenario runs either."""
     rep = run(out=tmp_path / "multi", params=ROOT / "config" / "multi_impulse_params.yaml", duration=388800.0,
