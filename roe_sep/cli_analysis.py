@@ -92,12 +92,10 @@ def cluster_figures(prog, out_dir, samples=2000, seed=0):
     """cluster_regions.png (seed 004 Figs. 3-4: P(safe from the OS) vs delay, analytical condition vs statistical
     estimate) and cluster_program.png (Fig. 5: pair distances of the selected program, simulated, with the P* bound)."""
     from .core.cluster import (
-        box_bounds,
-        drag_acceleration,
+        METHODS,
         draw,
-        pair_moments,
+        pair_distance_bound,
         platform_safe,
-        quantile_factor,
         simulated_platform_safety,
         simulated_positions,
     )
@@ -113,13 +111,15 @@ def cluster_figures(prog, out_dir, samples=2000, seed=0):
     for k, s in enumerate(cfg.sats):
         p = simulated_platform_safety(wide, dr, s, d)
         line, = ax.plot(d, p, label=f"{s.name} statistical (V = {s.velocity:g} m/s)")
-        ok = platform_safe(wide, s, d)
-        ax.plot(d[ok], np.full(ok.sum(), 1.0 + 0.002 * (k + 1)), "s", ms=3, color=line.get_color(),
-                label=f"{s.name} analytical: safe with P*")
+        for m, (method, marker) in enumerate(zip(METHODS, "s^")):
+            ok = platform_safe(dataclasses.replace(wide, method=method), s, d)
+            ax.plot(d[ok], np.full(ok.sum(), 1.0 + 0.002 * (2 * k + m + 1)), marker, ms=3, color=line.get_color(),
+                    label=f"{s.name} {method}: safe with P*")
     ax.axhline(cfg.p_required, color="k", ls="--", lw=0.8)
     ax.set_xlabel("separation delay [s]")
     ax.set_ylabel("P(safe from the OS)")
-    ax.set_title("safe from the OS: analytical regions (squares) inside the statistical ones", fontsize=10)
+    ax.set_title("safe from the OS: analytical regions (envelope squares, gaussian triangles) and the "
+                 "statistical P", fontsize=9)
     ax.legend(fontsize=7)
     ax.grid(alpha=0.3)
     path = out_dir / "cluster_regions.png"
@@ -130,23 +130,19 @@ def cluster_figures(prog, out_dir, samples=2000, seed=0):
         t = np.arange(np.nanmin(prog.delays), np.nanmax(prog.delays) + cfg.horizon, cfg.time_step)
         pos = {i: simulated_positions(cfg, dr, cfg.sats[i], prog.delays[i], t) for i in members}
         fig, ax = plt.subplots(figsize=(7, 4))
-        k = quantile_factor(cfg.p_required)
         for a_, i in enumerate(members):
             for j in members[a_ + 1:]:
                 dist = np.linalg.norm(pos[i] - pos[j], axis=-1)
-                q = np.quantile(dist, [0.0015, 0.5, 0.9985], axis=0)
+                q = np.quantile(dist, [1.0 - cfg.p_required, 0.5, cfg.p_required], axis=0)
                 line, = ax.plot(t, q[1] / 1e3, label=f"{cfg.sats[i].name}-{cfg.sats[j].name} median")
                 ax.fill_between(t, q[0] / 1e3, q[2] / 1e3, color=line.get_color(), alpha=0.2)
-                si, sj = cfg.sats[i], cfg.sats[j]
-                m, v = pair_moments(t, si.velocity, np.array(prog.delays[i]),
-                                    drag_acceleration(-si.delta_q, cfg.density, cfg.a), sj.velocity,
-                                    np.array(prog.delays[j]), drag_acceleration(-sj.delta_q, cfg.density, cfg.a),
-                                    cfg.sigma, cfg.n)
-                ax.plot(t, box_bounds(m, v, k)[1] / 1e3, ls="--", color=line.get_color(), lw=0.8)
+                bound = pair_distance_bound(cfg, cfg.sats[i], prog.delays[i], cfg.sats[j], prog.delays[j], t)
+                ax.plot(t, bound / 1e3, ls="--", color=line.get_color(), lw=0.8)
         ax.axhline(cfg.r_max / 1e3, color="k", ls=":", lw=0.8)
         ax.set_xlabel("time from the start of the program [s]")
         ax.set_ylabel("pair distance [km]")
-        ax.set_title("selected program: simulated 99.7 % band, analytical P* bound (dashed)")
+        ax.set_title(f"selected program: simulated median and (1-P*, P*) quantiles, {cfg.method} P* bound (dashed)",
+                     fontsize=9)
         ax.legend(fontsize=7)
         ax.grid(alpha=0.3)
         path = out_dir / "cluster_program.png"
@@ -254,7 +250,7 @@ def print_cluster(rep, out=None):
     cfg = rep["config"]
     w(f"Cluster separation program (seed 004): {cfg['altitude'] / 1e3:.0f} km, rho = {cfg['density']:.3e} kg/m^3, "
       f"sigma = {cfg['sigma_deg_s']:g} deg/s, P* = {cfg['p_required']:g}, r* = {cfg['r_safe']:g} m, "
-      f"r** = {cfg['r_max']:g} m over {cfg['turns']:g} turns\n")
+      f"r** = {cfg['r_max']:g} m over {cfg['turns']:g} turns, method {cfg['method']}\n")
     w(f"  {'NS':6s} {'cluster':>7s} {'V [m/s]':>8s} {'dQ [m^2/kg]':>12s} {'delay [s]':>10s} "
       f"{'OS-safe delays [s]':>20s}\n")
     for k, name in enumerate(rep["names"]):
@@ -282,7 +278,7 @@ def cmd_cluster(args):
 
     cfg = load_cluster_config(args.config)
     changes = {k: v for k, v in (("sigma_deg_s", args.sigma), ("p_required", args.p), ("r_safe", args.r_safe),
-                                 ("r_max", args.r_max)) if v is not None}
+                                 ("r_max", args.r_max), ("method", args.method)) if v is not None}
     cfg = dataclasses.replace(cfg, **changes).validate()
     if args.samples is not None and args.samples < 0:
         raise ValueError(f"--samples must be >= 0, got {args.samples}")
@@ -327,6 +323,8 @@ def register(subparsers):
     p.add_argument("--p", type=float, help="required probability P* (default 0.997)")
     p.add_argument("--r-safe", type=float, help="keep-out radius r* [m]")
     p.add_argument("--r-max", type=float, help="largest distance inside the cluster r** [m]")
+    p.add_argument("--method", choices=("envelope", "gaussian"), help="'with probability P*': every state of the "
+                   "P* tumbling set (default) or the seed's Gaussian k-sigma model")
     p.add_argument("--samples", type=int, default=5000, help="statistical validation samples (0: none; default 5000)")
     p.add_argument("--seed", type=int, default=0, help="seed of the statistical validation (default 0)")
     p.add_argument("--plots", metavar="DIR", help="write the figures (PNG) to DIR")

@@ -26,28 +26,31 @@ s = sigma tau, D the Dawson function (:func:`mean_cos`):
 Expected values and variances of the coordinates (seed 004 Eqs. 1-2) follow by the linear map of the HCW solution
 (:func:`hcw_matrix`, :func:`drag_offset`); for a pair, Var[r_i - r_j] includes the covariance above.
 
-Probability model ('with probability P*', Eqs. 3-5): each coordinate is taken as Gaussian with these moments.
+'With probability P*' (Eqs. 3-5), two analytical methods (``ClusterConfig.method``):
 
-* Safe from the OS (3): with k = Phi^-1(1 - (1 - P*)/6) all three coordinates lie within E +- k sigma with
-  probability >= P* (Bonferroni, valid for any correlation); the NS is safe at t when that box stays clear of the
-  r* ball (:func:`box_bounds`, lower) or when |r_i(t)| >= s_min(M(t)) V - |D(t)| >= r*, which holds for every
-  direction because only the direction is random (:func:`deterministic_bound`).
-* Safe from each other (4, lower part): the box of r_i - r_j always contains the origin (the two NS share the
-  tumbling, and their spread is far larger than r*), so the seed's independence assumption (K = 0) is used:
-  P(|r_i - r_j| < r*) <= prod over the coordinates of P(|x_c| < r*) <= 1 - P* (:func:`near_probability`), or the
-  deterministic pair bound (:func:`deterministic_pair_bound`, the head start right after the later separation).
-  This is not a bound when the coordinates are correlated; the statistical validation measures it.
-* Within r** (4, upper part) and the minimax criterion (5): the farthest corner of the P* box.
+* ``envelope`` (default, :mod:`~roe_sep.core.cluster_envelope`): every condition must hold for every tumbling state
+  of the set {Omega <= Omega*, any psi}, whose probability is exactly P*; the minimax cost is the largest pair
+  distance over that set. The conditions then hold jointly with P >= P* (a bound: no distribution approximation).
+* ``gaussian`` (the seed's model): each coordinate is taken as Gaussian with the moments above.
+  Safe from the OS (3): with k = Phi^-1(1 - (1 - P*)/6) all three coordinates lie within E +- k sigma with
+  probability >= P* (Bonferroni, any correlation); the NS is safe at t when that box stays clear of the r* ball
+  (:func:`box_bounds`, lower) or when |r_i(t)| >= s_min(M(t)) V - |D(t)| >= r*, which holds for every direction
+  (:func:`deterministic_bound`). Safe from each other (4, lower part): the box of r_i - r_j always contains the
+  origin, so the seed's independence assumption (K = 0) is used: P(|r_i - r_j| < r*) <= prod over the coordinates
+  of P(|x_c| < r*) <= 1 - P* (:func:`near_probability`), or the deterministic pair bound
+  (:func:`deterministic_pair_bound`). Within r** (4, upper part) and the minimax criterion (5): the farthest corner
+  of the P* box.
 
-Measured against the statistical simulation (README, tests): the OS regions and the pair-safety regions of the
-analytical model are more conservative than the statistical ones (seed 004 Sec. 4); the r** regions are *not*: the
-along-track spread is V cos(Omega dt) with Omega Rayleigh-distributed, whose lower tail is exponential, and the
-Gaussian k sigma underestimates its P* quantile.
+Measured against the statistical simulation (README, tests): every region of the envelope lies inside the
+statistical one (seed 004 Sec. 4: the analytical algorithm is the more stringent). The gaussian regions do for the
+OS and for the pair with the lighter-drag NS first, but *not* for the pair with the heavier-drag NS first nor for
+r**: the along-track spread is V cos(Omega dt) with Omega Rayleigh-distributed, whose lower tail is exponential, and
+the Gaussian k sigma underestimates its P* quantile; the independence assumption misses the drag-driven crossings.
 
 Statistical validation (seed 004 Sec. 4): :func:`simulate_program` draws the angular velocity, builds every NS's
 velocity and propagates the same dynamics for every sample (vectorized over samples); the seed's statistical model is
 more accurate (exact equations, elliptic orbit), here only the probability model differs, so the comparison
-isolates the analytical approximations. Propagation lives in :func:`hcw_matrix`/:func:`drag_offset` only.
+isolates the analytical approximations. Propagation: :mod:`~roe_sep.core.cluster_dynamics` only.
 """
 
 import dataclasses
@@ -57,10 +60,12 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.special import dawsn, ndtr, ndtri
 
-from .dynamics import drag_da_dot
+from .cluster_dynamics import drag_acceleration, drag_offset, hcw_matrix, hcw_terms, singular_values
+from .cluster_envelope import conditions, omega_bound
 from .orbit import mean_motion, semi_major_axis
 
 USSA76_DENSITY_220KM = 1.43e-10  # kg/m^3: US Standard Atmosphere 1976, log-interpolated 200 km / 250 km
+METHODS = ("envelope", "gaussian")  # how 'with probability P*' is evaluated (module docstring)
 
 
 @dataclass(frozen=True)
@@ -100,6 +105,7 @@ class ClusterConfig:
     max_delay: float = 60.0  # s, latest delay searched
     delay_step: float = 1.0  # s, grid of the delays
     time_step: float = 20.0  # s, sampling of the analytical conditions and the simulation
+    method: str = "envelope"  # 'envelope': every state of the P* tumbling set; 'gaussian': the seed's k-sigma model
 
     def validate(self):
         """Raise ValueError naming the first bad value."""
@@ -133,6 +139,8 @@ class ClusterConfig:
             v = getattr(self, name)
             if not (np.isfinite(v) and ok):
                 raise ValueError(f"{name} must be {what}, got {v}")
+        if self.method not in METHODS:
+            raise ValueError(f"method must be one of {list(METHODS)}, got {self.method!r}")
         if (self.max_delay - self.min_delay) / self.delay_step > 400:
             raise ValueError("delay grid too fine: (max_delay - min_delay) / delay_step must be <= 400")
         return self
@@ -148,6 +156,11 @@ class ClusterConfig:
     @property
     def sigma(self):
         return float(np.radians(self.sigma_deg_s))
+
+    @property
+    def omega_star(self):
+        """Omega* [rad/s]: the tumbling rates of the P* set of :mod:`~roe_sep.core.cluster_envelope`."""
+        return omega_bound(self.sigma, self.p_required)
 
     @property
     def horizon(self):
@@ -184,7 +197,7 @@ def cluster_config_from_dict(data) -> ClusterConfig:
                                           _coerce(f"sats[{i}].cluster", s.get("cluster", True), bool)))
             kw[k] = tuple(sats)
         else:
-            kw[k] = _coerce(k, v, float)
+            kw[k] = _coerce(k, v, hints[k])
     cfg = ClusterConfig(**kw)
     try:
         return cfg.validate()
@@ -199,50 +212,6 @@ def load_cluster_config(path=None) -> ClusterConfig:
     from .config import read_yaml
 
     return cluster_config_from_dict(read_yaml(path))
-
-
-# ---------------------------------------------------------------- dynamics (the only propagation of this module)
-
-
-def drag_acceleration(delta_q, rho, a):
-    """Seed 004 P_x = rho V_s^2 dQ [m/s^2], along x, dQ = Q_OS - Q_NS (V_s = circular speed, co-rotation neglected).
-
-    Equals (n a / 2) d(da)/dt of :func:`~roe_sep.core.dynamics.drag_da_dot` with dB = B_NS - B_OS = -2 dQ.
-    """
-    return 0.5 * mean_motion(a) * a * drag_da_dot(-2.0 * np.asarray(delta_q, dtype=float), rho, a)
-
-
-def hcw_matrix(tau, n):
-    """M(tau) ``(..., 3, 3)``: position [m] of a NS tau [s] after leaving the OS with velocity v: r = M v.
-
-    HCW solution from the origin (seed 004 Eqs. 1-2 coefficients, x along-track, y radial, z normal):
-    x = vx (4 sin(n tau)/n - 3 tau) + vy 2 (cos(n tau) - 1)/n,  y = vx 2 (1 - cos(n tau))/n + vy sin(n tau)/n,
-    z = vz sin(n tau)/n.  Zero for tau < 0 (the NS is still on the OS).
-    """
-    m00, m01, m10, m11, m22 = _hcw_terms(tau, n)
-    z = np.zeros_like(m00)
-    return np.stack([np.stack([m00, m01, z], -1), np.stack([m10, m11, z], -1), np.stack([z, z, m22], -1)], -2)
-
-
-def _hcw_terms(tau, n):
-    """The non-zero entries (m00, m01, m10, m11, m22) of :func:`hcw_matrix`, zero for tau < 0 (block structure:
-    the moment and bound functions use the entries directly)."""
-    t = np.where(np.asarray(tau, dtype=float) > 0.0, tau, 0.0)
-    s, c = np.sin(n * t), np.cos(n * t)
-    return 4.0 * s / n - 3.0 * t, 2.0 * (c - 1.0) / n, 2.0 * (1.0 - c) / n, s / n, s / n
-
-
-def drag_offset(tau, n, p_x):
-    """D(tau) ``(..., 3)``: position [m] due to a constant along-track acceleration ``p_x`` (seed 004 Eq. 1).
-
-    x = 4 P/n^2 (1 - cos n tau) - 3/2 P tau^2,  y = 2 P/n (tau - sin(n tau)/n),  z = 0;  zero for tau < 0.
-    """
-    tau = np.asarray(tau, dtype=float)
-    t = np.where(tau > 0.0, tau, 0.0)
-    p = np.asarray(p_x, dtype=float)
-    x = 4.0 * p / n**2 * (1.0 - np.cos(n * t)) - 1.5 * p * t**2
-    y = 2.0 * p / n * (t - np.sin(n * t) / n)
-    return np.stack([x, y, np.zeros_like(x + y)], axis=-1)
 
 
 # ---------------------------------------------------------------- the probabilistic model
@@ -284,7 +253,7 @@ def position_moments(t, v, dt, p_x, sigma, n):
     Var_y = m10^2 Var_Vx + m11^2 Var_Vy, Var_z = m22^2 Var_Vz (the seed's Eq. 2 coefficients).
     """
     tau = np.asarray(t) - np.asarray(dt)[..., None]
-    m00, m01, m10, m11, m22 = _hcw_terms(tau, n)
+    m00, m01, m10, m11, m22 = hcw_terms(tau, n)
     ev, var = velocity_moments(v, dt, sigma)
     ex, vx, vy, vz = (ev[..., 0][..., None], var[..., 0][..., None], var[..., 1][..., None], var[..., 2][..., None])
     dd = drag_offset(tau, n, np.asarray(p_x)[..., None])
@@ -296,8 +265,8 @@ def pair_moments(t, vi, dti, pi, vj, dtj, pj, sigma, n):
     """E and Var ``(..., 3)`` of r_i - r_j at times ``t`` (exact second moments, shared tumbling)."""
     ti = np.asarray(t) - np.asarray(dti)[..., None]
     tj = np.asarray(t) - np.asarray(dtj)[..., None]
-    a = _hcw_terms(ti, n)
-    b = _hcw_terms(tj, n)
+    a = hcw_terms(ti, n)
+    b = hcw_terms(tj, n)
     evi, vari = velocity_moments(vi, dti, sigma)
     evj, varj = velocity_moments(vj, dtj, sigma)
     cov = velocity_covariance(vi, dti, vj, dtj, sigma)
@@ -331,20 +300,6 @@ def box_bounds(mean, var, k):
     return lower, upper
 
 
-def singular_values(m):
-    """(s_min, s_max) of the block-diagonal :func:`hcw_matrix` (2x2 in-plane block and the normal entry),
-    closed form."""
-    if isinstance(m, tuple):  # the entries of :func:`_hcw_terms`
-        a, b, c, d, z = m
-    else:
-        a, b, c, d, z = m[..., 0, 0], m[..., 0, 1], m[..., 1, 0], m[..., 1, 1], m[..., 2, 2]
-    f = a * a + b * b + c * c + d * d
-    g = np.sqrt((a * a + b * b - c * c - d * d) ** 2 + 4.0 * (a * c + b * d) ** 2)
-    s_hi, s_lo = np.sqrt(0.5 * (f + g)), np.sqrt(np.maximum(0.5 * (f - g), 0.0))
-    z = np.abs(z)
-    return np.minimum(s_lo, z), np.maximum(s_hi, z)
-
-
 def near_probability(mean, var, r):
     """P(|r| < r) upper estimate under the Gaussian model with independent coordinates (the seed's K = 0).
 
@@ -372,8 +327,8 @@ def deterministic_pair_bound(t, vi, dti, pi, vj, dtj, pj, n):
     """
     ti = np.asarray(t) - np.asarray(dti)[..., None]
     tj = np.asarray(t) - np.asarray(dtj)[..., None]
-    si_lo, si_hi = singular_values(_hcw_terms(ti, n))
-    sj_lo, sj_hi = singular_values(_hcw_terms(tj, n))
+    si_lo, si_hi = singular_values(hcw_terms(ti, n))
+    sj_lo, sj_hi = singular_values(hcw_terms(tj, n))
     vi, vj = np.asarray(vi, dtype=float)[..., None], np.asarray(vj, dtype=float)[..., None]
     first_i = (np.asarray(dti) <= np.asarray(dtj))[..., None]
     bound = np.where(first_i, si_lo * vi - sj_hi * vj, sj_lo * vj - si_hi * vi)
@@ -389,7 +344,7 @@ def _time_grid(cfg, start, length):
 
 
 def platform_safe(cfg: ClusterConfig, sat: Nanosatellite, delays=None):
-    """Analytical condition (3) for each delay: P(r_i(t) >= r*) >= P* at every t in [dt + t_dep, dt + horizon].
+    """Analytical condition (3) for each delay: r_i(t) >= r* with P* at every t in [dt + t_dep, dt + horizon].
 
     Returns a boolean array over ``delays`` (default: the configured grid).
     """
@@ -397,43 +352,64 @@ def platform_safe(cfg: ClusterConfig, sat: Nanosatellite, delays=None):
     n = cfg.n
     p_x = drag_acceleration(-sat.delta_q, cfg.density, cfg.a)
     tau = _time_grid(cfg, cfg.departure_time, cfg.horizon - cfg.departure_time)
+    if cfg.method == "envelope":
+        zero = np.zeros_like(delays)
+        return conditions(sat.velocity, delays, p_x, zero, delays, zero, delays[:, None] + tau, n, cfg.omega_star,
+                          cfg.r_safe)[0]
     mean, var = position_moments(delays[:, None] + tau, sat.velocity, delays, p_x, cfg.sigma, n)
     lower, _ = box_bounds(mean, var, quantile_factor(cfg.p_required))
     det = deterministic_bound(tau, sat.velocity, p_x, n)
     return np.all((lower >= cfg.r_safe) | (det >= cfg.r_safe), axis=-1)
 
 
-def pair_tables(cfg: ClusterConfig, si: Nanosatellite, sj: Nanosatellite, delays=None):
-    """Over the delay grid (dt_i, dt_j): (safe, within r**, max upper-bound distance) of the pair, Eqs. (4)-(5).
-
-    Conditions hold at every t from the later separation to the later separation + horizon, with P*.
-    """
-    d = cfg.delays if delays is None else np.asarray(delays, dtype=float)
-    n, k = cfg.n, quantile_factor(cfg.p_required)
-    di, dj = np.meshgrid(d, d, indexing="ij")
+def _pair_conditions(cfg, si, di, sj, dj, within=True):
+    """(safe, within r**, largest distance bound) of NS ``si`` at delays ``di`` against ``sj`` at ``dj`` (arrays of
+    one shape), every t from the later separation to the later separation + horizon, with P* (Eqs. 4-5)."""
+    n = cfg.n
     t = np.maximum(di, dj)[..., None] + _time_grid(cfg, 0.0, cfg.horizon)
     pi = drag_acceleration(-si.delta_q, cfg.density, cfg.a)
     pj = drag_acceleration(-sj.delta_q, cfg.density, cfg.a)
+    distinct = di != dj
+    if cfg.method == "envelope":
+        shape = di.shape
+        clear, inside, upper = conditions(si.velocity, di.ravel(), pi, sj.velocity, dj.ravel(), pj,
+                                          t.reshape(di.size, -1), n, cfg.omega_star, cfg.r_safe,
+                                          cfg.r_max if within else None)
+        if not within:
+            return clear.reshape(shape) & distinct, None, None
+        return clear.reshape(shape) & distinct, inside.reshape(shape) & distinct, upper.reshape(shape)
     mean, var = pair_moments(t, si.velocity, di, pi, sj.velocity, dj, pj, cfg.sigma, n)
-    _, upper = box_bounds(mean, var, k)
+    _, upper = box_bounds(mean, var, quantile_factor(cfg.p_required))
     near = near_probability(mean, var, cfg.r_safe)
     det = deterministic_pair_bound(t, si.velocity, di, pi, sj.velocity, dj, pj, n)
-    distinct = di != dj
     safe = np.all((near <= 1.0 - cfg.p_required) | (det >= cfg.r_safe), axis=-1) & distinct
     return safe, np.all(upper <= cfg.r_max, axis=-1) & distinct, np.max(upper, axis=-1)
+
+
+def pair_tables(cfg: ClusterConfig, si: Nanosatellite, sj: Nanosatellite, delays=None):
+    """Over the delay grid (dt_i, dt_j): (safe, within r**, max distance bound) of the pair, Eqs. (4)-(5)."""
+    d = cfg.delays if delays is None else np.asarray(delays, dtype=float)
+    di, dj = np.meshgrid(d, d, indexing="ij")
+    return _pair_conditions(cfg, si, di, sj, dj)
+
+
+def pair_distance_bound(cfg: ClusterConfig, si: Nanosatellite, dt_i, sj: Nanosatellite, dt_j, t):
+    """P* upper bound [m] of |r_i - r_j| at each time of ``t`` ``(T,)`` by ``cfg.method`` (the minimax quantity)."""
+    t = np.asarray(t, dtype=float)
+    pi = drag_acceleration(-si.delta_q, cfg.density, cfg.a)
+    pj = drag_acceleration(-sj.delta_q, cfg.density, cfg.a)
+    if cfg.method == "envelope":
+        return conditions(si.velocity, dt_i, pi, sj.velocity, dt_j, pj, t[:, None], cfg.n, cfg.omega_star,
+                          cfg.r_safe, cfg.r_max)[2]
+    mean, var = pair_moments(t, si.velocity, np.asarray(dt_i, dtype=float), pi, sj.velocity,
+                             np.asarray(dt_j, dtype=float), pj, cfg.sigma, cfg.n)
+    return box_bounds(mean, var, quantile_factor(cfg.p_required))[1]
 
 
 def pair_safe_row(cfg: ClusterConfig, s_new: Nanosatellite, candidates, s_old: Nanosatellite, dt_old):
     """Condition (4), lower part, for NS ``s_new`` at each candidate delay against ``s_old`` at ``dt_old``."""
     c = np.asarray(candidates, dtype=float)
-    d_old = np.full_like(c, float(dt_old))
-    t = np.maximum(c, d_old)[:, None] + _time_grid(cfg, 0.0, cfg.horizon)
-    pn = drag_acceleration(-s_new.delta_q, cfg.density, cfg.a)
-    po = drag_acceleration(-s_old.delta_q, cfg.density, cfg.a)
-    mean, var = pair_moments(t, s_new.velocity, c, pn, s_old.velocity, d_old, po, cfg.sigma, cfg.n)
-    near = near_probability(mean, var, cfg.r_safe)
-    det = deterministic_pair_bound(t, s_new.velocity, c, pn, s_old.velocity, d_old, po, cfg.n)
-    return np.all((near <= 1.0 - cfg.p_required) | (det >= cfg.r_safe), axis=-1) & (c != d_old)
+    return _pair_conditions(cfg, s_new, c, s_old, np.full_like(c, float(dt_old)), within=False)[0]
 
 
 @dataclass
