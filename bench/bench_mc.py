@@ -9,24 +9,15 @@ import argparse
 import json
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from mc_loop import sweep_per_sample  # noqa: E402
+from timing import best_of  # noqa: E402
 
 from roe_sep.core.double_impulse import design  # noqa: E402
 from roe_sep.core.montecarlo import DEFAULT_P_VALUES, MonteCarloConfig, draw, sweep  # noqa: E402
-
-
-def best_of(fn, repeat):
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
 
 
 def main(argv=None):
@@ -40,15 +31,15 @@ def main(argv=None):
     d = design()
     ps = list(DEFAULT_P_VALUES)
     mc = MonteCarloConfig(samples=args.samples)
-    t_vec = best_of(lambda: sweep(d, mc, ps), args.repeat)
+    t_vec, _ = best_of(lambda: sweep(d, mc, ps), args.repeat)
 
     mc_loop = MonteCarloConfig(samples=args.loop_samples)
     draws = draw(d, mc_loop)
-    t_loop_subset = best_of(lambda: sweep_per_sample(d, mc_loop, draws, ps), 1)
+    t_loop_subset, _ = best_of(lambda: sweep_per_sample(d, mc_loop, draws, ps), 1)
     t_loop = t_loop_subset * args.samples / args.loop_samples
 
     cli = [sys.executable, "-m", "roe_sep.cli", "mc", "--json", "--samples", str(args.samples)]
-    t_cli = best_of(lambda: subprocess.run(cli, check=True, capture_output=True), args.repeat)
+    t_cli, _ = best_of(lambda: subprocess.run(cli, check=True, capture_output=True), args.repeat)
 
     result = {
         "samples": args.samples,

@@ -137,20 +137,20 @@ def _split(k, omega, delta):
     return np.repeat(k, 2), np.stack([omega - half, omega + half], axis=-1).ravel(), half
 
 
-def conditions(vi, dti, pi, vj, dtj, pj, t, n, omega_star, r_min, r_max=None, chunk=CHUNK_CASES):
+def conditions(vi, dti, pi, vj, dtj, pj, t, n, omega_star, r_min, r_max=None):
     """Conditions (3)-(5) on S* for NS i against NS j: arrays over cases ``(C,)`` (speeds [m/s], delays [s], drag
     accelerations [m/s^2]), times ``t`` ``(C, T)`` [s from the program start]; against the OS: V_j = 0, p_j = 0.
 
     Per case, for every state of S* at every sampled time: clear (|r| >= ``r_min``), and with ``r_max``: within
     (|r| <= ``r_max``) and upper, an upper bound of max |r| [m] over the times and S*, tight to r_max / 1000 where
     the case is within (the minimax cost). Returns (clear, within, upper); the last two None without ``r_max``.
-    ``chunk`` cases are decided together (bench/bench_cluster.py measures the choice).
+    :data:`CHUNK_CASES` cases are decided together (bench/bench_cluster.py measures the choice).
     """
     args = [np.asarray(x, dtype=float) for x in (vi, dti, pi, vj, dtj, pj)]
     t = np.asarray(t, dtype=float)
     out = []
-    for start in range(0, t.shape[0], chunk):
-        part = slice(start, start + chunk)
+    for start in range(0, t.shape[0], CHUNK_CASES):
+        part = slice(start, start + CHUNK_CASES)
         out.append(_decide(_cases(*(np.broadcast_to(x, t.shape[:1])[part] for x in args), t[part], n),
                            omega_star, r_min, r_max))
     clear = np.concatenate([o[0] for o in out])
