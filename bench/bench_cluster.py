@@ -2,7 +2,8 @@
 envelope decided in cache-sized chunks (``cluster_envelope.CHUNK_CASES``) vs all cases at once, and the seed's
 Gaussian model, side by side.
 
-All three go through :func:`roe_sep.core.cluster.pair_tables`; the two envelope runs must agree exactly (checked).
+All three go through :func:`roe_sep.core.deployment.cluster.pair_tables`; the two envelope runs must agree exactly
+(checked).
 """
 
 import argparse
@@ -16,8 +17,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from timing import best_of  # noqa: E402
 
-from roe_sep.core import cluster_envelope  # noqa: E402
-from roe_sep.core.cluster import ClusterConfig, _time_grid, pair_tables  # noqa: E402
+from roe_sep.core.deployment import cluster_envelope
+from roe_sep.core.deployment.cluster import ClusterConfig, _time_grid, pair_tables  # noqa: E402
 
 
 def main(argv=None):

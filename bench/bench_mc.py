@@ -16,8 +16,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from mc_loop import sweep_per_sample  # noqa: E402
 from timing import best_of  # noqa: E402
 
-from roe_sep.core.double_impulse import design  # noqa: E402
-from roe_sep.core.montecarlo import DEFAULT_P_VALUES, MonteCarloConfig, draw, sweep  # noqa: E402
+from roe_sep.core.montecarlo.sweep import DEFAULT_P_VALUES, MonteCarloConfig, draw, sweep  # noqa: E402
+from roe_sep.core.separation.double_impulse import design  # noqa: E402
 
 
 def main(argv=None):

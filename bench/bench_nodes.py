@@ -22,8 +22,8 @@ def planner_latency(events):
     import rclpy
     from roe_sep_msgs.msg import ManeuverPlan
 
-    from roe_sep.core.double_impulse import design
-    from roe_sep.nodes import qos
+    from roe_sep import interfaces
+    from roe_sep.core.separation.double_impulse import design
     from roe_sep.nodes.convert import time_to_sec
     from roe_sep.run import ros_environment
 
@@ -38,13 +38,13 @@ def planner_latency(events):
     rclpy.init()
     node = rclpy.create_node("bench_latency")
     received = {}
-    node.create_subscription(ManeuverPlan, qos.DRIFT_STOP_PLAN_TOPIC,
+    node.create_subscription(ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC,
                              lambda m: received.setdefault(time_to_sec(m.ejection_epoch), time.perf_counter()),
-                             qos.LATCHED)
-    pub = node.create_publisher(type(ejection_event()), qos.EJECTION_TOPIC, qos.LATCHED)
+                             interfaces.LATCHED)
+    pub = node.create_publisher(type(ejection_event()), interfaces.EJECTION_TOPIC, interfaces.LATCHED)
     try:
         deadline = time.monotonic() + 30
-        while pub.get_subscription_count() == 0 or node.count_publishers(qos.DRIFT_STOP_PLAN_TOPIC) == 0:
+        while pub.get_subscription_count() == 0 or node.count_publishers(interfaces.DRIFT_STOP_PLAN_TOPIC) == 0:
             rclpy.spin_once(node, timeout_sec=0.05)
             if time.monotonic() > deadline:
                 raise RuntimeError("planner did not come up")
@@ -63,7 +63,7 @@ def planner_latency(events):
         planner.terminate()
         planner.wait()
 
-    from roe_sep.core.double_impulse import plan_drift_stop
+    from roe_sep.core.separation.double_impulse import plan_drift_stop
 
     d = design()
     t0 = time.perf_counter()

@@ -1,6 +1,6 @@
 """Benchmark: nonlinear Monte Carlo throughput, heyoka batch mode vs a per-sample scipy solve_ivp loop, side by side.
 
-Both integrate the same force model (J2 + drag of both spacecraft, :func:`roe_sep.core.nonlinear.pair_rhs` for
+Both integrate the same force model (J2 + drag of both spacecraft, :func:`roe_sep.core.truth.nonlinear.pair_rhs` for
 scipy, the compiled Taylor integrator for heyoka) over the same span: ejection -> drift-stop (k pi) -> 24 h, for
 one p. heyoka runs every sample (batch lanes over a thread pool); the scipy loop runs ``--loop-samples`` samples
 (DOP853, rtol 1e-12, atol 1e-6 m) and is extrapolated linearly. Throughput per core = sample pairs / CPU second.
@@ -15,13 +15,13 @@ import time
 
 import numpy as np
 
-from roe_sep.core import nonlinear as nl
 from roe_sep.core.constants import R_EARTH, SECONDS_PER_DAY
-from roe_sep.core.double_impulse import design
-from roe_sep.core.dynamics import arg_latitude_rate
-from roe_sep.core.maneuvers import dispersed_dv
-from roe_sep.core.montecarlo import MonteCarloConfig, draw
-from roe_sep.core.validation import MC_TOL, MC_ZONALS
+from roe_sep.core.montecarlo.sweep import MonteCarloConfig, draw
+from roe_sep.core.relmotion.dynamics import arg_latitude_rate
+from roe_sep.core.relmotion.maneuvers import dispersed_dv
+from roe_sep.core.separation.double_impulse import design
+from roe_sep.core.truth import nonlinear as nl
+from roe_sep.core.truth.validation import MC_TOL, MC_ZONALS
 
 
 def setup(d, mc, p):

@@ -5,7 +5,7 @@ Same physics, same draws, one sample at a time through the same core functions.
 
 import numpy as np
 
-from roe_sep.core.montecarlo import Draws, after_stop, pre_stop, summarize
+from roe_sep.core.montecarlo.sweep import Draws, after_stop, pre_stop, summarize
 
 
 def _one(d: Draws, i):
@@ -13,7 +13,7 @@ def _one(d: Draws, i):
 
 
 def sweep_per_sample(design, mc, draws, p_values):
-    """Rows like :func:`roe_sep.core.montecarlo.sweep`, computed sample by sample; returns (rows, outcomes)."""
+    """Rows like :func:`roe_sep.core.montecarlo.sweep.sweep`, computed sample by sample; returns (rows, outcomes)."""
     n = draws.f1.shape[0]
     per_p = {p: [] for p in p_values}
     crossings = np.empty(n)

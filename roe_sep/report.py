@@ -13,10 +13,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .core.dynamics import propagate
-from .core.monitor import ERROR_CRITERIA, MonitorLimits, in_fov
-from .core.safety import min_rn_distance
-from .nodes import qos
+from . import interfaces
+from .core.relmotion.dynamics import propagate
+from .core.safety.metrics import min_rn_distance
+from .core.safety.monitor import ERROR_CRITERIA, MonitorLimits, in_fov
 
 ROE_KEYS = ("a_da", "a_dl", "a_dex", "a_dey", "a_dix", "a_diy")
 
@@ -79,12 +79,13 @@ def initial_conditions(truth, plans, ic_burns, truth_da_dot, limits, drift_toler
 
 
 def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()):
-    topics = (qos.EXECUTED_TOPIC, qos.TRUTH_ROE_TOPIC, qos.DIAGNOSTICS_TOPIC, qos.SAFETY_TOPIC,
-              qos.PLAN_CHECK_TOPIC, qos.OD_TOPIC, qos.ACQUISITION_PLAN_TOPIC, qos.DRIFT_STOP_PLAN_TOPIC)
+    topics = (interfaces.EXECUTED_TOPIC, interfaces.TRUTH_ROE_TOPIC, interfaces.DIAGNOSTICS_TOPIC,
+              interfaces.SAFETY_TOPIC, interfaces.PLAN_CHECK_TOPIC, interfaces.OD_TOPIC,
+              interfaces.ACQUISITION_PLAN_TOPIC, interfaces.DRIFT_STOP_PLAN_TOPIC)
     data = read_topics(bag_dir, topics)
 
     maneuvers = []
-    for _, m in data[qos.EXECUTED_TOPIC]:
+    for _, m in data[interfaces.EXECUTED_TOPIC]:
         dv = [m.dv_rtn.x, m.dv_rtn.y, m.dv_rtn.z]
         maneuvers.append({"purpose": m.purpose, "spacecraft": m.spacecraft, "epoch": _stamp(m.epoch),
                           "u_deg": math.degrees(m.mean_arg_latitude), "dv_rtn": dv, "dv": float(np.linalg.norm(dv))})
@@ -96,29 +97,29 @@ def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()
     ejection = next((m for m in maneuvers if m["purpose"] == "ejection"), None)
     ic_burns = [m for m in carrier if m["purpose"] == "ic_acquisition"]
 
-    truth = data[qos.TRUTH_ROE_TOPIC]
+    truth = data[interfaces.TRUTH_ROE_TOPIC]
     final = truth[-1][1] if truth else None
     final_roe = [getattr(final, k) for k in ROE_KEYS] if final else None
 
-    sim_status = [s for _, d in data[qos.DIAGNOSTICS_TOPIC] for s in d.status if s.name == "roe_sep/sim"]
+    sim_status = [s for _, d in data[interfaces.DIAGNOSTICS_TOPIC] for s in d.status if s.name == "roe_sep/sim"]
     late = [s.message for s in sim_status if "executed late" in s.message or "not executed" in s.message]
     values = {kv.key: kv.value for kv in sim_status[-1].values} if sim_status else {}
     min_distance = float(values.get("min_distance_m", "nan"))
 
-    truth_checks = [s for _, s in data[qos.SAFETY_TOPIC] if s.source == "truth"]
+    truth_checks = [s for _, s in data[interfaces.SAFETY_TOPIC] if s.source == "truth"]
     failed_ever = {name for s in truth_checks for name in s.violations}
     last = truth_checks[-1] if truth_checks else None
-    plan_checks = [s for _, s in data[qos.PLAN_CHECK_TOPIC]]
+    plan_checks = [s for _, s in data[interfaces.PLAN_CHECK_TOPIC]]
     criteria = {name: bool(truth_checks) and name not in failed_ever for name in ERROR_CRITERIA}
     criteria["min_distance"] = not math.isnan(min_distance) and min_distance >= limits.keep_out  # inf: no approach
     criteria["plans_approved"] = bool(plan_checks) and all(s.safe for s in plan_checks)
     safe = all(criteria[name] for name in (*ERROR_CRITERIA, "min_distance", "plans_approved"))
     truth_da_dot = float(values.get("truth_a_da_dot_m_per_day", "nan"))
-    ic = initial_conditions(truth, data[qos.ACQUISITION_PLAN_TOPIC], ic_burns, truth_da_dot, limits,
+    ic = initial_conditions(truth, data[interfaces.ACQUISITION_PLAN_TOPIC], ic_burns, truth_da_dot, limits,
                             run_end=duration)
     criteria["ic_reached"] = bool(ic and ic["reached"])
 
-    od = data[qos.OD_TOPIC]
+    od = data[interfaces.OD_TOPIC]
     od_report = None
     if od:
         first = od[0][1]

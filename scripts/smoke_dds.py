@@ -16,7 +16,6 @@ if os.environ.get('ROS_AUTOMATIC_DISCOVERY_RANGE') != 'LOCALHOST' or not os.envi
 import rclpy  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402
-
 from roe_sep_msgs.msg import ImpulsiveManeuver, ManeuverPlan  # noqa: E402
 
 TOPIC = '/roe_sep/smoke/maneuver_plan'

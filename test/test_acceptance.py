@@ -5,8 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from roe_sep.core import acceptance, multi_impulse
-from roe_sep.core.montecarlo import MonteCarloConfig
+from roe_sep.core.montecarlo import acceptance
+from roe_sep.core.montecarlo.sweep import MonteCarloConfig
+from roe_sep.core.separation import multi_impulse
 
 D = multi_impulse.design()
 RES = acceptance.run(D, MonteCarloConfig(samples=20000, seed=3))
@@ -36,7 +37,7 @@ def test_ac1_mean_residual_is_minus_2p_over_n():
 
 
 def test_same_draws_as_the_foundation():
-    from roe_sep.core.montecarlo import draw
+    from roe_sep.core.montecarlo.sweep import draw
 
     d = draw(D, MonteCarloConfig(samples=20000, seed=3))
     np.testing.assert_array_equal(d.f1, RES.draws.f1)

@@ -10,18 +10,7 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from roe_sep.core.acquisition import (
-    AcquisitionConfig,
-    AcquisitionInfeasible,
-    InvalidAcquisitionConfig,
-    drift_nulling_dv_bound,
-    ei_magnitude_floor,
-    plan_acquisition,
-    verify,
-)
-from roe_sep.core.double_impulse import design
-from roe_sep.core.dynamics import arg_latitude_rate, drag_da_dot, propagate
-from roe_sep.core.lp_transfer import (
+from roe_sep.core.acquisition.lp_transfer import (
     carrier_burn_effects,
     grid_epochs,
     grid_response,
@@ -30,8 +19,19 @@ from roe_sep.core.lp_transfer import (
     sagitta,
     transition_matrices,
 )
-from roe_sep.core.safety import min_rn_distance
-from roe_sep.core.trajectory import Burn, Chief, trajectory
+from roe_sep.core.acquisition.planner import (
+    AcquisitionConfig,
+    AcquisitionInfeasible,
+    InvalidAcquisitionConfig,
+    drift_nulling_dv_bound,
+    ei_magnitude_floor,
+    plan_acquisition,
+    verify,
+)
+from roe_sep.core.relmotion.dynamics import arg_latitude_rate, drag_da_dot, propagate
+from roe_sep.core.relmotion.trajectory import Burn, Chief, trajectory
+from roe_sep.core.safety.metrics import min_rn_distance
+from roe_sep.core.separation.double_impulse import design
 
 D = design()
 A, INC = D.a, D.inc

@@ -20,11 +20,11 @@ from roe_sep_msgs.msg import ImpulsiveManeuver, ManeuverPlan, RelativeOrbitalEle
 from rosgraph_msgs.msg import Clock  # noqa: E402
 from rosutil import ROOT, rclpy, ros_env, spin_until, start_node, stop_node, wait_exit  # noqa: I001,E402
 
+from roe_sep import interfaces  # noqa: E402
 from roe_sep.bag import BagError, definitions, info, metadata  # noqa: E402
 from roe_sep.bag import reader as bag_reader  # noqa: E402
 from roe_sep.bag import recover as bag_recover  # noqa: E402
 from roe_sep.bag import replay as bag_replay  # noqa: E402
-from roe_sep.nodes import qos  # noqa: E402
 from roe_sep.nodes.convert import array_to_vector, sec_to_time  # noqa: E402
 
 rosbags_rosbag2 = pytest.importorskip("rosbags.rosbag2")
@@ -139,7 +139,7 @@ def ros():
     rclpy.init()
     node = rclpy.create_node("bag_test")
     node.diags = []
-    node.create_subscription(DiagnosticArray, qos.DIAGNOSTICS_TOPIC, node.diags.append, qos.DIAGNOSTICS)
+    node.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, node.diags.append, interfaces.DIAGNOSTICS)
     yield node
     node.destroy_node()
     rclpy.try_shutdown()
@@ -149,10 +149,10 @@ def ros():
 def recorded(ros, tmp_path_factory):
     """A bag recorded by the real recorder process: the latched plan published before it started, then streams."""
     bag = str(tmp_path_factory.mktemp("rec") / "run1")
-    plan_pub = ros.create_publisher(ManeuverPlan, qos.DRIFT_STOP_PLAN_TOPIC, qos.LATCHED)
-    roe_pub = ros.create_publisher(RelativeOrbitalElements, qos.TRUTH_ROE_TOPIC, qos.STREAM)
-    diag_pub = ros.create_publisher(DiagnosticArray, qos.DIAGNOSTICS_TOPIC, qos.DIAGNOSTICS)
-    clock_pub = ros.create_publisher(Clock, qos.CLOCK_TOPIC, CLOCK_QOS)
+    plan_pub = ros.create_publisher(ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.LATCHED)
+    roe_pub = ros.create_publisher(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, interfaces.STREAM)
+    diag_pub = ros.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
+    clock_pub = ros.create_publisher(Clock, interfaces.CLOCK_TOPIC, CLOCK_QOS)
     plan = plan_msg()
     plan_pub.publish(plan)  # before the recorder exists: it must come from the transient-local history
     t0 = time.monotonic()
@@ -170,7 +170,8 @@ def recorded(ros, tmp_path_factory):
                 clocks.append(Clock(clock=Time(sec=100 + i, nanosec=250_000_000)))
                 clock_pub.publish(clocks[-1])
             rclpy.spin_once(ros, timeout_sec=0.025)
-        expect = {qos.TRUTH_ROE_TOPIC: N_ROE, qos.CLOCK_TOPIC: N_CLOCK, qos.DRIFT_STOP_PLAN_TOPIC: 1}
+        expect = {interfaces.TRUTH_ROE_TOPIC: N_ROE, interfaces.CLOCK_TOPIC: N_CLOCK,
+                  interfaces.DRIFT_STOP_PLAN_TOPIC: 1}
         assert spin_until(ros, lambda: all(recorder_values(ros.diags).get(t) == str(n) for t, n in expect.items()),
                           timeout=10), recorder_values(ros.diags)
     finally:
@@ -192,22 +193,22 @@ def test_metadata_yaml_is_rosbag2_jazzy(recorded):
     assert fname == "run1_0.mcap" and os.path.isfile(os.path.join(recorded.bag, fname))
     topics = {t["topic_metadata"]["name"]: t for t in meta["topics_with_message_count"]}
     assert "/rosout" not in topics  # excluded
-    assert topics[qos.TRUTH_ROE_TOPIC]["message_count"] == N_ROE
-    assert topics[qos.CLOCK_TOPIC]["message_count"] == N_CLOCK
-    assert topics[qos.DRIFT_STOP_PLAN_TOPIC]["message_count"] == 1
-    assert topics[qos.DIAGNOSTICS_TOPIC]["message_count"] >= N_DIAG
+    assert topics[interfaces.TRUTH_ROE_TOPIC]["message_count"] == N_ROE
+    assert topics[interfaces.CLOCK_TOPIC]["message_count"] == N_CLOCK
+    assert topics[interfaces.DRIFT_STOP_PLAN_TOPIC]["message_count"] == 1
+    assert topics[interfaces.DIAGNOSTICS_TOPIC]["message_count"] >= N_DIAG
     assert meta["message_count"] == sum(t["message_count"] for t in topics.values())
     (f,) = meta["files"]
     assert f["path"] == fname and f["message_count"] == meta["message_count"]
     assert f["duration"] == meta["duration"] and f["starting_time"] == meta["starting_time"]
-    plan_meta = topics[qos.DRIFT_STOP_PLAN_TOPIC]["topic_metadata"]
+    plan_meta = topics[interfaces.DRIFT_STOP_PLAN_TOPIC]["topic_metadata"]
     assert plan_meta["type"] == "roe_sep_msgs/msg/ManeuverPlan" and plan_meta["serialization_format"] == "cdr"
     (offer,) = plan_meta["offered_qos_profiles"]
     assert offer["durability"] == "transient_local" and offer["reliability"] == "reliable"
     assert set(offer) == {"history", "depth", "reliability", "durability", "deadline", "lifespan", "liveliness",
                           "liveliness_lease_duration", "avoid_ros_namespace_conventions"}
     assert offer["deadline"] == {"sec": 9223372036, "nsec": 854775807}
-    roe_offer = topics[qos.TRUTH_ROE_TOPIC]["topic_metadata"]["offered_qos_profiles"][0]
+    roe_offer = topics[interfaces.TRUTH_ROE_TOPIC]["topic_metadata"]["offered_qos_profiles"][0]
     assert roe_offer["durability"] == "volatile"
     for t in topics.values():
         tm = t["topic_metadata"]
@@ -249,20 +250,20 @@ def test_mcap_layout_is_rosbag2_storage_mcap(recorded):
 
 def test_round_trip_with_mcap_ros2(recorded):
     got = read_mcap_ros2(mcap_file(recorded.bag))
-    assert [norm(m) for m, _, _ in got[qos.DRIFT_STOP_PLAN_TOPIC]] == [norm(recorded.plan)]
-    assert [norm(m) for m, _, _ in got[qos.TRUTH_ROE_TOPIC]] == [norm(m) for m in recorded.roes]
-    assert [norm(m) for m, _, _ in got[qos.CLOCK_TOPIC]] == [norm(m) for m in recorded.clocks]
-    mine = [m for m, _, _ in got[qos.DIAGNOSTICS_TOPIC] if any(s.name == SOURCE_STATUS for s in m.status)]
+    assert [norm(m) for m, _, _ in got[interfaces.DRIFT_STOP_PLAN_TOPIC]] == [norm(recorded.plan)]
+    assert [norm(m) for m, _, _ in got[interfaces.TRUTH_ROE_TOPIC]] == [norm(m) for m in recorded.roes]
+    assert [norm(m) for m, _, _ in got[interfaces.CLOCK_TOPIC]] == [norm(m) for m in recorded.clocks]
+    mine = [m for m, _, _ in got[interfaces.DIAGNOSTICS_TOPIC] if any(s.name == SOURCE_STATUS for s in m.status)]
     assert [norm(m) for m in mine] == [norm(m) for m in recorded.diags]
 
 
 def test_round_trip_with_rosbags(recorded):
     got, conns = read_rosbags(recorded.bag)
-    assert [norm(m) for m in got[qos.DRIFT_STOP_PLAN_TOPIC]] == [norm(recorded.plan)]
-    assert [norm(m) for m in got[qos.TRUTH_ROE_TOPIC]] == [norm(m) for m in recorded.roes]
-    assert [norm(m) for m in got[qos.CLOCK_TOPIC]] == [norm(m) for m in recorded.clocks]
-    assert [norm(m) for m in published_diags(got[qos.DIAGNOSTICS_TOPIC])] == [norm(m) for m in recorded.diags]
-    plan_conn = conns[qos.DRIFT_STOP_PLAN_TOPIC]
+    assert [norm(m) for m in got[interfaces.DRIFT_STOP_PLAN_TOPIC]] == [norm(recorded.plan)]
+    assert [norm(m) for m in got[interfaces.TRUTH_ROE_TOPIC]] == [norm(m) for m in recorded.roes]
+    assert [norm(m) for m in got[interfaces.CLOCK_TOPIC]] == [norm(m) for m in recorded.clocks]
+    assert [norm(m) for m in published_diags(got[interfaces.DIAGNOSTICS_TOPIC])] == [norm(m) for m in recorded.diags]
+    plan_conn = conns[interfaces.DRIFT_STOP_PLAN_TOPIC]
     assert plan_conn.msgcount == 1 and plan_conn.digest == definitions.type_hash("roe_sep_msgs/msg/ManeuverPlan")
     assert plan_conn.ext.offered_qos_profiles[0].durability.name == "TRANSIENT_LOCAL"
 
@@ -271,32 +272,34 @@ def test_info(recorded):
     d = info(recorded.bag)
     assert d["complete"] and d["profile"] == "ros2" and d["ros_distro"]
     counts = {t["name"]: t["message_count"] for t in d["topics"]}
-    assert counts[qos.TRUTH_ROE_TOPIC] == N_ROE and counts[qos.CLOCK_TOPIC] == N_CLOCK
+    assert counts[interfaces.TRUTH_ROE_TOPIC] == N_ROE and counts[interfaces.CLOCK_TOPIC] == N_CLOCK
     assert d["message_count"] == sum(counts.values()) and 0 < d["duration_s"] < recorded.seconds
     types = {t["name"]: t["type"] for t in d["topics"]}
-    assert types[qos.TRUTH_ROE_TOPIC] == "roe_sep_msgs/msg/RelativeOrbitalElements"
+    assert types[interfaces.TRUTH_ROE_TOPIC] == "roe_sep_msgs/msg/RelativeOrbitalElements"
 
 
 # -- replay ----------------------------------------------------------------------------------------------------------
 def test_replay_same_messages_in_order_and_relatched(ros, recorded):
     roes, clocks, arrivals = [], [], []
-    roe_sub = ros.create_subscription(RelativeOrbitalElements, qos.TRUTH_ROE_TOPIC,
-                                      lambda m: (roes.append(m), arrivals.append(time.monotonic())), qos.STREAM)
-    clock_sub = ros.create_subscription(Clock, qos.CLOCK_TOPIC, clocks.append, CLOCK_QOS)
+    roe_sub = ros.create_subscription(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC,
+                                      lambda m: (roes.append(m), arrivals.append(time.monotonic())), interfaces.STREAM)
+    clock_sub = ros.create_subscription(Clock, interfaces.CLOCK_TOPIC, clocks.append, CLOCK_QOS)
     proc = bag_replay_process(recorded.bag, "--rate", "1", "--delay", "10", "--linger", "3",
-                              "--topics", qos.TRUTH_ROE_TOPIC, qos.CLOCK_TOPIC, qos.DRIFT_STOP_PLAN_TOPIC)
+                              "--topics", interfaces.TRUTH_ROE_TOPIC, interfaces.CLOCK_TOPIC,
+                              interfaces.DRIFT_STOP_PLAN_TOPIC)
     try:
         assert spin_until(ros, lambda: len(roes) >= N_ROE and len(clocks) >= N_CLOCK, timeout=20), (
             [m.a_dl for m in roes], len(clocks))
         assert [norm(m) for m in roes] == [norm(m) for m in recorded.roes]
         assert [norm(m) for m in clocks] == [norm(m) for m in recorded.clocks]
         # original timing: the 20 messages were recorded ~25 ms apart; replayed at rate 1 they are spread out too
-        recorded_span = (read_mcap_ros2(mcap_file(recorded.bag))[qos.TRUTH_ROE_TOPIC][-1][1]
-                         - read_mcap_ros2(mcap_file(recorded.bag))[qos.TRUTH_ROE_TOPIC][0][1]) * 1e-9
+        recorded_span = (read_mcap_ros2(mcap_file(recorded.bag))[interfaces.TRUTH_ROE_TOPIC][-1][1]
+                         - read_mcap_ros2(mcap_file(recorded.bag))[interfaces.TRUTH_ROE_TOPIC][0][1]) * 1e-9
         assert arrivals[-1] - arrivals[0] > 0.5 * recorded_span
         # a subscriber created after the replay published the latched plan still receives it
         plans = []
-        plan_sub = ros.create_subscription(ManeuverPlan, qos.DRIFT_STOP_PLAN_TOPIC, plans.append, qos.LATCHED)
+        plan_sub = ros.create_subscription(ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, plans.append,
+                                           interfaces.LATCHED)
         assert spin_until(ros, lambda: len(plans) >= 1, timeout=5)
         assert [norm(p) for p in plans] == [norm(recorded.plan)]
         ros.destroy_subscription(plan_sub)
@@ -320,8 +323,8 @@ def test_replay_publishes_clock_from_log_times(ros, tmp_path):
         for i in range(4):
             w.write(topic, serialize_message(roe_msg(i)), t0 + i * 100_000_000)
     clocks, roes = [], []
-    subs = [ros.create_subscription(Clock, qos.CLOCK_TOPIC, clocks.append, CLOCK_QOS),
-            ros.create_subscription(RelativeOrbitalElements, topic, roes.append, qos.STREAM)]
+    subs = [ros.create_subscription(Clock, interfaces.CLOCK_TOPIC, clocks.append, CLOCK_QOS),
+            ros.create_subscription(RelativeOrbitalElements, topic, roes.append, interfaces.STREAM)]
     proc = bag_replay_process(str(tmp_path / "noclock"), "--clock", "50", "--delay", "10", "--linger", "0.2")
     try:
         spin_until(ros, lambda: proc.poll() is not None, timeout=30)  # take every /clock as it comes
@@ -347,9 +350,9 @@ def test_sim_time_log_times(ros, tmp_path):
     (here the latched plan and one ROE message) take the first clock time instead of 0."""
     roe_topic, plan_topic = "/bag_test/sim/roe", "/bag_test/sim/plan"
     bag = tmp_path / "sim"
-    clock_pub = ros.create_publisher(Clock, qos.CLOCK_TOPIC, CLOCK_QOS)
-    roe_pub = ros.create_publisher(RelativeOrbitalElements, roe_topic, qos.STREAM)
-    plan_pub = ros.create_publisher(ManeuverPlan, plan_topic, qos.LATCHED)
+    clock_pub = ros.create_publisher(Clock, interfaces.CLOCK_TOPIC, CLOCK_QOS)
+    roe_pub = ros.create_publisher(RelativeOrbitalElements, roe_topic, interfaces.STREAM)
+    plan_pub = ros.create_publisher(ManeuverPlan, plan_topic, interfaces.LATCHED)
     plan_pub.publish(plan_msg())
     rec = start_node("recorder", "-p", f"output:={bag}", "-p", "use_sim_time:=true", "-p", "flush_period:=0.2",
                      "-p", f"topics:=[{roe_topic}, {plan_topic}]")
@@ -378,7 +381,7 @@ def test_sim_time_log_times(ros, tmp_path):
 def test_sigkill_then_recover(ros, tmp_path):
     topic = "/bag_test/kill_roe"
     bag, out = tmp_path / "killed", tmp_path / "recovered"
-    pub = ros.create_publisher(RelativeOrbitalElements, topic, qos.STREAM)
+    pub = ros.create_publisher(RelativeOrbitalElements, topic, interfaces.STREAM)
     rec = start_node("recorder", "-p", f"output:={bag}", "-p", f"topics:=[{topic}]", "-p", "flush_period:=0.3")
     try:
         assert spin_until(ros, lambda: pub.get_subscription_count() >= 1, timeout=20)
@@ -411,7 +414,7 @@ def test_bad_message_survived_and_sigterm_closes_the_bag(ros, tmp_path):
     """Garbage bytes on a typed topic are recorded as they are (never deserialized); SIGTERM closes the bag."""
     topic = "/bag_test/garbage"
     bag = tmp_path / "term"
-    pub = ros.create_publisher(RelativeOrbitalElements, topic, qos.STREAM)
+    pub = ros.create_publisher(RelativeOrbitalElements, topic, interfaces.STREAM)
     rec = start_node("recorder", "-p", f"output:={bag}", "-p", f"topics:=[{topic}]")
     try:
         assert spin_until(ros, lambda: pub.get_subscription_count() >= 1, timeout=20)

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from roe_sep.core.cluster import (
+from roe_sep.core.config import ConfigError
+from roe_sep.core.deployment.cluster import (
     ClusterConfig,
     Draws,
     cluster_config_from_dict,
@@ -26,11 +27,10 @@ from roe_sep.core.cluster import (
     simulated_positions,
     statistical_min_delay_difference,
 )
-from roe_sep.core.cluster_dynamics import drag_acceleration, hcw_matrix
-from roe_sep.core.cluster_envelope import omega_bound, psi_extrema
-from roe_sep.core.config import ConfigError
-from roe_sep.core.dynamics import drag_da_dot
-from roe_sep.core.orbit import circular_speed, mean_motion
+from roe_sep.core.deployment.cluster_dynamics import drag_acceleration, hcw_matrix
+from roe_sep.core.deployment.cluster_envelope import omega_bound, psi_extrema
+from roe_sep.core.relmotion.dynamics import drag_da_dot
+from roe_sep.core.relmotion.orbit import circular_speed, mean_motion
 
 CFG = ClusterConfig()
 
@@ -260,7 +260,7 @@ def small_config(tmp_path):
 def test_cli_json(capsys, small_config):
     import argparse
 
-    from roe_sep import cli_analysis
+    from roe_sep.cli import analysis as cli_analysis
 
     parser = argparse.ArgumentParser()
     cli_analysis.register(parser.add_subparsers(dest="command"))
@@ -279,7 +279,7 @@ def test_cli_plots(capsys, small_config, tmp_path):
     """--plots writes the regions figure (seed 004 Figs. 3-4) and the program figure (Fig. 5)."""
     import argparse
 
-    from roe_sep import cli_analysis
+    from roe_sep.cli import analysis as cli_analysis
 
     parser = argparse.ArgumentParser()
     cli_analysis.register(parser.add_subparsers(dest="command"))

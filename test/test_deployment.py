@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from roe_sep.core.deployment import (
+from roe_sep.core.deployment.sweep import (
     DeploymentConfig,
     deployment_dv_rtn,
     deployment_roe,
@@ -15,7 +15,7 @@ from roe_sep.core.deployment import (
     relative_motion,
     sweep,
 )
-from roe_sep.core.orbit import mean_motion
+from roe_sep.core.relmotion.orbit import mean_motion
 
 # the seed's Fig. 5 layout: every 45 deg from +V-bar
 SEED = DeploymentConfig(angles_deg=tuple(float(a) for a in range(0, 360, 45)))
@@ -136,7 +136,7 @@ def test_bad_config(field, value, word):
 def test_cli_json_and_bad_input(capsys):
     import argparse
 
-    from roe_sep import cli_analysis
+    from roe_sep.cli import analysis as cli_analysis
 
     parser = argparse.ArgumentParser()
     cli_analysis.register(parser.add_subparsers(dest="command"))
@@ -156,7 +156,7 @@ def test_cli_plots(capsys, tmp_path):
     """--plots writes seed 003 Fig. 5 per inclination and the first-orbits figure, and lists them in --json."""
     import argparse
 
-    from roe_sep import cli_analysis
+    from roe_sep.cli import analysis as cli_analysis
 
     parser = argparse.ArgumentParser()
     cli_analysis.register(parser.add_subparsers(dest="command"))

@@ -4,10 +4,10 @@ import math
 import numpy as np
 import pytest
 
-from roe_sep.core.double_impulse import InfeasibleDesignError, SeparationConfig, admissible_k, design
-from roe_sep.core.dynamics import propagate
-from roe_sep.core.maneuvers import delta_roe
-from roe_sep.core.roe import e_vector_polar, i_vector_polar
+from roe_sep.core.relmotion.dynamics import propagate
+from roe_sep.core.relmotion.maneuvers import delta_roe
+from roe_sep.core.relmotion.roe import e_vector_polar, i_vector_polar
+from roe_sep.core.separation.double_impulse import InfeasibleDesignError, SeparationConfig, admissible_k, design
 
 D = design()
 

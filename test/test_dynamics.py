@@ -3,7 +3,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from roe_sep.core.dynamics import (
+from roe_sep.core.relmotion.dynamics import (
     arg_latitude_rate,
     ballistic_coefficient,
     drag_da_dot,
@@ -13,8 +13,8 @@ from roe_sep.core.dynamics import (
     raan_rate,
     sun_synchronous_inclination,
 )
-from roe_sep.core.orbit import circular_speed, mean_motion, semi_major_axis
-from roe_sep.core.roe import roe_to_rtn
+from roe_sep.core.relmotion.orbit import circular_speed, mean_motion, semi_major_axis
+from roe_sep.core.relmotion.roe import roe_to_rtn
 
 A = float(semi_major_axis(515e3))
 N = float(mean_motion(A))

@@ -10,11 +10,11 @@ from roe_sep_msgs.msg import ManeuverPlan, OrbitalElements, OrbitDetermination  
 from rosgraph_msgs.msg import Clock  # noqa: E402
 from rosutil import rclpy, spin_until, start_node, stop_node, wait_exit  # noqa: I001  (skips without rclpy)
 
-from roe_sep.core.acquisition import AcquisitionConfig, plan_acquisition  # noqa: E402
-from roe_sep.core.double_impulse import design  # noqa: E402
-from roe_sep.core.dynamics import drag_da_dot  # noqa: E402
-from roe_sep.core.trajectory import Chief, state_at  # noqa: E402
-from roe_sep.nodes import qos  # noqa: E402
+from roe_sep import interfaces  # noqa: E402
+from roe_sep.core.acquisition.planner import AcquisitionConfig, plan_acquisition  # noqa: E402
+from roe_sep.core.relmotion.dynamics import drag_da_dot  # noqa: E402
+from roe_sep.core.relmotion.trajectory import Chief, state_at  # noqa: E402
+from roe_sep.core.separation.double_impulse import design  # noqa: E402
 from roe_sep.nodes.convert import msg_to_roe, roe_to_msg, sec_to_time, time_to_sec  # noqa: E402
 
 D = design()
@@ -46,10 +46,10 @@ def ground():
     rclpy.init()
     node = rclpy.create_node("ic_ground_test")
     node.plans, node.diags = [], []
-    node.create_subscription(ManeuverPlan, qos.ACQUISITION_PLAN_TOPIC, node.plans.append, qos.LATCHED)
-    node.create_subscription(DiagnosticArray, qos.DIAGNOSTICS_TOPIC, node.diags.append, qos.DIAGNOSTICS)
-    node.od_pub = node.create_publisher(OrbitDetermination, qos.OD_TOPIC, qos.LATCHED)
-    clock_pub = node.create_publisher(Clock, qos.CLOCK_TOPIC, 10)
+    node.create_subscription(ManeuverPlan, interfaces.ACQUISITION_PLAN_TOPIC, node.plans.append, interfaces.LATCHED)
+    node.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, node.diags.append, interfaces.DIAGNOSTICS)
+    node.od_pub = node.create_publisher(OrbitDetermination, interfaces.OD_TOPIC, interfaces.LATCHED)
+    clock_pub = node.create_publisher(Clock, interfaces.CLOCK_TOPIC, 10)
     node.sim_time = None  # published at 20 Hz once set
 
     def tick():

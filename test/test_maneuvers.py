@@ -3,8 +3,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from roe_sep.core.maneuvers import control_matrix, delta_roe, dispersed_dv, dv_for_delta_roe
-from roe_sep.core.roe import roe_to_rtn
+from roe_sep.core.relmotion.maneuvers import control_matrix, delta_roe, dispersed_dv, dv_for_delta_roe
+from roe_sep.core.relmotion.roe import roe_to_rtn
 
 A, N = 6893137.0, 1.1031727426577115e-3
 dv_st = st.tuples(*[st.floats(-2, 2, allow_nan=False)] * 3).map(np.array)

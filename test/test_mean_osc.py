@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from roe_sep.core import mean_osc as mo
 from roe_sep.core.constants import J2, R_EARTH
-from roe_sep.core.dynamics import sun_synchronous_inclination
+from roe_sep.core.relmotion.dynamics import sun_synchronous_inclination
+from roe_sep.core.truth import mean_osc as mo
 
 A = R_EARTH + 515e3
 INC = float(sun_synchronous_inclination(A))
@@ -40,7 +40,7 @@ def test_round_trip_residual_is_second_order(monkeypatch):
 def test_numerical_orbit_has_constant_mean_elements():
     """J2-only truth over 6 h: the osculating a swings by +-9.4 km, the mean a by tens of m (O(J2^2)) and mean i by
     < 1e-6 rad: the first-order map removes the short-period terms."""
-    from roe_sep.core.nonlinear import Atmosphere, pair_state, propagate_pair
+    from roe_sep.core.truth.nonlinear import Atmosphere, pair_state, propagate_pair
 
     kep = np.array([A, 0.0, INC, 0.3, 0.0, 1.0])
     t = np.linspace(0, 6 * 3600, 217)

@@ -1,10 +1,10 @@
 import numpy as np
 import pytest
 
-from roe_sep.core.double_impulse import design, plan_drift_stop
-from roe_sep.core.maneuvers import delta_roe
-from roe_sep.core.monitor import MonitorLimits, assess, in_fov
-from roe_sep.core.trajectory import Burn, Chief
+from roe_sep.core.relmotion.maneuvers import delta_roe
+from roe_sep.core.relmotion.trajectory import Burn, Chief
+from roe_sep.core.safety.monitor import MonitorLimits, assess, in_fov
+from roe_sep.core.separation.double_impulse import design, plan_drift_stop
 
 D = design()
 CHIEF = Chief(a=D.a, inc=D.inc, u0=D.u1, t0=0.0)

@@ -5,8 +5,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from roe_sep.core.double_impulse import design
-from roe_sep.core.montecarlo import MonteCarloConfig, draw, sweep
+from roe_sep.core.montecarlo.sweep import MonteCarloConfig, draw, sweep
+from roe_sep.core.separation.double_impulse import design
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
 from mc_loop import sweep_per_sample  # noqa: E402

@@ -5,12 +5,12 @@ import math
 import numpy as np
 import pytest
 
-from roe_sep.core import multi_impulse as mi
-from roe_sep.core.double_impulse import SeparationConfig
-from roe_sep.core.dynamics import j2_kappa, sun_synchronous_inclination
-from roe_sep.core.maneuvers import delta_roe
-from roe_sep.core.orbit import mean_motion, semi_major_axis
-from roe_sep.core.roe import e_vector_polar, i_vector_polar
+from roe_sep.core.relmotion.dynamics import j2_kappa, sun_synchronous_inclination
+from roe_sep.core.relmotion.maneuvers import delta_roe
+from roe_sep.core.relmotion.orbit import mean_motion, semi_major_axis
+from roe_sep.core.relmotion.roe import e_vector_polar, i_vector_polar
+from roe_sep.core.separation import multi_impulse as mi
+from roe_sep.core.separation.double_impulse import SeparationConfig
 
 D = mi.design()
 A = 6378137.0 + 515e3
@@ -162,7 +162,7 @@ def test_planner_node_multi_impulse_strategy():
     from roe_sep_msgs.msg import EjectionEvent, ManeuverPlan
     from rosutil import rclpy, spin_until, start_node, stop_node, wait_exit
 
-    from roe_sep.nodes import qos
+    from roe_sep import interfaces
     from roe_sep.nodes.convert import array_to_vector, sec_to_time, time_to_sec, vector_to_array
 
     code, out = wait_exit(start_node("planner", "-p", "strategy:=triple"))
@@ -170,8 +170,8 @@ def test_planner_node_multi_impulse_strategy():
     rclpy.init()
     node = rclpy.create_node("ground_multi_test")
     plans = []
-    node.create_subscription(ManeuverPlan, qos.DRIFT_STOP_PLAN_TOPIC, plans.append, qos.LATCHED)
-    pub = node.create_publisher(EjectionEvent, qos.EJECTION_TOPIC, qos.LATCHED)
+    node.create_subscription(ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, plans.append, interfaces.LATCHED)
+    pub = node.create_publisher(EjectionEvent, interfaces.EJECTION_TOPIC, interfaces.LATCHED)
     planner = start_node("planner", "-p", "strategy:=multi_impulse")
     try:
         ev = EjectionEvent(dv_magnitude=1.53)
@@ -194,7 +194,7 @@ def test_planner_node_multi_impulse_strategy():
         # the PlanSeparation service designs the same plan (zero fields = the defaults), ejection first
         from roe_sep_msgs.srv import PlanSeparation
 
-        client = node.create_client(PlanSeparation, qos.PLAN_SERVICE)
+        client = node.create_client(PlanSeparation, interfaces.PLAN_SERVICE)
         assert client.wait_for_service(timeout_sec=20)
         future = client.call_async(PlanSeparation.Request(u1=D.u1, ejection_epoch=sec_to_time(1000.0)))
         assert spin_until(node, future.done, timeout=30)

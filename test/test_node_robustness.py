@@ -8,7 +8,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus  # noqa: E402
 from roe_sep_msgs.msg import EjectionEvent, ManeuverPlan, RelativeOrbitalElements, SafetyStatus  # noqa: E402
 from rosutil import rclpy, spin_until, start_node, stop_node, wait_exit  # noqa: I001  (skips without rclpy)
 
-from roe_sep.nodes import qos  # noqa: E402
+from roe_sep import interfaces  # noqa: E402
 from roe_sep.nodes.convert import maneuver_msg, sec_to_time  # noqa: E402
 
 
@@ -17,12 +17,12 @@ def tester():
     rclpy.init()
     node = rclpy.create_node("tester")
     node.diags, node.checks = [], []
-    node.create_subscription(DiagnosticArray, qos.DIAGNOSTICS_TOPIC, node.diags.append, 100)
-    node.create_subscription(SafetyStatus, qos.PLAN_CHECK_TOPIC, node.checks.append, qos.EXECUTED)
+    node.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, node.diags.append, 100)
+    node.create_subscription(SafetyStatus, interfaces.PLAN_CHECK_TOPIC, node.checks.append, interfaces.EXECUTED)
     node.pubs = {
-        "truth": node.create_publisher(RelativeOrbitalElements, qos.TRUTH_ROE_TOPIC, qos.STREAM),
-        "ejection": node.create_publisher(EjectionEvent, qos.EJECTION_TOPIC, qos.LATCHED),
-        "plan": node.create_publisher(ManeuverPlan, qos.DRIFT_STOP_PLAN_TOPIC, qos.LATCHED),
+        "truth": node.create_publisher(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, interfaces.STREAM),
+        "ejection": node.create_publisher(EjectionEvent, interfaces.EJECTION_TOPIC, interfaces.LATCHED),
+        "plan": node.create_publisher(ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.LATCHED),
     }
     yield node
     node.destroy_node()
@@ -61,7 +61,7 @@ def test_nan_inputs_are_survived(tester):
         # (after the truth: an ejection event on the topic, even a bad one, tells the ejector not to eject again)
         tester.pubs["ejection"].publish(bad_event)
         tester.pubs["plan"].publish(bad_plan)
-        expected = [("sim", "ejection event rejected"), ("sim", f"plan on {qos.DRIFT_STOP_PLAN_TOPIC} rejected"),
+        expected = [("sim", "ejection event rejected"), ("sim", f"plan on {interfaces.DRIFT_STOP_PLAN_TOPIC} rejected"),
                     ("safety_monitor", "ejection event rejected")]
         spin_until(tester, lambda: all(errors(tester, *e) for e in expected), timeout=30)
         seen = [(s.name, s.message) for d in tester.diags for s in d.status if s.level == DiagnosticStatus.ERROR]

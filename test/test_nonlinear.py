@@ -3,13 +3,13 @@
 import numpy as np
 import pytest
 
-from roe_sep.core import nonlinear as nl
 from roe_sep.core.constants import R_EARTH
-from roe_sep.core.dynamics import drag_da_dot, sun_synchronous_inclination
-from roe_sep.core.maneuvers import delta_roe
-from roe_sep.core.mean_osc import mean_to_cartesian
-from roe_sep.core.orbit import mean_motion
-from roe_sep.core.roe import roe_to_kepler, roe_to_rtn
+from roe_sep.core.relmotion.dynamics import drag_da_dot, sun_synchronous_inclination
+from roe_sep.core.relmotion.maneuvers import delta_roe
+from roe_sep.core.relmotion.orbit import mean_motion
+from roe_sep.core.relmotion.roe import roe_to_kepler, roe_to_rtn
+from roe_sep.core.truth import nonlinear as nl
+from roe_sep.core.truth.mean_osc import mean_to_cartesian
 
 A = R_EARTH + 515e3
 INC = float(sun_synchronous_inclination(A))
@@ -80,8 +80,8 @@ def test_relative_rtn_close_to_linear_map():
 def test_differential_drag_rate_is_derived_factor_of_model():
     """Truth a*da rate = model rate times the orbit average of rho(h)/rho_ref * |v_r| v_r.T / v^2 (spherical
     altitude ~4 km above a - R_E lowers rho; the co-rotating atmosphere raises |v_r| for a retrograde orbit)."""
-    from roe_sep.core.orbit import circular_speed
-    from roe_sep.core.radar import rtn_matrix
+    from roe_sep.core.od.radar import rtn_matrix
+    from roe_sep.core.relmotion.orbit import circular_speed
 
     t = np.arange(0.0, 43200.0 + 1, 20.0)
     s = nl.propagate_pair(nl.pair_state(CHIEF, CHIEF), 0.0, t, (), 0.0079, 0.0230, ATM, zonals=2)
@@ -100,7 +100,7 @@ def test_differential_drag_rate_is_derived_factor_of_model():
 def test_nonlinear_truth_drop_in_for_truth_model():
     """The simulator's usage: ticks of 40 s, distances then truth samples, the ejection and a carrier burn; the
     result matches the secular TruthModel within the model-error bounds of test_validation (one orbit here)."""
-    from roe_sep.core.truth import TruthModel
+    from roe_sep.core.truth.secular import TruthModel
 
     chief0 = np.array([A, 0.0, INC, 0.5, 0.0, np.radians(50.0)])
     da_dot = float(drag_da_dot(0.0230 - 0.0079, 1e-12, A))

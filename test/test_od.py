@@ -7,10 +7,19 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from roe_sep.core.dynamics import drag_da_dot, propagate, propagate_chief, sun_synchronous_inclination
-from roe_sep.core.od import RadarBatch, batch_least_squares, initial_guess, jacobian, nees, predict
-from roe_sep.core.orbit import semi_major_axis
-from roe_sep.core.radar import TIRA, add_noise, gmst, julian_date, observe, raan_from_ltan, relative_distance, visible
+from roe_sep.core.od.batch import RadarBatch, batch_least_squares, initial_guess, jacobian, nees, predict
+from roe_sep.core.od.radar import (
+    TIRA,
+    add_noise,
+    gmst,
+    julian_date,
+    observe,
+    raan_from_ltan,
+    relative_distance,
+    visible,
+)
+from roe_sep.core.relmotion.dynamics import drag_da_dot, propagate, propagate_chief, sun_synchronous_inclination
+from roe_sep.core.relmotion.orbit import semi_major_axis
 
 A = float(semi_major_axis(515e3))
 INC = float(sun_synchronous_inclination(A))

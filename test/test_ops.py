@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from roe_sep.cli import main
-from roe_sep.core import ops
-from roe_sep.core.radar import raan_from_sun
+from roe_sep.core.od.radar import raan_from_sun
+from roe_sep.core.ops import plan as ops
 
 CFG = ops.load_ops_config()
 REP = ops.plan(CFG, datetime.date(2016, 7, 1), days=2.0)

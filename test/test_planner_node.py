@@ -8,8 +8,8 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus  # noqa: E402
 from roe_sep_msgs.msg import EjectionEvent, ManeuverPlan  # noqa: E402
 from rosutil import rclpy, spin_until, start_node, stop_node, wait_exit  # noqa: I001  (skips without rclpy)
 
-from roe_sep.core.double_impulse import design  # noqa: E402
-from roe_sep.nodes import qos  # noqa: E402
+from roe_sep import interfaces  # noqa: E402
+from roe_sep.core.separation.double_impulse import design  # noqa: E402
 from roe_sep.nodes.convert import array_to_vector, sec_to_time, time_to_sec  # noqa: E402
 
 D = design()
@@ -35,9 +35,9 @@ def ground():
     rclpy.init()
     node = rclpy.create_node("ground_test")
     node.plans, node.diags = [], []
-    node.create_subscription(ManeuverPlan, qos.DRIFT_STOP_PLAN_TOPIC, node.plans.append, qos.LATCHED)
-    node.create_subscription(DiagnosticArray, qos.DIAGNOSTICS_TOPIC, node.diags.append, qos.DIAGNOSTICS)
-    node.ejection_pub = node.create_publisher(EjectionEvent, qos.EJECTION_TOPIC, qos.LATCHED)
+    node.create_subscription(ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, node.plans.append, interfaces.LATCHED)
+    node.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, node.diags.append, interfaces.DIAGNOSTICS)
+    node.ejection_pub = node.create_publisher(EjectionEvent, interfaces.EJECTION_TOPIC, interfaces.LATCHED)
     yield node
     node.destroy_node()
     rclpy.try_shutdown()
@@ -107,7 +107,7 @@ def test_plan_separation_service(ground):
 
     planner = start_node("planner", "-p", "p_mode:=fixed", "-p", "p_reduction:=0.05")
     try:
-        client = ground.create_client(PlanSeparation, qos.PLAN_SERVICE)
+        client = ground.create_client(PlanSeparation, interfaces.PLAN_SERVICE)
         assert client.wait_for_service(timeout_sec=20)
 
         def call(**fields):

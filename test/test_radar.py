@@ -7,9 +7,7 @@ import numpy as np
 import pytest
 
 from roe_sep.core.constants import MU_EARTH
-from roe_sep.core.dynamics import propagate_chief, sun_synchronous_inclination
-from roe_sep.core.orbit import semi_major_axis
-from roe_sep.core.radar import (
+from roe_sep.core.od.radar import (
     TIRA,
     WGS84_A,
     WGS84_E2,
@@ -33,7 +31,9 @@ from roe_sep.core.radar import (
     sun_right_ascension,
     visible,
 )
-from roe_sep.core.roe import roe_to_rtn
+from roe_sep.core.relmotion.dynamics import propagate_chief, sun_synchronous_inclination
+from roe_sep.core.relmotion.orbit import semi_major_axis
+from roe_sep.core.relmotion.roe import roe_to_rtn
 
 A = float(semi_major_axis(515e3))
 INC = float(sun_synchronous_inclination(A))

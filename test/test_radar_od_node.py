@@ -20,12 +20,12 @@ from roe_sep_msgs.msg import (  # noqa: E402
 from rosgraph_msgs.msg import Clock  # noqa: E402
 from rosutil import rclpy, spin_until, start_node, stop_node, wait_exit  # noqa: I001  (skips without rclpy)
 
-from roe_sep.core.dynamics import propagate_chief, sun_synchronous_inclination  # noqa: E402
-from roe_sep.core.orbit import semi_major_axis  # noqa: E402
-from roe_sep.core.radar import TIRA, gmst, julian_date, observe, raan_from_ltan, relative_distance  # noqa: E402
-from roe_sep.core.roe import wrap_angle  # noqa: E402
-from roe_sep.core.trajectory import Burn, Chief, trajectory  # noqa: E402
-from roe_sep.nodes import qos  # noqa: E402
+from roe_sep import interfaces  # noqa: E402
+from roe_sep.core.od.radar import TIRA, gmst, julian_date, observe, raan_from_ltan, relative_distance  # noqa: E402
+from roe_sep.core.relmotion.dynamics import propagate_chief, sun_synchronous_inclination  # noqa: E402
+from roe_sep.core.relmotion.orbit import semi_major_axis  # noqa: E402
+from roe_sep.core.relmotion.roe import wrap_angle  # noqa: E402
+from roe_sep.core.relmotion.trajectory import Burn, Chief, trajectory  # noqa: E402
 from roe_sep.nodes.convert import array_to_elements, maneuver_msg, roe_to_msg, sec_to_time, time_to_sec  # noqa
 
 EPOCH = "2016-07-01T00:00:00"
@@ -61,12 +61,12 @@ def sim():
     rclpy.init()
     node = rclpy.create_node("sim_test")
     node.meas, node.ods, node.diags = [], [], []
-    node.create_subscription(RadarMeasurement, qos.RADAR_TOPIC, node.meas.append, qos.STREAM)
-    node.create_subscription(OrbitDetermination, qos.OD_TOPIC, node.ods.append, qos.LATCHED)
-    node.create_subscription(DiagnosticArray, qos.DIAGNOSTICS_TOPIC, node.diags.append, qos.DIAGNOSTICS)
-    node.truth_pub = node.create_publisher(RelativeOrbitalElements, qos.TRUTH_ROE_TOPIC, qos.STREAM)
-    node.clock_pub = node.create_publisher(Clock, qos.CLOCK_TOPIC, qos.STREAM)
-    node.burn_pub = node.create_publisher(ImpulsiveManeuver, qos.EXECUTED_TOPIC, qos.EXECUTED)
+    node.create_subscription(RadarMeasurement, interfaces.RADAR_TOPIC, node.meas.append, interfaces.STREAM)
+    node.create_subscription(OrbitDetermination, interfaces.OD_TOPIC, node.ods.append, interfaces.LATCHED)
+    node.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, node.diags.append, interfaces.DIAGNOSTICS)
+    node.truth_pub = node.create_publisher(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, interfaces.STREAM)
+    node.clock_pub = node.create_publisher(Clock, interfaces.CLOCK_TOPIC, interfaces.STREAM)
+    node.burn_pub = node.create_publisher(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, interfaces.EXECUTED)
     yield node
     node.destroy_node()
     rclpy.try_shutdown()
@@ -79,7 +79,8 @@ def statuses(node, level):
 def run_sim(node, proc):
     """Publish truth + /clock from 0 to SIM_END; spin between steps so that nothing queues up."""
     assert spin_until(node, lambda: node.truth_pub.get_subscription_count() >= 1
-                      and node.clock_pub.get_subscription_count() >= 1 and node.count_publishers(qos.OD_TOPIC) >= 1,
+                      and node.clock_pub.get_subscription_count() >= 1
+                      and node.count_publishers(interfaces.OD_TOPIC) >= 1,
                       timeout=30), "radar_od did not come up"
     time.sleep(0.5)  # let the reliable endpoints finish matching
     ticks = np.arange(0.0, SIM_END + TICK / 2, TICK)

@@ -4,8 +4,15 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from oracle import rtn_relative_position
 
-from roe_sep.core.orbit import mean_motion, semi_major_axis
-from roe_sep.core.roe import e_vector_polar, i_vector_polar, kepler_to_roe, roe_to_kepler, roe_to_rtn, rtn_to_roe
+from roe_sep.core.relmotion.orbit import mean_motion, semi_major_axis
+from roe_sep.core.relmotion.roe import (
+    e_vector_polar,
+    i_vector_polar,
+    kepler_to_roe,
+    roe_to_kepler,
+    roe_to_rtn,
+    rtn_to_roe,
+)
 
 small = st.floats(-2e-3, 2e-3, allow_nan=False)
 angle = st.floats(-np.pi, np.pi, allow_nan=False)

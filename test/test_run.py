@@ -11,8 +11,9 @@ from roe_sep_msgs.msg import ManeuverPlan, RelativeOrbitalElements  # noqa: E402
 from rosutil import ROOT, rclpy, spin_until  # noqa: I001  (skips without rclpy)
 from test_bag import bag_replay_process, mcap_file, norm, read_mcap_ros2, read_rosbags  # noqa: E402
 
-from roe_sep.cli import main, print_run  # noqa: E402
-from roe_sep.nodes import qos  # noqa: E402
+from roe_sep import interfaces  # noqa: E402
+from roe_sep.cli import main  # noqa: E402
+from roe_sep.cli.run import print_run  # noqa: E402
 from roe_sep.run import run  # noqa: E402
 
 CHI2_6_999 = 22.458  # 99.9 % quantile of chi-square with 6 degrees of freedom
@@ -51,7 +52,7 @@ def test_default_run_is_safe_and_reaches_the_initial_conditions(scenario):
 
 def test_recorded_acquisition_plans_respect_burn_limits_and_quantization(scenario):
     out, _ = scenario
-    plans = [m for m, _, _ in read_mcap_ros2(mcap_file(out / "bag"))[qos.ACQUISITION_PLAN_TOPIC]]
+    plans = [m for m, _, _ in read_mcap_ros2(mcap_file(out / "bag"))[interfaces.ACQUISITION_PLAN_TOPIC]]
     burns = [b for p in plans for b in p.maneuvers]
     assert burns
     for b in burns:
@@ -67,28 +68,28 @@ def test_run_bag_reads_the_same_with_two_independent_readers(scenario):
     first = read_mcap_ros2(mcap_file(bag))
     second, conns = read_rosbags(bag)
     assert {t: len(v) for t, v in first.items()} == {t: len(v) for t, v in second.items()}
-    truth_a = [norm(m) for m, _, _ in first[qos.TRUTH_ROE_TOPIC]]
-    truth_b = [norm(m) for m in second[qos.TRUTH_ROE_TOPIC]]
+    truth_a = [norm(m) for m, _, _ in first[interfaces.TRUTH_ROE_TOPIC]]
+    truth_b = [norm(m) for m in second[interfaces.TRUTH_ROE_TOPIC]]
     assert truth_a == truth_b and len(truth_a) > 4000
-    assert conns[qos.DRIFT_STOP_PLAN_TOPIC].ext.offered_qos_profiles[0].durability.name == "TRANSIENT_LOCAL"
+    assert conns[interfaces.DRIFT_STOP_PLAN_TOPIC].ext.offered_qos_profiles[0].durability.name == "TRANSIENT_LOCAL"
     assert main(["bag", "info", str(bag)]) == 0
 
 
 def test_replay_of_the_run(scenario):
     out, _ = scenario
     bag = out / "bag"
-    recorded = [m for m, _, _ in read_mcap_ros2(mcap_file(bag))[qos.TRUTH_ROE_TOPIC]]
+    recorded = [m for m, _, _ in read_mcap_ros2(mcap_file(bag))[interfaces.TRUTH_ROE_TOPIC]]
     rclpy.init()
     node = rclpy.create_node("replay_check")
     got = []
-    node.create_subscription(RelativeOrbitalElements, qos.TRUTH_ROE_TOPIC, got.append, 10000)
+    node.create_subscription(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, got.append, 10000)
     proc = bag_replay_process(str(bag), "--rate", "40000", "--delay", "10", "--linger", "3", "--topics",
-                              qos.TRUTH_ROE_TOPIC, qos.DRIFT_STOP_PLAN_TOPIC)
+                              interfaces.TRUTH_ROE_TOPIC, interfaces.DRIFT_STOP_PLAN_TOPIC)
     try:
         assert spin_until(node, lambda: len(got) >= len(recorded), timeout=60), (len(got), len(recorded))
         assert [norm(m) for m in got] == [norm(m) for m in recorded]
         plans = []
-        node.create_subscription(ManeuverPlan, qos.DRIFT_STOP_PLAN_TOPIC, plans.append, qos.LATCHED)
+        node.create_subscription(ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, plans.append, interfaces.LATCHED)
         assert spin_until(node, lambda: len(plans) == 1, timeout=10)
         assert math.isclose(plans[0].p_reduction, 0.06, abs_tol=0.03)
     finally:

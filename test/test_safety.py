@@ -4,11 +4,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import minimize_scalar
 
-from roe_sep.core.dynamics import arg_latitude_rate, propagate, sun_synchronous_inclination
-from roe_sep.core.maneuvers import delta_roe
-from roe_sep.core.orbit import mean_motion, semi_major_axis
-from roe_sep.core.roe import roe_to_rtn
-from roe_sep.core.safety import approaching, fov_limit, min_rn_distance, nearest_crossing
+from roe_sep.core.relmotion.dynamics import arg_latitude_rate, propagate, sun_synchronous_inclination
+from roe_sep.core.relmotion.maneuvers import delta_roe
+from roe_sep.core.relmotion.orbit import mean_motion, semi_major_axis
+from roe_sep.core.relmotion.roe import roe_to_rtn
+from roe_sep.core.safety.metrics import approaching, fov_limit, min_rn_distance, nearest_crossing
 
 A = float(semi_major_axis(515e3))
 N = float(mean_motion(A))

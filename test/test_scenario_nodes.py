@@ -7,8 +7,8 @@ from roe_sep_msgs.msg import ImpulsiveManeuver, RelativeOrbitalElements, SafetyS
 from rosgraph_msgs.msg import Clock  # noqa: E402
 from rosutil import rclpy, spin_until, start_node, stop_node  # noqa: I001  (skips without rclpy)
 
-from roe_sep.core.double_impulse import design  # noqa: E402
-from roe_sep.nodes import qos  # noqa: E402
+from roe_sep import interfaces  # noqa: E402
+from roe_sep.core.separation.double_impulse import design  # noqa: E402
 from roe_sep.nodes.convert import time_to_sec  # noqa: E402
 
 D = design()
@@ -20,11 +20,13 @@ def observer():
     rclpy.init()
     node = rclpy.create_node("observer")
     node.got = {"executed": [], "checks": [], "truth": [], "status": [], "clock": []}
-    node.create_subscription(ImpulsiveManeuver, qos.EXECUTED_TOPIC, node.got["executed"].append, qos.EXECUTED)
-    node.create_subscription(SafetyStatus, qos.PLAN_CHECK_TOPIC, node.got["checks"].append, qos.EXECUTED)
-    node.create_subscription(SafetyStatus, qos.SAFETY_TOPIC, node.got["status"].append, qos.STREAM)
-    node.create_subscription(RelativeOrbitalElements, qos.TRUTH_ROE_TOPIC, node.got["truth"].append, qos.STREAM)
-    node.create_subscription(Clock, qos.CLOCK_TOPIC, node.got["clock"].append, 10)
+    node.create_subscription(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, node.got["executed"].append,
+                             interfaces.EXECUTED)
+    node.create_subscription(SafetyStatus, interfaces.PLAN_CHECK_TOPIC, node.got["checks"].append, interfaces.EXECUTED)
+    node.create_subscription(SafetyStatus, interfaces.SAFETY_TOPIC, node.got["status"].append, interfaces.STREAM)
+    node.create_subscription(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, node.got["truth"].append,
+                             interfaces.STREAM)
+    node.create_subscription(Clock, interfaces.CLOCK_TOPIC, node.got["clock"].append, 10)
     yield node
     node.destroy_node()
     rclpy.try_shutdown()
@@ -50,7 +52,7 @@ def test_ejection_drift_stop_loop(observer, dynamics):
         # executed with dispersion: close to, not equal to, the commanded burns
         assert math.hypot(ejection.dv_rtn.x, ejection.dv_rtn.y, ejection.dv_rtn.z) == pytest.approx(1.41, rel=0.35)
         assert [c.safe for c in g["checks"]] == [True]
-        assert g["checks"][0].source == f"plan:{qos.DRIFT_STOP_PLAN_TOPIC}"
+        assert g["checks"][0].source == f"plan:{interfaces.DRIFT_STOP_PLAN_TOPIC}"
         after = [t for t in g["truth"] if time_to_sec(t.header.stamp) > time_to_sec(stop.epoch)]
         assert after and all(t.a_da * t.a_dl < 0 for t in after)  # receding after the drift-stop
         assert all(s.safe for s in g["status"] if s.source == "truth")

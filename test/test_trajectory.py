@@ -1,9 +1,9 @@
 import numpy as np
 import pytest
 
-from roe_sep.core.double_impulse import design, plan_drift_stop
-from roe_sep.core.dynamics import arg_latitude_rate, propagate, propagate_chief, raan_rate
-from roe_sep.core.trajectory import Burn, Chief, state_at, trajectory
+from roe_sep.core.relmotion.dynamics import arg_latitude_rate, propagate, propagate_chief, raan_rate
+from roe_sep.core.relmotion.trajectory import Burn, Chief, state_at, trajectory
+from roe_sep.core.separation.double_impulse import design, plan_drift_stop
 
 D = design()
 CHIEF = Chief(a=D.a, inc=D.inc, u0=D.u1, t0=0.0)

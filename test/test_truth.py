@@ -1,10 +1,10 @@
 import numpy as np
 import pytest
 
-from roe_sep.core.double_impulse import design
-from roe_sep.core.dynamics import arg_latitude_rate, drag_da_dot
-from roe_sep.core.maneuvers import delta_roe
-from roe_sep.core.truth import ExecutionErrors, TruthModel, chief_from_u, time_to_arg_latitude
+from roe_sep.core.relmotion.dynamics import arg_latitude_rate, drag_da_dot
+from roe_sep.core.relmotion.maneuvers import delta_roe
+from roe_sep.core.separation.double_impulse import design
+from roe_sep.core.truth.secular import ExecutionErrors, TruthModel, chief_from_u, time_to_arg_latitude
 
 D = design()
 

@@ -16,11 +16,11 @@ import math
 import numpy as np
 import pytest
 
-from roe_sep.core import multi_impulse
-from roe_sep.core.double_impulse import design
-from roe_sep.core.dynamics import drag_da_dot
-from roe_sep.core.montecarlo import MonteCarloConfig
-from roe_sep.core.validation import double_impulse_case, model_errors, multi_impulse_case, nonlinear_sweep
+from roe_sep.core.montecarlo.sweep import MonteCarloConfig
+from roe_sep.core.relmotion.dynamics import drag_da_dot
+from roe_sep.core.separation import multi_impulse
+from roe_sep.core.separation.double_impulse import design
+from roe_sep.core.truth.validation import double_impulse_case, model_errors, multi_impulse_case, nonlinear_sweep
 
 G_DRAG = 0.952  # truth / model differential drag (derived above, measured in test_nonlinear)
 DAY = 86400.0
@@ -72,7 +72,7 @@ def test_nonlinear_monte_carlo_agrees_with_linear():
 
 
 def _parser():
-    from roe_sep import cli_nonlinear
+    from roe_sep.cli import nonlinear as cli_nonlinear
 
     ap = argparse.ArgumentParser(prog="roe-sep")
     cli_nonlinear.register(ap.add_subparsers(dest="command", required=True))
@@ -99,7 +99,7 @@ def test_propagate_nonlinear_agrees_with_j2drag(capsys):
 
 
 def test_cli_rejects_bad_input(capsys):
-    from roe_sep import cli_nonlinear
+    from roe_sep.cli import nonlinear as cli_nonlinear
     from roe_sep.core.config import load_scenario
 
     with pytest.raises(SystemExit) as exc:

@@ -2,14 +2,16 @@
 
 Modules, one job each: :mod:`.definitions` (schema text and type hash of a message type), :mod:`.qos` (QoS
 profiles <-> rosbag2 dictionaries), :mod:`.metadata` (``metadata.yaml``), :mod:`.writer` (the MCAP bag writer),
-:mod:`.reader` (topics, messages, :func:`info`), :mod:`.recover` (rebuild a bag from an unfinished file) and
+:mod:`.scan` (record scan of an unfinished file), :mod:`.reader` (topics, messages,
+:func:`info`), :mod:`.recover` (rebuild a bag from an unfinished file) and
 :mod:`.replay` (``roe-sep replay``, the only one that needs rclpy). The recorder node is
 :mod:`roe_sep.nodes.recorder`.
 """
 
 
-class BagError(Exception):
-    """A bag cannot be read or written; the message says which path and why."""
+from .errors import BagError
+
+__all__ = ["BagError", "info"]
 
 
 def info(path) -> dict:

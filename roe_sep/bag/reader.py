@@ -10,7 +10,9 @@ from pathlib import Path
 
 from mcap.reader import make_reader
 
-from . import BagError, metadata
+from . import metadata
+from .errors import BagError
+from .scan import Scan
 
 Message = collections.namedtuple("Message", "topic type data log_time publish_time sequence")
 
@@ -94,8 +96,6 @@ def info(path) -> dict:
         count, start, end = stats.message_count, stats.message_start_time, stats.message_end_time
         result.update(complete=True, profile=header.profile, library=header.library)
     except BagError:
-        from .recover import Scan
-
         scan = Scan(file)
         chans_by_id, schemas, per = {}, {}, collections.Counter()
         start = end = None

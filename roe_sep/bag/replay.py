@@ -15,16 +15,17 @@ import argparse
 import sys
 import time
 
-from . import BagError, reader
+from . import reader
+from .errors import BagError
 from .qos import to_rclpy
 
 CLOCK_TOPIC = "/clock"
 
 
 def _project_depths() -> dict:
-    """Depths of the transient-local topics of :mod:`roe_sep.nodes.qos` (the table in the README)."""
+    """Depths of the transient-local topics of :mod:`roe_sep.interfaces` (the table in the README)."""
     try:
-        from ..nodes import qos as q
+        from .. import interfaces as q
     except Exception:  # noqa: BLE001  (rclpy missing: nothing to play anyway)
         return {}
     depths = {}

@@ -13,8 +13,8 @@ import types
 import typing
 from dataclasses import dataclass, field
 
-from .double_impulse import SeparationConfig
-from .montecarlo import DEFAULT_P_VALUES, MonteCarloConfig
+from .montecarlo.sweep import DEFAULT_P_VALUES, MonteCarloConfig
+from .separation.double_impulse import SeparationConfig
 
 
 class ConfigError(ValueError):

@@ -5,10 +5,10 @@ Services:
 * ``/analysis/deployment`` (roe_sep_msgs/srv/DeploymentAssessment): one in-plane deployment of a CubeSat from its
   mother craft, distance vs time over N days (numerical J2-J4 + drag, or the secular ROE model), first-orbit
   closest approach.
-  Physics: :mod:`roe_sep.core.deployment`.
+  Physics: :mod:`roe_sep.core.deployment.sweep`.
 * ``/analysis/cluster_program`` (roe_sep_msgs/srv/ClusterProgram): delays of a nanosatellite group separated from a
   tumbling platform, minimax over the feasible regions, optional statistical check. Physics:
-  :mod:`roe_sep.core.cluster`.
+  :mod:`roe_sep.core.deployment.cluster`.
 
 Parameters:
 
@@ -26,9 +26,9 @@ import math
 from rclpy.node import Node
 from roe_sep_msgs.srv import ClusterProgram, DeploymentAssessment
 
-from ..core.cluster import Nanosatellite, draw, load_cluster_config, select_program, simulate_program
 from ..core.config import ConfigError
-from ..core.deployment import MODELS, USSA76_DENSITY_400KM, DeploymentConfig, sweep
+from ..core.deployment.cluster import Nanosatellite, draw, load_cluster_config, select_program, simulate_program
+from ..core.deployment.sweep import MODELS, USSA76_DENSITY_400KM, DeploymentConfig, sweep
 from .params import ParameterError, declare, finite, require
 
 DEPLOYMENT_SERVICE = "/analysis/deployment"

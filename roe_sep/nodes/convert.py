@@ -7,7 +7,8 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Vector3
 from roe_sep_msgs.msg import ImpulsiveManeuver, OrbitalElements, RelativeOrbitalElements
 
-from ..core.roe import wrap_angle
+from .. import interfaces
+from ..core.relmotion.roe import wrap_angle
 
 ROE_FIELDS = ("a_da", "a_dl", "a_dex", "a_dey", "a_dix", "a_diy")
 KEPLER_FIELDS = ("semi_major_axis", "eccentricity", "inclination", "raan", "arg_perigee", "mean_arg_latitude")
@@ -49,7 +50,7 @@ def array_to_elements(kep) -> OrbitalElements:
                            arg_perigee=float(wrap_angle(argp)), mean_arg_latitude=float(wrap_angle(argp + m)))
 
 
-def roe_to_msg(roe, chief: OrbitalElements, stamp: Time, frame_id="carrier_rtn", covariance=None):
+def roe_to_msg(roe, chief: OrbitalElements, stamp: Time, frame_id=interfaces.CARRIER_RTN_FRAME, covariance=None):
     """Dimensionless ROE -> message in meters (a*delta alpha, a = the chief's semi-major axis)."""
     a = chief.semi_major_axis
     msg = RelativeOrbitalElements(chief=chief)
@@ -84,7 +85,7 @@ def relative_dv(m: ImpulsiveManeuver) -> np.ndarray:
 
 
 def plan_burns(maneuvers):
-    """ImpulsiveManeuver messages -> :class:`roe_sep.core.trajectory.Burn` list (relative impulses)."""
-    from ..core.trajectory import Burn
+    """ImpulsiveManeuver messages -> :class:`roe_sep.core.relmotion.trajectory.Burn` list (relative impulses)."""
+    from ..core.relmotion.trajectory import Burn
 
     return [Burn(time_to_sec(m.epoch), tuple(relative_dv(m))) for m in maneuvers]

@@ -1,6 +1,7 @@
 """ejector: the spring (SPL) ejection event.
 
-Commands the ejection of the scenario's design (:func:`roe_sep.core.double_impulse.design`: fixed |dv|, direction
+Commands the ejection of the scenario's design (:func:`roe_sep.core.separation.double_impulse.design`: fixed |dv|,
+direction
 from the aimed e/i vectors, seed 002 Eqs. 9-12) at the configured epoch, or at the first time the carrier's mean
 argument of latitude reaches u1 after ``not_before``, read from the carrier state in the truth stream (on board the
 carrier knows its own orbit from GPS). Publishes ``/separation/ejection`` (roe_sep_msgs/EjectionEvent, latched)
@@ -9,7 +10,7 @@ a little ahead of the epoch; the simulator applies it at the epoch with the mech
 Parameters: ``scenario_file`` ('' = embedded default), ``ejection_epoch`` (s, sim time; negative: at u1),
 ``not_before`` (s), ``lead_time`` (s, how early the time-tagged event may be published, default 1800; it must
 exceed the spacing of the truth samples), ``strategy`` (``double_impulse`` default, or ``multi_impulse``: the SPL
-ejection of :func:`roe_sep.core.multi_impulse.design`, 1.53 m/s at u1 = 90 deg, seed 001 Sec. 3).
+ejection of :func:`roe_sep.core.separation.multi_impulse.design`, 1.53 m/s at u1 = 90 deg, seed 001 Sec. 3).
 """
 
 import math
@@ -18,11 +19,11 @@ from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.node import Node
 from roe_sep_msgs.msg import EjectionEvent, RelativeOrbitalElements
 
+from .. import interfaces
 from ..core.config import ConfigError, load_scenario
-from ..core.double_impulse import InfeasibleDesignError, design
-from ..core.dynamics import propagate_chief
-from ..core.truth import time_to_arg_latitude
-from . import qos
+from ..core.relmotion.dynamics import propagate_chief
+from ..core.separation.double_impulse import InfeasibleDesignError, design
+from ..core.truth.secular import time_to_arg_latitude
 from .convert import array_to_elements, elements_to_array, maneuver_msg, sec_to_time, time_to_sec
 from .diagnostics import ERROR, OK, publish_status
 from .params import ParameterError, declare, finite, require
@@ -44,7 +45,7 @@ class EjectorNode(Node):
         try:
             scenario = load_scenario(scenario_file or None)
             if strategy == "multi_impulse":
-                from ..core import multi_impulse
+                from ..core.separation import multi_impulse
 
                 self.design = multi_impulse.design(scenario.separation, mc=scenario.monte_carlo)
             else:
@@ -52,11 +53,11 @@ class EjectorNode(Node):
         except (ConfigError, InfeasibleDesignError) as exc:
             raise ParameterError(f"parameter 'scenario_file': {exc}") from exc
         self.sent = False
-        self.pub = self.create_publisher(EjectionEvent, qos.EJECTION_TOPIC, qos.LATCHED)
-        self.diag_pub = self.create_publisher(DiagnosticArray, qos.DIAGNOSTICS_TOPIC, qos.DIAGNOSTICS)
-        self.create_subscription(RelativeOrbitalElements, qos.TRUTH_ROE_TOPIC, self.on_state, qos.STREAM)
+        self.pub = self.create_publisher(EjectionEvent, interfaces.EJECTION_TOPIC, interfaces.LATCHED)
+        self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
+        self.create_subscription(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, self.on_state, interfaces.STREAM)
         # a restarted ejector finds its own latched event and does not eject twice
-        self.create_subscription(EjectionEvent, qos.EJECTION_TOPIC, self.on_existing_event, qos.LATCHED)
+        self.create_subscription(EjectionEvent, interfaces.EJECTION_TOPIC, self.on_existing_event, interfaces.LATCHED)
         publish_status(self, self.diag_pub, OK, "waiting for the ejection epoch")
 
     def on_existing_event(self, _event: EjectionEvent):
@@ -90,7 +91,7 @@ class EjectorNode(Node):
         d = self.design
         ev = EjectionEvent(dv_magnitude=float(d.config.spl_dv), chief=chief)
         ev.header.stamp = sec_to_time(t_ej)
-        ev.header.frame_id = "carrier_rtn"
+        ev.header.frame_id = interfaces.CARRIER_RTN_FRAME
         ev.ejection = maneuver_msg(t_ej, chief.mean_arg_latitude, d.dv1_rtn, "picosatellite", "ejection")
         self.pub.publish(ev)
         self.sent = True

@@ -3,7 +3,7 @@
 Subscribes ``/od/estimate`` (roe_sep_msgs/OrbitDetermination, latched) and publishes the minimum-delta-v carrier
 plan on ``/acquisition/plan`` (roe_sep_msgs/ManeuverPlan, RELIABLE + TRANSIENT_LOCAL, depth 1; strategy
 ``ic_acquisition``, one ``carrier``/``ic_acquisition`` maneuver per burn epoch, ``aimed`` = the predicted ROE at the
-IC epoch t_F with the chief's elements there) and ``/diagnostics``. Physics: :func:`roe_sep.core.acquisition.
+IC epoch t_F with the chief's elements there) and ``/diagnostics``. Physics: :func:`roe_sep.core.acquisition.planner.
 plan_acquisition` (linear program + quantized re-solve, verified with the shared trajectory). Run it with
 ``use_sim_time:=true``: "now" is the simulator's clock.
 
@@ -37,17 +37,17 @@ from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.node import Node
 from roe_sep_msgs.msg import ImpulsiveManeuver, ManeuverPlan, OrbitDetermination
 
-from ..core.acquisition import (
+from .. import interfaces
+from ..core.acquisition.planner import (
     AcquisitionConfig,
     InvalidAcquisitionConfig,
     check_inputs,
     plan_acquisition,
     validate_config,
 )
-from ..core.dynamics import propagate_chief
-from ..core.roe import wrap_angle
-from ..core.trajectory import Chief, state_at
-from . import qos
+from ..core.relmotion.dynamics import propagate_chief
+from ..core.relmotion.roe import wrap_angle
+from ..core.relmotion.trajectory import Chief, state_at
 from .convert import (
     array_to_elements,
     elements_to_array,
@@ -112,15 +112,16 @@ class IcPlannerNode(Node):
         except InvalidAcquisitionConfig as exc:
             raise ParameterError(f"parameter '{exc.name}' must be {exc.must}, got {exc.value!r}") from exc
 
-        self.plan_pub = self.create_publisher(ManeuverPlan, qos.ACQUISITION_PLAN_TOPIC, qos.LATCHED)
-        self.diag_pub = self.create_publisher(DiagnosticArray, qos.DIAGNOSTICS_TOPIC, qos.DIAGNOSTICS)
-        self.create_subscription(OrbitDetermination, qos.OD_TOPIC, self.on_estimate, qos.LATCHED)
-        self.create_subscription(ImpulsiveManeuver, qos.EXECUTED_TOPIC, self.on_executed, qos.EXECUTED)
+        self.plan_pub = self.create_publisher(ManeuverPlan, interfaces.ACQUISITION_PLAN_TOPIC, interfaces.LATCHED)
+        self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
+        self.create_subscription(OrbitDetermination, interfaces.OD_TOPIC, self.on_estimate, interfaces.LATCHED)
+        self.create_subscription(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, self.on_executed, interfaces.EXECUTED)
         # the acquisition starts once the separation plan (drift-stop, or the multi-impulse burns) is flown
-        self.create_subscription(ManeuverPlan, qos.DRIFT_STOP_PLAN_TOPIC, self.on_separation_plan, qos.LATCHED)
+        self.create_subscription(ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, self.on_separation_plan,
+                                 interfaces.LATCHED)
         self.separation_end = -math.inf  # s, epoch of the separation plan's last burn
         # a restarted ic_planner keeps the IC epoch of the acquisition in progress: its own latched plan
-        self.create_subscription(ManeuverPlan, qos.ACQUISITION_PLAN_TOPIC, self.on_own_plan, qos.LATCHED)
+        self.create_subscription(ManeuverPlan, interfaces.ACQUISITION_PLAN_TOPIC, self.on_own_plan, interfaces.LATCHED)
         self.executed = []  # carrier burns flown so far (relative impulses), from the simulator/executor
         self.t_final = None  # s, IC epoch of the acquisition in progress (fixed by its first plan)
         self.last_key = None  # (solution stamp, estimate epoch) of the newest OD seen
@@ -229,7 +230,7 @@ class IcPlannerNode(Node):
 
         out = ManeuverPlan(strategy="ic_acquisition", p_reduction=0.0)
         out.header.stamp = self.get_clock().now().to_msg()
-        out.header.frame_id = "carrier_rtn"
+        out.header.frame_id = interfaces.CARRIER_RTN_FRAME
         out.maneuvers = [maneuver_msg(float(t), float(wrap_angle(u)), dv, "carrier", "ic_acquisition")
                          for t, u, dv in zip(plan.epochs, plan.u, plan.dv_carrier)]
         kep = propagate_chief(elements_to_array(el), plan.t_final - t_od, self.cfg.j2)

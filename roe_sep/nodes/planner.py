@@ -2,7 +2,7 @@
 
 Subscribes ``/separation/ejection`` (roe_sep_msgs/EjectionEvent, latched) and publishes the drift-stop
 ``/separation/drift_stop_plan`` (roe_sep_msgs/ManeuverPlan, RELIABLE + TRANSIENT_LOCAL, depth 1) as soon as an
-event arrives. Physics: :func:`roe_sep.core.double_impulse.plan_drift_stop` (seed 002 Eqs. 9, 18).
+event arrives. Physics: :func:`roe_sep.core.separation.double_impulse.plan_drift_stop` (seed 002 Eqs. 9, 18).
 
 Parameters (YAML via ``--ros-args --params-file``):
 
@@ -15,7 +15,8 @@ Parameters (YAML via ``--ros-args --params-file``):
 * ``mc_samples`` (int, 100000), ``mc_seed`` (int, 0): the start-up Monte Carlo.
 * ``j2`` (bool, true): secular J2 in the drift-stop epoch and the predicted ROE.
 * ``strategy`` (string, ``double_impulse``): ``double_impulse`` (the drift-stop above) or ``multi_impulse``
-  (seed 001 Sec. 3, :func:`roe_sep.core.multi_impulse.plan_carrier_burns`): every carrier burn of the multi-impulse
+  (seed 001 Sec. 3, :func:`roe_sep.core.separation.multi_impulse.plan_carrier_burns`): every carrier burn of the
+  multi-impulse
   plan (blind drift reduction with |p| of Eq. 21, then the tangential e-vector pair), each <= 0.3 m/s and quantized
   to 1 mm/s, published as one ManeuverPlan with strategy "multi_impulse" on the same topic; ``k`` and ``p_mode``
   do not apply to it.
@@ -30,13 +31,13 @@ from rclpy.node import Node
 from roe_sep_msgs.msg import EjectionEvent, ManeuverPlan
 from roe_sep_msgs.srv import PlanSeparation
 
+from .. import interfaces
 from ..core.config import ConfigError, load_scenario
-from ..core.double_impulse import design, plan_drift_stop, reduction_bounds
-from ..core.dynamics import drag_da_dot, raan_rate
-from ..core.montecarlo import sweep
-from ..core.multi_impulse import MultiImpulseConfig, multi_config, plan_carrier_burns
-from ..core.roe import wrap_angle
-from . import qos
+from ..core.montecarlo.sweep import sweep
+from ..core.relmotion.dynamics import drag_da_dot, raan_rate
+from ..core.relmotion.roe import wrap_angle
+from ..core.separation.double_impulse import design, plan_drift_stop, reduction_bounds
+from ..core.separation.multi_impulse import MultiImpulseConfig, multi_config, plan_carrier_burns
 from .convert import maneuver_msg, roe_to_msg, sec_to_time, time_to_sec, vector_to_array
 from .diagnostics import ERROR, OK, publish_status
 from .params import ParameterError, declare, finite, require
@@ -82,10 +83,10 @@ class PlannerNode(Node):
         else:
             self.p = None  # computed from each commanded ejection
 
-        self.plan_pub = self.create_publisher(ManeuverPlan, qos.DRIFT_STOP_PLAN_TOPIC, qos.LATCHED)
-        self.diag_pub = self.create_publisher(DiagnosticArray, qos.DIAGNOSTICS_TOPIC, qos.DIAGNOSTICS)
-        self.create_subscription(EjectionEvent, qos.EJECTION_TOPIC, self.on_ejection, qos.LATCHED)
-        self.create_service(PlanSeparation, qos.PLAN_SERVICE, self.on_plan_request)
+        self.plan_pub = self.create_publisher(ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.LATCHED)
+        self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
+        self.create_subscription(EjectionEvent, interfaces.EJECTION_TOPIC, self.on_ejection, interfaces.LATCHED)
+        self.create_service(PlanSeparation, interfaces.PLAN_SERVICE, self.on_plan_request)
         self.plans = 0
         publish_status(self, self.diag_pub, OK, "waiting for the ejection event", self._values())
 
@@ -139,7 +140,7 @@ class PlannerNode(Node):
     def _multi_design(self, request):
         """The multi-impulse design of a PlanSeparation request: SPL size, u1, a_di_f, altitude, side from the
         request (zero = default; ``k``, ``a_de_f`` and ``p_reduction`` do not apply)."""
-        from ..core import multi_impulse
+        from ..core.separation import multi_impulse
 
         sep = dataclasses.replace(self.scenario.separation, leading=not request.following,
                                   **({"altitude": request.altitude} if request.altitude else {}))
@@ -166,7 +167,7 @@ class PlannerNode(Node):
 
         msg = ManeuverPlan(strategy="double_impulse", ejection_epoch=event.header.stamp, p_reduction=float(stop.p))
         msg.header.stamp = self.get_clock().now().to_msg()
-        msg.header.frame_id = "carrier_rtn"
+        msg.header.frame_id = interfaces.CARRIER_RTN_FRAME
         msg.maneuvers = [maneuver_msg(stop.epoch, stop.u2, stop.dv_carrier_rtn, "carrier", "drift_stop")]
         dt = stop.epoch - epoch1
         aimed_chief = type(chief)(
@@ -184,7 +185,7 @@ class PlannerNode(Node):
         plan = plan_carrier_burns(dv1, u1, epoch1, a, inc, sep, self.multi, self.j2, da_dot)
         msg = ManeuverPlan(strategy="multi_impulse", ejection_epoch=event.header.stamp, p_reduction=float(plan.p))
         msg.header.stamp = self.get_clock().now().to_msg()
-        msg.header.frame_id = "carrier_rtn"
+        msg.header.frame_id = interfaces.CARRIER_RTN_FRAME
         msg.maneuvers = [maneuver_msg(b.epoch, b.u, b.dv_carrier_rtn, "carrier", b.purpose) for b in plan.burns]
         chief = event.chief
         dt = plan.ic_epoch - epoch1

@@ -5,13 +5,14 @@ determination needs several passes over about 12 h. This stub simulates those me
 
 * ``/clock`` (rosgraph_msgs/Clock, the node runs with ``use_sim_time``): for every measurement epoch k *
   ``sample_interval`` in (last, now], the latest ``/sim/truth/roe`` is propagated to the epoch
-  (:func:`~roe_sep.core.dynamics.propagate` with J2, :func:`~roe_sep.core.dynamics.propagate_chief`); where a
+  (:func:`~roe_sep.core.relmotion.dynamics.propagate` with J2,
+  :func:`~roe_sep.core.relmotion.dynamics.propagate_chief`); where a
   station sees the picosatellite above its mask and the spacecraft are >= ``min_separation`` apart a noisy
   ``roe_sep_msgs/RadarMeasurement`` is published on ``/radar/measurements`` (STREAM).
 * A pass is a run of consecutive measurement epochs of one station; it counts once closed with >=
   ``min_pass_measurements`` measurements. When >= ``passes_required`` counted passes since the latest executed
   maneuver span >= ``min_arc`` (first measurement of the first to last of the last), the batch least squares of
-  :mod:`roe_sep.core.od` runs on their measurements and ``roe_sep_msgs/OrbitDetermination`` is published on
+  :mod:`roe_sep.core.od.batch` runs on their measurements and ``roe_sep_msgs/OrbitDetermination`` is published on
   ``/od/estimate`` (latched); it runs again after every further counted pass.
 * ``/sim/executed_maneuvers`` (latched history): measurements before the latest burn, and those simulated from a
   truth message older than the burn, are not used.
@@ -27,12 +28,21 @@ from rclpy.node import Node
 from roe_sep_msgs.msg import ImpulsiveManeuver, OrbitDetermination, RadarMeasurement, RelativeOrbitalElements
 from rosgraph_msgs.msg import Clock
 
+from .. import interfaces
 from ..core.constants import R_EARTH, SECONDS_PER_DAY
-from ..core.dynamics import propagate, propagate_chief
-from ..core.od import RadarBatch, batch_least_squares
-from ..core.radar import DEFAULT_EPOCH_UTC, Station, add_noise, gmst, julian_date, observe, relative_distance, visible
-from ..core.roe import wrap_angle
-from . import qos
+from ..core.od.batch import RadarBatch, batch_least_squares
+from ..core.od.radar import (
+    DEFAULT_EPOCH_UTC,
+    Station,
+    add_noise,
+    gmst,
+    julian_date,
+    observe,
+    relative_distance,
+    visible,
+)
+from ..core.relmotion.dynamics import propagate, propagate_chief
+from ..core.relmotion.roe import wrap_angle
 from .convert import array_to_elements, elements_to_array, msg_to_roe, roe_to_msg, sec_to_time, time_to_sec
 from .diagnostics import ERROR, OK, WARN, publish_status
 from .params import ParameterError, declare, finite, require
@@ -116,12 +126,12 @@ class RadarODNode(Node):
         self.estimates = 0
         self.published = 0
 
-        self.meas_pub = self.create_publisher(RadarMeasurement, qos.RADAR_TOPIC, qos.STREAM)
-        self.od_pub = self.create_publisher(OrbitDetermination, qos.OD_TOPIC, qos.LATCHED)
-        self.diag_pub = self.create_publisher(DiagnosticArray, qos.DIAGNOSTICS_TOPIC, qos.DIAGNOSTICS)
-        self.create_subscription(RelativeOrbitalElements, qos.TRUTH_ROE_TOPIC, self.on_truth, qos.STREAM)
-        self.create_subscription(ImpulsiveManeuver, qos.EXECUTED_TOPIC, self.on_maneuver, qos.EXECUTED)
-        self.create_subscription(Clock, qos.CLOCK_TOPIC, self.on_clock, qos.CLOCK_SUB)
+        self.meas_pub = self.create_publisher(RadarMeasurement, interfaces.RADAR_TOPIC, interfaces.STREAM)
+        self.od_pub = self.create_publisher(OrbitDetermination, interfaces.OD_TOPIC, interfaces.LATCHED)
+        self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
+        self.create_subscription(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, self.on_truth, interfaces.STREAM)
+        self.create_subscription(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, self.on_maneuver, interfaces.EXECUTED)
+        self.create_subscription(Clock, interfaces.CLOCK_TOPIC, self.on_clock, interfaces.CLOCK_SUB)
         publish_status(self, self.diag_pub, OK, "waiting for truth", self._values())
 
     def _values(self):
@@ -283,7 +293,7 @@ class RadarODNode(Node):
                                  residual_rms=float(result.residual_rms), a_da_dot=float(result.x[6] * a),
                                  a_da_dot_sigma=float(math.sqrt(result.cov[6, 6]) * a))
         msg.header.stamp = sec_to_time(self.t_last)
-        msg.header.frame_id = "carrier_rtn"
+        msg.header.frame_id = interfaces.CARRIER_RTN_FRAME
         msg.estimate = roe_to_msg(result.x[:6], chief, sec_to_time(result.t_est), covariance=result.cov[:6, :6])
         return msg
 

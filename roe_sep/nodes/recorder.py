@@ -32,10 +32,10 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+from .. import interfaces
 from ..bag import BagError, definitions
 from ..bag import qos as bag_qos
 from ..bag.writer import BagWriter
-from . import qos
 from .diagnostics import ERROR, OK, WARN, publish_status
 from .params import ParameterError, finite, require
 
@@ -88,7 +88,7 @@ class RecorderNode(Node):
         self.errors = 0
         self.last_error = ""
         self._last_error_log = 0.0
-        self.diag_pub = self.create_publisher(DiagnosticArray, qos.DIAGNOSTICS_TOPIC, qos.DIAGNOSTICS)
+        self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
         wall = Clock(clock_type=ClockType.STEADY_TIME)
         self.create_timer(DISCOVERY_PERIOD, self.discover, clock=wall)
         self.create_timer(float(self.flush_period), self.flush, clock=wall)

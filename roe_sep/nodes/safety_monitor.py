@@ -3,7 +3,7 @@
 Evaluates the truth stream and, separately, the OD estimate (propagated to the present with the burns executed
 since its epoch) every ``period`` seconds of sim time, and every plan before its first burn by predicting the
 trajectory under it from the best knowledge the ground has (the OD estimate, else the commanded ejection; never
-truth). Criteria and thresholds: :mod:`roe_sep.core.monitor`. Publishes ``/safety/status`` (truth and estimate),
+truth). Criteria and thresholds: :mod:`roe_sep.core.safety.monitor`. Publishes ``/safety/status`` (truth and estimate),
 ``/safety/plan_check`` (one verdict per plan; the simulator executes only approved plans) and ``/diagnostics``.
 """
 
@@ -21,18 +21,18 @@ from roe_sep_msgs.msg import (
     SafetyStatus,
 )
 
+from .. import interfaces
 from ..core.config import ConfigError, load_scenario
-from ..core.dynamics import drag_da_dot
-from ..core.maneuvers import delta_roe
-from ..core.monitor import MonitorLimits, assess
-from ..core.orbit import mean_motion
-from ..core.trajectory import Chief, state_at
-from . import qos
+from ..core.relmotion.dynamics import drag_da_dot
+from ..core.relmotion.maneuvers import delta_roe
+from ..core.relmotion.orbit import mean_motion
+from ..core.relmotion.trajectory import Chief, state_at
+from ..core.safety.monitor import MonitorLimits, assess
 from .convert import msg_to_roe, plan_burns, sec_to_time, time_to_sec, vector_to_array
 from .diagnostics import publish_status
 from .params import ParameterError, declare, finite, require
 
-PLAN_TOPICS = (qos.DRIFT_STOP_PLAN_TOPIC, qos.ACQUISITION_PLAN_TOPIC)
+PLAN_TOPICS = (interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.ACQUISITION_PLAN_TOPIC)
 
 
 class Knowledge:
@@ -85,15 +85,15 @@ class SafetyMonitorNode(Node):
         self.checked = set()
         self.pending_plans = {}
 
-        self.status_pub = self.create_publisher(SafetyStatus, qos.SAFETY_TOPIC, qos.STREAM)
-        self.check_pub = self.create_publisher(SafetyStatus, qos.PLAN_CHECK_TOPIC, qos.EXECUTED)
-        self.diag_pub = self.create_publisher(DiagnosticArray, qos.DIAGNOSTICS_TOPIC, qos.DIAGNOSTICS)
-        self.create_subscription(RelativeOrbitalElements, qos.TRUTH_ROE_TOPIC, self.on_truth, qos.STREAM)
-        self.create_subscription(OrbitDetermination, qos.OD_TOPIC, self.on_estimate, qos.LATCHED)
-        self.create_subscription(EjectionEvent, qos.EJECTION_TOPIC, self.on_ejection, qos.LATCHED)
-        self.create_subscription(ImpulsiveManeuver, qos.EXECUTED_TOPIC, self.on_executed, qos.EXECUTED)
+        self.status_pub = self.create_publisher(SafetyStatus, interfaces.SAFETY_TOPIC, interfaces.STREAM)
+        self.check_pub = self.create_publisher(SafetyStatus, interfaces.PLAN_CHECK_TOPIC, interfaces.EXECUTED)
+        self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
+        self.create_subscription(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, self.on_truth, interfaces.STREAM)
+        self.create_subscription(OrbitDetermination, interfaces.OD_TOPIC, self.on_estimate, interfaces.LATCHED)
+        self.create_subscription(EjectionEvent, interfaces.EJECTION_TOPIC, self.on_ejection, interfaces.LATCHED)
+        self.create_subscription(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, self.on_executed, interfaces.EXECUTED)
         for topic in PLAN_TOPICS:
-            self.create_subscription(ManeuverPlan, topic, lambda m, tp=topic: self.on_plan(tp, m), qos.LATCHED)
+            self.create_subscription(ManeuverPlan, topic, lambda m, tp=topic: self.on_plan(tp, m), interfaces.LATCHED)
 
     # ---------------------------------------------------------------- helpers
     def nominal_da_dot(self, a):

@@ -1,8 +1,8 @@
 """sim: the dynamics simulator that closes the loop on sim time.
 
 Publishes ``/clock`` faster than real time, propagates the truth relative orbit (``dynamics: secular``, the
-default: :class:`roe_sep.core.truth.TruthModel`, J2 + true differential drag; ``dynamics: nonlinear``:
-:class:`roe_sep.core.nonlinear.NonlinearTruth`, both spacecraft integrated numerically with J2-J4 and drag, ROE
+default: :class:`roe_sep.core.truth.secular.TruthModel`, J2 + true differential drag; ``dynamics: nonlinear``:
+:class:`roe_sep.core.truth.nonlinear.NonlinearTruth`, both spacecraft integrated numerically with J2-J4 and drag, ROE
 published as mean ROE of the numerical states), applies the commanded ejection with its real dispersion and executes
 every planned carrier burn at its epoch with execution and attitude errors (seed 002 Eq. 22, seeded). A plan's
 burns are executed only once the safety monitor has approved that plan (``require_plan_approval``); while a burn
@@ -31,13 +31,13 @@ from roe_sep_msgs.msg import (
 )
 from rosgraph_msgs.msg import Clock
 
+from .. import interfaces
 from ..core.config import ConfigError, load_scenario
 from ..core.constants import ARCSEC
-from ..core.double_impulse import InfeasibleDesignError, design
-from ..core.dynamics import drag_da_dot
-from ..core.radar import DEFAULT_EPOCH_UTC, julian_date, raan_from_ltan
-from ..core.truth import ExecutionErrors, TruthModel, chief_from_u
-from . import qos
+from ..core.od.radar import DEFAULT_EPOCH_UTC, julian_date, raan_from_ltan
+from ..core.relmotion.dynamics import drag_da_dot
+from ..core.separation.double_impulse import InfeasibleDesignError, design
+from ..core.truth.secular import ExecutionErrors, TruthModel, chief_from_u
 from .convert import (
     array_to_elements,
     array_to_vector,
@@ -51,7 +51,7 @@ from .convert import (
 from .diagnostics import ERROR, OK, WARN, publish_status
 from .params import ParameterError, declare, finite, require
 
-PLAN_TOPICS = (qos.DRIFT_STOP_PLAN_TOPIC, qos.ACQUISITION_PLAN_TOPIC)
+PLAN_TOPICS = (interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.ACQUISITION_PLAN_TOPIC)
 ACQUISITION_PLANNER = "roe_sep/ic_planner"  # its /diagnostics status name
 DEFAULT_DURATION = 280800.0  # s: 3.25 days, through OD and the initial-condition acquisition and half a day on
 
@@ -128,7 +128,7 @@ class SimNode(Node):
         da_dot = float(drag_da_dot(mc.delta_b * db_factor, mc.density, a)) if mc.drag else 0.0
         chief0 = chief_from_u(a, inc, raan, math.radians(u0_deg))
         if self.dynamics == "nonlinear":
-            from ..core.nonlinear import Atmosphere, NonlinearTruth
+            from ..core.truth.nonlinear import Atmosphere, NonlinearTruth
 
             b_c = mc.carrier.ballistic if mc.drag else 0.0
             b_d = b_c + mc.delta_b * db_factor if mc.drag else 0.0
@@ -159,17 +159,17 @@ class SimNode(Node):
         self.ejected_at = None  # set by the ejection until the drift-stop plan answering it arrives
         self.od_seen = set()
 
-        self.clock_pub = self.create_publisher(Clock, qos.CLOCK_TOPIC, 10)
-        self.roe_pub = self.create_publisher(RelativeOrbitalElements, qos.TRUTH_ROE_TOPIC, qos.STREAM)
-        self.rtn_pub = self.create_publisher(RelativeState, qos.TRUTH_RTN_TOPIC, qos.STREAM)
-        self.exec_pub = self.create_publisher(ImpulsiveManeuver, qos.EXECUTED_TOPIC, qos.EXECUTED)
-        self.diag_pub = self.create_publisher(DiagnosticArray, qos.DIAGNOSTICS_TOPIC, qos.DIAGNOSTICS)
-        self.create_subscription(EjectionEvent, qos.EJECTION_TOPIC, self.on_ejection, qos.LATCHED)
+        self.clock_pub = self.create_publisher(Clock, interfaces.CLOCK_TOPIC, 10)
+        self.roe_pub = self.create_publisher(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, interfaces.STREAM)
+        self.rtn_pub = self.create_publisher(RelativeState, interfaces.TRUTH_RTN_TOPIC, interfaces.STREAM)
+        self.exec_pub = self.create_publisher(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, interfaces.EXECUTED)
+        self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
+        self.create_subscription(EjectionEvent, interfaces.EJECTION_TOPIC, self.on_ejection, interfaces.LATCHED)
         for topic in PLAN_TOPICS:
-            self.create_subscription(ManeuverPlan, topic, lambda m, tp=topic: self.on_plan(tp, m), qos.LATCHED)
-        self.create_subscription(SafetyStatus, qos.PLAN_CHECK_TOPIC, self.on_plan_check, qos.EXECUTED)
-        self.create_subscription(OrbitDetermination, qos.OD_TOPIC, self.on_od, qos.LATCHED)
-        self.create_subscription(DiagnosticArray, qos.DIAGNOSTICS_TOPIC, self.on_diagnostics, 100)
+            self.create_subscription(ManeuverPlan, topic, lambda m, tp=topic: self.on_plan(tp, m), interfaces.LATCHED)
+        self.create_subscription(SafetyStatus, interfaces.PLAN_CHECK_TOPIC, self.on_plan_check, interfaces.EXECUTED)
+        self.create_subscription(OrbitDetermination, interfaces.OD_TOPIC, self.on_od, interfaces.LATCHED)
+        self.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, self.on_diagnostics, 100)
         self.timer = self.create_timer(tick_period, self.tick)
         self.get_logger().info(
             f"truth: a = {a:.1f} m, i = {math.degrees(inc):.3f} deg, raan = {math.degrees(raan):.2f} deg, "
@@ -191,7 +191,7 @@ class SimNode(Node):
             self._status(WARN, "second ejection event ignored: the picosatellite is already released")
             return
         self.seen_ejections.add(key)
-        self.pending.append(PendingBurn(key, ev.ejection, qos.EJECTION_TOPIC, key))
+        self.pending.append(PendingBurn(key, ev.ejection, interfaces.EJECTION_TOPIC, key))
 
     def on_plan(self, topic, plan: ManeuverPlan):
         stamp = time_to_sec(plan.header.stamp)
@@ -211,7 +211,7 @@ class SimNode(Node):
         burns = [b for b in burns if self._key(b) not in self.flown]
         self.pending = [b for b in self.pending if b.topic != topic] + burns
         self.plan_stamps[topic] = stamp
-        if topic == qos.DRIFT_STOP_PLAN_TOPIC:
+        if topic == interfaces.DRIFT_STOP_PLAN_TOPIC:
             self.holds.pop("drift_stop", None)
         self.get_logger().info(f"plan on {topic}: {len(burns)} burn(s) from t = "
                                f"{min((b.epoch for b in burns), default=math.nan):.0f} s")
@@ -254,7 +254,7 @@ class SimNode(Node):
     def awaiting_drift_stop(self):
         """After the ejection the ground owes the drift-stop plan: hold the clock until one answering it has
         arrived (at most ``approval_timeout`` wall seconds), as for a plan awaiting its safety check."""
-        if self.ejected_at is None or qos.DRIFT_STOP_PLAN_TOPIC in self.plan_stamps:
+        if self.ejected_at is None or interfaces.DRIFT_STOP_PLAN_TOPIC in self.plan_stamps:
             return False
         if not self._holding("drift_stop"):
             self.ejected_at = None
@@ -314,7 +314,7 @@ class SimNode(Node):
 
     def _approval(self, burn):
         """True: execute; False: drop; None: wait."""
-        if burn.topic == qos.EJECTION_TOPIC or not self.require_approval:
+        if burn.topic == interfaces.EJECTION_TOPIC or not self.require_approval:
             return True
         verdict = self.approvals.get((burn.topic, burn.plan_stamp))
         if verdict is not None:
@@ -388,11 +388,11 @@ class SimNode(Node):
         stamp = sec_to_time(t)
         chief = array_to_elements(self.truth.chief_elements(t))
         roe = self.truth.roe_at(t)
-        self.roe_pub.publish(roe_to_msg(roe, chief, stamp, frame_id="truth"))
+        self.roe_pub.publish(roe_to_msg(roe, chief, stamp, frame_id=interfaces.TRUTH_FRAME))
         pos, vel = self.truth.rtn_at(t)
         state = RelativeState(position=array_to_vector(pos), velocity=array_to_vector(vel))
         state.header.stamp = stamp
-        state.header.frame_id = "carrier_rtn"
+        state.header.frame_id = interfaces.CARRIER_RTN_FRAME
         self.rtn_pub.publish(state)
 
     def _status(self, level, message):

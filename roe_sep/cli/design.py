@@ -1,0 +1,219 @@
+"""``roe-sep design`` and ``roe-sep mc``: the separation design (double impulse, seeds 000/002; multi-impulse, seed
+001) and its Monte Carlo (the p sweep of Table 3; the multi-impulse acceptance criteria AC1-AC3)."""
+
+import dataclasses
+import math
+import sys
+from pathlib import Path
+
+from ..core.config import load_scenario
+from ..core.montecarlo.sweep import SweepResult, sweep
+from ..core.separation.double_impulse import DoubleImpulseDesign, design
+from .common import emit, p_list, positive_int, vec
+
+
+def design_report(d: DoubleImpulseDesign) -> dict:
+    """The machine-readable design: every key the README documents (SI units, angles in deg where named)."""
+    b = d.bounds
+    aimed = d.final_roe() * d.a
+    return {
+        "strategy": "double_impulse",
+        "a": d.a,
+        "n": d.n,
+        "inclination_deg": math.degrees(d.inc),
+        "u1_deg": math.degrees(d.u1),
+        "u2_deg": math.degrees(d.u2),
+        "k": d.k,
+        "k_admissible": list(d.k_admissible),
+        "eta_deg": math.degrees(d.eta),
+        "dv1_rtn": d.dv1_rtn.tolist(),
+        "dv2_rtn": d.dv2_rtn.tolist(),
+        "dv2_carrier_rtn": (0.0 - d.dv2_rtn).tolist(),
+        "a_dl_star": d.a_dl_star,
+        "a_da1": d.a_da1,
+        "a_dl_f": d.a_dl_f,
+        "aimed_roe": aimed.tolist(),
+        "p_sigma_level": d.config.p_sigma_level,
+        "p_min_3sigma": d.p_min,
+        "p_max": d.p_max,
+        "bounds": dataclasses.asdict(b),
+        "config": dataclasses.asdict(d.config),
+    }
+
+def print_design(rep: dict, out=None):
+    b = rep["bounds"]
+    w = (out or sys.stdout).write
+    w("Double-impulse separation design (seeds 000/002, Eqs. 9-21)\n")
+    w(f"  carrier orbit     a = {rep['a']:.1f} m   n = {rep['n']:.6e} rad/s   i = {rep['inclination_deg']:.3f} deg\n")
+    w(f"  ejection (SPL)    u1 = {rep['u1_deg']:8.3f} deg   dv1 RTN = {vec(rep['dv1_rtn'])} m/s "
+      "(picosat rel. carrier)\n")
+    w(f"  drift-stop        u2 = {rep['u2_deg']:8.3f} deg   dv2 RTN = {vec(rep['dv2_rtn'])} m/s (relative effect)\n")
+    w(f"                    k = {rep['k']} (admissible {rep['k_admissible']})   carrier burns "
+      f"{vec(rep['dv2_carrier_rtn'])} m/s\n")
+    w(f"  e/i configuration eta = {rep['eta_deg']:.0f} deg   a*Delta dl* = {rep['a_dl_star']:.1f} m   "
+      f"a da1 = {rep['a_da1']:.1f} m   a dl_F = {rep['a_dl_f']:.1f} m\n")
+    w("  aimed ROE a*[da dl dex dey dix diy] = [" + " ".join(f"{x:.1f}" for x in rep["aimed_roe"]) + "] m\n")
+    w("\nAdmissible sizes of the final relative orbit (Table 2, from Table 1)\n")
+    w(f"  {'':10s}{'min [m]':>12s}{'max [m]':>12s}\n")
+    for key, label in (("dl", "a dl"), ("de", "a de"), ("di", "a di")):
+        w(f"  {label:10s}{b[f'a_{key}_min']:12.2f}{b[f'a_{key}_max']:12.2f}\n")
+    w(f"  a di margin (safety #7) = {b['a_di_margin']:.2f} m\n")
+    w(f"\nDrift-stop reduction (Eq. 21, {rep['p_sigma_level']:g} sigma): "
+      f"{rep['p_min_3sigma']:.7f} <= |p| < {rep['p_max']:.7f} m/s\n")
+
+def print_sweep(res: dict, out=None):
+    w = (out or sys.stdout).write
+    w(f"Monte Carlo p sweep: {res['samples']} samples, seed {res['seed']}, drag {'on' if res['drag'] else 'off'}, "
+      f"J2 {'on' if res['j2'] else 'off'}, dB = {res['delta_b']:.5f} m^2/kg\n")
+    cols = (("p", "p [m/s]", "{:9.4f}"), ("p_approach", "P(approach)", "{:11.3%}"),
+            ("p_evaporation", "P(evap.)", "{:9.3%}"), ("p_below_radar_horizon", "P(<5km@24h)", "{:11.3%}"),
+            ("p_min_rn_violation", "P(RN<min)", "{:9.3%}"), ("p_fov_violation", "P(FOV)", "{:8.3%}"),
+            ("p_table2_violation", "P(>Tab.2)", "{:9.3%}"),
+            ("a_dl_horizon_mean", "mean a dl@24h", "{:13.0f}"))
+    w("  " + "  ".join(f"{h:>{len(fmt.format(0.0))}s}" for _, h, fmt in cols) + "\n")
+    for row in res["rows"]:
+        mark = "  <- p_best" if row["p"] == res["p_best"] else ""
+        w("  " + "  ".join(fmt.format(row[k]) for k, _, fmt in cols) + mark + "\n")
+    w(f"  p_best = {res['p_best']:g} m/s (minimum of P(approach) + P(evaporation))\n")
+    w(f"  nearest R=0 transit before the drift-stop: min {res['crossing_min']:.0f} m over all samples, "
+      f"{res['crossing_min_within_3sigma_f1']:.0f} m for f1 >= {res['f1_3sigma']:.2f}\n")
+
+def _progress(enabled):
+    if not enabled:
+        return iter
+    from tqdm import tqdm
+
+    return lambda it: tqdm(it, desc="p sweep", unit="p", leave=False)
+
+def run_sweep(scenario, args) -> SweepResult:
+    mc = scenario.monte_carlo
+    overrides = {}
+    if args.samples is not None:
+        overrides["samples"] = args.samples
+    if args.seed is not None:
+        overrides["seed"] = args.seed
+    if args.no_drag:
+        overrides["drag"] = False
+    if args.j2:
+        overrides["j2"] = True
+    mc = dataclasses.replace(mc, **overrides)
+    p_values = args.p if args.p is not None else scenario.p_values
+    d = design(scenario.separation)
+    return sweep(d, mc, p_values, progress=_progress(not args.json and sys.stderr.isatty()))
+
+def sweep_report(res: SweepResult) -> dict:
+    out = res.to_dict()
+    out["f1_3sigma"] = 1.0 - 3.0 * res.design.config.spl_sigma
+    return out
+
+STRATEGIES = ("double_impulse", "multi_impulse")
+
+def _multi_design(scenario, args):
+    from ..core.separation import multi_impulse
+
+    overrides = {k: v for k, v in (("spl_dv", args.spl_dv), ("u1_deg", args.u1)) if v is not None}
+    mcfg = dataclasses.replace(multi_impulse.MultiImpulseConfig(), **overrides)
+    return multi_impulse.design(scenario.separation, mcfg, scenario.monte_carlo)
+
+def print_multi_design(rep: dict, out=None):
+    w = (out or sys.stdout).write
+    a = rep["a"]
+    w("Multi-impulse separation design (seed 001 Sec. 3)\n")
+    w(f"  carrier orbit     a = {a:.1f} m   n = {rep['n']:.6e} rad/s   i = {rep['inclination_deg']:.3f} deg\n")
+    w(f"  ejection (SPL)    u1 = {rep['u1_deg']:8.3f} deg   dv RTN = {vec(rep['ejection_dv_rtn'])} m/s "
+      f"(|dv| = {rep['spl_dv']:g} m/s, picosat rel. carrier)\n")
+    w(f"    tangential: max(Eq. 10 e~ = {rep['dv_t_min_eq10']:.4f}, AC3 drift-free = {rep['dv_t_min_ac3']:.4f}) m/s;"
+      f" normal: a di_F = {rep['a_di_f']:.1f} m; radial: the rest (Eq. 12)\n")
+    w(f"  carrier burns (tangential, <= {rep['max_burn']:g} m/s, quantum {rep['dv_quantum'] * 1e3:g} mm/s)\n")
+    w(f"    {'purpose':16s}{'u [deg]':>10s}{'u mod 360':>10s}{'t [h]':>9s}{'dvT carrier [m/s]':>19s}\n")
+    for m in rep["maneuvers"]:
+        w(f"    {m['purpose']:16s}{m['u_deg']:10.2f}{m['u_deg'] % 360:10.2f}{m['epoch'] / 3600:9.3f}"
+          f"{m['dv_rtn'][1]:+19.3f}\n")
+    w(f"  thrusted dv = {rep['thrusted_dv_total']:.3f} m/s = {rep['thrusted_to_ejection_ratio']:.1%} of the ejection dv"
+      f"   (drift reduction |p| = {rep['p']:.4f} m/s)\n")
+    for key, label in (("roe_after_ejection", "after ejection"), ("roe_after_reduction", "after drift reduction"),
+                       ("roe_final", "after the pair (IC)")):
+        w(f"  a*ROE {label:22s} [" + " ".join(f"{x:.1f}" for x in rep[key]) + "] m\n")
+    w(f"  final e/i angle {rep['final_ei_angle_deg']:.2f} deg   "
+      f"min R-N distance {rep['final_min_rn_distance']:.1f} m\n")
+    j = rep["j2"]
+    w("J2 (seed 001 Sec. 2.2 item 3)\n")
+    w(f"  de rotation {j['e_vector_rotation_deg_per_day']:+.3f} deg/day (clockwise)\n")
+    w(f"  a diy drift {j['a_diy_drift_per_m_dix_m_per_day']:.4f} m/day per m of a dix; a dix at u1 = "
+      f"{j['a_dix_at_ejection']:.3f} m -> {j['a_diy_drift_m_per_day']:.3f} m/day "
+      f"(u1 = 88 deg would give {j['a_diy_drift_m_per_day_if_u1_88deg']:.2f} m/day): eject at u = 90/270 deg\n")
+
+def cmd_design(args):
+    scenario = load_scenario(args.config)
+    if args.strategy == "multi_impulse":
+        from ..core.separation.multi_impulse import design_report as multi_report
+
+        emit(multi_report(_multi_design(scenario, args)), args.json, print_multi_design)
+        return
+    emit(design_report(design(scenario.separation)), args.json, print_design)
+
+def print_acceptance(rep: dict, out=None):
+    w = (out or sys.stdout).write
+    w(f"Multi-impulse Monte Carlo (seed 001 Sec. 4): {rep['samples']} samples, seed {rep['seed']}, "
+      f"drag {'on' if rep['drag'] else 'off'}, J2 {'on' if rep['j2'] else 'off'}\n")
+    w(f"  AC1  a da < 0 after the drift reduction          {rep['ac1']:9.3%}  ({rep['n_ac1_fail']} fail; "
+      f"max a da = {rep['a_da_after_reduction_max']:.1f} m)\n")
+    w(f"  AC2  nearest R=0 transit >= {rep['ac2_distance']:.0f} m              {rep['ac2']:9.3%}  "
+      f"({rep['n_ac2_fail']} fail; min {rep['crossing_min']:.0f} m)\n")
+    w(f"  AC3  min R-N > 150 m, |a da| < {rep['drift_free_a_da']:.1f} m         {rep['ac3']:9.3%}  "
+      f"({rep['n_ac3_fail']} fail of {rep['n_drift_free']} drift-free)\n")
+
+def cmd_mc(args):
+    if args.strategy == "multi_impulse":
+        from ..core.montecarlo.acceptance import run as run_acceptance
+
+        scenario = load_scenario(args.config)
+        overrides = {k: v for k, v in (("samples", args.samples), ("seed", args.seed)) if v is not None}
+        if args.no_drag:
+            overrides["drag"] = False
+        if args.j2:
+            overrides["j2"] = True
+        if args.p is not None:
+            raise ValueError("--p applies to the double_impulse sweep only (multi_impulse sizes p by Eq. 21)")
+        mc = dataclasses.replace(scenario.monte_carlo, **overrides)
+        res = run_acceptance(_multi_design(scenario, args), mc)
+        rep = res.to_dict()
+        if args.plots:
+            from ..plots.acceptance import write_acceptance_figures
+
+            rep["figures"] = [str(p) for p in write_acceptance_figures(res, Path(args.plots))]
+        emit(rep, args.json, print_acceptance)
+        return
+    res = run_sweep(load_scenario(args.config), args)
+    rep = sweep_report(res)
+    if args.plots:
+        from ..plots.montecarlo import write_figures
+
+        rep["figures"] = [str(p) for p in write_figures(res, Path(args.plots))]
+    emit(rep, args.json, print_sweep)
+
+def _strategy_args(p):
+    p.add_argument("--strategy", choices=STRATEGIES, default="double_impulse",
+                   help="separation strategy (default double_impulse; multi_impulse: seed 001)")
+    p.add_argument("--spl-dv", type=float, help="multi_impulse: SPL |dv| [m/s] (default 1.53)")
+    p.add_argument("--u1", type=float, help="multi_impulse: ejection argument of latitude [deg] (default 90)")
+
+def register(subparsers):
+    """Add ``design`` and ``mc`` to the ``roe-sep`` subparsers."""
+    p = subparsers.add_parser("design", help="nominal double-impulse separation plan")
+    p.add_argument("--config", help="scenario YAML (default: the embedded BIROS/picosatellite case)")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    _strategy_args(p)
+    p.set_defaults(func=cmd_design)
+
+    p = subparsers.add_parser("mc", help="Monte Carlo sweep over the drift-stop reduction p")
+    p.add_argument("--config", help="scenario YAML")
+    p.add_argument("--samples", type=positive_int, help="number of samples (default 100000)")
+    p.add_argument("--seed", type=int, help="random seed (default from the scenario: 0)")
+    p.add_argument("--p", type=p_list, help="comma-separated p values [m/s]")
+    p.add_argument("--no-drag", action="store_true", help="switch differential drag off")
+    p.add_argument("--j2", action="store_true", help="include secular J2 in the propagation")
+    p.add_argument("--plots", metavar="DIR", help="write the figures (PNG) to DIR")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    _strategy_args(p)
+    p.set_defaults(func=cmd_mc)

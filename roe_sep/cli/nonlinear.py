@@ -1,0 +1,194 @@
+"""``roe-sep propagate`` and ``roe-sep validate``: the nonlinear truth on the command line (issue 5 item 5).
+
+``register(subparsers)`` adds both subcommands to the ``roe-sep`` parser; bad input raises ValueError, which
+``roe_sep.cli.main`` reports with exit status 2, as every other subcommand.
+"""
+
+import argparse
+import dataclasses
+import math
+import sys
+
+import numpy as np
+
+from .common import emit, nonneg_int, p_list
+
+MODELS = ("keplerian", "j2", "j2drag", "nonlinear")
+
+
+def _roe_arg(text):
+    try:
+        values = [float(x) for x in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--roe expects six comma-separated numbers [m], got {text!r}") from None
+    if len(values) != 6 or not all(math.isfinite(v) for v in values):
+        raise argparse.ArgumentTypeError(f"--roe expects six finite comma-separated numbers [m], got {text!r}")
+    return values
+
+
+def _days_list(text):
+    try:
+        values = [int(x) for x in text.split(",") if x.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--days expects comma-separated whole days, got {text!r}") from None
+    if not values or not all(1 <= v <= 30 for v in values):
+        raise argparse.ArgumentTypeError(f"--days expects whole days in [1, 30], got {text!r}")
+    return sorted(set(values))
+
+
+def _finite(name, value, positive=False):
+    if value is None:
+        return
+    if not math.isfinite(value) or (positive and value <= 0):
+        raise ValueError(f"{name} must be {'positive and ' if positive else ''}finite, got {value}")
+
+
+def propagate_report(roe_m, altitude, inc_deg, u_deg, days, step, model, scenario):
+    """Propagate a*ROE [m] from a circular chief (mean elements) with one model; SI output."""
+    from ..core.constants import SECONDS_PER_DAY
+    from ..core.relmotion.dynamics import sun_synchronous_inclination
+    from ..core.relmotion.orbit import semi_major_axis
+    from ..core.relmotion.roe import roe_to_kepler
+    from ..core.truth.validation import Case
+
+    _finite("--alt", altitude, positive=True)
+    _finite("--days", days, positive=True)
+    _finite("--step", step, positive=True)
+    _finite("--u", u_deg)
+    if altitude < 200e3 or altitude >= 1100e3:
+        raise ValueError(f"--alt must be in [200, 1100) km (the tabulated density), got {altitude:g} m")
+    if days > 30:
+        raise ValueError(f"--days must be at most 30, got {days:g}")
+    a = float(semi_major_axis(altitude))
+    inc = float(sun_synchronous_inclination(a)) if inc_deg is None else math.radians(inc_deg)
+    if inc_deg is not None and not (0.0 < inc_deg < 180.0):
+        raise ValueError(f"--inc must be in (0, 180) deg, got {inc_deg:g}")
+    mc = scenario.monte_carlo
+    chief = np.array([a, 0.0, inc, 0.0, 0.0, math.radians(u_deg)])
+    roe = np.asarray(roe_m, dtype=float) / a
+    if np.any(np.abs(roe[[0, 2, 3, 4, 5]]) > 0.01):
+        raise ValueError("--roe: |a da|, |a de|, |a di| must be below 1 % of a (near-circular, close formation)")
+    times = np.arange(0.0, days * SECONDS_PER_DAY + step / 2, step)
+    b_c, b_d = (mc.carrier.ballistic, mc.picosat.ballistic) if mc.drag else (0.0, 0.0)
+    case = Case("propagate", chief, (), b_c, b_d, mc.density)
+    if model == "nonlinear":
+        from ..core.truth.nonlinear import mean_roe, pair_state, propagate_pair
+
+        s0 = pair_state(chief, roe_to_kepler(chief, roe))
+        out = mean_roe(propagate_pair(s0, 0.0, times, (), b_c, b_d, case.atmosphere)) * a
+    else:
+        from ..core.relmotion.dynamics import drag_da_dot, propagate
+
+        da_dot = float(drag_da_dot(b_d - b_c, mc.density, a)) if model == "j2drag" else 0.0
+        out = propagate(roe[None, :], times, a, inc, model != "keplerian", da_dot) * a
+    return {"model": model, "a": a, "altitude": altitude, "inclination_deg": math.degrees(inc), "u0_deg": u_deg,
+            "delta_b": b_d - b_c, "density": mc.density, "t": times.tolist(), "roe": out.tolist()}
+
+
+def cmd_propagate(args):
+    from ..core.config import load_scenario
+
+    rep = propagate_report(args.roe, args.alt, args.inc, args.u, args.days, args.step, args.model,
+                           load_scenario(args.config))
+    emit(rep, args.json, lambda r: print_propagate(r, args.step))
+    return 0
+
+
+def print_propagate(rep, step, out=None):
+    """The ROE table of ``roe-sep propagate``, one row every 3 h (``step`` [s] the sampling) and the last."""
+    w = (out or sys.stdout).write
+    w(f"ROE propagation, model {rep['model']}: a = {rep['a']:.1f} m, i = {rep['inclination_deg']:.3f} deg, "
+      f"u0 = {rep['u0_deg']:g} deg, dB = {rep['delta_b']:.5f} m^2/kg, rho = {rep['density']:.3g} kg/m^3\n")
+    w(f"  {'t [h]':>8s}" + "".join(f"{'a ' + n + ' [m]':>14s}" for n in ("da", "dl", "dex", "dey", "dix", "diy"))
+      + "\n")
+    t = np.asarray(rep["t"])
+    stride = max(1, int(round(3 * 3600.0 / step)))
+    for k in list(range(0, len(t), stride)) + ([len(t) - 1] if (len(t) - 1) % stride else []):
+        w(f"  {t[k] / 3600:8.2f}" + "".join(f"{x:14.2f}" for x in rep["roe"][k]) + "\n")
+
+
+def validate_report(scenario, days, mc_samples=0, p_values=None, seed=None):
+    """The model-error table (item 3) for the double- and multi-impulse cases, optionally the nonlinear MC."""
+    from ..core.separation import multi_impulse
+    from ..core.separation.double_impulse import design
+    from ..core.truth.validation import (
+        double_impulse_case,
+        model_errors,
+        multi_impulse_case,
+        nonlinear_sweep,
+        zonal_effect,
+    )
+
+    mc = scenario.monte_carlo
+    d = design(scenario.separation)
+    cases = [double_impulse_case(d, mc), multi_impulse_case(multi_impulse.design(scenario.separation, mc=mc), mc)]
+    rep = {"days": days, "rows": [], "zonal_effect": {}}
+    for case in cases:
+        rep["rows"] += [e.to_dict() for e in model_errors(case, days)]
+        rep["zonal_effect"][case.name] = zonal_effect(case, days).tolist()
+    if mc_samples:
+        over = {"samples": mc_samples}
+        if seed is not None:
+            over["seed"] = seed
+        res = nonlinear_sweep(d, dataclasses.replace(mc, **over), p_values or scenario.p_values)
+        rep["monte_carlo"] = res.to_dict()
+    return rep
+
+
+def print_validate(rep, out=None):
+    w = (out or sys.stdout).write
+    w("Model error: core secular ROE model minus nonlinear truth (J2-J4 + drag, mean ROE via Brouwer-Lyddane)\n")
+    names = ("da", "dl", "dex", "dey", "dix", "diy")
+    w(f"  {'case':15s}{'model':10s}{'day':>4s}" + "".join(f"{'a ' + n:>10s}" for n in names)
+      + f"{'max|dr|':>10s}{'max|d|r||':>11s}   [m]\n")
+    for row in rep["rows"]:
+        for k, day in enumerate(row["days"]):
+            w(f"  {row['case']:15s}{row['model']:10s}{day:4d}"
+              + "".join(f"{row['roe_error'][n][k]:10.1f}" for n in names)
+              + f"{row['rtn_error_max'][k]:10.1f}{row['distance_error_max'][k]:11.1f}\n")
+    for name, z in rep["zonal_effect"].items():
+        w(f"  J3+J4 effect on the truth ({name}, last day): a*dROE = [" + " ".join(f"{x:.1f}" for x in z[-1])
+          + "] m\n")
+    if "monte_carlo" in rep:
+        m = rep["monte_carlo"]
+        w(f"\nNonlinear vs linear Monte Carlo ({m['samples']} samples, same draws, {m['seconds']:.1f} s)\n")
+        w(f"  {'p [m/s]':>8s}{'P(appr) lin':>13s}{'P(appr) nl':>12s}{'P(evap) lin':>13s}{'P(evap) nl':>12s}"
+          f"{'same appr':>11s}{'same evap':>11s}\n")
+        for lr, nr, ag in zip(m["linear_rows"], m["rows"], m["agreement"]):
+            w(f"  {nr['p']:8.4f}{lr['p_approach']:13.3%}{nr['p_approach']:12.3%}{lr['p_evaporation']:13.3%}"
+              f"{nr['p_evaporation']:12.3%}{ag['approach']:11.3%}{ag['evaporation']:11.3%}\n")
+
+
+
+def cmd_validate(args):
+    from ..core.config import load_scenario
+
+    rep = validate_report(load_scenario(args.config), args.days, args.mc or 0, args.p, args.seed)
+    emit(rep, args.json, print_validate)
+    return 0
+
+
+def register(subparsers):
+    """Add ``propagate`` and ``validate`` to the ``roe-sep`` subparsers."""
+    p = subparsers.add_parser("propagate", help="propagate ROE with a secular model or the nonlinear truth")
+    p.add_argument("--roe", type=_roe_arg, required=True, metavar="DA,DL,DEX,DEY,DIX,DIY",
+                   help="initial mean ROE a*[da dl dex dey dix diy] [m]")
+    p.add_argument("--alt", type=float, default=515e3, help="chief mean altitude a - R_E [m] (default 515000)")
+    p.add_argument("--inc", type=float, help="chief inclination [deg] (default: sun-synchronous)")
+    p.add_argument("--u", type=float, default=0.0, help="chief mean argument of latitude at t = 0 [deg]")
+    p.add_argument("--days", type=float, default=1.0, help="propagation span [days] (default 1)")
+    p.add_argument("--step", type=float, default=600.0, help="output step [s] (default 600)")
+    p.add_argument("--model", choices=MODELS, default="j2drag", help="dynamics (default j2drag)")
+    p.add_argument("--config", help="scenario YAML (drag properties and density)")
+    p.add_argument("--json", action="store_true", help="machine-readable output (t [s], roe [m])")
+    p.set_defaults(func=cmd_propagate)
+
+    p = subparsers.add_parser("validate", help="model error of the secular ROE model against the nonlinear truth")
+    p.add_argument("--config", help="scenario YAML")
+    p.add_argument("--days", type=_days_list, default=[1, 2, 3], help="comma-separated days (default 1,2,3)")
+    p.add_argument("--mc", type=nonneg_int, metavar="N",
+                   help="also run the nonlinear Monte Carlo with N samples next to the linear one")
+    p.add_argument("--p", type=p_list, help="comma-separated p values [m/s] for --mc")
+    p.add_argument("--seed", type=int, help="Monte Carlo seed")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=cmd_validate)

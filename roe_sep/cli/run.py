@@ -1,0 +1,97 @@
+"""``roe-sep run``, ``roe-sep replay`` and ``roe-sep bag``: the scenario end to end over ROS 2 (the README's main
+command), and the tools for its bags."""
+
+import json
+import sys
+from pathlib import Path
+
+from .common import emit, vec
+
+
+def print_run(rep: dict, out=None):
+    w = (out or sys.stdout).write
+    w(f"Run {'SAFE' if rep['safe'] else 'UNSAFE'} ({rep['run']['reason']})\n")
+    for m in rep["maneuvers"]:
+        w(f"  t = {m['epoch']:10.1f} s  u = {m['u_deg'] % 360:7.2f} deg  {m['spacecraft']:13s} {m['purpose']:15s} "
+          f"dv RTN = {vec(m['dv_rtn'])} m/s  |dv| = {m['dv']:.4f} m/s\n")
+    w(f"  carrier dv total = {rep['dv_total']:.4f} m/s "
+      f"({', '.join(f'{k} {v:.4f}' for k, v in rep['dv_by_purpose'].items())})\n")
+    if rep["time_to_ic"] is not None:
+        w(f"  time to initial conditions = {rep['time_to_ic'] / 3600:.1f} h after the ejection\n")
+    if rep["final_roe"]:
+        w("  final truth a*ROE [da dl dex dey dix diy] = [" + " ".join(f"{x:.1f}" for x in rep["final_roe"]) + "] m\n")
+    md = rep["min_distance"]
+    w(f"  closest approach after departure = {'none' if md is None else f'{md:.1f} m'}\n")
+    if rep["ic"]:
+        ic = rep["ic"]
+        w(f"  truth at the IC epoch t = {ic['epoch']:.0f} s: a*ROE = [" + " ".join(f"{x:.1f}" for x in ic["roe"])
+          + f"] m, e/i angle {ic['ei_angle_deg']:.1f} deg, min R-N {ic['min_rn_distance']:.0f} m\n")
+    if rep["od"]:
+        od = rep["od"]
+        w(f"  first OD: t = {od['epoch']:.0f} s, {od['passes']} passes, {od['measurements']} measurements, "
+          f"NEES = {od.get('nees') if od.get('nees') is None else round(od['nees'], 2)}\n")
+    for name, ok in rep["criteria"].items():
+        w(f"  {'pass' if ok else 'FAIL'}  {name}\n")
+
+def cmd_run(args):
+    from ..run import run
+
+    rep = run(config=args.config, out=args.out, params=args.params, duration=args.duration, seed=args.seed,
+              timeout=args.timeout, progress=not args.json and sys.stderr.isatty())
+
+    def human(r):
+        print_run(r)
+        print(f"\nbag: {Path(args.out) / 'bag'}   report: {Path(args.out) / 'report.json'}")
+
+    emit(rep, args.json, human)
+    return 0 if rep["safe"] else 1
+
+def delegated(argv):
+    """``replay`` and ``bag recover`` own their argument parsing (and ``--help``): hand them the rest."""
+    if argv[:1] == ["replay"]:
+        from ..bag import replay
+
+        return replay.main(argv[1:])
+    if argv[:2] == ["bag", "recover"]:
+        from ..bag import recover
+
+        return recover.main(argv[2:])
+    return None
+
+def cmd_bag_info(args):
+    from ..bag import BagError, info
+    from ..bag.reader import format_info
+
+    try:
+        d = info(args.bag)
+    except (BagError, OSError) as exc:
+        raise ValueError(str(exc)) from exc
+    print(json.dumps(d, indent=2) if args.json else format_info(d))
+    return 0
+
+def register_run(subparsers):
+    """Add ``run`` and ``replay`` to the ``roe-sep`` subparsers."""
+    p = subparsers.add_parser("run", help="run the scenario end to end (all nodes, sim time), record a bag, "
+                              "write a report")
+    p.add_argument("--config", help="scenario YAML")
+    p.add_argument("--params", help="ROS parameter YAML overriding node parameters ({node: {ros__parameters: ...}})")
+    p.add_argument("--out", default="out/run", help="output directory: bag/, report.json, logs/ (default out/run)")
+    p.add_argument("--duration", type=float, help="sim seconds to run (default 280800 = 3.25 days)")
+    p.add_argument("--seed", type=int, help="seed of the simulated dispersions (default 0)")
+    p.add_argument("--timeout", type=float, default=1800.0, help="wall-time limit [s] (default 1800)")
+    p.add_argument("--json", action="store_true", help="print the report as JSON")
+    p.set_defaults(func=cmd_run)
+
+    subparsers.add_parser("replay", add_help=False, help="play a bag back onto its topics (roe-sep replay --help)")
+
+
+def register_bag(subparsers):
+    """Add ``bag info`` and ``bag recover`` to the ``roe-sep`` subparsers."""
+    bag = subparsers.add_parser("bag", help="inspect or recover a bag").add_subparsers(dest="bag_command",
+                                                                                      required=True)
+    p = bag.add_parser("info", help="topics, types, counts, QoS and duration of a bag")
+    p.add_argument("bag", help="bag directory or .mcap file")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=cmd_bag_info)
+    bag.add_parser("recover", add_help=False, help="rebuild a complete bag from an unfinished recording "
+                   "(roe-sep bag recover --help)")

@@ -1,0 +1,186 @@
+"""Batch weighted least-squares orbit determination of the relative orbit from radar passes (seed 001 Sec. 5).
+
+State x = [da, dl, dex, dey, dix, diy, da_dot]: the dimensionless ROE at the estimate epoch ``t_est`` and the
+differential-drag drift of da [1/s] (:func:`~roe_sep.core.relmotion.dynamics.drag_da_dot`). The carrier's own orbit is
+known (it carries GPS): its mean elements at each measurement epoch are inputs.
+
+Model (Tapley, Schutz, Born, *Statistical Orbit Determination*, 2004, Ch. 4): z_k = h_k(x) + v_k, v_k ~ N(0, R_k),
+R_k = diag(sigma_range^2, sigma_angle^2, sigma_angle^2), with
+
+    h_k(x) = observe(propagate(x[:6], t_k - t_est, a, i, J2, da_dot = x[6]), chief_k, theta_k, station_k)
+
+(:func:`~roe_sep.core.relmotion.dynamics.propagate`, :func:`~roe_sep.core.od.radar.observe`). Gauss-Newton iterations
+
+    dx = (H^T W H)^-1 H^T W (z - h(x)),   W = R^-1,   H = dh/dx by central finite differences,
+
+solved by SVD of the column-scaled, whitened H (no explicit normal matrix, so ill-conditioning is detected rather
+than rounded away). Azimuth residuals are wrapped to [-pi, pi). Formal covariance P = (H^T W H)^-1 at the solution.
+The secular ROE model is linear in x and the look angles are almost linear over the estimate's uncertainty
+(hundreds of meters at ~1000 km range), so the estimate is unbiased and P is its actual covariance: the normalized
+estimation error squared (:func:`nees`) is chi-square with 7 degrees of freedom.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..relmotion.dynamics import propagate
+from ..relmotion.roe import roe_to_rtn, wrap_angle
+from .radar import chief_from_kepler, chief_position_velocity, earth_rotation_matrix, look_position, observe, rtn_matrix
+
+STATE_SIZE = 7
+MAX_CONDITION = 1e10
+"""Largest condition number of the whitened, column-scaled design matrix accepted (normal matrix: its square)."""
+
+
+@dataclass(frozen=True)
+class RadarBatch:
+    """Measurements of one OD batch, one row per epoch (any order, any stations).
+
+    ``t`` (m,) sim time [s]; ``z`` (m, 3) [range m, az rad, el rad]; ``sigma`` (m, 3) their 1-sigma noise;
+    ``chief`` (m, 6) the carrier's mean Keplerian elements at ``t``; ``theta`` (m,) Greenwich sidereal angle [rad];
+    ``site_ef`` (m, 3) station Earth-fixed position [m]; ``site_enu`` (m, 3, 3) its ENU rotation.
+    """
+
+    t: np.ndarray
+    z: np.ndarray
+    sigma: np.ndarray
+    chief: np.ndarray
+    theta: np.ndarray
+    site_ef: np.ndarray
+    site_enu: np.ndarray
+
+
+@dataclass(frozen=True)
+class ODResult:
+    """Estimate ``x`` (7,) at ``t_est`` [s] with covariance ``cov`` (7, 7) (dimensionless ROE, 1/s), the post-fit
+    normalized residual RMS, Gauss-Newton ``iterations`` and the number of measurement triplets used."""
+
+    x: np.ndarray
+    cov: np.ndarray
+    t_est: float
+    residual_rms: float
+    iterations: int
+    measurements: int
+
+
+def measurement_residual(z, z_model):
+    """z - h with the azimuth difference wrapped to [-pi, pi) (``(..., 3)``)."""
+    r = np.asarray(z, dtype=float) - np.asarray(z_model, dtype=float)
+    r[..., 1] = wrap_angle(r[..., 1])
+    return r
+
+
+def _chief_a_inc(batch: RadarBatch):
+    """a [m] and i [rad] of the chief at the batch's latest epoch (the secular ROE model's constants)."""
+    k = np.argmax(batch.t)
+    return batch.chief[k, 0], batch.chief[k, 2]
+
+
+def predict(x, batch: RadarBatch, t_est, j2=True):
+    """h(x): modeled [range, az, el] ``(..., m, 3)`` for states ``x`` ``(..., 7)`` at epoch ``t_est``.
+
+    The ROE are propagated with :func:`propagate` (a, i of the chief at the batch's latest epoch; J2;
+    da_dot = x[6]) to each measurement epoch and observed with :func:`observe`.
+    """
+    x = np.asarray(x, dtype=float)
+    a, inc = _chief_a_inc(batch)
+    roe = propagate(x[..., None, :6], batch.t - t_est, a, inc, j2, x[..., None, 6])
+    return observe(roe, batch.chief, batch.theta, batch.site_ef, batch.site_enu)
+
+
+def state_steps(a):
+    """Finite-difference steps of the 7 states: 1 m of each a*ROE, and 1e-6 m/s of a*da_dot (6 m of a*dl after
+    a day), small against the hundreds of meters the look angles need to become nonlinear at LEO ranges."""
+    return np.array([1.0] * 6 + [1e-6]) / a
+
+
+def jacobian(x, batch: RadarBatch, t_est, j2=True):
+    """H = dh/dx ``(m, 3, 7)`` by central differences (h(x + s e_j) - h(x - s e_j)) / 2 s, azimuth wrapped."""
+    s = state_steps(_chief_a_inc(batch)[0])
+    pert = np.concatenate([np.diag(s), -np.diag(s)]) + np.asarray(x, dtype=float)
+    z = predict(pert, batch, t_est, j2)  # (14, m, 3)
+    diff = measurement_residual(z[:STATE_SIZE], z[STATE_SIZE:])  # (7, m, 3)
+    return np.moveaxis(diff / (2.0 * s[:, None, None]), 0, -1)
+
+
+def initial_guess(batch: RadarBatch, t_est, j2=True):
+    """Linear starting point: every measurement inverted to a relative RTN position, then unweighted least squares.
+
+    r_rel/a = [R T N]^T (R3(theta)^T look_position(z) - r_chief) / a is linear in x, exactly: the secular
+    propagation and the ROE -> RTN map are linear, so its design matrix is the model evaluated on the 7 unit states.
+    """
+    a, inc, raan, u = chief_from_kepler(batch.chief)
+    rc, vc = chief_position_velocity(a, inc, raan, u)
+    r_eci = np.einsum("...ji,...j->...i", earth_rotation_matrix(batch.theta),
+                      look_position(batch.z, batch.site_ef, batch.site_enu))
+    rel = np.einsum("...ji,...j->...i", rtn_matrix(rc, vc), r_eci - rc) / a[:, None]
+    unit = np.eye(STATE_SIZE)
+    roe = propagate(unit[:, None, :6], batch.t - t_est, *_chief_a_inc(batch), j2, unit[:, None, 6])
+    design = np.moveaxis(roe_to_rtn(roe, u)[0], 0, -1).reshape(-1, STATE_SIZE)  # (3m, 7)
+    scale = np.linalg.norm(design, axis=0)
+    scale[scale == 0.0] = 1.0  # an unobservable component stays 0 here; batch_least_squares reports it
+    y = np.linalg.lstsq(design / scale, rel.reshape(-1), rcond=None)[0]
+    return y / scale
+
+
+def _check(batch: RadarBatch):
+    m = np.shape(batch.t)[0] if np.ndim(batch.t) == 1 else -1
+    if m < 0:
+        raise ValueError("measurement epochs must be a 1-D array")
+    shapes = {"z": (m, 3), "sigma": (m, 3), "chief": (m, 6), "theta": (m,), "site_ef": (m, 3), "site_enu": (m, 3, 3)}
+    for name, shape in shapes.items():
+        if np.shape(getattr(batch, name)) != shape:
+            raise ValueError(f"{name} has shape {np.shape(getattr(batch, name))}, expected {shape}")
+    if 3 * m < STATE_SIZE + 1:
+        raise ValueError(f"not enough measurements: {m} range/az/el triplets ({3 * m} values) for {STATE_SIZE} "
+                         "unknowns and a residual")
+    for name in ("t", "z", "sigma", "chief", "theta", "site_ef", "site_enu"):
+        if not np.all(np.isfinite(getattr(batch, name))):
+            raise ValueError(f"measurement batch has non-finite values in {name!r}")
+    if np.any(np.asarray(batch.sigma) <= 0.0):
+        raise ValueError("measurement sigmas must be positive")
+
+
+def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_iterations=20, tol=1e-6):
+    """Gauss-Newton weighted least squares of x = [ROE at t_est (6), da_dot] (module docstring).
+
+    ``t_est`` defaults to the last measurement epoch; ``x0`` to :func:`initial_guess`. Converged when the step's
+    Mahalanobis length sqrt(dx^T H^T W H dx) is below ``tol`` (a fraction of one sigma). Raises ValueError with the
+    reason for too few or non-finite measurements, an unobservable state (singular normal matrix) or no
+    convergence.
+    """
+    _check(batch)
+    t_est = float(np.max(batch.t)) if t_est is None else float(t_est)
+    x = initial_guess(batch, t_est, j2) if x0 is None else np.array(x0, dtype=float)
+    w = 1.0 / np.asarray(batch.sigma, dtype=float).reshape(-1)
+    for iteration in range(1, max_iterations + 1):
+        r = measurement_residual(batch.z, predict(x, batch, t_est, j2)).reshape(-1) * w
+        h = jacobian(x, batch, t_est, j2).reshape(-1, STATE_SIZE) * w[:, None]
+        scale = np.linalg.norm(h, axis=0)
+        if not np.all(scale > 0.0):
+            raise ValueError(f"singular normal matrix: state component(s) {np.nonzero(~(scale > 0.0))[0].tolist()}"
+                             " have zero partials (not observable from these measurements)")
+        u_, sv, vt = np.linalg.svd(h / scale, full_matrices=False)
+        cond = sv[0] / sv[-1] if sv[-1] > 0.0 else np.inf
+        if not cond < MAX_CONDITION:
+            raise ValueError(f"singular normal matrix (condition number {cond:.3g} of the scaled design matrix): "
+                             "the measurements do not determine the relative orbit and da_dot")
+        dy = vt.T @ ((u_.T @ r) / sv)
+        x = x + dy / scale
+        if np.linalg.norm(sv * (vt @ dy)) < tol:
+            break
+    else:
+        raise ValueError(f"Gauss-Newton did not converge in {max_iterations} iterations")
+    r = measurement_residual(batch.z, predict(x, batch, t_est, j2)).reshape(-1) * w
+    cov = (vt.T / sv**2) @ vt / np.outer(scale, scale)
+    return ODResult(x=x, cov=0.5 * (cov + cov.T), t_est=t_est, residual_rms=float(np.sqrt(np.mean(r * r))),
+                    iterations=iteration, measurements=int(np.shape(batch.t)[0]))
+
+
+def nees(x_est, x_true, cov):
+    """Normalized estimation error squared e^T P^-1 e, e = x_est - x_true (chi-square with dim(x) degrees of
+    freedom for a consistent estimator; Bar-Shalom, Li, Kirubarajan 2001, Sec. 5.4)."""
+    e = np.asarray(x_est, dtype=float) - np.asarray(x_true, dtype=float)
+    return float(e @ np.linalg.solve(np.asarray(cov, dtype=float), e))
+

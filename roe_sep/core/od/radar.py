@@ -1,0 +1,293 @@
+"""Ground-station radar geometry and measurement model (seed 001 Sec. 5: radar tracking of the picosatellite).
+
+Frames and models of this stub, chosen for a consistent simulation/estimation pair rather than for arc-second
+astrometry:
+
+* Time: sim time ``t`` [s] counts from a calendar epoch given as a Julian date ``jd0`` (UTC). UT1 = UTC is assumed
+  (|UT1 - UTC| < 0.9 s, i.e. < 6.6e-5 rad of Earth rotation: up to 270 m of station position along its parallel;
+  simulator and estimator share the convention, so it does not bias this stub's estimates).
+* Earth rotation: the inertial frame is the equator and equinox of date; Earth-fixed = inertial rotated by the
+  Greenwich mean sidereal time (IAU 1982, :func:`gmst`). Nutation (the equation of the equinoxes, < 1.2 s of
+  time) and polar motion (< 0.5 arcsec) are ignored; the chief's RAAN is referred to the same frame.
+* Chief (carrier): its *mean* near-circular elements (a, i, raan, u) are used as if they were osculating
+  (:func:`chief_position_velocity`, circular orbit, e neglected). The short-periodic J2 terms (~km) and the
+  eccentricity (a e ~ km for a frozen orbit) shift the absolute position of both spacecraft together; the relative
+  geometry the radar must separate is unaffected. Simulator and estimator use the same model.
+* Picosatellite: chief + RTN relative position of the linear ROE map :func:`~roe_sep.core.relmotion.roe.roe_to_rtn`
+  (rectilinear, so an along-track offset y leaves the sphere by y^2 / (2 a): 65 m at 30 km, common to truth and
+  model of this stub).
+* Stations: geodetic latitude/longitude/ellipsoidal height on WGS-84 (:func:`geodetic_to_ecef`); look angles in
+  the local East-North-Up frame, azimuth from north towards east, no refraction.
+"""
+
+import math
+from dataclasses import dataclass
+from datetime import datetime, timezone
+
+import numpy as np
+
+from ..constants import MU_EARTH, R_EARTH, SECONDS_PER_DAY
+from ..relmotion.roe import roe_to_rtn
+
+WGS84_A = R_EARTH
+"""WGS-84 semi-major axis [m]."""
+
+WGS84_F = 1.0 / 298.257223563
+"""WGS-84 flattening."""
+
+WGS84_E2 = WGS84_F * (2.0 - WGS84_F)
+"""WGS-84 first eccentricity squared."""
+
+DEFAULT_EPOCH_UTC = "2016-07-01T00:00:00"
+"""Calendar epoch of sim time 0 in the default scenario (the date of seed 001's operational plan)."""
+
+JD_J2000 = 2451545.0
+"""Julian date of the J2000.0 epoch (2000-01-01 12:00)."""
+
+JD_UNIX_EPOCH = 2440587.5
+"""Julian date of 1970-01-01 00:00 UTC."""
+
+
+def julian_date(epoch_utc):
+    """Julian date of a UTC calendar epoch: JD = 2440587.5 + (POSIX seconds) / 86400.
+
+    ``epoch_utc`` is a :class:`datetime` or an ISO-8601 string (``2016-07-01T00:00:00``, optional ``Z`` or
+    ``+hh:mm``); a naive value is taken as UTC. POSIX time has no leap seconds, so this is the UTC Julian date (used
+    as UT1, see the module docstring). Raises ValueError for an unparseable string.
+    """
+    if isinstance(epoch_utc, str):
+        text = epoch_utc.strip()
+        if text.endswith(("Z", "z")):
+            text = text[:-1] + "+00:00"
+        epoch_utc = datetime.fromisoformat(text)
+    if epoch_utc.tzinfo is None:
+        epoch_utc = epoch_utc.replace(tzinfo=timezone.utc)
+    return JD_UNIX_EPOCH + epoch_utc.timestamp() / SECONDS_PER_DAY
+
+
+def gmst(jd_ut1):
+    """Greenwich mean sidereal time [rad, 0..2pi) from the UT1 Julian date, IAU 1982 (Vallado Eq. 3-47).
+
+    theta = 67310.54841 s + (876600 h + 8640184.812866 s) T + 0.093104 s T^2 - 6.2e-6 s T^3,
+    T = (JD_UT1 - 2451545.0) / 36525 Julian centuries; seconds of time, 86400 s = 2 pi.
+    """
+    t = (np.asarray(jd_ut1, dtype=float) - JD_J2000) / 36525.0
+    seconds = 67310.54841 + (876600.0 * 3600.0 + 8640184.812866) * t + 0.093104 * t**2 - 6.2e-6 * t**3
+    return np.mod(seconds, SECONDS_PER_DAY) * (2.0 * np.pi / SECONDS_PER_DAY)
+
+
+def sun_right_ascension(jd):
+    """Apparent right ascension of the Sun [rad, -pi..pi), low precision (Astronomical Almanac, Sec. C, 0.01 deg
+    in 1950-2050).
+
+    n = JD - 2451545.0; L = 280.460 + 0.9856474 n; g = 357.528 + 0.9856003 n (deg);
+    lambda = L + 1.915 sin g + 0.020 sin 2g; eps = 23.439 - 0.0000004 n; alpha = atan2(cos eps sin lambda, cos lambda).
+    """
+    n = np.asarray(jd, dtype=float) - JD_J2000
+    mean_lon = np.radians(280.460 + 0.9856474 * n)
+    g = np.radians(357.528 + 0.9856003 * n)
+    lam = mean_lon + np.radians(1.915) * np.sin(g) + np.radians(0.020) * np.sin(2.0 * g)
+    eps = np.radians(23.439 - 0.0000004 * n)
+    return np.arctan2(np.cos(eps) * np.sin(lam), np.cos(lam))
+
+
+def raan_from_sun(sun_ra, ltan_hours):
+    """RAAN [rad, 0..2pi) of an orbit whose ascending node is at local time ``ltan_hours`` when the Sun is at right
+    ascension ``sun_ra``: raan = alpha_sun + (LTAN - 12 h) * 15 deg/h (the node is LTAN - 12 h of hour angle east
+    of the Sun)."""
+    return np.mod(np.asarray(sun_ra, dtype=float) + (np.asarray(ltan_hours, dtype=float) - 12.0) * (np.pi / 12.0),
+                  2.0 * np.pi)
+
+
+def raan_from_ltan(ltan_hours, jd):
+    """:func:`raan_from_sun` with the low-precision *apparent* Sun of :func:`sun_right_ascension` on date ``jd``,
+    i.e. LTAN in apparent solar time; for mean solar time add the equation of time (at most 16 min, 4 deg of RAAN).
+    BIROS: LTAN 09:30 (seed 002)."""
+    return raan_from_sun(sun_right_ascension(jd), ltan_hours)
+
+
+def geodetic_to_ecef(lat, lon, alt):
+    """Earth-fixed position [m] of geodetic latitude/longitude [rad] and ellipsoidal height [m] on WGS-84.
+
+    N = a / sqrt(1 - e^2 sin^2 lat):  x = (N + h) cos lat cos lon,  y = (N + h) cos lat sin lon,
+    z = (N (1 - e^2) + h) sin lat.  Returns ``(..., 3)``.
+    """
+    lat, lon, alt = (np.asarray(v, dtype=float) for v in (lat, lon, alt))
+    n = WGS84_A / np.sqrt(1.0 - WGS84_E2 * np.sin(lat) ** 2)
+    return np.stack([(n + alt) * np.cos(lat) * np.cos(lon), (n + alt) * np.cos(lat) * np.sin(lon),
+                     (n * (1.0 - WGS84_E2) + alt) * np.sin(lat)], axis=-1)
+
+
+def enu_matrix(lat, lon):
+    """Rotation Earth-fixed -> local East-North-Up at geodetic ``lat``/``lon`` [rad]: rows E, N, U, ``(..., 3, 3)``.
+
+    E = (-sin lon, cos lon, 0), N = (-sin lat cos lon, -sin lat sin lon, cos lat), U = (cos lat cos lon,
+    cos lat sin lon, sin lat).
+    """
+    lat, lon = np.asarray(lat, dtype=float), np.asarray(lon, dtype=float)
+    sl, cl, sp, cp = np.sin(lon), np.cos(lon), np.sin(lat), np.cos(lat)
+    z = np.zeros_like(sl * sp)
+    return np.stack([np.stack([-sl + z, cl + z, z], -1), np.stack([-sp * cl, -sp * sl, cp + z], -1),
+                     np.stack([cp * cl, cp * sl, sp + z], -1)], axis=-2)
+
+
+@dataclass(frozen=True)
+class Station:
+    """A ground station: name, geodetic latitude/longitude [rad], ellipsoidal height [m] (WGS-84)."""
+
+    name: str
+    lat: float
+    lon: float
+    alt: float
+
+    @property
+    def ecef(self):
+        """Earth-fixed position [m], :func:`geodetic_to_ecef`."""
+        return geodetic_to_ecef(self.lat, self.lon, self.alt)
+
+    @property
+    def enu(self):
+        """Earth-fixed -> ENU rotation, :func:`enu_matrix`."""
+        return enu_matrix(self.lat, self.lon)
+
+
+TIRA = Station("TIRA", math.radians(50.6166), math.radians(7.1296), 300.0)
+"""FHR's Tracking and Imaging Radar, Wachtberg near Bonn: 50.6166 N, 7.1296 E; the site is at about 260 m above sea
+level (the nearby highest point of Wachtberg is 269 m) and the geoid is about 47 m above WGS-84 there, so about
+300 m ellipsoidal height."""
+
+
+def earth_rotation_matrix(theta):
+    """Inertial (of date) -> Earth-fixed rotation R3(theta) about z by the sidereal angle ``theta`` [rad],
+    ``(..., 3, 3)``: x_ef = cos th x + sin th y, y_ef = -sin th x + cos th y, z_ef = z."""
+    th = np.asarray(theta, dtype=float)
+    c, s = np.cos(th), np.sin(th)
+    z, one = np.zeros_like(th), np.ones_like(th)
+    return np.stack([np.stack([c, s, z], -1), np.stack([-s, c, z], -1), np.stack([z, z, one], -1)], axis=-2)
+
+
+def chief_position_velocity(a, inc, raan, u):
+    """Inertial position [m] and velocity [m/s] of a circular orbit at argument of latitude ``u`` [rad].
+
+    r = a (cos raan cos u - sin raan sin u cos i,  sin raan cos u + cos raan sin u cos i,  sin u sin i),
+    v = sqrt(mu / a) (-cos raan sin u - sin raan cos u cos i,  -sin raan sin u + cos raan cos u cos i,  cos u sin i).
+    Mean elements used as osculating (see the module docstring). Returns two ``(..., 3)`` arrays.
+    """
+    a, inc, raan, u = (np.asarray(v, dtype=float) for v in (a, inc, raan, u))
+    co, so, ci, si, cu, su = np.cos(raan), np.sin(raan), np.cos(inc), np.sin(inc), np.cos(u), np.sin(u)
+    r = a[..., None] * np.stack([co * cu - so * su * ci, so * cu + co * su * ci, su * si], axis=-1)
+    v = np.sqrt(MU_EARTH / a)[..., None] * np.stack([-co * su - so * cu * ci, -so * su + co * cu * ci, cu * si],
+                                                     axis=-1)
+    return r, v
+
+
+def rtn_matrix(r, v):
+    """RTN -> inertial rotation ``(..., 3, 3)`` whose columns are R = r/|r|, T = N x R, N = (r x v)/|r x v|."""
+    r, v = np.asarray(r, dtype=float), np.asarray(v, dtype=float)
+    er = r / np.linalg.norm(r, axis=-1, keepdims=True)
+    h = np.cross(r, v)
+    en = h / np.linalg.norm(h, axis=-1, keepdims=True)
+    return np.stack([er, np.cross(en, er), en], axis=-1)
+
+
+def chief_from_kepler(kep):
+    """(a, i, raan, u) of mean Keplerian elements ``[a, e, i, raan, argp, M]`` (u = argp + M)."""
+    k = np.asarray(kep, dtype=float)
+    return k[..., 0], k[..., 2], k[..., 3], k[..., 4] + k[..., 5]
+
+
+def deputy_position(roe, chief_kep):
+    """Inertial position [m] of the picosatellite: chief + RTN relative position.
+
+    r = r_chief + [R T N] (a * roe_to_rtn(roe, u)[0]), with the chief from :func:`chief_position_velocity` at its
+    mean elements ``chief_kep`` ``[a, e, i, raan, argp, M]``; ``roe`` dimensionless. Broadcasts over leading axes.
+    """
+    a, inc, raan, u = chief_from_kepler(chief_kep)
+    rc, vc = chief_position_velocity(a, inc, raan, u)
+    rel = roe_to_rtn(roe, u)[0] * a[..., None]
+    return rc + np.einsum("...ij,...j->...i", rtn_matrix(rc, vc), rel)
+
+
+def relative_distance(roe, a, u):
+    """|relative position| [m] of the linear ROE map, a |roe_to_rtn(roe, u)[0]|: the radar separability distance."""
+    return np.linalg.norm(roe_to_rtn(roe, u)[0], axis=-1) * np.asarray(a, dtype=float)
+
+
+def look_angles(r_ef, site_ef, site_enu):
+    """Range [m], azimuth [rad, 0..2pi, from north towards east] and elevation [rad] of Earth-fixed ``r_ef``.
+
+    rho = r - site rotated to ENU (``site_enu`` from :func:`enu_matrix`): range = |rho|,
+    az = atan2(E, N), el = atan2(U, sqrt(E^2 + N^2)). Returns ``(..., 3)`` = [range, az, el].
+    """
+    d = np.asarray(r_ef, dtype=float) - np.asarray(site_ef, dtype=float)
+    e, n, up = np.moveaxis(np.einsum("...ij,...j->...i", site_enu, d), -1, 0)
+    return np.stack([np.sqrt(e * e + n * n + up * up), np.mod(np.arctan2(e, n), 2.0 * np.pi),
+                     np.arctan2(up, np.hypot(e, n))], axis=-1)
+
+
+def look_position(z, site_ef, site_enu):
+    """Inverse of :func:`look_angles`: Earth-fixed position of ``z`` = [range, az, el]:
+    ENU = range (cos el sin az, cos el cos az, sin el), r = site + ENU^T rotated back."""
+    z = np.asarray(z, dtype=float)
+    rng, az, el = z[..., 0], z[..., 1], z[..., 2]
+    enu = rng[..., None] * np.stack([np.cos(el) * np.sin(az), np.cos(el) * np.cos(az), np.sin(el)], axis=-1)
+    return np.asarray(site_ef, dtype=float) + np.einsum("...ji,...j->...i", site_enu, enu)
+
+
+def observe(roe, chief_kep, theta, site_ef, site_enu):
+    """The measurement function: [range, az, el] of the picosatellite seen from a station.
+
+    :func:`deputy_position` -> Earth-fixed with :func:`earth_rotation_matrix` (sidereal angle ``theta``, e.g.
+    :func:`gmst`) -> :func:`look_angles`. Broadcasts over leading axes (epochs, samples).
+    """
+    r_ef = np.einsum("...ij,...j->...i", earth_rotation_matrix(theta), deputy_position(roe, chief_kep))
+    return look_angles(r_ef, site_ef, site_enu)
+
+
+def chief_elevation(chief_kep, theta, site_ef, site_enu):
+    """Elevation [rad] of the chief itself (roe = 0) from a station: the carrier's passes."""
+    return observe(np.zeros(6), chief_kep, theta, site_ef, site_enu)[..., 2]
+
+
+def visible(elevation, mask):
+    """True where the elevation is above the mask [rad]."""
+    return np.asarray(elevation, dtype=float) > mask
+
+
+def pass_windows(elevation, t_start, t_end, mask, step=30.0, tol=0.01):
+    """Rise/set times [s] of the passes above ``mask`` [rad] in ``[t_start, t_end]``: ``(k, 2)`` array.
+
+    ``elevation(t)`` is vectorized over an array of times. Scan on a ``step`` grid, then refine every sign change of
+    elevation - mask by simultaneous bisection down to ``tol`` seconds. A pass in progress at ``t_start``
+    (``t_end``) starts (ends) there. Passes shorter than ``step`` can fall between grid points and be missed: the
+    default 30 s is far below the minutes a LEO pass above a 10 deg mask lasts.
+    """
+    t = np.arange(t_start, t_end, step, dtype=float)
+    t = np.append(t, float(t_end))
+    up = visible(elevation(t), mask)
+    change = np.nonzero(up[1:] != up[:-1])[0]
+    lo, hi = t[change].copy(), t[change + 1].copy()
+    rising = ~up[change]
+    while lo.size and np.max(hi - lo) > tol:
+        mid = 0.5 * (lo + hi)
+        same = visible(elevation(mid), mask) == up[change]  # mid still on the 'before' side of the crossing
+        lo, hi = np.where(same, mid, lo), np.where(same, hi, mid)
+    cross = 0.5 * (lo + hi)
+    rises = list(cross[rising])
+    sets = list(cross[~rising])
+    if up[0]:
+        rises.insert(0, t[0])
+    if up[-1]:
+        sets.append(t[-1])
+    return np.array([rises, sets], dtype=float).T.reshape(-1, 2)
+
+
+def add_noise(z, sigma, rng):
+    """Noisy measurements: z + N(0, sigma) per component (range [m], az, el [rad]), azimuth wrapped to 0..2pi.
+
+    ``rng`` is a :class:`numpy.random.Generator` (seeded by the caller for reproducibility).
+    """
+    z = np.asarray(z, dtype=float)
+    out = z + np.asarray(sigma, dtype=float) * rng.standard_normal(z.shape)
+    out[..., 1] = np.mod(out[..., 1], 2.0 * np.pi)
+    return out

@@ -1,0 +1,96 @@
+"""Passive-safety and visibility metrics of a relative orbit (seeds 000/002)."""
+
+import numpy as np
+
+from ..relmotion.dynamics import arg_latitude_rate, propagate
+from ..relmotion.orbit import mean_motion
+from ..relmotion.roe import e_vector_polar, roe_to_rtn, wrap_angle
+
+
+def min_rn_distance(roe):
+    """Minimum distance in the plane normal to the flight direction (R-N), dimensionless, seed 002 Eq. (25).
+
+    dr_min = sqrt(2) |de . di| / (de^2 + di^2 + |de + di| |de - di|)^(1/2), valid for da = 0; (anti-)parallel
+    e/i vectors give min(de, di), perpendicular ones give 0. Multiply by a for meters.
+    """
+    r = np.asarray(roe, dtype=float)
+    de, di = r[..., 2:4], r[..., 4:6]
+    dot = np.sum(de * di, axis=-1)
+    de2, di2 = np.sum(de * de, axis=-1), np.sum(di * di, axis=-1)
+    plus = np.linalg.norm(de + di, axis=-1)
+    minus = np.linalg.norm(de - di, axis=-1)
+    denom = np.sqrt(de2 + di2 + plus * minus)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(denom > 0.0, np.sqrt(2.0) * np.abs(dot) / denom, 0.0)
+
+
+def fov_limit(dl, half_angle):
+    """Largest oscillation amplitude that stays in a camera half field of view: tan(half) |dl|, seed 002 Eq. (11).
+
+    Curvature neglected, as in the seed. Same unit as ``dl``.
+    """
+    return np.tan(half_angle) * np.abs(np.asarray(dl, dtype=float))
+
+
+def approaching(roe):
+    """True where the mean along-track separation shrinks: d(dl)/dt = -3/2 n da has the opposite sign of dl.
+
+    Equivalent to da * dl > 0 (seed 002: 'approaching drift' is a da > 0 with the picosatellite leading).
+    """
+    r = np.asarray(roe, dtype=float)
+    return r[..., 0] * r[..., 1] > 0.0
+
+
+def nearest_crossing(roe0, u0, duration, a, inc, j2=True, da_dot=0.0, t_min=None, iterations=3):
+    """Smallest along-track distance |T| at a transit through the R = 0 plane in ``(t_min, duration]`` seconds.
+
+    Seed 002 Fig. 8 / seed 001 AC2. ``roe0`` ``(..., 6)`` is the dimensionless state at t = 0, when the chief is at
+    mean argument of latitude ``u0`` [rad]. In each revolution m the transit candidates come from the Keplerian
+    solution of R/a = da - |de| cos(u - phi) = 0 with the elements at that revolution's start,
+    u = phi +- arccos(da/|de|), and are refined by Newton iterations on the full secular model (:func:`propagate`
+    then :func:`roe_to_rtn`), so J2 and differential drag are included. ``t_min`` (default: a tenth of an orbit)
+    excludes the trivial transit at t = 0 right after an ejection. An orbit without radial motion (da = de = 0)
+    lies in the R = 0 plane: its distance is |T| at ``t_min``.
+
+    Returns ``(t_abs, t)``: the dimensionless |T|/a (``inf`` where no transit occurs in the window) and the
+    transit time [s] (``nan`` there).
+    """
+    r0 = np.asarray(roe0, dtype=float)
+    batch = r0.shape[:-1]
+    u0 = np.broadcast_to(np.asarray(u0, dtype=float), batch)[..., None]
+    dad = np.broadcast_to(np.asarray(da_dot, dtype=float), batch)[..., None]
+    u_dot = arg_latitude_rate(a, inc, j2)
+    n = mean_motion(a)
+    period = 2.0 * np.pi / u_dot
+    if t_min is None:
+        t_min = 0.1 * period
+    with np.errstate(invalid="ignore", divide="ignore"):  # circular (de = 0) samples give NaN: masked below
+        t_rev = period * np.arange(int(np.ceil(duration / period)) + 1)
+        start = propagate(r0[..., None, :], t_rev, a, inc, j2, dad)
+        de, phi = e_vector_polar(start)
+        psi = np.arccos(np.clip(start[..., 0] / de, -1.0, 1.0))
+        u_start = u0 + u_dot * t_rev
+        cand = np.concatenate([phi + psi, phi - psi], axis=-1)
+        u_start2 = np.concatenate([u_start, u_start], axis=-1)
+        # one candidate of each kind per revolution, within half a revolution of that revolution's start
+        t = np.concatenate([t_rev, t_rev]) + wrap_angle(cand - u_start2) / u_dot
+        r_b = r0[..., None, :]
+        for _ in range(iterations):
+            state = propagate(r_b, t, a, inc, j2, dad)
+            pos, vel = roe_to_rtn(state, u0 + u_dot * t)
+            t = t - pos[..., 0] / (vel[..., 0] * n)
+        state = propagate(r_b, t, a, inc, j2, dad)
+        pos, _ = roe_to_rtn(state, u0 + u_dot * t)
+    ok = np.isfinite(t) & (t > t_min) & (t <= duration) & (np.abs(pos[..., 0]) < 1e-9)
+    t_abs = np.where(ok, np.abs(pos[..., 1]), np.inf)
+    idx = np.argmin(t_abs, axis=-1)[..., None]
+    best = np.take_along_axis(t_abs, idx, axis=-1)[..., 0]
+    t_best = np.where(np.isfinite(best), np.take_along_axis(t, idx, axis=-1)[..., 0], np.nan)
+    # an orbit with no radial motion at all (da = 0, de = 0) stays in the R = 0 plane: it "transits" everywhere,
+    # at the along-track distance it has at t_min
+    flat = (np.abs(r0[..., 0]) < 1e-12) & (np.hypot(r0[..., 2], r0[..., 3]) < 1e-12)
+    if np.any(flat):
+        pos_min, _ = roe_to_rtn(propagate(r0, t_min, a, inc, j2, dad[..., 0]), u0[..., 0] + u_dot * t_min)
+        best = np.where(flat, np.abs(pos_min[..., 1]), best)
+        t_best = np.where(flat, t_min, t_best)
+    return best, t_best

@@ -1,0 +1,104 @@
+"""The simulator's truth: chief mean elements and the relative orbit, with burns applied as they are executed.
+
+Before the ejection the picosatellite rides in the carrier (ROE zero, no differential drag); from the ejection on
+the relative orbit follows the secular model (:func:`~roe_sep.core.relmotion.dynamics.propagate`: Keplerian drift, J2
+and the *true* differential drag ``da_dot``) and each executed burn adds seed 002 Eq. (2) at the chief's argument of
+latitude of that instant.
+"""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..relmotion.dynamics import arg_latitude_rate, propagate, propagate_chief
+from ..relmotion.maneuvers import delta_roe, dispersed_dv
+from ..relmotion.orbit import mean_motion
+from ..relmotion.roe import roe_to_rtn
+from ..relmotion.trajectory import Chief
+
+
+@dataclass
+class TruthModel:
+    """Mutable truth state. ``chief0``: mean Keplerian ``[a, e, i, raan, argp, M]`` at ``t0`` [s]."""
+
+    chief0: np.ndarray
+    t0: float
+    da_dot: float  # 1/s, true differential-drag drift of da after the ejection
+    j2: bool = True
+    roe: np.ndarray = field(default_factory=lambda: np.zeros(6))
+    t_state: float = 0.0
+    separated: bool = False
+
+    def __post_init__(self):
+        self.chief0 = np.asarray(self.chief0, dtype=float)
+        self.t_state = self.t0
+
+    @property
+    def a(self):
+        return float(self.chief0[0])
+
+    @property
+    def inc(self):
+        return float(self.chief0[2])
+
+    def chief(self) -> Chief:
+        return Chief(self.a, self.inc, float(self.chief0[4] + self.chief0[5]), self.t0)
+
+    def chief_elements(self, t):
+        """Chief mean Keplerian elements at ``t``."""
+        return propagate_chief(self.chief0, np.asarray(t, dtype=float) - self.t0, self.j2)
+
+    def u_at(self, t):
+        return self.chief().u_at(t, self.j2)
+
+    def roe_at(self, t):
+        """Dimensionless ROE at ``t`` >= the last event (scalar or array of times)."""
+        dt = np.asarray(t, dtype=float) - self.t_state
+        if not self.separated:
+            return np.zeros(np.shape(dt) + (6,))
+        return propagate(self.roe if np.ndim(dt) == 0 else self.roe[None, :], dt, self.a, self.inc, self.j2,
+                         self.da_dot)
+
+    def rtn_at(self, t):
+        """Relative position [m] and velocity [m/s] in the carrier RTN frame at ``t``."""
+        pos, vel = roe_to_rtn(self.roe_at(t), self.u_at(t))
+        return pos * self.a, vel * self.a * mean_motion(self.a)
+
+    def distances(self, t_from, t_to, step):
+        """Times and |r| [m] over ``[t_from, t_to]`` sampled every ``step`` seconds (and at both ends)."""
+        times = np.append(np.arange(t_from, t_to, step), t_to)
+        return times, np.linalg.norm(self.rtn_at(times)[0], axis=-1)
+
+    def apply(self, t, dv_rel):
+        """Execute a relative impulse [m/s] (the ejection: the picosatellite's; a carrier burn: minus its own)."""
+        state = self.roe_at(t)
+        self.roe = state + delta_roe(np.asarray(dv_rel, dtype=float), self.u_at(t), self.a, mean_motion(self.a))
+        self.t_state = float(t)
+        self.separated = True
+
+
+@dataclass
+class ExecutionErrors:
+    """Seeded execution errors of seed 002 Eq. (22): magnitude factor and attitude errors per burn."""
+
+    rng: np.random.Generator
+    spl_sigma: float
+    thruster_sigma: float
+    attitude_sigma: float  # rad, per axis
+
+    def executed(self, dv_own, spacecraft):
+        """The burn as executed: ``f R(eps) dv`` with f ~ N(1, sigma of the SPL or of the carrier thruster)."""
+        sigma = self.spl_sigma if spacecraft == "picosatellite" else self.thruster_sigma
+        factor = self.rng.normal(1.0, sigma)
+        eps = self.rng.normal(0.0, self.attitude_sigma, 3)
+        return dispersed_dv(dv_own, factor, eps)
+
+
+def chief_from_u(a, inc, raan, u):
+    """Circular chief mean elements ``[a, 0, i, raan, 0, u]`` (argument of perigee 0, M = u)."""
+    return np.array([a, 0.0, inc, raan, 0.0, u], dtype=float)
+
+
+def time_to_arg_latitude(u_now, u_target, a, inc, j2=True):
+    """Seconds until the chief's mean argument of latitude next reaches ``u_target`` (in [0, one period))."""
+    return float(np.mod(u_target - u_now, 2.0 * np.pi) / arg_latitude_rate(a, inc, j2))

@@ -1,0 +1,60 @@
+"""The ROS interface of roe_sep in one place: topic and service names, QoS profiles and frame ids, shared by the
+nodes, the run report, the bag tools and the tests (documented in the README's topic table).
+
+Below the nodes in the layering (core <- interfaces, bag <- nodes <- run/report <- cli): offline tools read topic
+names from here without importing any node.
+"""
+
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+LATCHED = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST,
+    depth=1,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
+)
+"""Plans, events and other latched outputs: a late joiner (or a restarted node) receives the last message."""
+
+DIAGNOSTICS = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST, depth=10, reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.VOLATILE,
+)
+"""``/diagnostics``, as diagnostic_updater publishes it."""
+
+STREAM = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST, depth=100, reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.VOLATILE,
+)
+"""Periodic streams (truth, measurements, safety status): reliable, deep enough for a fast sim clock."""
+
+EXECUTED = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST, depth=50, reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
+)
+"""Executed maneuvers: every burn of the run stays available to late joiners (the report, a replay)."""
+
+CLOCK_SUB = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST, depth=10, reliability=ReliabilityPolicy.BEST_EFFORT,
+    durability=DurabilityPolicy.VOLATILE,
+)
+"""Subscribing to ``/clock``: best effort matches a reliable or best-effort publisher; a node that processes every
+epoch in (last, now] at each tick loses nothing when a tick is dropped."""
+
+CLOCK_TOPIC = "/clock"  # rosgraph_msgs/Clock, published by the sim (rclpy's own sim-time subscriber uses it)
+EJECTION_TOPIC = "/separation/ejection"  # EjectionEvent, LATCHED, ejector
+DRIFT_STOP_PLAN_TOPIC = "/separation/drift_stop_plan"  # ManeuverPlan, LATCHED, planner
+TRUTH_ROE_TOPIC = "/sim/truth/roe"  # RelativeOrbitalElements, STREAM, sim
+TRUTH_RTN_TOPIC = "/sim/truth/rtn"  # RelativeState, STREAM, sim
+EXECUTED_TOPIC = "/sim/executed_maneuvers"  # ImpulsiveManeuver, EXECUTED, sim (as executed, with errors)
+RADAR_TOPIC = "/radar/measurements"  # RadarMeasurement, STREAM, radar_od
+OD_TOPIC = "/od/estimate"  # OrbitDetermination, LATCHED, radar_od
+ACQUISITION_PLAN_TOPIC = "/acquisition/plan"  # ManeuverPlan, LATCHED, ic_planner
+SAFETY_TOPIC = "/safety/status"  # SafetyStatus, STREAM, safety_monitor (truth and estimate)
+PLAN_CHECK_TOPIC = "/safety/plan_check"  # SafetyStatus, EXECUTED (keeps the last 50 checks), safety_monitor
+DIAGNOSTICS_TOPIC = "/diagnostics"
+PLAN_SERVICE = "/separation/plan"  # roe_sep_msgs/srv/PlanSeparation, planner
+
+CARRIER_RTN_FRAME = "carrier_rtn"
+"""Radial-tangential-normal frame of the carrier (chief): relative states, ROE estimates, plans and events."""
+TRUTH_FRAME = "truth"
+"""Frame id of the simulator's true ROE (``/sim/truth/roe``): the same RTN frame, marked as truth, not an estimate."""

@@ -1,0 +1,130 @@
+"""The package's architecture as a test: no import circles anywhere in ``roe_sep/`` and no upward import.
+
+Layers, lowest first (a module may import its own layer and the ones below, never one above):
+
+    core  <-  interfaces, bag  <-  nodes  <-  run, report, plots  <-  cli
+
+Every import counts, also the ones inside functions (a lazy import hides a circle, it does not remove it). Only
+imports of ``roe_sep`` modules are followed; ``from pkg import name`` is an edge to the submodule ``pkg.name`` when
+that exists, else to ``pkg`` itself. The core also never imports ROS (rclpy or any message package).
+"""
+
+import ast
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1] / "roe_sep"
+
+LAYERS = {"core": 0, "interfaces": 1, "bag": 1, "nodes": 2, "run": 3, "report": 3, "plots": 3, "cli": 4}
+ROS_MODULES = ("rclpy", "roe_sep_msgs", "rosgraph_msgs", "diagnostic_msgs", "builtin_interfaces", "geometry_msgs",
+               "std_msgs", "rcl_interfaces", "ament_index_python")
+
+
+def module_name(path: Path) -> str:
+    parts = list(path.relative_to(ROOT.parent).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def modules() -> dict:
+    return {module_name(p): p for p in sorted(ROOT.rglob("*.py"))}
+
+
+def imports(name: str, path: Path, known: set):
+    """(target roe_sep module, line) of every import in a module, and the top-level names of other imports."""
+    is_pkg = path.name == "__init__.py"
+    base = name.split(".") if is_pkg else name.split(".")[:-1]
+    edges, external = [], []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), str(path))):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                (edges if alias.name.split(".")[0] == "roe_sep" else external).append((alias.name, node.lineno))
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                parent = base[: len(base) - (node.level - 1)]
+                target = ".".join(parent + ([node.module] if node.module else []))
+            else:
+                target = node.module or ""
+            if target.split(".")[0] != "roe_sep":
+                external.append((target, node.lineno))
+                continue
+            for alias in node.names:
+                sub = f"{target}.{alias.name}"
+                edges.append((sub if sub in known else target, node.lineno))
+    return [(t, line) for t, line in edges if t in known], external
+
+
+def layer(name: str):
+    parts = name.split(".")
+    return LAYERS.get(parts[1]) if len(parts) > 1 else -1
+
+
+@pytest.fixture(scope="module")
+def graph():
+    mods = modules()
+    known = set(mods)
+    out = {}
+    for name, path in mods.items():
+        out[name] = imports(name, path, known)
+    return out
+
+
+def test_every_module_has_a_layer(graph):
+    assert [m for m in graph if layer(m) is None] == []
+
+
+def test_no_upward_import(graph):
+    upward = [f"{src} (layer {layer(src)}) imports {dst} (layer {layer(dst)}) at line {line}"
+              for src, (edges, _) in graph.items() for dst, line in edges if layer(dst) > layer(src)]
+    assert upward == []
+
+
+def test_core_imports_no_ros(graph):
+    bad = [f"{src} imports {ext} at line {line}" for src, (_, external) in graph.items() if layer(src) == 0
+           for ext, line in external if ext.split(".")[0] in ROS_MODULES]
+    assert bad == []
+
+
+def find_cycles(adjacency: dict) -> list:
+    """Strongly connected components with more than one module, or a module importing itself (Tarjan)."""
+    index, low, stack, on_stack, out = {}, {}, [], set(), []
+    counter = [0]
+
+    def visit(v):
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on_stack.add(v)
+        for w in adjacency.get(v, ()):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1 or v in adjacency.get(v, ()):
+                out.append(sorted(comp))
+
+    for v in sorted(adjacency):
+        if v not in index:
+            visit(v)
+    return out
+
+
+def test_no_import_circles(graph):
+    adjacency = {src: {dst for dst, _ in edges if dst != src} for src, (edges, _) in graph.items()}
+    assert find_cycles(adjacency) == []
+
+
+def test_the_checks_can_fail():
+    """The detectors themselves: a two-module circle and an upward edge are found."""
+    assert find_cycles({"a": {"b"}, "b": {"a"}, "c": {"a"}}) == [["a", "b"]]
+    assert layer("roe_sep.cli.design") > layer("roe_sep.core.config")
+    assert layer("roe_sep.core.relmotion.roe") == 0 and layer("roe_sep.nodes.sim") == 2
