@@ -52,6 +52,8 @@ ACQUISITION_PLAN_TOPIC = "/acquisition/plan"  # ManeuverPlan, LATCHED, ic_planne
 SAFETY_TOPIC = "/safety/status"  # SafetyStatus, STREAM, safety_monitor (truth and estimate)
 PLAN_CHECK_TOPIC = "/safety/plan_check"  # SafetyStatus, EXECUTED (keeps the last 50 checks), safety_monitor
 DIAGNOSTICS_TOPIC = "/diagnostics"
+LOCKSTEP_STEP_TOPIC = "/lockstep/step"  # LockstepStep, sim: the lockstep clock (README: roe-sep run)
+LOCKSTEP_ACK_TOPIC = "/lockstep/ack"  # LockstepAck, every participant
 PLAN_SERVICE = "/separation/plan"  # roe_sep_msgs/srv/PlanSeparation, planner
 
 CARRIER_RTN_FRAME = "carrier_rtn"

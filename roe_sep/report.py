@@ -52,6 +52,24 @@ def truth_at(truth, t, truth_da_dot):
                      truth_da_dot / a / 86400.0) * a
 
 
+def planner_model_error(plans, truth, truth_da_dot):
+    """The planner's prediction against truth: the aimed a*ROE of the last plan on a topic (its ``aimed`` field,
+    stamped with the epoch it is aimed at) minus the truth there [m]; None without a plan or truth. The planners
+    never see the truth: this is their model error plus, for the blind drift-stop, the ejection's dispersion."""
+    if not plans:
+        return None
+    aimed = plans[-1][1].aimed
+    t = _stamp(aimed.header.stamp)
+    if not truth or t > _stamp(truth[-1][1].header.stamp):
+        return None  # aimed beyond the end of the run: no truth there
+    true = truth_at(truth, t, truth_da_dot)
+    if true is None:
+        return None
+    predicted = np.array([getattr(aimed, k) for k in ROE_KEYS])
+    return {"epoch": t, "predicted": predicted.tolist(), "truth": true.tolist(),
+            "error": (predicted - true).tolist()}
+
+
 def initial_conditions(truth, plans, ic_burns, truth_da_dot, limits, drift_tolerance=5.0, ei_tolerance_deg=10.0,
                        run_end=None):
     """The experiment's initial conditions checked on truth at the IC epoch of the last acquisition plan: mean
@@ -118,6 +136,10 @@ def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()
     ic = initial_conditions(truth, data[interfaces.ACQUISITION_PLAN_TOPIC], ic_burns, truth_da_dot, limits,
                             run_end=duration)
     criteria["ic_reached"] = bool(ic and ic["reached"])
+    model_error = {
+        "drift_stop": planner_model_error(data[interfaces.DRIFT_STOP_PLAN_TOPIC], truth, truth_da_dot),
+        "ic": planner_model_error(data[interfaces.ACQUISITION_PLAN_TOPIC], truth, truth_da_dot),
+    }
 
     od = data[interfaces.OD_TOPIC]
     od_report = None
@@ -152,6 +174,7 @@ def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()
         "truth_drag_a_da_dot_m_per_day": truth_da_dot,
         "od": od_report,
         "ic": ic,
+        "model_error": model_error,  # planners' prediction - truth [m] at the drift-stop and at the IC epoch
         "execution_warnings": late,  # burns executed late or dropped (unapproved), from the simulator
         "end_violations": list(last.violations) if last is not None else None,  # informational (drag drift on)
         "plan_checks": [{"source": s.source, "plan_stamp": _stamp(s.plan_stamp), "safe": s.safe,

@@ -16,6 +16,21 @@ from pathlib import Path
 import yaml
 
 NODES = ("recorder", "safety_monitor", "planner", "radar_od", "ic_planner", "ejector", "sim")
+PARTICIPANTS = ("ejector", "planner", "radar_od", "ic_planner", "safety_monitor")
+"""The lockstep participants: every node that reacts to the simulation (the recorder only listens)."""
+# subscribers of each topic the simulator waits for before its clock starts (so that nobody misses a message)
+SUBSCRIBERS = {
+    "/sim/truth/roe": ("ejector", "radar_od", "safety_monitor", "recorder"),
+    "/sim/truth/rtn": ("recorder",),
+    "/sim/executed_maneuvers": ("radar_od", "ic_planner", "safety_monitor", "recorder"),
+    "/separation/ejection": ("ejector", "planner", "safety_monitor", "sim", "recorder"),
+    "/separation/drift_stop_plan": ("ic_planner", "safety_monitor", "sim", "recorder"),
+    "/acquisition/plan": ("ic_planner", "safety_monitor", "sim", "recorder"),
+    "/od/estimate": ("ic_planner", "safety_monitor", "sim", "recorder"),
+    "/radar/measurements": ("recorder",),
+    "/safety/status": ("recorder",),
+    "/safety/plan_check": ("sim", "recorder"),
+}
 
 
 def ros_environment(domain_id=None):
@@ -36,11 +51,11 @@ def parameters(config, bag_dir, overrides):
     """The run's ROS parameter file content: shared values for every node, then per-node values."""
     shared = {"use_sim_time": True, "scenario_file": str(Path(config).resolve()) if config else ""}
     per_node = {
-        # start the clock once every node is up: the truth stream's subscribers (ejector, safety_monitor,
-        # radar_od, recorder), the ejection's (planner after its start-up Monte Carlo, sim, safety_monitor, ejector)
-        # and the OD's (ic_planner, safety_monitor)
+        # start the clock once every node is up (the planner after its start-up Monte Carlo) and subscribed to what
+        # it reads, the recorder to every topic; then run in lockstep with every reacting node
         "sim": {"use_sim_time": False,
-                "wait_for": ["/sim/truth/roe=4", "/separation/ejection=4", "/od/estimate=2"]},
+                "wait_for": [f"{topic}={len(nodes)}" for topic, nodes in SUBSCRIBERS.items()],
+                "lockstep_participants": list(PARTICIPANTS)},
         "recorder": {"output": str(bag_dir)},
     }
     for node, values in (overrides or {}).items():
@@ -99,27 +114,40 @@ class Deployment:
 
 
 def wait_for_completion(duration, deployment, timeout, progress):
-    """Spin a small observer node until the sim's clock reaches ``duration``; returns (reached, reason).
+    """Spin a small observer node until the simulator reports the scenario complete (or aborted) on
+    ``/diagnostics``; returns (reached, reason). ``/clock`` only feeds the progress line.
 
     The observer joins the nodes' DDS domain on loopback: rclpy reads both from this process's environment, which
     may carry neither (a plain shell), so the deployment's values are set here before ``rclpy.init``."""
     import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
     from rosgraph_msgs.msg import Clock
+
+    from . import interfaces
 
     for key in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE"):
         os.environ[key] = deployment.env[key]
     os.environ.pop("ROS_LOCALHOST_ONLY", None)
     rclpy.init()
     node = rclpy.create_node("roe_sep_run")
-    now = {"t": 0.0}
-    node.create_subscription(Clock, "/clock", lambda m: now.update(t=m.clock.sec + m.clock.nanosec * 1e-9), 10)
+    now = {"t": 0.0, "end": None}
+
+    def on_status(array):
+        for s in array.status:
+            if s.name == "roe_sep/sim" and (s.message == "scenario complete" or s.message.startswith("scenario "
+                                                                                                     "aborted")):
+                now["end"] = s.message
+
+    node.create_subscription(Clock, interfaces.CLOCK_TOPIC,
+                             lambda m: now.update(t=m.clock.sec + m.clock.nanosec * 1e-9), 10)
+    node.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, on_status, interfaces.DIAGNOSTICS)
     start = time.monotonic()
     shown = -1
     try:
         while True:
             rclpy.spin_once(node, timeout_sec=0.1)
-            if now["t"] >= duration:
-                return True, "scenario complete"
+            if now["end"] is not None:
+                return now["end"] == "scenario complete", now["end"]
             dead = deployment.dead()
             if dead:
                 return False, f"node(s) exited early: {dead} (see logs/)"
@@ -137,7 +165,7 @@ def wait_for_completion(duration, deployment, timeout, progress):
 
 
 def run(config=None, out="out/run", params=None, duration=None, seed=None, timeout=1800.0, domain_id=None,
-        progress=False):
+        progress=False, real_time_factor=None):
     """Run the scenario; returns the report dict (``report['safe']``) and writes it to ``out/report.json``."""
     from .nodes.sim import DEFAULT_DURATION
     from .report import build_report
@@ -153,6 +181,8 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
         sim["duration"] = float(duration)
     if seed is not None:
         sim["seed"] = int(seed)
+    if real_time_factor is not None:
+        sim["real_time_factor"] = float(real_time_factor)
     params_file = out / "params.yaml"
     params_file.write_text(yaml.safe_dump(parameters(config, bag_dir.resolve(), overrides), sort_keys=False))
     sim_duration = float(sim.setdefault("duration", DEFAULT_DURATION))

@@ -18,4 +18,5 @@ export ROS_DOMAIN_ID="${ROE_SEP_TEST_DOMAIN_ID:-$(( ($$ % 100) + 1 ))}"
 unset _ROS_WHEELS_BOOTSTRAP_COMPLETE
 
 echo "[test] ROS_DOMAIN_ID=$ROS_DOMAIN_ID ROS_AUTOMATIC_DISCOVERY_RANGE=$ROS_AUTOMATIC_DISCOVERY_RANGE"
-exec "$ROOT/.venv/bin/python" -m pytest -q test "$@"
+# no path given: pytest.ini testpaths (test/)
+exec "$ROOT/.venv/bin/python" -m pytest -q "$@"

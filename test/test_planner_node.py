@@ -9,6 +9,7 @@ from roe_sep_msgs.msg import EjectionEvent, ManeuverPlan  # noqa: E402
 from rosutil import rclpy, spin_until, start_node, stop_node, wait_exit  # noqa: I001  (skips without rclpy)
 
 from roe_sep import interfaces  # noqa: E402
+from roe_sep.core.relmotion.roe import wrap_angle  # noqa: E402
 from roe_sep.core.separation.double_impulse import design  # noqa: E402
 from roe_sep.nodes.convert import array_to_vector, sec_to_time, time_to_sec  # noqa: E402
 
@@ -59,7 +60,8 @@ def test_plan_bad_event_and_restart(ground):
         assert (burn.spacecraft, burn.purpose) == ("carrier", "drift_stop")
         # the carrier burns the opposite of the relative drift-stop (-1.329250, 0.162718 - 0.06, 0)
         assert [burn.dv_rtn.x, burn.dv_rtn.y, burn.dv_rtn.z] == pytest.approx([1.329250, -0.102718, 0.0], abs=1e-6)
-        assert burn.mean_arg_latitude == pytest.approx(D.u1 + 3 * math.pi)
+        # every angle in our messages is wrapped to [-pi, pi) (README topic table)
+        assert burn.mean_arg_latitude == pytest.approx(float(wrap_angle(D.u1 + 3 * math.pi)))
         assert time_to_sec(burn.epoch) - 1000.0 == pytest.approx(3 * math.pi / D.n, rel=2e-3)  # ~1.5 orbits
         assert time_to_sec(plan.ejection_epoch) == pytest.approx(1000.0)
         assert plan.aimed.a_da == pytest.approx(-2 * 0.06 / D.n, abs=0.5)  # the reduction leaves 2 p / n of da

@@ -37,7 +37,8 @@ def cmd_run(args):
     from ..run import run
 
     rep = run(config=args.config, out=args.out, params=args.params, duration=args.duration, seed=args.seed,
-              timeout=args.timeout, progress=not args.json and sys.stderr.isatty())
+              timeout=args.timeout, progress=not args.json and sys.stderr.isatty(),
+              real_time_factor=args.real_time_factor)
 
     def human(r):
         print_run(r)
@@ -79,6 +80,9 @@ def register_run(subparsers):
     p.add_argument("--duration", type=float, help="sim seconds to run (default 280800 = 3.25 days)")
     p.add_argument("--seed", type=int, help="seed of the simulated dispersions (default 0)")
     p.add_argument("--timeout", type=float, default=1800.0, help="wall-time limit [s] (default 1800)")
+    p.add_argument("--real-time-factor", type=float, metavar="X",
+                   help="pace the lockstep clock at X sim seconds per wall second at most (default 0: as fast as "
+                        "the machine allows; the results are the same either way)")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
     p.set_defaults(func=cmd_run)
 

@@ -69,7 +69,9 @@ def msg_to_roe(msg: RelativeOrbitalElements) -> np.ndarray:
 
 
 def maneuver_msg(epoch: float, u: float, dv_rtn, spacecraft: str, purpose: str) -> ImpulsiveManeuver:
-    return ImpulsiveManeuver(epoch=sec_to_time(epoch), mean_arg_latitude=float(u), dv_rtn=array_to_vector(dv_rtn),
+    """One impulsive maneuver; ``u`` [rad] wrapped to [-pi, pi) as every angle in our messages."""
+    return ImpulsiveManeuver(epoch=sec_to_time(epoch), mean_arg_latitude=float(wrap_angle(u)),
+                             dv_rtn=array_to_vector(dv_rtn),
                              spacecraft=spacecraft, purpose=purpose)
 
 

@@ -26,6 +26,7 @@ from ..core.separation.double_impulse import InfeasibleDesignError, design
 from ..core.truth.secular import time_to_arg_latitude
 from .convert import array_to_elements, elements_to_array, maneuver_msg, sec_to_time, time_to_sec
 from .diagnostics import ERROR, OK, publish_status
+from .lockstep import Lockstep
 from .params import ParameterError, declare, finite, require
 
 
@@ -53,11 +54,12 @@ class EjectorNode(Node):
         except (ConfigError, InfeasibleDesignError) as exc:
             raise ParameterError(f"parameter 'scenario_file': {exc}") from exc
         self.sent = False
-        self.pub = self.create_publisher(EjectionEvent, interfaces.EJECTION_TOPIC, interfaces.LATCHED)
+        self.lockstep = ls = Lockstep(self)
+        self.pub = ls.publisher(EjectionEvent, interfaces.EJECTION_TOPIC, interfaces.LATCHED)
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
-        self.create_subscription(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, self.on_state, interfaces.STREAM)
+        ls.subscribe(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, self.on_state, interfaces.STREAM)
         # a restarted ejector finds its own latched event and does not eject twice
-        self.create_subscription(EjectionEvent, interfaces.EJECTION_TOPIC, self.on_existing_event, interfaces.LATCHED)
+        ls.subscribe(EjectionEvent, interfaces.EJECTION_TOPIC, self.on_existing_event, interfaces.LATCHED)
         publish_status(self, self.diag_pub, OK, "waiting for the ejection epoch")
 
     def on_existing_event(self, _event: EjectionEvent):
@@ -70,6 +72,7 @@ class EjectorNode(Node):
             publish_status(self, self.diag_pub, ERROR, "carrier state rejected: not finite")
             return
         if self.sent:
+            self.lockstep.unsubscribe(interfaces.TRUTH_ROE_TOPIC)  # nothing left to command: stop reading the truth
             return
         if self.epoch >= 0:
             t_ej = self.epoch

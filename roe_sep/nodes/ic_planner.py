@@ -59,6 +59,7 @@ from .convert import (
     time_to_sec,
 )
 from .diagnostics import ERROR, OK, WARN, publish_status
+from .lockstep import Lockstep
 from .params import ParameterError, declare
 
 
@@ -112,16 +113,17 @@ class IcPlannerNode(Node):
         except InvalidAcquisitionConfig as exc:
             raise ParameterError(f"parameter '{exc.name}' must be {exc.must}, got {exc.value!r}") from exc
 
-        self.plan_pub = self.create_publisher(ManeuverPlan, interfaces.ACQUISITION_PLAN_TOPIC, interfaces.LATCHED)
+        self.lockstep = ls = Lockstep(self)
+        self.plan_pub = ls.publisher(ManeuverPlan, interfaces.ACQUISITION_PLAN_TOPIC, interfaces.LATCHED)
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
-        self.create_subscription(OrbitDetermination, interfaces.OD_TOPIC, self.on_estimate, interfaces.LATCHED)
-        self.create_subscription(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, self.on_executed, interfaces.EXECUTED)
+        ls.subscribe(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, self.on_executed, interfaces.EXECUTED,
+                     stamp=lambda m: time_to_sec(m.epoch))
         # the acquisition starts once the separation plan (drift-stop, or the multi-impulse burns) is flown
-        self.create_subscription(ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, self.on_separation_plan,
-                                 interfaces.LATCHED)
+        ls.subscribe(ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, self.on_separation_plan, interfaces.LATCHED)
         self.separation_end = -math.inf  # s, epoch of the separation plan's last burn
         # a restarted ic_planner keeps the IC epoch of the acquisition in progress: its own latched plan
-        self.create_subscription(ManeuverPlan, interfaces.ACQUISITION_PLAN_TOPIC, self.on_own_plan, interfaces.LATCHED)
+        ls.subscribe(ManeuverPlan, interfaces.ACQUISITION_PLAN_TOPIC, self.on_own_plan, interfaces.LATCHED)
+        ls.subscribe(OrbitDetermination, interfaces.OD_TOPIC, self.on_estimate, interfaces.LATCHED)
         self.executed = []  # carrier burns flown so far (relative impulses), from the simulator/executor
         self.t_final = None  # s, IC epoch of the acquisition in progress (fixed by its first plan)
         self.last_key = None  # (solution stamp, estimate epoch) of the newest OD seen
@@ -158,7 +160,8 @@ class IcPlannerNode(Node):
             self.get_logger().debug(f"OD solution {key} is not newer than {self.last_key}: ignored")
             return
         self.last_key = key
-        t_od, now = key[1], self.now()
+        # lockstep: the planner decides at the epoch of the solution, whatever the step that carried it
+        t_od, now = key[1], (key[0] if self.lockstep.active else self.now())
         if self.separation_end >= t_od:
             text = (f"OD at t = {t_od:.1f} s not used: the separation plan flies until t = {self.separation_end:.1f} s;"
                     " the acquisition starts from an OD made after it")
@@ -229,7 +232,7 @@ class IcPlannerNode(Node):
         plan = plan_acquisition(roe0, chief, da_dot, cfg, t_earliest=t_start + self.cfg.planning_margin)
 
         out = ManeuverPlan(strategy="ic_acquisition", p_reduction=0.0)
-        out.header.stamp = self.get_clock().now().to_msg()
+        out.header.stamp = sec_to_time(t_start)  # the plan describes the burns from its start state on
         out.header.frame_id = interfaces.CARRIER_RTN_FRAME
         out.maneuvers = [maneuver_msg(float(t), float(wrap_angle(u)), dv, "carrier", "ic_acquisition")
                          for t, u, dv in zip(plan.epochs, plan.u, plan.dv_carrier)]

@@ -40,6 +40,7 @@ from ..core.separation.double_impulse import design, plan_drift_stop, reduction_
 from ..core.separation.multi_impulse import MultiImpulseConfig, multi_config, plan_carrier_burns
 from .convert import maneuver_msg, roe_to_msg, sec_to_time, time_to_sec, vector_to_array
 from .diagnostics import ERROR, OK, publish_status
+from .lockstep import Lockstep
 from .params import ParameterError, declare, finite, require
 
 P_MODES = ("monte_carlo", "three_sigma", "fixed")
@@ -83,9 +84,10 @@ class PlannerNode(Node):
         else:
             self.p = None  # computed from each commanded ejection
 
-        self.plan_pub = self.create_publisher(ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.LATCHED)
+        self.lockstep = ls = Lockstep(self)
+        self.plan_pub = ls.publisher(ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.LATCHED)
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
-        self.create_subscription(EjectionEvent, interfaces.EJECTION_TOPIC, self.on_ejection, interfaces.LATCHED)
+        ls.subscribe(EjectionEvent, interfaces.EJECTION_TOPIC, self.on_ejection, interfaces.LATCHED)
         self.create_service(PlanSeparation, interfaces.PLAN_SERVICE, self.on_plan_request)
         self.plans = 0
         publish_status(self, self.diag_pub, OK, "waiting for the ejection event", self._values())
@@ -166,7 +168,7 @@ class PlannerNode(Node):
         stop = plan_drift_stop(dv1, u1, epoch1, a, inc, k or self.k, p, self.j2)
 
         msg = ManeuverPlan(strategy="double_impulse", ejection_epoch=event.header.stamp, p_reduction=float(stop.p))
-        msg.header.stamp = self.get_clock().now().to_msg()
+        msg.header.stamp = event.header.stamp  # the plan describes the separation from the ejection epoch on
         msg.header.frame_id = interfaces.CARRIER_RTN_FRAME
         msg.maneuvers = [maneuver_msg(stop.epoch, stop.u2, stop.dv_carrier_rtn, "carrier", "drift_stop")]
         dt = stop.epoch - epoch1
@@ -184,7 +186,7 @@ class PlannerNode(Node):
         da_dot = float(drag_da_dot(mc.delta_b, mc.density, a)) if mc.drag else 0.0
         plan = plan_carrier_burns(dv1, u1, epoch1, a, inc, sep, self.multi, self.j2, da_dot)
         msg = ManeuverPlan(strategy="multi_impulse", ejection_epoch=event.header.stamp, p_reduction=float(plan.p))
-        msg.header.stamp = self.get_clock().now().to_msg()
+        msg.header.stamp = event.header.stamp  # the plan describes the separation from the ejection epoch on
         msg.header.frame_id = interfaces.CARRIER_RTN_FRAME
         msg.maneuvers = [maneuver_msg(b.epoch, b.u, b.dv_carrier_rtn, "carrier", b.purpose) for b in plan.burns]
         chief = event.chief

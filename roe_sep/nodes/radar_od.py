@@ -45,6 +45,7 @@ from ..core.relmotion.dynamics import propagate, propagate_chief
 from ..core.relmotion.roe import wrap_angle
 from .convert import array_to_elements, elements_to_array, msg_to_roe, roe_to_msg, sec_to_time, time_to_sec
 from .diagnostics import ERROR, OK, WARN, publish_status
+from .lockstep import Lockstep
 from .params import ParameterError, declare, finite, require
 
 MAX_SAMPLE_INTERVAL = 600.0  # s: a pass above 10 deg lasts a few minutes
@@ -126,11 +127,14 @@ class RadarODNode(Node):
         self.estimates = 0
         self.published = 0
 
-        self.meas_pub = self.create_publisher(RadarMeasurement, interfaces.RADAR_TOPIC, interfaces.STREAM)
-        self.od_pub = self.create_publisher(OrbitDetermination, interfaces.OD_TOPIC, interfaces.LATCHED)
+        self.lockstep = ls = Lockstep(self)
+        self.meas_pub = ls.publisher(RadarMeasurement, interfaces.RADAR_TOPIC, interfaces.STREAM)
+        self.od_pub = ls.publisher(OrbitDetermination, interfaces.OD_TOPIC, interfaces.LATCHED)
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
-        self.create_subscription(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, self.on_truth, interfaces.STREAM)
-        self.create_subscription(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, self.on_maneuver, interfaces.EXECUTED)
+        # a burn and the truth right after it share a stamp: the burn is processed first
+        ls.subscribe(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, self.on_maneuver, interfaces.EXECUTED,
+                     stamp=lambda m: time_to_sec(m.epoch))
+        ls.subscribe(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, self.on_truth, interfaces.STREAM)
         self.create_subscription(Clock, interfaces.CLOCK_TOPIC, self.on_clock, interfaces.CLOCK_SUB)
         publish_status(self, self.diag_pub, OK, "waiting for truth", self._values())
 
@@ -152,6 +156,8 @@ class RadarODNode(Node):
             publish_status(self, self.diag_pub, OK, "tracking", self._values())
         if self.truth is None or truth[0] >= self.truth[0]:
             self.truth = truth
+        if self.lockstep.active:  # lockstep: the truth stream is the clock (every sample, whatever the step)
+            self.advance(truth[0])
 
     @staticmethod
     def parse_truth(msg: RelativeOrbitalElements):
@@ -175,7 +181,11 @@ class RadarODNode(Node):
                                    "are no longer used")
 
     def on_clock(self, msg: Clock):
-        now = time_to_sec(msg.clock)
+        if not self.lockstep.active:
+            self.advance(time_to_sec(msg.clock))
+
+    def advance(self, now):
+        """Measurements for every epoch k * ``sample_interval`` in (last, now]."""
         if self.t_last is not None and now < self.t_last - self.dt:
             self.get_logger().warn(f"sim time jumped back from {self.t_last:.1f} s to {now:.1f} s: restarting")
             self.reset()

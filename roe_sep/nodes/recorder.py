@@ -21,6 +21,8 @@ Parameters:
 Publishes ``/diagnostics`` (1 Hz wall time) with the message counts per topic.
 """
 
+import collections
+import struct
 import sys
 import time
 from datetime import datetime
@@ -31,12 +33,14 @@ from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from roe_sep_msgs.msg import LockstepStep
 
 from .. import interfaces
 from ..bag import BagError, definitions
 from ..bag import qos as bag_qos
 from ..bag.writer import BagWriter
 from .diagnostics import ERROR, OK, WARN, publish_status
+from .lockstep import STEP_QOS
 from .params import ParameterError, finite, require
 
 DISCOVERY_PERIOD = 0.5  # s, wall time
@@ -76,6 +80,8 @@ class RecorderNode(Node):
                 "a finite positive number of seconds")
         self.topics = {absolute(t.strip()) for t in topics or []}
         self.exclude = {absolute(t.strip()) for t in exclude or []}
+        # the lockstep protocol's own traffic is not scenario data (record it by naming it in 'topics')
+        self.exclude |= {interfaces.LOCKSTEP_STEP_TOPIC, interfaces.LOCKSTEP_ACK_TOPIC} - self.topics
         self.sim_time = bool(self.get_parameter("use_sim_time").value)
         try:
             self.writer = BagWriter(output or datetime.now().strftime("rosbag2_%Y_%m_%d-%H_%M_%S"))
@@ -89,6 +95,13 @@ class RecorderNode(Node):
         self.last_error = ""
         self._last_error_log = 0.0
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
+        # lockstep: log times from the simulator's steps (see on_step)
+        self.steps = collections.deque(maxlen=64)  # (counts, lo, hi) of the latest step messages, in order
+        self.received = collections.Counter()
+        self.held = collections.defaultdict(collections.deque)  # topic -> (n, data, source) not attributed yet
+        self.last_log = {}  # topic -> last log time [ns] (monotone per channel)
+        self.step_time = None  # ns, sim time of the latest step
+        self.create_subscription(LockstepStep, interfaces.LOCKSTEP_STEP_TOPIC, self.on_step, STEP_QOS)
         wall = Clock(clock_type=ClockType.STEADY_TIME)
         self.create_timer(DISCOVERY_PERIOD, self.discover, clock=wall)
         self.create_timer(float(self.flush_period), self.flush, clock=wall)
@@ -149,6 +162,9 @@ class RecorderNode(Node):
     def on_message(self, topic, data, info):
         try:
             source = info.get("source_timestamp") if isinstance(info, dict) else None
+            if self.step_time is not None:
+                self._lockstep_message(topic, data, source)
+                return
             now = self.get_clock().now().nanoseconds
             if self.sim_time and now == 0 and len(self.pending) < PENDING_LIMIT:
                 self.pending.append((topic, data, source))
@@ -157,6 +173,56 @@ class RecorderNode(Node):
             self.writer.write(topic, data, now, source or now)
         except Exception as exc:  # noqa: BLE001  (a node never dies on a bad message)
             self._error(f"message on {topic} not recorded: {exc}")
+
+    # -- lockstep log times --------------------------------------------------------------------------------------
+    # Under the lockstep clock (README "roe-sep run") every message is logged at the sim time at which it was
+    # published, whatever order DDS delivers the topics in. A step message (j, r) counts the messages published on
+    # each topic so far, so the n-th message of a topic was published just before the first step message whose
+    # count reaches n: before round 0 of step j, by the simulator advancing over (t_{j-1}, t_j] or by a participant
+    # in the last round of step j-1 (logged at its header stamp clamped to [t_{j-1}, t_j]); before a later round, by
+    # a participant reacting at t_j (logged at t_j). /clock is logged at its own value, topics the protocol does not
+    # count (e.g. /diagnostics) at the sim time of the latest step; log times never decrease on a channel.
+    def on_step(self, step: LockstepStep):
+        t = step.header.stamp.sec * 1_000_000_000 + step.header.stamp.nanosec
+        lo = int(round(step.period_start * 1e9)) if step.round == 0 else t
+        self.steps.append((dict(zip(step.topics, step.counts)), min(lo, t), t))
+        self.step_time = t if self.step_time is None else max(self.step_time, t)
+        for topic in list(self.held):
+            self._release(topic)
+
+    def _lockstep_message(self, topic, data, source):
+        if topic == interfaces.CLOCK_TOPIC:
+            self._write_monotone(topic, data, _stamp_ns(data), source)
+            return
+        if not any(topic in counts for counts, _, _ in self.steps):
+            self._write_monotone(topic, data, self.step_time, source)
+            return
+        self.received[topic] += 1
+        self.held[topic].append((self.received[topic], data, source))
+        self._release(topic)
+
+    def _release(self, topic):
+        held = self.held[topic]
+        while held:
+            n, data, source = held[0]
+            window = next(((lo, hi) for counts, lo, hi in self.steps if counts.get(topic, 0) >= n), None)
+            if window is None:
+                return
+            held.popleft()
+            stamp = _stamp_ns(data)
+            self._write_monotone(topic, data, min(max(stamp, window[0]), window[1]), source)
+
+    def _write_monotone(self, topic, data, log_ns, source):
+        log_ns = max(int(log_ns), self.last_log.get(topic, 0))
+        self.last_log[topic] = log_ns
+        self.writer.write(topic, data, log_ns, source or log_ns)
+
+    def _flush_held(self):
+        """At shutdown: what no step message attributed was published in the last step."""
+        for topic, held in self.held.items():
+            while held:
+                _, data, source = held.popleft()
+                self._write_monotone(topic, data, self.step_time or 0, source)
 
     def _write_pending(self, now):
         pending, self.pending = self.pending, []
@@ -199,6 +265,7 @@ class RecorderNode(Node):
         if writer is not None:
             try:
                 self._write_pending(self.get_clock().now().nanoseconds)
+                self._flush_held()
             except Exception:  # noqa: BLE001
                 pass
             writer.close()
@@ -208,6 +275,16 @@ class RecorderNode(Node):
             else:  # after SIGINT/SIGTERM the context is already shut down: no /rosout any more
                 print(f"[INFO] [recorder]: {text}", file=sys.stderr)
         return super().destroy_node()
+
+
+def _stamp_ns(data: bytes) -> int:
+    """The first builtin_interfaces/Time of a CDR-serialized message (its header stamp, a maneuver's epoch, a
+    clock's value) [ns]; 0 if the data is too short. Only used to place a log time inside its step."""
+    if len(data) < 12:
+        return 0
+    endian = "<" if data[1] == 1 else ">"
+    sec, nsec = struct.unpack(endian + "iI", data[4:12])
+    return sec * 1_000_000_000 + nsec
 
 
 def main(args=None):

@@ -30,6 +30,7 @@ from ..core.relmotion.trajectory import Chief, state_at
 from ..core.safety.monitor import MonitorLimits, assess
 from .convert import msg_to_roe, plan_burns, sec_to_time, time_to_sec, vector_to_array
 from .diagnostics import publish_status
+from .lockstep import Lockstep
 from .params import ParameterError, declare, finite, require
 
 PLAN_TOPICS = (interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.ACQUISITION_PLAN_TOPIC)
@@ -85,15 +86,17 @@ class SafetyMonitorNode(Node):
         self.checked = set()
         self.pending_plans = {}
 
-        self.status_pub = self.create_publisher(SafetyStatus, interfaces.SAFETY_TOPIC, interfaces.STREAM)
-        self.check_pub = self.create_publisher(SafetyStatus, interfaces.PLAN_CHECK_TOPIC, interfaces.EXECUTED)
+        self.lockstep = ls = Lockstep(self)
+        self.status_pub = ls.publisher(SafetyStatus, interfaces.SAFETY_TOPIC, interfaces.STREAM)
+        self.check_pub = ls.publisher(SafetyStatus, interfaces.PLAN_CHECK_TOPIC, interfaces.EXECUTED)
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
-        self.create_subscription(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, self.on_truth, interfaces.STREAM)
-        self.create_subscription(OrbitDetermination, interfaces.OD_TOPIC, self.on_estimate, interfaces.LATCHED)
-        self.create_subscription(EjectionEvent, interfaces.EJECTION_TOPIC, self.on_ejection, interfaces.LATCHED)
-        self.create_subscription(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, self.on_executed, interfaces.EXECUTED)
+        ls.subscribe(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, self.on_executed, interfaces.EXECUTED,
+                     stamp=lambda m: time_to_sec(m.epoch))
+        ls.subscribe(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, self.on_truth, interfaces.STREAM)
+        ls.subscribe(OrbitDetermination, interfaces.OD_TOPIC, self.on_estimate, interfaces.LATCHED)
+        ls.subscribe(EjectionEvent, interfaces.EJECTION_TOPIC, self.on_ejection, interfaces.LATCHED)
         for topic in PLAN_TOPICS:
-            self.create_subscription(ManeuverPlan, topic, lambda m, tp=topic: self.on_plan(tp, m), interfaces.LATCHED)
+            ls.subscribe(ManeuverPlan, topic, lambda m, tp=topic: self.on_plan(tp, m), interfaces.LATCHED)
 
     # ---------------------------------------------------------------- helpers
     def nominal_da_dot(self, a):

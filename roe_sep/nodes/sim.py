@@ -23,6 +23,8 @@ from rclpy.node import Node
 from roe_sep_msgs.msg import (
     EjectionEvent,
     ImpulsiveManeuver,
+    LockstepAck,
+    LockstepStep,
     ManeuverPlan,
     OrbitDetermination,
     RelativeOrbitalElements,
@@ -49,6 +51,7 @@ from .convert import (
     vector_to_array,
 )
 from .diagnostics import ERROR, OK, WARN, publish_status
+from .lockstep import ACK_QOS, STEP_QOS, Lockstep
 from .params import ParameterError, declare, finite, require
 
 PLAN_TOPICS = (interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.ACQUISITION_PLAN_TOPIC)
@@ -71,7 +74,7 @@ class SimNode(Node):
         self.seed = declare(self, "seed", 0, "seed of the ejection/burn/drag dispersions")
         self.disperse = declare(self, "disperse", True, "apply execution errors and the drag uncertainty")
         self.duration = declare(self, "duration", DEFAULT_DURATION, "s, sim time at which the run ends")
-        self.time_step = declare(self, "time_step", 40.0, "s of sim time per clock tick")
+        self.time_step = declare(self, "time_step", 600.0, "s of sim time per clock tick (lockstep: per step)")
         tick_period = declare(self, "tick_period", 0.01, "wall s between clock ticks")
         self.truth_period = declare(self, "truth_period", 60.0, "s, sim-time period of the truth topics")
         u0_deg = declare(self, "u0_deg", 50.0, "deg, carrier mean argument of latitude at sim time 0")
@@ -84,11 +87,17 @@ class SimNode(Node):
         self.departure = declare(self, "departure_distance", 1000.0,
                                  "m, closest approaches are tracked once the picosatellite is this far away")
         self.j2 = declare(self, "j2", True, "secular J2 in the truth dynamics (secular dynamics only)")
-        self.dynamics = declare(self, "dynamics", "secular",
+        self.dynamics = declare(self, "dynamics", "nonlinear",
                                 "truth: 'secular' (ROE model) or 'nonlinear' (both spacecraft integrated numerically)")
         wait_for = declare(self, "wait_for", [""], "'topic=count' items: hold the clock at 0 until each topic has "
                                                   "that many subscribers (every node up)")
         self.start_timeout = declare(self, "start_timeout", 60.0, "wall s to wait for those subscribers at most")
+        participants = declare(self, "lockstep_participants", [""],
+                               "node names of the lockstep participants ([] or ['']: free-running clock)")
+        self.real_time_factor = declare(self, "real_time_factor", 0.0,
+                                        "lockstep: sim s per wall s at most (0: as fast as the machine allows)")
+        self.step_timeout = declare(self, "step_timeout", 120.0,
+                                    "lockstep: wall s a step may wait for a participant before the run fails")
 
         for name, value in (("duration", self.duration), ("time_step", self.time_step),
                             ("tick_period", tick_period), ("truth_period", self.truth_period),
@@ -112,6 +121,13 @@ class SimNode(Node):
             self.wait_for[topic] = int(count)
         require("start_timeout", finite(self.start_timeout) and self.start_timeout >= 0, self.start_timeout,
                 "a non-negative number [s]")
+        require("real_time_factor", finite(self.real_time_factor) and self.real_time_factor >= 0,
+                self.real_time_factor, "a non-negative number (0: as fast as possible)")
+        require("step_timeout", finite(self.step_timeout) and self.step_timeout > 0, self.step_timeout,
+                "a positive number [s]")
+        self.participants = sorted({p for p in participants if p})
+        require("lockstep_participants", all(isinstance(p, str) and p != "sim" for p in self.participants),
+                list(participants), "a list of node names other than 'sim'")
         for name, value in (("disperse", self.disperse), ("require_plan_approval", self.require_approval),
                             ("j2", self.j2)):
             require(name, isinstance(value, bool), value, "true or false")
@@ -159,22 +175,40 @@ class SimNode(Node):
         self.ejected_at = None  # set by the ejection until the drift-stop plan answering it arrives
         self.od_seen = set()
 
+        # the simulator reads its inputs through the lockstep buffer too (it coordinates, so it does not acknowledge)
+        self.lockstep = Lockstep(self, acknowledge=False)
+        self.lockstep.on_round_done = self._round_check
+        ls = self.lockstep
         self.clock_pub = self.create_publisher(Clock, interfaces.CLOCK_TOPIC, 10)
-        self.roe_pub = self.create_publisher(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, interfaces.STREAM)
-        self.rtn_pub = self.create_publisher(RelativeState, interfaces.TRUTH_RTN_TOPIC, interfaces.STREAM)
-        self.exec_pub = self.create_publisher(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, interfaces.EXECUTED)
+        self.roe_pub = ls.publisher(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, interfaces.STREAM)
+        self.rtn_pub = ls.publisher(RelativeState, interfaces.TRUTH_RTN_TOPIC, interfaces.STREAM)
+        self.exec_pub = ls.publisher(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, interfaces.EXECUTED)
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
-        self.create_subscription(EjectionEvent, interfaces.EJECTION_TOPIC, self.on_ejection, interfaces.LATCHED)
+        ls.subscribe(EjectionEvent, interfaces.EJECTION_TOPIC, self.on_ejection, interfaces.LATCHED)
         for topic in PLAN_TOPICS:
-            self.create_subscription(ManeuverPlan, topic, lambda m, tp=topic: self.on_plan(tp, m), interfaces.LATCHED)
-        self.create_subscription(SafetyStatus, interfaces.PLAN_CHECK_TOPIC, self.on_plan_check, interfaces.EXECUTED)
-        self.create_subscription(OrbitDetermination, interfaces.OD_TOPIC, self.on_od, interfaces.LATCHED)
-        self.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, self.on_diagnostics, 100)
-        self.timer = self.create_timer(tick_period, self.tick)
+            ls.subscribe(ManeuverPlan, topic, lambda m, tp=topic: self.on_plan(tp, m), interfaces.LATCHED)
+        ls.subscribe(SafetyStatus, interfaces.PLAN_CHECK_TOPIC, self.on_plan_check, interfaces.EXECUTED)
+        ls.subscribe(OrbitDetermination, interfaces.OD_TOPIC, self.on_od, interfaces.LATCHED)
+        if self.participants:
+            self.step_pub = self.create_publisher(LockstepStep, interfaces.LOCKSTEP_STEP_TOPIC, STEP_QOS)
+            self.create_subscription(LockstepAck, interfaces.LOCKSTEP_ACK_TOPIC, self.on_ack, ACK_QOS)
+            self.acks = {}  # participant -> its latest LockstepAck
+            self.step_index, self.round, self.t_prev = 0, 0, 0.0
+            self.round_counts = {}
+            self.round_sent = None  # wall time the current round was published (None: not started)
+            self.wall_start = None
+            self.continue_timer = None
+            self.steps_published = 0
+            self.timer = self.create_timer(0.05, self.lockstep_watch)
+        else:
+            self.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, self.on_diagnostics, 100)
+            self.timer = self.create_timer(tick_period, self.tick)
         self.get_logger().info(
             f"truth: a = {a:.1f} m, i = {math.degrees(inc):.3f} deg, raan = {math.degrees(raan):.2f} deg, "
             f"differential drag a*da_dot = "
-            f"{da_dot * a * 86400:.1f} m/day, {self.duration / 86400:.2f} days at {self.time_step / tick_period:.0f}x")
+            f"{da_dot * a * 86400:.1f} m/day, {self.duration / 86400:.2f} days, "
+            + (f"lockstep with {self.participants}" if self.participants
+               else f"free-running at {self.time_step / tick_period:.0f}x"))
         self._status(OK, "running")
 
     # ----------------------------------------------------------------- inputs
@@ -304,13 +338,159 @@ class SimNode(Node):
                 self._execute(burn)
         self._advance(t_next)
         self.clock_pub.publish(Clock(clock=sec_to_time(self.t)))
-        if self.t >= self.next_status:
-            self.next_status += 3600.0
-            self._status(OK, "running")
         if self.t >= self.duration:
             self.done = True
             self._status(OK, "scenario complete")
             self.get_logger().info("scenario complete")
+
+    # ------------------------------------------------------------- lockstep
+    def lockstep_watch(self):
+        """Wall-clock watchdog of the lockstep clock: starts the run once every participant is up, asks again for
+        a lost acknowledgement, and fails the run with the silent participants named when a step waits longer
+        than ``step_timeout`` (a fault detector only: it never changes what is simulated)."""
+        if self.done:
+            return
+        now = time.monotonic()
+        if self.round_sent is None:  # not started: every participant and subscriber up?
+            if self.ready_lockstep(now):
+                self.wall_start = now
+                self._publish_step()
+            return
+        waited = now - self.round_sent
+        if self.continue_timer is not None:
+            return
+        limit = self.start_timeout if self.step_index == 0 else self.step_timeout
+        if waited > limit:
+            missing = [p for p in self.participants if self._acked(p) is False]
+            step = f"step {self.step_index} round {self.round} (t = {self.t:.0f} s)"
+            self._fault(f"lockstep: no acknowledgement of {step} from {', '.join(missing) or 'nobody'} within "
+                        f"{limit:g} s" if missing else f"lockstep: {step} incomplete after {limit:g} s: the "
+                        f"simulator still waits for counted messages {self._own_missing()}")
+        elif waited > 1.0 and now - self.round_resent > 1.0:
+            self.round_resent = now
+            self.step_pub.publish(self.step_msg)  # a participant that missed it acknowledges again
+
+    def ready_lockstep(self, now):
+        missing = {t: n for t, n in self.wait_for.items() if self.count_subscribers(t) < n}
+        if self.count_subscribers(interfaces.LOCKSTEP_STEP_TOPIC) < len(self.participants):
+            missing[interfaces.LOCKSTEP_STEP_TOPIC] = len(self.participants)
+        if self.count_publishers(interfaces.LOCKSTEP_ACK_TOPIC) < len(self.participants):
+            missing[interfaces.LOCKSTEP_ACK_TOPIC + " (publishers)"] = len(self.participants)
+        if not missing:
+            return True
+        if now - self.waiting_since > self.start_timeout:
+            self._fault(f"lockstep: participants not up within {self.start_timeout:g} s: missing {missing}")
+        return False
+
+    def _own_missing(self):
+        counts = self.lockstep.last_counts
+        return {t: counts.get(t, 0) - self.lockstep.received[t] for t in self.lockstep.inputs
+                if counts.get(t, 0) > self.lockstep.received[t]}
+
+    def _fault(self, reason):
+        self.done = True
+        self.get_logger().error(reason)
+        self._status(ERROR, f"scenario aborted: {reason}")
+
+    def _acked(self, name):
+        ack = self.acks.get(name)
+        return ack is not None and (ack.step, ack.round) == (self.step_index, self.round)
+
+    def on_ack(self, ack: LockstepAck):
+        if ack.node not in self.participants:
+            return
+        prev = self.acks.get(ack.node)
+        if prev is None or (ack.step, ack.round) >= (prev.step, prev.round):
+            self.acks[ack.node] = ack
+        self._round_check()
+
+    def _totals(self):
+        """Messages published so far per counted topic: the simulator's and every participant's latest count."""
+        totals = dict(self.lockstep.published)
+        for ack in self.acks.values():
+            for topic, n in zip(ack.topics, ack.published):
+                totals[topic] = totals.get(topic, 0) + n
+        return totals
+
+    def _publish_step(self, final=False):
+        totals = self._totals()
+        topics = sorted(totals)
+        msg = LockstepStep(step=self.step_index, round=self.round, period_start=float(self.t_prev), topics=topics,
+                           counts=[int(totals[t]) for t in topics], final=final)
+        msg.header.stamp = sec_to_time(self.t)
+        self.step_msg, self.round_counts = msg, totals
+        self.round_sent = self.round_resent = time.monotonic()
+        self.steps_published += 1
+        self.step_pub.publish(msg)
+        if not final:
+            self.lockstep.on_step_msg(msg)  # the simulator's own inputs of this round
+
+    def _round_check(self):
+        """After every acknowledgement: the round is over when every participant and the simulator itself have
+        processed it; a reaction (new messages on a topic someone reads) opens the next round of the same step,
+        else sim time advances."""
+        if not self.participants or self.done or self.round_sent is None or self.continue_timer is not None:
+            return
+        if self.lockstep.last != (self.step_index, self.round):
+            return
+        if not all(self._acked(p) for p in self.participants):
+            return
+        totals = self._totals()
+        read = set(self.lockstep.inputs)
+        for ack in self.acks.values():
+            read.update(ack.inputs)
+        if any(totals.get(t, 0) != self.round_counts.get(t, 0) for t in read):
+            self.round += 1
+            self._publish_step()
+            return
+        self._continue()
+
+    def _continue(self):
+        """Advance to the next step now, or when the real-time factor allows."""
+        if self.continue_timer is not None:
+            self.destroy_timer(self.continue_timer)
+            self.continue_timer = None
+        if self.t >= self.duration:
+            self.done = True
+            self._publish_step(final=True)
+            self._status(OK, "scenario complete")
+            self.get_logger().info(f"scenario complete: {self.steps_published} lockstep messages in "
+                                   f"{time.monotonic() - self.wall_start:.1f} s")
+            return
+        t_next = min(self.t + self.time_step, self.duration)
+        if self.real_time_factor > 0:
+            wait = self.wall_start + t_next / self.real_time_factor - time.monotonic()
+            if wait > 0:
+                self.continue_timer = self.create_timer(wait, self._continue)
+                return
+        self._step_to(t_next)
+        self.step_index += 1
+        self.round = 0
+        self.clock_pub.publish(Clock(clock=sec_to_time(self.t)))
+        self._publish_step()
+
+    def _step_to(self, t_next):
+        """Fly the burns due up to ``t_next`` (in epoch order) and move the truth there."""
+        self.t_prev = self.t
+        for burn in sorted((b for b in self.pending if b.epoch <= t_next), key=lambda b: b.epoch):
+            self.pending.remove(burn)
+            if self._verdict(burn):
+                self._execute(burn)
+        self._advance(t_next)
+
+    def _verdict(self, burn):
+        """Lockstep: the safety monitor has checked every plan before sim time reaches its burns, so a missing
+        check is a fault of the plan, not a matter of waiting: the burn is not executed (ERROR)."""
+        if burn.topic == interfaces.EJECTION_TOPIC or not self.require_approval:
+            return True
+        verdict = self.approvals.get((burn.topic, burn.plan_stamp))
+        if verdict is None:
+            self._status(ERROR, f"burn at t = {burn.epoch:.0f} s of the plan on {burn.topic} not executed: the "
+                                "safety monitor did not check the plan")
+        elif not verdict:
+            self._status(ERROR, f"burn at t = {burn.epoch:.0f} s of the plan on {burn.topic} not executed: "
+                                "the safety monitor flagged the plan")
+        return bool(verdict)
 
     def _approval(self, burn):
         """True: execute; False: drop; None: wait."""
@@ -330,15 +510,26 @@ class SimNode(Node):
         return None
 
     def _advance(self, t_to):
-        """Move the truth to ``t_to``, publishing the truth samples and tracking the minimum distance."""
+        """Move the truth to ``t_to``, publishing the truth samples, tracking the minimum distance and reporting
+        the hourly status at its own epoch (so that every output is the same whatever the step size)."""
+        while self.next_status <= t_to:
+            self._advance_to(self.next_status)
+            self.next_status += 3600.0
+            self._status(OK, "running")
+        self._advance_to(t_to)
+
+    def _advance_to(self, t_to):
         if t_to <= self.t:
             return
         if self.truth.separated:
             times, dist = self.truth.distances(self.t, t_to, self.distance_step)
             self._track_closest_approach(times, dist)
+        epochs = []
         while self.next_truth <= t_to:
-            self._publish_truth(self.next_truth)
+            epochs.append(self.next_truth)
             self.next_truth += self.truth_period
+        if epochs:
+            self._publish_truth(epochs)
         self.t = t_to
 
     def _track_closest_approach(self, times, dist):
@@ -379,24 +570,24 @@ class SimNode(Node):
             self.ejected_at = t_exec
         self.burns += 1
         self.exec_pub.publish(done)
-        self._publish_truth(t_exec)
+        self._publish_truth([t_exec])
         self.get_logger().info(f"t = {t_exec:.0f} s: executed {m.purpose} of the {m.spacecraft}, dv RTN = "
                                f"({executed[0]:+.4f}, {executed[1]:+.4f}, {executed[2]:+.4f}) m/s")
         self._status(OK, f"executed {m.purpose} burn")
 
-    def _publish_truth(self, t):
-        stamp = sec_to_time(t)
-        chief = array_to_elements(self.truth.chief_elements(t))
-        roe = self.truth.roe_at(t)
-        self.roe_pub.publish(roe_to_msg(roe, chief, stamp, frame_id=interfaces.TRUTH_FRAME))
-        pos, vel = self.truth.rtn_at(t)
-        state = RelativeState(position=array_to_vector(pos), velocity=array_to_vector(vel))
-        state.header.stamp = stamp
-        state.header.frame_id = interfaces.CARRIER_RTN_FRAME
-        self.rtn_pub.publish(state)
+    def _publish_truth(self, epochs):
+        """The truth topics at each of ``epochs`` [s] (evaluated in one vectorized pass)."""
+        kep, roe, (pos, vel) = self.truth.samples(np.asarray(epochs, dtype=float))
+        for j, t in enumerate(epochs):
+            stamp = sec_to_time(t)
+            self.roe_pub.publish(roe_to_msg(roe[j], array_to_elements(kep[j]), stamp, frame_id=interfaces.TRUTH_FRAME))
+            state = RelativeState(position=array_to_vector(pos[j]), velocity=array_to_vector(vel[j]))
+            state.header.stamp = stamp
+            state.header.frame_id = interfaces.CARRIER_RTN_FRAME
+            self.rtn_pub.publish(state)
 
     def _status(self, level, message):
-        publish_status(self, self.diag_pub, level, message, {
+        publish_status(self, self.diag_pub, level, message, stamp=self.t, values={
             "sim_time_s": f"{self.t:.1f}",
             "burns_executed": self.burns,
             "min_distance_m": f"{self.min_dist[0]:.3f}",

@@ -27,6 +27,7 @@ Parameters: ``[B_chief, B_deputy, rho_ref, h_ref, H]`` (m^2/kg, m^2/kg, kg/m^3, 
 
 import copy
 import functools
+import math
 import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -170,6 +171,7 @@ def pair_equations(zonals=4):
 
 
 DEFAULT_TOL = 1e-15
+SEGMENT = 3600.0  # s, the simulator truth integrates in segments ending on this grid (NonlinearTruth._extend)
 """Taylor integrator tolerance (relative/absolute, heyoka's default is machine epsilon ~2.2e-16)."""
 
 
@@ -457,12 +459,16 @@ class NonlinearTruth:
         return float(self.chief0[2])
 
     def _extend(self, t):
+        """Integrate up to (at least) ``t`` in segments that end on the fixed grid of ``SEGMENT`` seconds from
+        ``t0``: the integrator's steps, hence the truth to the last bit, depend on the burns alone, never on how the
+        queries are spaced (the lockstep step size, the pacing)."""
         t = float(t)
-        if t > self._ta.time:
+        while t > self._ta.time:
             t_from = self._ta.time
-            res = self._ta.propagate_until(t, c_output=True)
+            t_to = self.t0 + (math.floor((t_from - self.t0) / SEGMENT + 1e-9) + 1) * SEGMENT
+            res = self._ta.propagate_until(t_to, c_output=True)
             _check(res[0])
-            self._segments.append((t_from, t, res[4]))
+            self._segments.append((t_from, t_to, res[4]))
 
     def states(self, times):
         """Pair states ``(..., 12)`` at ``times`` [s] (scalar or array, each >= the previous query's earliest)."""
@@ -501,6 +507,12 @@ class NonlinearTruth:
         """True relative position [m] and velocity [m/s] in the carrier's RTN frame at ``t``."""
         return relative_rtn(self.states(t))
 
+    def samples(self, t):
+        """Carrier mean elements, mean ROE and the true RTN state at the times ``t`` (an array), in one pass."""
+        st = self.states(np.asarray(t, dtype=float))
+        mean = mean_elements(st)
+        return mean[..., 0, :], kepler_to_roe(mean[..., 0, :], mean[..., 1, :]), relative_rtn(st)
+
     def distances(self, t_from, t_to, step):
         """Times and |r| [m] over ``[t_from, t_to]`` every ``step`` seconds (and at both ends)."""
         times = np.append(np.arange(t_from, t_to, step), t_to)
@@ -512,11 +524,11 @@ class NonlinearTruth:
         if spacecraft not in ("picosatellite", "carrier"):
             raise ValueError(f"unknown spacecraft {spacecraft!r}")
         deputy = spacecraft == "picosatellite"
-        self._extend(t)
-        if self._ta.time != float(t):
-            raise ValueError(f"burn at t = {t} s precedes the truth's time {self._ta.time} s")
+        t = float(t)
+        state = self.states(t)  # from the grid segment holding t (the integrator may have gone past it)
         dv = np.asarray(dv_rel, dtype=float) * (1.0 if deputy else -1.0)
-        self._ta.state[:] = apply_impulse(self._ta.state, dv, deputy)
+        self._ta.time = t
+        self._ta.state[:] = apply_impulse(state, dv, deputy)
         if deputy and not self.separated:
             self._ta.pars[1] = self.b_deputy
         self.separated = True

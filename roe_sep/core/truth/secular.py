@@ -59,6 +59,11 @@ class TruthModel:
         return propagate(self.roe if np.ndim(dt) == 0 else self.roe[None, :], dt, self.a, self.inc, self.j2,
                          self.da_dot)
 
+    def samples(self, t):
+        """Carrier mean elements, ROE and the RTN state at the times ``t`` (an array), as the nonlinear truth's."""
+        t = np.asarray(t, dtype=float)
+        return self.chief_elements(t), self.roe_at(t), self.rtn_at(t)
+
     def rtn_at(self, t):
         """Relative position [m] and velocity [m/s] in the carrier RTN frame at ``t``."""
         pos, vel = roe_to_rtn(self.roe_at(t), self.u_at(t))

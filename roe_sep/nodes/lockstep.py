@@ -1,0 +1,175 @@
+"""Lockstep sim time: the participant side of the protocol (the coordinator is :mod:`roe_sep.nodes.sim`).
+
+The idea of PX4 SITL lockstep and of steppable simulator clocks, over plain DDS topics:
+
+* The simulator publishes its outputs of a step (truth samples, executed burns, ``/clock``), then a
+  ``roe_sep_msgs/LockstepStep`` on ``/lockstep/step`` with, for every counted topic, how many messages the simulator
+  and all participants have published on it so far.
+* A participant buffers every message of its counted input topics. It processes a round only once it holds every
+  message the round counts, and then exactly those, in one canonical order (header stamp, then the order in which
+  the node declared its inputs, then arrival on the topic, which DDS keeps per publisher): what it computes depends
+  on the data alone, never on which topic's message DDS delivered first, on thread scheduling or on machine load.
+  Then it acknowledges the round (``roe_sep_msgs/LockstepAck`` on ``/lockstep/ack``) with the counts of what it
+  published meanwhile.
+* When every participant has acknowledged and nothing new was published on a topic that a participant reads, the
+  step is over; otherwise the simulator opens another round of the same step with the new counts (an ejection
+  event -> the drift-stop plan -> its safety check: three rounds). Only then does sim time advance.
+
+A node that never receives a step message (run alone, or driven by a test) processes every message at once, as
+before. Topics outside the step's counts (e.g. a ground segment's own publisher) are processed at once too.
+"""
+
+import collections
+
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from roe_sep_msgs.msg import LockstepAck, LockstepStep
+
+from .. import interfaces
+from .convert import sec_to_time, time_to_sec
+
+STEP_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10, reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.VOLATILE)
+ACK_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.VOLATILE)
+
+
+def header_stamp(msg) -> float:
+    """Sim time [s] a message describes: its ``header.stamp``."""
+    return time_to_sec(msg.header.stamp)
+
+
+class CountingPublisher:
+    """A publisher that counts what it publishes for the lockstep acknowledgements."""
+
+    def __init__(self, lockstep, publisher, topic):
+        self._lockstep, self._pub, self.topic = lockstep, publisher, topic
+
+    def publish(self, msg):
+        self._pub.publish(msg)
+        self._lockstep.published[self.topic] += 1
+
+    def get_subscription_count(self):
+        return self._pub.get_subscription_count()
+
+    def __getattr__(self, name):  # everything else of rclpy's Publisher
+        return getattr(self._pub, name)
+
+
+class Lockstep:
+    """Participant in the lockstep protocol. ``subscribe`` and ``publisher`` replace the node's own
+    ``create_subscription``/``create_publisher`` for the counted topics; ``on_step(t)`` (optional) runs after the
+    messages of each step's first round, with the step's sim time ``t``."""
+
+    def __init__(self, node, on_step=None, acknowledge=True):
+        self.node = node
+        self.name = node.get_name()
+        self.on_step_callback = on_step
+        self.acknowledge = acknowledge
+        self.inputs = {}  # topic -> (callback, rank, stamp function)
+        self.subscriptions = {}
+        self.buffer = collections.defaultdict(collections.deque)  # topic -> messages not processed yet
+        self.received = collections.Counter()
+        self.processed = collections.Counter()
+        self.published = collections.Counter()
+        self.active = False  # a step message has arrived: lockstep mode
+        self.pending = None  # the step round waiting for its messages
+        self.last = None  # (step, round) last acknowledged
+        self.time = None  # sim time of the current step [s]
+        self.last_counts = {}  # topic -> count of the latest step message
+        self.steps_done = 0
+        self.on_round_done = None  # called after each round is processed (the coordinator's own bookkeeping)
+        node.create_subscription(LockstepStep, interfaces.LOCKSTEP_STEP_TOPIC, self.on_step_msg, STEP_QOS)
+        self.ack_pub = node.create_publisher(LockstepAck, interfaces.LOCKSTEP_ACK_TOPIC, ACK_QOS) \
+            if acknowledge else None
+
+    # ------------------------------------------------------------------ declaration
+    def subscribe(self, msg_type, topic, callback, qos, stamp=header_stamp):
+        """Subscribe ``callback`` to ``topic`` through the lockstep buffer (inputs are ranked in declaration
+        order for messages with equal stamps)."""
+        self.inputs[topic] = (callback, len(self.inputs), stamp)
+        self.subscriptions[topic] = self.node.create_subscription(msg_type, topic,
+                                                                  lambda m, tp=topic: self._on_input(tp, m), qos)
+        return self.subscriptions[topic]
+
+    def unsubscribe(self, topic):
+        """Stop reading ``topic`` (e.g. the ejector once the ejection is commanded): no step waits for it any more."""
+        sub = self.subscriptions.pop(topic, None)
+        if sub is not None:
+            self.node.destroy_subscription(sub)
+        self.inputs.pop(topic, None)
+        self.buffer.pop(topic, None)
+
+    def publisher(self, msg_type, topic, qos):
+        self.published[topic] += 0
+        return CountingPublisher(self, self.node.create_publisher(msg_type, topic, qos), topic)
+
+    # ------------------------------------------------------------------ protocol
+    def _on_input(self, topic, msg):
+        self.received[topic] += 1
+        if self.active and topic in self.last_counts:
+            self.buffer[topic].append(msg)
+            self._try()
+            return
+        self.processed[topic] += 1
+        self.inputs[topic][0](msg)
+
+    @staticmethod
+    def _counts(step: LockstepStep) -> dict:
+        return dict(zip(step.topics, step.counts))
+
+    def on_step_msg(self, step: LockstepStep):
+        key = (step.step, step.round)
+        if self.last is not None and key <= self.last:
+            if key == self.last:
+                self._ack(step)  # the coordinator asks again: our acknowledgement may have been lost
+            return
+        self.active = True
+        self.pending = step
+        self.last_counts = self._counts(step)
+        self._try()
+
+    def _try(self):
+        step = self.pending
+        if step is None:
+            return
+        counts = self._counts(step)
+        due = {}
+        for topic in self.inputs:
+            need = counts.get(topic, 0) - self.processed[topic]
+            if need <= 0:
+                continue
+            if len(self.buffer[topic]) < need:
+                return  # a counted message is still on its way
+            due[topic] = need
+        self.pending = None
+        batch = []
+        for topic, need in due.items():
+            callback, rank, stamp = self.inputs[topic]
+            for seq in range(need):
+                msg = self.buffer[topic].popleft()
+                batch.append((stamp(msg), rank, seq, callback, msg))
+            self.processed[topic] += need
+        batch.sort(key=lambda b: b[:3])
+        self.time = time_to_sec(step.header.stamp)
+        for _, _, _, callback, msg in batch:
+            callback(msg)
+        if step.round == 0 and self.on_step_callback is not None and not step.final:
+            self.on_step_callback(self.time)
+        self.last = (step.step, step.round)
+        self.steps_done += 1
+        self._ack(step)
+        if self.on_round_done is not None:
+            self.on_round_done()
+
+    def _ack(self, step):
+        if self.ack_pub is None:
+            return
+        topics = sorted(self.published)
+        ack = LockstepAck(node=self.name, step=step.step, round=step.round, inputs=sorted(self.inputs),
+                          topics=topics, published=[self.published[t] for t in topics])
+        ack.header.stamp = sec_to_time(time_to_sec(step.header.stamp))
+        self.ack_pub.publish(ack)
+
+    def now(self, fallback):
+        """Sim time of the current step in lockstep mode, else ``fallback`` (the node clock)."""
+        return self.time if self.active and self.time is not None else fallback
