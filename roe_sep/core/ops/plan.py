@@ -44,36 +44,104 @@ class OpsConfig:
     tle: tuple | None = None  # (line1, line2)
 
 
-def load_ops_config(path=None) -> OpsConfig:
-    """Read ``config/ops.yaml`` (or ``path``); every missing section or station field is named in the error."""
-    import yaml
+# every numeric key of config/ops.yaml: (lo, hi, lo_open, hi_open, unit); a key outside its range is refused
+_SITE_KEYS = {"lat_deg": (-90.0, 90.0, False, False, "deg"), "lon_deg": (-180.0, 360.0, False, False, "deg"),
+              "height_m": (-500.0, 9000.0, False, False, "m"), "min_elevation_deg": (0.0, 90.0, False, True, "deg")}
+_RULE_KEYS = {"pole_tolerance_deg": (0.0, 45.0, False, False, "deg"),
+              "radar_min_delay_orbits": (0.0, 30.0, False, False, "orbits"),
+              "radar_target_delay_orbits": (0.0, 30.0, False, False, "orbits"),
+              "radar_backup_max_h": (0.0, 48.0, False, False, "h"), "confirm_after_h": (0.0, 48.0, False, False, "h"),
+              "confirm_before_h": (0.0, 72.0, False, False, "h"), "time_step_s": (0.0, 600.0, True, False, "s")}
+_CAMERA_KEYS = {"sun_exclusion_deg": (0.0, 180.0, False, False, "deg")}
+_ORBIT_KEYS = {"altitude_m": (150e3, 2000e3, False, False, "m"), "inclination_deg": (0.0, 180.0, True, True, "deg"),
+               "ltan_h": (0.0, 24.0, False, True, "h"), "u0_deg": (-360.0, 360.0, False, False, "deg")}
 
-    p = Path(path) if path else DEFAULT_OPS_CONFIG
-    try:
-        data = yaml.safe_load(p.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise ValueError(f"cannot read ops configuration {p}: {exc.strerror}") from exc
+
+def _check_section(where, section, keys, required=(), other=()):
+    """Refuse unknown keys and numbers out of range in one mapping of the ops configuration (ConfigError)."""
+    from ...checks import check_number
+    from ..config import ConfigError
+
+    unknown = sorted(set(section) - set(keys) - set(other))
+    if unknown:
+        raise ConfigError(f"{where}: unknown key(s) {unknown}; known keys: {sorted(set(keys) | set(other))}")
+    missing = [k for k in required if k not in section]
+    if missing:
+        raise ConfigError(f"{where}: missing key(s) {missing}")
+    for key, (lo, hi, lo_open, hi_open, unit) in keys.items():
+        if key in section and not (key == "inclination_deg" and section[key] is None):
+            try:
+                check_number(f"{where}.{key}", section[key], lo, hi, lo_open=lo_open, hi_open=hi_open, unit=unit)
+            except ValueError as exc:
+                raise ConfigError(str(exc)) from None
+
+
+def ops_config_from_dict(data, where="ops configuration") -> OpsConfig:
+    """Validate a parsed ops YAML: every section, key and number is checked (ConfigError naming the key)."""
+    from ..config import ConfigError
+
     if not isinstance(data, dict):
-        raise ValueError(f"ops configuration {p}: expected a mapping")
-    for section in ("stations", "radar", "camera", "rules", "orbit"):
+        raise ConfigError(f"{where}: expected a mapping at the top level, got {type(data).__name__}")
+    sections = ("stations", "radar", "camera", "rules", "orbit")
+    unknown = sorted(set(data) - set(sections))
+    if unknown:
+        raise ConfigError(f"{where}: unknown section(s) {unknown}; known: {list(sections)}")
+    for section in sections:
         if not isinstance(data.get(section), dict):
-            raise ValueError(f"ops configuration {p}: section '{section}' missing or not a mapping")
+            raise ConfigError(f"{where}: section '{section}' missing or not a mapping")
     for group in ("stations", "radar"):
+        if not data[group]:
+            raise ConfigError(f"{where}: {group}: at least one site is required")
         for code, st in data[group].items():
-            for key in ("lat_deg", "lon_deg", "height_m", "min_elevation_deg"):
-                v = st.get(key) if isinstance(st, dict) else None
-                if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-                    raise ValueError(f"ops configuration {p}: {group}.{code}.{key} must be a finite number")
+            if not isinstance(st, dict):
+                raise ConfigError(f"{where}: {group}.{code}: expected a mapping of {sorted(_SITE_KEYS)}")
+            _check_section(f"{group}.{code}", st, _SITE_KEYS, required=tuple(_SITE_KEYS), other=("name",))
+    _check_section("camera", data["camera"], _CAMERA_KEYS, other=("boresight_rtn",))
+    b = data["camera"].get("boresight_rtn", "ejection")
+    if b != "ejection":
+        vec = b if isinstance(b, list) and len(b) == 3 else None
+        if vec is None or any(isinstance(x, bool) or not isinstance(x, (int, float)) for x in vec) \
+                or not np.all(np.isfinite(vec)) or np.linalg.norm(vec) == 0:
+            raise ConfigError(f"camera.boresight_rtn: expected 'ejection' or three finite numbers [R, T, N] not all "
+                              f"zero, got {b!r}")
+    _check_section("rules", data["rules"], _RULE_KEYS)
+    rules = data["rules"]
+    if rules.get("confirm_before_h", 16.0) <= rules.get("confirm_after_h", 11.0):
+        raise ConfigError(f"rules.confirm_before_h ({rules.get('confirm_before_h', 16.0)}) must be larger than "
+                          f"rules.confirm_after_h ({rules.get('confirm_after_h', 11.0)})")
+    _check_section("orbit", data["orbit"], _ORBIT_KEYS, required=("altitude_m", "ltan_h"))
     return OpsConfig(data["stations"], data["radar"], data["camera"], data["rules"], data["orbit"])
 
 
+def load_ops_config(path=None) -> OpsConfig:
+    """Read ``config/ops.yaml`` (or ``path``); every missing or unknown section, key or bad number is named."""
+    from ..config import read_yaml
+
+    p = Path(path) if path else DEFAULT_OPS_CONFIG
+    return ops_config_from_dict(read_yaml(p), f"ops configuration {p}")
+
+
 def read_tle(path):
-    """The two element lines of a TLE file (an optional name line is skipped)."""
-    lines = [ln.rstrip() for ln in Path(path).read_text(encoding="utf-8").splitlines() if ln.strip()]
+    """The two element lines of a TLE file (an optional name line is skipped); checked by SGP4's parser."""
+    from sgp4.api import Satrec
+
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ValueError(f"--tle {path}: cannot read it: {exc.strerror}") from None
+    except UnicodeDecodeError:
+        raise ValueError(f"--tle {path}: not a text file") from None
+    lines = [ln.rstrip() for ln in text.splitlines() if ln.strip()]
     l1 = [ln for ln in lines if ln.startswith("1 ")]
     l2 = [ln for ln in lines if ln.startswith("2 ")]
     if len(l1) != 1 or len(l2) != 1:
         raise ValueError(f"--tle {path}: expected one TLE (lines starting with '1 ' and '2 ')")
+    try:
+        sat = Satrec.twoline2rv(l1[0], l2[0])
+    except Exception as exc:  # noqa: BLE001  (sgp4 raises ValueError or IndexError on malformed lines)
+        raise ValueError(f"--tle {path}: not a valid TLE ({exc})") from None
+    if not (math.isfinite(sat.no_kozai) and sat.no_kozai > 0 and 0 <= sat.ecco < 1):
+        raise ValueError(f"--tle {path}: not a valid TLE (mean motion {sat.no_kozai}, eccentricity {sat.ecco})")
     return l1[0], l2[0]
 
 
