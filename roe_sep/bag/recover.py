@@ -30,8 +30,8 @@ from .writer import BagWriter, check_output
 
 def recover(src, out) -> dict:
     """Write the readable part of bag ``src`` to a new bag directory ``out``; returns counts and the damage
-    (``kind``: complete / truncated / corrupt, see :class:`~roe_sep.bag.scan.Scan`). BagError, and nothing left
-    behind in ``out``, when not a single message can be recovered."""
+    (``kind``: complete / truncated / corrupt, see :class:`~roe_sep.bag.scan.Scan`); with no message readable the
+    new bag is empty (``messages`` 0; the command line removes it and exits 2)."""
     bag_dir, file = resolve(src)
     with open(file, "rb") as fh:
         if fh.read(8) != MAGIC:
@@ -42,8 +42,6 @@ def recover(src, out) -> dict:
             metadata.read(bag_dir)
         except Exception as exc:  # noqa: BLE001  (reported: the recovered bag gets a new one)
             source_metadata = f"{metadata.FILE_NAME} of the source unreadable ({type(exc).__name__}: {one_line(exc)})"
-    out_existed = Path(out).exists()
-    check_output(out)
     scan = Scan(file)
     schemas, channels, orphans = {}, {}, 0
     custom = None
@@ -81,12 +79,6 @@ def recover(src, out) -> dict:
             writer.custom_data.update(custom)
     finally:
         writer.close()
-    if writer.message_count == 0:
-        for name in (writer.file_name, metadata.FILE_NAME):  # only what this call wrote (``out`` was empty)
-            (writer.path / name).unlink(missing_ok=True)
-        if not out_existed:
-            shutil.rmtree(writer.path, ignore_errors=True)
-        raise BagError(f"{file}: no message can be recovered ({scan.kind}: {scan.reason}); nothing written")
     return {"source": str(file), "output": str(writer.path), "messages": writer.message_count,
             "topics": len(writer.topics), "complete": scan.complete, "kind": scan.kind,
             "valid_bytes": scan.valid_bytes, "size_bytes": scan.size, "lost_bytes": scan.size - scan.valid_bytes,
@@ -117,10 +109,21 @@ def main(argv=None) -> int:
     parser.add_argument("bag", help="bag directory or .mcap file to recover")
     parser.add_argument("out", help="new bag directory to write (must not exist or be empty)")
     args = parser.parse_args(argv)
+    out_existed = Path(args.out).exists()
     try:
+        check_output(args.out)
         r = recover(args.bag, args.out)
     except (BagError, OSError) as exc:
         print(f"roe-sep: error: {one_line(exc)}", file=sys.stderr)
+        return 2
+    if r["messages"] == 0:  # an empty bag is no recovery: remove what this call wrote (``out`` was empty)
+        out = Path(r["output"])
+        for f in out.iterdir():
+            f.unlink()
+        if not out_existed:
+            shutil.rmtree(out, ignore_errors=True)
+        print(f"roe-sep: error: {r['source']}: no message can be recovered ({r['kind']}: {r['reason']}); nothing "
+              "written", file=sys.stderr)
         return 2
     print(summary_line(r))
     return 1 if r["kind"] == "corrupt" else 0

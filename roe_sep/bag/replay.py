@@ -90,7 +90,7 @@ def load(bag, selected=None):
         wanted = {s if s.startswith("/") else "/" + s for s in selected}
         missing = sorted(wanted - names)
         if missing:
-            raise BagError(f"{bag}: topics not in the bag: {', '.join(missing)} (it has {', '.join(sorted(names))})")
+            raise BagError(f"--topics: {', '.join(missing)} not in the bag {bag} (it has {', '.join(sorted(names))})")
         topics = [t for t in topics if t["name"] in wanted]
     if not any(t["message_count"] for t in topics):
         raise BagError(f"{bag}: no messages to replay")

@@ -75,8 +75,11 @@ class Scan:
                         self.profile, self.library = rec.profile, rec.library
                     yield rec
                 if opcode == _FOOTER:
-                    self.complete = True
-                    self.reason = self.kind = "complete"
+                    if fh.read(len(MAGIC)) == MAGIC:
+                        self.complete = True
+                        self.reason = self.kind = "complete"
+                    else:
+                        self._stop(fh, f"closing magic after the footer missing at byte {self.valid_bytes}")
                     return
 
     @staticmethod

@@ -101,6 +101,9 @@ def run_sweep(scenario, args) -> SweepResult:
     d = design(separation_config(scenario, args))
     return sweep(d, mc, p_values, progress=_progress(not args.json and sys.stderr.isatty()))
 
+SWEEP_NULLS = {"crossing_min_within_3sigma_f1": "no sample with f1 >= 1 - 3 sigma (too few samples)"}
+
+
 def sweep_report(res: SweepResult) -> dict:
     out = res.to_dict()
     out["f1_3sigma"] = 1.0 - 3.0 * res.design.config.spl_sigma
@@ -200,7 +203,7 @@ def cmd_mc(args):
         from ..plots.montecarlo import write_figures
 
         rep["figures"] = [str(p) for p in write_figures(res, Path(args.plots))]
-    emit(rep, args.json, print_sweep)
+    emit(rep, args.json, print_sweep, why=SWEEP_NULLS)
 
 def _strategy_args(p):
     p.add_argument("--strategy", choices=STRATEGIES, default="double_impulse",

@@ -157,7 +157,13 @@ def read_yaml(path):
 
 def load_scenario(path=None) -> Scenario:
     """Read a scenario YAML file; ``None`` gives the embedded default scenario."""
-    return Scenario() if path is None else scenario_from_dict(read_yaml(path))
+    if path is None:
+        return Scenario()
+    data = read_yaml(path)
+    try:
+        return scenario_from_dict(data)
+    except ConfigError as exc:
+        raise ConfigError(f"configuration {path}: {exc}") from None
 
 
 __all__ = ["ConfigError", "Scenario", "load_scenario", "read_yaml", "scenario_from_dict"]

@@ -178,11 +178,11 @@ def cluster_config_from_dict(data) -> ClusterConfig:
 
     data = {} if data is None else data
     if not isinstance(data, dict):
-        raise ConfigError(f"cluster configuration: expected a mapping, got {type(data).__name__}")
+        raise ConfigError(f"expected a mapping at the top level, got {type(data).__name__}")
     hints = {f.name: f.type for f in dataclasses.fields(ClusterConfig)}
     unknown = sorted(set(data) - set(hints))
     if unknown:
-        raise ConfigError(f"cluster configuration: unknown key(s) {unknown}; known keys: {sorted(hints)}")
+        raise ConfigError(f"unknown key(s) {unknown}; known keys: {sorted(hints)}")
     kw = {}
     for k, v in data.items():
         if k == "sats":
@@ -210,9 +210,13 @@ def load_cluster_config(path=None) -> ClusterConfig:
     """Read a cluster YAML (config/cluster.yaml layout); ``None`` gives the embedded Soyuz-stage example."""
     if path is None:
         return ClusterConfig()
-    from ..config import read_yaml
+    from ..config import ConfigError, read_yaml
 
-    return cluster_config_from_dict(read_yaml(path))
+    data = read_yaml(path)
+    try:
+        return cluster_config_from_dict(data)
+    except ConfigError as exc:
+        raise ConfigError(f"cluster configuration {path}: {exc}") from None
 
 
 # ---------------------------------------------------------------- the probabilistic model

@@ -76,25 +76,25 @@ def _check_section(where, section, keys, required=(), other=()):
                 raise ConfigError(str(exc)) from None
 
 
-def ops_config_from_dict(data, where="ops configuration") -> OpsConfig:
+def ops_config_from_dict(data) -> OpsConfig:
     """Validate a parsed ops YAML: every section, key and number is checked (ConfigError naming the key)."""
     from ..config import ConfigError
 
     if not isinstance(data, dict):
-        raise ConfigError(f"{where}: expected a mapping at the top level, got {type(data).__name__}")
+        raise ConfigError(f"expected a mapping at the top level, got {type(data).__name__}")
     sections = ("stations", "radar", "camera", "rules", "orbit")
     unknown = sorted(set(data) - set(sections))
     if unknown:
-        raise ConfigError(f"{where}: unknown section(s) {unknown}; known: {list(sections)}")
+        raise ConfigError(f"unknown section(s) {unknown}; known: {list(sections)}")
     for section in sections:
         if not isinstance(data.get(section), dict):
-            raise ConfigError(f"{where}: section '{section}' missing or not a mapping")
+            raise ConfigError(f"section '{section}' missing or not a mapping")
     for group in ("stations", "radar"):
         if not data[group]:
-            raise ConfigError(f"{where}: {group}: at least one site is required")
+            raise ConfigError(f"{group}: at least one site is required")
         for code, st in data[group].items():
             if not isinstance(st, dict):
-                raise ConfigError(f"{where}: {group}.{code}: expected a mapping of {sorted(_SITE_KEYS)}")
+                raise ConfigError(f"{group}.{code}: expected a mapping of {sorted(_SITE_KEYS)}")
             _check_section(f"{group}.{code}", st, _SITE_KEYS, required=tuple(_SITE_KEYS), other=("name",))
     _check_section("camera", data["camera"], _CAMERA_KEYS, other=("boresight_rtn",))
     b = data["camera"].get("boresight_rtn", "ejection")
@@ -115,10 +115,14 @@ def ops_config_from_dict(data, where="ops configuration") -> OpsConfig:
 
 def load_ops_config(path=None) -> OpsConfig:
     """Read ``config/ops.yaml`` (or ``path``); every missing or unknown section, key or bad number is named."""
-    from ..config import read_yaml
+    from ..config import ConfigError, read_yaml
 
     p = Path(path) if path else DEFAULT_OPS_CONFIG
-    return ops_config_from_dict(read_yaml(p), f"ops configuration {p}")
+    data = read_yaml(p)
+    try:
+        return ops_config_from_dict(data)
+    except ConfigError as exc:
+        raise ConfigError(f"ops configuration {p}: {exc}") from None
 
 
 def read_tle(path):
