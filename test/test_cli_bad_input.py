@@ -89,7 +89,9 @@ def cases():
     ops = ["--date", "2024-06-01", "--days", "0.2"]
     c += opt_cases(["ops"], ["--days", "0.2"], "--date", ["2024-13-01", "yesterday", "2060-01-01", "1800-01-01", ""])
     c += opt_cases(["ops"], ["--date", "2024-06-01"], "--days", N + NEG + ["8"])
-    c += file_cases(["ops"], ops, "--tle", ["missing", "directory", "binary", "bad_tle"], ["--tle"])
+    c += file_cases(["ops"], ops, "--tle", ["missing", "directory", "binary", "bad_tle", "decayed_tle"], ["--tle"])
+    c.append(("ops --tle 34 years before --date", ["ops", "--date", "2050-01-01", "--days", "0.2", "--tle", "{tle}"],
+              2, ["--tle", "2050-01-01"]))
     c += file_cases(["ops"], ops, "--ops-config", CONFIG_FILES + ["ops_lat", "ops_step0", "ops_unknown", "ops_ltan",
                                                                   "ops_boresight"])
     c.append(("ops --plot <under a file>", ["ops", *ops, "--plot", "{binary}/x.png"], 2, ["{binary}"]))
@@ -224,6 +226,12 @@ def files(tmp_path_factory):
     text("ops_boresight", ops.replace("boresight_rtn: ejection", "boresight_rtn: [0, 0, 0]"))
     f["bad_tle"] = d / "bad.tle"
     f["bad_tle"].write_text("1 garbage line that is no element set\n2 and neither is this one\n")
+    elements = ("1 41604U 16040F   16183.50000000  .00000500  00000-0  25000-4 0  9990\n"
+                "2 41604  97.4500 250.0000 0010000  90.0000 270.0000 {} 1000\n")
+    f["tle"] = d / "biros.tle"
+    f["tle"].write_text(elements.format("15.18000000"))
+    f["decayed_tle"] = d / "decayed.tle"
+    f["decayed_tle"].write_text(elements.format("17.90000000"))  # a period of 80 min: perigee below the surface
     cluster = (ROOT / "config" / "cluster.yaml").read_text()
     text("cluster_nan", cluster + "\nsigma_deg_s: .nan\n" if "sigma_deg_s" not in cluster else
          cluster.replace("sigma_deg_s:", "sigma_deg_s: .nan #"))

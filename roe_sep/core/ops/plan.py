@@ -27,11 +27,14 @@ from pathlib import Path
 
 import numpy as np
 
+from ..constants import MU_EARTH, R_EARTH
 from ..od.radar import raan_from_sun
 from ..relmotion.dynamics import sun_synchronous_inclination
 from ..relmotion.orbit import mean_motion, orbital_period, semi_major_axis
 
 DEFAULT_OPS_CONFIG = Path(__file__).resolve().parents[3] / "config" / "ops.yaml"
+MIN_PERIGEE = 100e3  # m: a TLE whose perigee is lower describes no orbit
+MAX_TLE_AGE_DAYS = 30.0  # SGP4 element sets degrade within days (drag); a plan this far from the epoch is refused
 
 
 @dataclass(frozen=True)
@@ -146,7 +149,21 @@ def read_tle(path):
         raise ValueError(f"--tle {path}: not a valid TLE ({exc})") from None
     if not (math.isfinite(sat.no_kozai) and sat.no_kozai > 0 and 0 <= sat.ecco < 1):
         raise ValueError(f"--tle {path}: not a valid TLE (mean motion {sat.no_kozai}, eccentricity {sat.ecco})")
+    a = (MU_EARTH / (sat.no_kozai / 60.0) ** 2) ** (1.0 / 3.0)  # m, from the mean motion [rad/min]
+    perigee = a * (1.0 - sat.ecco) - R_EARTH
+    if perigee < MIN_PERIGEE:
+        raise ValueError(f"--tle {path}: perigee altitude {perigee / 1e3:.0f} km (mean motion "
+                         f"{sat.no_kozai * 1440 / (2 * math.pi):.3f} rev/day) is below {MIN_PERIGEE / 1e3:.0f} km: "
+                         "not an orbit")
     return l1[0], l2[0]
+
+
+def tle_epoch(cfg: OpsConfig) -> _dt.datetime:
+    """The epoch of the configured TLE (UTC)."""
+    from sgp4.api import Satrec
+    from sgp4.conveniences import sat_epoch_datetime
+
+    return sat_epoch_datetime(Satrec.twoline2rv(*cfg.tle))
 
 
 def with_tle(cfg: OpsConfig, path) -> OpsConfig:
@@ -252,8 +269,14 @@ def plan(cfg: OpsConfig, date: _dt.date, days: float = 2.0, boresight_rtn=None) 
 
     if not (isinstance(days, (int, float)) and 0 < days <= 7):
         raise ValueError(f"days must be in (0, 7], got {days!r}")
-    ts, eph = _skyfield()
     start = _dt.datetime(date.year, date.month, date.day, tzinfo=_dt.timezone.utc)
+    if cfg.tle:
+        age = (start - tle_epoch(cfg)).total_seconds() / 86400.0
+        if not -MAX_TLE_AGE_DAYS <= age <= MAX_TLE_AGE_DAYS - days:
+            raise ValueError(f"--tle: the plan from {date.isoformat()} (+{days:g} d) lies {age:+.1f} days from the TLE "
+                             f"epoch {tle_epoch(cfg):%Y-%m-%d %H:%M} UTC; SGP4 predictions are allowed within "
+                             f"{MAX_TLE_AGE_DAYS:g} days of it")
+    ts, eph = _skyfield()
     t0, t1 = ts.from_datetime(start), ts.from_datetime(start + _dt.timedelta(days=days))
     sat = carrier_satellite(cfg, start, ts, eph)
     rules = cfg.rules
