@@ -155,15 +155,19 @@ def read_yaml(path):
         raise ConfigError(f"configuration {path} is not valid YAML{where}: {what}") from exc
 
 
-def load_scenario(path=None) -> Scenario:
-    """Read a scenario YAML file; ``None`` gives the embedded default scenario."""
-    if path is None:
-        return Scenario()
+def load_yaml_config(path, build, what="configuration"):
+    """``build(read_yaml(path))``; a :class:`ConfigError` of ``build`` gets the file's name in front
+    (``configuration FILE: separation.spl_dv: expected ...``)."""
     data = read_yaml(path)
     try:
-        return scenario_from_dict(data)
+        return build(data)
     except ConfigError as exc:
-        raise ConfigError(f"configuration {path}: {exc}") from None
+        raise ConfigError(f"{what} {path}: {exc}") from None
 
 
-__all__ = ["ConfigError", "Scenario", "load_scenario", "read_yaml", "scenario_from_dict"]
+def load_scenario(path=None) -> Scenario:
+    """Read a scenario YAML file; ``None`` gives the embedded default scenario."""
+    return Scenario() if path is None else load_yaml_config(path, scenario_from_dict)
+
+
+__all__ = ["ConfigError", "Scenario", "load_scenario", "load_yaml_config", "read_yaml", "scenario_from_dict"]

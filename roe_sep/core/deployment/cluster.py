@@ -210,13 +210,9 @@ def load_cluster_config(path=None) -> ClusterConfig:
     """Read a cluster YAML (config/cluster.yaml layout); ``None`` gives the embedded Soyuz-stage example."""
     if path is None:
         return ClusterConfig()
-    from ..config import ConfigError, read_yaml
+    from ..config import load_yaml_config
 
-    data = read_yaml(path)
-    try:
-        return cluster_config_from_dict(data)
-    except ConfigError as exc:
-        raise ConfigError(f"cluster configuration {path}: {exc}") from None
+    return load_yaml_config(path, cluster_config_from_dict, "cluster configuration")
 
 
 # ---------------------------------------------------------------- the probabilistic model

@@ -118,14 +118,9 @@ def ops_config_from_dict(data) -> OpsConfig:
 
 def load_ops_config(path=None) -> OpsConfig:
     """Read ``config/ops.yaml`` (or ``path``); every missing or unknown section, key or bad number is named."""
-    from ..config import ConfigError, read_yaml
+    from ..config import load_yaml_config
 
-    p = Path(path) if path else DEFAULT_OPS_CONFIG
-    data = read_yaml(p)
-    try:
-        return ops_config_from_dict(data)
-    except ConfigError as exc:
-        raise ConfigError(f"ops configuration {p}: {exc}") from None
+    return load_yaml_config(Path(path) if path else DEFAULT_OPS_CONFIG, ops_config_from_dict, "ops configuration")
 
 
 def read_tle(path):
