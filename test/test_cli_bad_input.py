@@ -147,7 +147,7 @@ def cases():
     c += opt_cases(["cluster"], cl, "--seed", N + ["-1"])
     c += opt_cases(["cluster"], cl, "--method", ["bogus"])
     c += file_cases(["cluster"], cl, "--config", CONFIG_FILES + ["cluster_nan", "cluster_unknown", "cluster_negv",
-                                                                 "cluster_nosats"])
+                                                                 "cluster_nosats", "cluster_fast", "cluster_density"])
     # bag info: unreadable -> 2, damaged -> 1 with the damage named
     for name in ("missing", "empty_dir", "garbage_bag", "empty_file"):
         c.append((f"bag info <{name}>", ["bag", "info", "{" + name + "}"], 2, ["{" + name + "}"]))
@@ -238,6 +238,8 @@ def files(tmp_path_factory):
     text("cluster_unknown", "sigmaa_deg_s: 0.3\n")
     text("cluster_negv", "sats: [{name: a, velocity: -1.0, delta_q: 0.006}]\n")
     text("cluster_nosats", "sats: []\n")
+    text("cluster_fast", "sats: [{name: a, velocity: 1.0e+300, delta_q: 0.006}]\n")
+    text("cluster_density", "density: 1.0\n")
     text("cluster_small", "max_delay: 15.0\ndelay_step: 5.0\nturns: 0.5\ntime_step: 60.0\n")
     text("params_unknown_node", "no_such_node: {ros__parameters: {x: 1}}\n")
     text("params_nan", "sim: {ros__parameters: {tick_period: .nan}}\n")
@@ -379,6 +381,7 @@ JSON_COMMANDS = [
     ["ops", "--date", "2024-06-01", "--days", "0.5", "--json"],
     ["propagate", *PROPAGATE, "--json"],
     ["validate", "--days", "1", "--json"],
+    ["validate", "--days", "1", "--mc", "2", "--p", "0.05", "--json"],
     ["deploy-sweep", *DEPLOY, "--json"],
     ["cluster", "--config", "{cluster_small}", "--samples", "20", "--json"],
     ["bag", "info", "--json", "{good_bag}"],
