@@ -7,7 +7,6 @@ All three go through :func:`roe_sep.core.deployment.cluster.pair_tables`; the tw
 """
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -17,6 +16,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from timing import best_of  # noqa: E402
 
+from roe_sep import jsonutil
 from roe_sep.core.deployment import cluster_envelope
 from roe_sep.core.deployment.cluster import ClusterConfig, _time_grid, pair_tables  # noqa: E402
 
@@ -43,7 +43,7 @@ def main(argv=None):
            "envelope_chunked_s": t_chunk, "envelope_all_at_once_s": t_all, "gaussian_s": t_gauss,
            "chunked_speedup": t_all / t_chunk, "envelope_over_gaussian": t_chunk / t_gauss}
     if args.json:
-        print(json.dumps(rep, indent=2))
+        print(jsonutil.dumps(rep))
     else:
         print(f"pair table ns1-ns2: {cases} delay pairs x {times} times (best of {args.repeat})")
         print(f"  envelope, chunks of {chunk} cases   {t_chunk:7.2f} s")

@@ -6,7 +6,6 @@ times the whole ``roe-sep mc --json`` command (interpreter start-up included), t
 """
 
 import argparse
-import json
 import subprocess
 import sys
 from pathlib import Path
@@ -16,6 +15,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from mc_loop import sweep_per_sample  # noqa: E402
 from timing import best_of  # noqa: E402
 
+from roe_sep import jsonutil  # noqa: E402
 from roe_sep.core.montecarlo.sweep import DEFAULT_P_VALUES, MonteCarloConfig, draw, sweep  # noqa: E402
 from roe_sep.core.separation.double_impulse import design  # noqa: E402
 
@@ -52,7 +52,7 @@ def main(argv=None):
         "vectorized_sample_p_pairs_per_s": args.samples * len(ps) / t_vec,
     }
     if args.json:
-        print(json.dumps(result, indent=2))
+        print(jsonutil.dumps(result))
     else:
         print(f"Monte Carlo p sweep, {args.samples} samples x {len(ps)} p values (best of {args.repeat})")
         print(f"  vectorized        {t_vec:8.3f} s   ({result['vectorized_sample_p_pairs_per_s']:.3g} sample-p/s)")

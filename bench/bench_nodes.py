@@ -15,6 +15,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from roe_sep import jsonutil
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -99,7 +101,7 @@ def main(argv=None):
     if not args.skip_scenario:
         result["scenario"] = scenario()
     if args.json:
-        print(json.dumps(result, indent=2))
+        print(jsonutil.dumps(result))
         return 0
     lat = result["planner_latency"]
     print(f"planner: ejection event -> plan received over DDS, {lat['events']} events")

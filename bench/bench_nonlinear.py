@@ -7,7 +7,6 @@ one p. heyoka runs every sample (batch lanes over a thread pool); the scipy loop
 """
 
 import argparse
-import json
 import math
 import os
 import sys
@@ -15,6 +14,7 @@ import time
 
 import numpy as np
 
+from roe_sep import jsonutil
 from roe_sep.core.constants import R_EARTH, SECONDS_PER_DAY
 from roe_sep.core.montecarlo.sweep import MonteCarloConfig, draw
 from roe_sep.core.relmotion.dynamics import arg_latitude_rate
@@ -96,7 +96,7 @@ def main(argv=None):
         "max_relative_position_difference_m": agree,
     }
     if args.json:
-        json.dump(res, sys.stdout, indent=2)
+        jsonutil.dump(res, sys.stdout)
         print()
         return 0
     print(f"nonlinear Monte Carlo, {n} sample pairs, ejection -> drift-stop -> +24 h ({t_end / 3600:.1f} h), "

@@ -10,6 +10,7 @@ from pathlib import Path
 
 from mcap.reader import make_reader
 
+from ..checks import one_line
 from . import metadata
 from .errors import BagError
 from .scan import Scan
@@ -27,11 +28,10 @@ def resolve(path):
     names = []
     if (p / metadata.FILE_NAME).is_file():
         try:
-            names = metadata.read(p).get("relative_file_paths") or []
-        except Exception as exc:  # noqa: BLE001  (a damaged metadata.yaml: fall back to the directory listing)
+            names = [n for n in metadata.read(p).get("relative_file_paths") or [] if isinstance(n, str)]
+        except Exception:  # noqa: BLE001  (a damaged metadata.yaml: fall back to the directory listing; info says so)
             names = []
-            _ = exc
-    files = [p / n for n in names if (p / n).is_file()] or sorted(p.glob("*.mcap"))
+    files = [p / n for n in names if (p / n).is_file()] or sorted(f for f in p.glob("*.mcap") if f.is_file())
     if not files:
         raise BagError(f"{path}: not a bag (no .mcap file in the directory)")
     if len(files) > 1:
@@ -80,52 +80,98 @@ def messages(path, topics=None):
                           msg.publish_time, msg.sequence)
 
 
+def _scan(file):
+    """Every record of the file, CRCs checked: (scan, channels by id, schemas by id, per-channel counts, start, end)."""
+    scan = Scan(file)
+    chans_by_id, schemas, per = {}, {}, collections.Counter()
+    start = end = None
+    for rec in scan.records():
+        kind = type(rec).__name__
+        if kind == "Schema":
+            schemas[rec.id] = rec
+        elif kind == "Channel":
+            chans_by_id[rec.id] = rec
+        elif kind == "Message":
+            per[rec.channel_id] += 1
+            start = rec.log_time if start is None else min(start, rec.log_time)
+            end = rec.log_time if end is None else max(end, rec.log_time)
+    return scan, chans_by_id, schemas, per, start, end
+
+
+def _summary_problems(file, per, count) -> list:
+    """Disagreements between the summary section of a complete file and its records."""
+    try:
+        with open(file, "rb") as fh:
+            _, summary = _summary(fh, file)
+    except BagError as exc:
+        return [f"summary section unreadable ({exc})"]
+    stats = summary.statistics
+    problems = []
+    if stats.message_count != count:
+        problems.append(f"summary statistics say {stats.message_count} messages, the records hold {count}")
+    elif {k: v for k, v in stats.channel_message_counts.items() if v} != {k: v for k, v in per.items() if v}:
+        problems.append("summary per-channel message counts differ from the records")
+    return problems
+
+
+def _metadata_problems(bag_dir, count, result) -> list:
+    """A bag directory's metadata.yaml: present, readable, and the same message count as the file."""
+    if bag_dir is None:
+        return []
+    if not (bag_dir / metadata.FILE_NAME).is_file():
+        return [f"no {metadata.FILE_NAME} in {bag_dir} (`roe-sep bag recover` writes one)"]
+    try:
+        meta = metadata.read(bag_dir)
+        result["ros_distro"] = meta.get("ros_distro")
+        n = int(meta.get("message_count"))
+    except Exception as exc:  # noqa: BLE001  (any damage: bad YAML, missing keys, wrong types)
+        return [f"{metadata.FILE_NAME} unreadable ({type(exc).__name__}: {one_line(exc)}); `roe-sep bag recover` "
+                "rebuilds it"]
+    if n != count:
+        return [f"{metadata.FILE_NAME} says {n} messages, the file holds {count}"]
+    return []
+
+
 def info(path) -> dict:
-    """Topics, types, counts and times of a bag; an unfinished file is scanned (``complete`` false)."""
+    """Topics, types, counts and times of a bag, from a full record scan (CRCs checked) of its file.
+
+    ``complete``: the file ends with its footer; ``damage_kind``: ``complete``, ``truncated`` (recording cut off:
+    `roe-sep bag recover` keeps everything before the cut) or ``corrupt`` (unreadable bytes inside the file);
+    ``problems``: every inconsistency found (summary vs records, metadata.yaml), empty for a sound bag.
+    """
     bag_dir, file = resolve(path)
     result = {"path": str(bag_dir or file), "file": str(file), "storage_identifier": metadata.STORAGE_ID,
               "size_bytes": file.stat().st_size}
-    try:
-        with open(file, "rb") as fh:
-            reader, summary = _summary(fh, file)
-            header = reader.get_header()
-        stats = summary.statistics
-        counts = stats.channel_message_counts
-        chans = [(ch, summary.schemas.get(ch.schema_id), counts.get(cid, 0))
-                 for cid, ch in sorted(summary.channels.items())]
-        count, start, end = stats.message_count, stats.message_start_time, stats.message_end_time
-        result.update(complete=True, profile=header.profile, library=header.library)
-    except BagError:
-        scan = Scan(file)
-        chans_by_id, schemas, per = {}, {}, collections.Counter()
-        start = end = None
-        for rec in scan.records():
-            kind = type(rec).__name__
-            if kind == "Schema":
-                schemas[rec.id] = rec
-            elif kind == "Channel":
-                chans_by_id[rec.id] = rec
-            elif kind == "Message":
-                per[rec.channel_id] += 1
-                start = rec.log_time if start is None else min(start, rec.log_time)
-                end = rec.log_time if end is None else max(end, rec.log_time)
-        chans = [(ch, schemas.get(ch.schema_id), per[cid]) for cid, ch in sorted(chans_by_id.items())]
-        count = sum(per.values())
-        result.update(complete=False, profile=scan.profile, library=scan.library,
-                      recoverable_bytes=scan.valid_bytes, damage=scan.reason)
+    scan, chans_by_id, schemas, per, start, end = _scan(file)
+    chans = [(ch, schemas.get(ch.schema_id), per[cid]) for cid, ch in sorted(chans_by_id.items())]
+    count = sum(per.values())
+    problems = []
+    result.update(complete=scan.complete, damage_kind=scan.kind, profile=scan.profile, library=scan.library)
+    if scan.complete:
+        problems += _summary_problems(file, per, count)
+    else:
+        result.update(recoverable_bytes=scan.valid_bytes, damage=scan.reason)
+        problems.append(f"{scan.kind}: {scan.reason}; {scan.size - scan.valid_bytes} of {scan.size} bytes unreadable")
+    problems += _metadata_problems(bag_dir, count, result)
     if count == 0:
         start = end = 0
     result.update(
         message_count=count, start_ns=start, end_ns=end, duration_s=(end - start) * 1e-9,
         topics=[{"name": ch.topic, "type": schema.name if schema else "", "message_count": n,
                  "serialization_format": ch.message_encoding,
-                 "qos": [{k: q[k] for k in ("reliability", "durability", "history", "depth")}
-                         for q in metadata.parse_qos(ch.metadata.get("offered_qos_profiles", ""))],
+                 "qos": [{k: q.get(k) for k in ("reliability", "durability", "history", "depth")}
+                         for q in _qos(ch)],
                  "type_description_hash": ch.metadata.get("topic_type_hash", "")}
-                for ch, schema, n in chans])
-    if bag_dir is not None and (bag_dir / metadata.FILE_NAME).is_file():
-        result["ros_distro"] = metadata.read(bag_dir).get("ros_distro")
+                for ch, schema, n in chans],
+        problems=problems)
     return result
+
+
+def _qos(channel) -> list:
+    try:
+        return [q for q in metadata.parse_qos(channel.metadata.get("offered_qos_profiles", "")) if isinstance(q, dict)]
+    except Exception:  # noqa: BLE001  (a damaged QoS string is reported as no QoS, never a crash)
+        return []
 
 
 def format_info(d: dict) -> str:
@@ -133,7 +179,8 @@ def format_info(d: dict) -> str:
     lines = [f"Files:             {d['file']}",
              f"Bag size:          {d['size_bytes'] / 1024:.1f} KiB",
              f"Storage id:        {d['storage_identifier']}" + ("" if d["complete"] else
-                                                                "   (UNFINISHED: run `roe-sep bag recover`)"),
+                                                                f"   ({d['damage_kind'].upper()}: run `roe-sep bag "
+                                                                f"recover`)"),
              f"Duration:          {d['duration_s']:.3f}s",
              f"Start:             {d['start_ns'] * 1e-9:.9f}",
              f"End:               {d['end_ns'] * 1e-9:.9f}",
@@ -143,4 +190,5 @@ def format_info(d: dict) -> str:
         lines.append(("Topic information: " if i == 0 else " " * 19)
                      + f"Topic: {t['name']} | Type: {t['type']} | Count: {t['message_count']} | "
                        f"Serialization Format: {t['serialization_format']} | QoS: {qos}")
+    lines += [f"PROBLEM:           {p}" for p in d.get("problems", [])]
     return "\n".join(lines)

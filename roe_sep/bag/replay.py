@@ -11,15 +11,17 @@ latest after ``--delay`` s: DDS discovery of a new participant occasionally take
 replayed like any topic; ``--clock`` without a recorded ``/clock`` publishes one from the log times.
 """
 
-import argparse
+import re
 import sys
 import time
 
+from ..checks import OneLineParser, finite_float, one_line
 from . import reader
 from .errors import BagError
 from .qos import to_rclpy
 
 CLOCK_TOPIC = "/clock"
+_TOPIC = re.compile(r"^(/[A-Za-z_][A-Za-z0-9_]*)+$")
 
 
 def _project_depths() -> dict:
@@ -48,38 +50,26 @@ def publisher_depth(topic: dict, known: dict) -> int:
     return 100
 
 
-def _positive(text):
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}") from None
-    if not value > 0 or value == float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
-    return value
-
-
-def _non_negative(text):
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number of seconds >= 0, got {text!r}") from None
-    if not value >= 0 or value == float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a number of seconds >= 0, got {text!r}")
-    return value
+# --rate: the playback wall time is the bag's span / rate, so a tiny rate is a hang in disguise
+RATE = finite_float(1e-3, 1e9, unit="(playback speed factor)")
+CLOCK_HZ = finite_float(0.1, 1000.0, unit="Hz")
+WAIT_S = finite_float(0.0, 3600.0, unit="s")
 
 
 def parser():
-    p = argparse.ArgumentParser(prog="roe-sep replay", description="Play a recorded bag back onto its topics.")
+    p = OneLineParser(prog="roe-sep replay", description="Play a recorded bag back onto its topics.")
     p.add_argument("bag", help="bag directory (or .mcap file) written by the recorder or ros2 bag record -s mcap")
-    p.add_argument("--rate", type=_positive, default=1.0, help="playback speed factor (default 1)")
+    p.add_argument("--rate", type=RATE, default=1.0, help="playback speed factor in [0.001, 1e9] (default 1)")
     p.add_argument("--topics", nargs="+", metavar="TOPIC", help="replay only these topics")
-    p.add_argument("--clock", type=_positive, nargs="?", const=40.0, metavar="HZ",
-                   help="publish /clock from the log times (default 40 Hz) when the bag has no /clock")
-    p.add_argument("--delay", type=_non_negative, default=1.0,
-                   help="wait up to this many seconds for subscribers of every volatile topic before the first "
-                        "message (DDS discovery; default 1)")
-    p.add_argument("--linger", type=_non_negative, default=2.0,
-                   help="seconds to stay up after the last message so latched data reaches late joiners (default 2)")
+    p.add_argument("--clock", type=CLOCK_HZ, nargs="?", const=40.0, metavar="HZ",
+                   help="publish /clock from the log times at HZ in [0.1, 1000] (default 40 Hz) when the bag has no "
+                        "/clock")
+    p.add_argument("--delay", type=WAIT_S, default=1.0,
+                   help="wait up to this many seconds, in [0, 3600], for subscribers of every volatile topic before "
+                        "the first message (DDS discovery; default 1)")
+    p.add_argument("--linger", type=WAIT_S, default=2.0,
+                   help="seconds in [0, 3600] to stay up after the last message so latched data reaches late "
+                        "joiners (default 2)")
     return p
 
 
@@ -87,13 +77,20 @@ def load(bag, selected=None):
     """``(topics to play, bag has /clock)``; BagError for a bad bag, an unknown topic or a missing type."""
     from .definitions import message_class
 
+    scanned = reader.info(bag)  # full record scan: a damaged bag is refused before anything is published
+    if not scanned["complete"] or scanned["problems"]:
+        raise BagError(f"{bag}: damaged bag ({'; '.join(scanned['problems'])}); recover it with `roe-sep bag recover` "
+                       "and replay the result")
     topics = reader.topics(bag)
     names = {t["name"] for t in topics}
     if selected:
+        bad = [s for s in selected if not _TOPIC.match(s if s.startswith("/") else "/" + s)]
+        if bad:
+            raise BagError(f"--topics: not a ROS topic name: {', '.join(repr(b) for b in bad)}")
         wanted = {s if s.startswith("/") else "/" + s for s in selected}
         missing = sorted(wanted - names)
         if missing:
-            raise BagError(f"{bag}: topics not in the bag: {', '.join(missing)} (it has {', '.join(sorted(names))})")
+            raise BagError(f"--topics: {', '.join(missing)} not in the bag {bag} (it has {', '.join(sorted(names))})")
         topics = [t for t in topics if t["name"] in wanted]
     if not any(t["message_count"] for t in topics):
         raise BagError(f"{bag}: no messages to replay")
@@ -162,6 +159,10 @@ def play(bag, topics, args, has_clock) -> int:
     except KeyboardInterrupt:
         print(f"roe-sep replay: interrupted after {count} messages", file=sys.stderr)
         return 130
+    except Exception as exc:  # noqa: BLE001  (a record unreadable mid-play: stop with one line, not a traceback)
+        print(f"roe-sep: error: replay stopped after {count} messages: {type(exc).__name__}: {one_line(exc)}",
+              file=sys.stderr)
+        return 1
     finally:
         node.destroy_node()
         rclpy.try_shutdown()
@@ -183,7 +184,7 @@ def main(argv=None) -> int:
     try:
         topics, has_clock = load(args.bag, args.topics)
     except (BagError, OSError) as exc:
-        print(f"roe-sep: error: {exc}", file=sys.stderr)
+        print(f"roe-sep: error: {one_line(exc)}", file=sys.stderr)
         return 2
     return play(args.bag, topics, args, has_clock)
 

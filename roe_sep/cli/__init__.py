@@ -6,16 +6,21 @@ One module per command group, each with a ``register(subparsers)``: :mod:`.desig
 ``python -m roe_sep.cli`` is the same as ``roe-sep``.
 """
 
-import argparse
+import os
 import sys
 
+from ..bag.errors import BagError
+from ..checks import OneLineParser, one_line
 from ..core.config import ConfigError
 from ..core.separation.double_impulse import InfeasibleDesignError
 from . import analysis, design, nonlinear, ops, run
 
+EXIT_BAD_INPUT = 2  # bad option, bad file, infeasible design: the one-line message names it
+EXIT_INTERNAL = 3  # an exception nobody expected: a bug, reported on one line (ROE_SEP_DEBUG=1: the traceback)
+
 
 def build_parser():
-    parser = argparse.ArgumentParser(prog="roe-sep", description=__doc__.splitlines()[0])
+    parser = OneLineParser(prog="roe-sep", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
     design.register(sub)
     ops.register(sub)
@@ -26,19 +31,37 @@ def build_parser():
     return parser
 
 
+def _os_error(exc: OSError) -> str:
+    where = f"{exc.filename}: " if exc.filename else ""
+    return f"{where}{exc.strerror or exc}"
+
+
 def main(argv=None):
+    """``roe-sep``: exit 0 on success, 1 when the result is negative (unsafe run, infeasible cluster program, damaged
+    bag), 2 on bad input (one line naming the option, the value and what is allowed), 3 on an internal error."""
     argv = sys.argv[1:] if argv is None else list(argv)
-    delegated = run.delegated(argv)
-    if delegated is not None:
-        return delegated
-    args = build_parser().parse_args(argv)
     try:
+        delegated = run.delegated(argv)
+        if delegated is not None:
+            return delegated
+        args = build_parser().parse_args(argv)
         code = args.func(args)
-    except (ConfigError, InfeasibleDesignError, ValueError, FileNotFoundError) as exc:
-        print(f"roe-sep: error: {exc}", file=sys.stderr)
-        return 2
+    except (ConfigError, InfeasibleDesignError, ValueError, BagError) as exc:
+        print(f"roe-sep: error: {one_line(exc)}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     except BrokenPipeError:  # e.g. `roe-sep mc --json | head`
         sys.stderr.close()
         return 0
+    except OSError as exc:  # a file that cannot be read or written (--plots, --out, --config ...)
+        print(f"roe-sep: error: {one_line(_os_error(exc))}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print("roe-sep: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:  # noqa: BLE001  (last resort: one line, never a traceback on the terminal)
+        if os.environ.get("ROE_SEP_DEBUG"):
+            raise
+        print(f"roe-sep: internal error: {type(exc).__name__}: {one_line(exc)} (a bug; rerun with ROE_SEP_DEBUG=1 "
+              "for the traceback)", file=sys.stderr)
+        return EXIT_INTERNAL
     return code or 0
-

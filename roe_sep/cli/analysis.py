@@ -6,14 +6,13 @@ turns into exit status 2 with the message.
 """
 
 import dataclasses
-import math
 import sys
 from pathlib import Path
 
 import numpy as np
 
 from ..plots.analysis import cluster_figures, deployment_figures
-from .common import emit, float_list
+from .common import emit, finite_float, float_list, integer, seed
 
 
 def deploy_config(args):
@@ -31,8 +30,6 @@ def deploy_config(args):
     if args.angles is not None:
         changes["angles_deg"] = args.angles
     elif args.angle_step is not None:
-        if not (math.isfinite(args.angle_step) and 0 < args.angle_step <= 180):
-            raise ValueError(f"--angle-step must be in (0, 180] deg, got {args.angle_step}")
         changes["angles_deg"] = tuple(float(a) for a in np.arange(0.0, 360.0 - 1e-9, args.angle_step))
     if args.no_drag:
         changes["drag"] = False
@@ -142,8 +139,6 @@ def cmd_cluster(args):
     changes = {k: v for k, v in (("sigma_deg_s", args.sigma), ("p_required", args.p), ("r_safe", args.r_safe),
                                  ("r_max", args.r_max), ("method", args.method)) if v is not None}
     cfg = dataclasses.replace(cfg, **changes).validate()
-    if args.samples is not None and args.samples < 0:
-        raise ValueError(f"--samples must be >= 0, got {args.samples}")
     prog = select_program(cfg)
     stat = None
     if prog.feasible and args.samples:
@@ -160,15 +155,23 @@ def cmd_cluster(args):
 def register(subparsers):
     """Add ``deploy-sweep`` and ``cluster`` to the ``roe-sep`` sub-command parser."""
     p = subparsers.add_parser("deploy-sweep", help="CubeSat deployment direction/velocity sweep (seed 003 Sec. 4.2)")
-    p.add_argument("--altitude", type=float, help="circular orbit altitude [m] (default 400000)")
-    p.add_argument("--inclinations", type=float_list("--inclinations"), help="deg, comma-separated "
-                   "(default 97.03,37,5)")
-    p.add_argument("--dv", type=float_list("--dv"), help="deployer dv [m/s], comma-separated (default 1.0,0.2)")
-    p.add_argument("--angles", type=float_list("--angles"), help="deg from +V-bar clockwise, comma-separated")
-    p.add_argument("--angle-step", type=float, help="deg between angles from 0 (default 15)")
-    p.add_argument("--days", type=float, help="free drift [days] (default 10)")
-    p.add_argument("--step", type=float, help="s between samples of the distance curves (default 600)")
-    p.add_argument("--density", type=float, help="atmospheric density [kg/m^3] (default 2.803e-12, USSA76 400 km)")
+    p.add_argument("--altitude", type=finite_float(100e3, 5000e3, unit="m"),
+                   help="circular orbit altitude [m] in [100000, 5000000]; [200000, 1100000) for the nonlinear "
+                   "model (default 400000)")
+    p.add_argument("--inclinations", type=float_list(0.0, 180.0, lo_open=True, hi_open=True, unit="deg"),
+                   help="deg, comma-separated, each in (0, 180) (default 97.03,37,5)")
+    p.add_argument("--dv", type=float_list(0.0, 100.0, lo_open=True, unit="m/s"),
+                   help="deployer dv [m/s], comma-separated, each in (0, 100] (default 1.0,0.2)")
+    p.add_argument("--angles", type=float_list(-360.0, 360.0, unit="deg"),
+                   help="deg from +V-bar clockwise, comma-separated, each in [-360, 360]")
+    p.add_argument("--angle-step", type=finite_float(0.0, 180.0, lo_open=True, unit="deg"),
+                   help="deg between angles from 0, in (0, 180] (default 15)")
+    p.add_argument("--days", type=finite_float(0.0, 60.0, lo_open=True, unit="days"),
+                   help="free drift [days] in (0, 60] (default 10)")
+    p.add_argument("--step", type=finite_float(1.0, 86400.0, unit="s"),
+                   help="s between samples of the distance curves, in [1, 86400] and at most days/4 (default 600)")
+    p.add_argument("--density", type=finite_float(0.0, 1e-6, unit="kg/m^3"),
+                   help="atmospheric density [kg/m^3] in [0, 1e-6] (default 2.803e-12, USSA76 400 km)")
     p.add_argument("--no-drag", action="store_true", help="switch differential drag off")
     p.add_argument("--no-j2", action="store_true", help="switch J2 off (needs --model linear)")
     p.add_argument("--model", choices=("nonlinear", "linear"), help="relative motion: numerical J2-J4 + drag "
@@ -181,14 +184,19 @@ def register(subparsers):
     p = subparsers.add_parser("cluster", help="separation program of a nanosatellite cluster from a tumbling "
                               "platform (seed 004)")
     p.add_argument("--config", help="cluster YAML (default: the embedded Soyuz-stage example, config/cluster.yaml)")
-    p.add_argument("--sigma", type=float, help="1-sigma transverse angular velocity of the platform [deg/s]")
-    p.add_argument("--p", type=float, help="required probability P* (default 0.997)")
-    p.add_argument("--r-safe", type=float, help="keep-out radius r* [m]")
-    p.add_argument("--r-max", type=float, help="largest distance inside the cluster r** [m]")
+    p.add_argument("--sigma", type=finite_float(0.0, 90.0, lo_open=True, unit="deg/s"),
+                   help="1-sigma transverse angular velocity of the platform [deg/s] in (0, 90]")
+    p.add_argument("--p", type=finite_float(0.5, 1.0, hi_open=True),
+                   help="required probability P* in [0.5, 1) (default 0.997)")
+    p.add_argument("--r-safe", type=finite_float(0.0, 1e6, lo_open=True, unit="m"),
+                   help="keep-out radius r* [m] in (0, 1e6]")
+    p.add_argument("--r-max", type=finite_float(0.0, 1e7, lo_open=True, unit="m"),
+                   help="largest distance inside the cluster r** [m] in (0, 1e7], larger than r*")
     p.add_argument("--method", choices=("envelope", "gaussian"), help="'with probability P*': every state of the "
                    "P* tumbling set (default) or the seed's Gaussian k-sigma model")
-    p.add_argument("--samples", type=int, default=5000, help="statistical validation samples (0: none; default 5000)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the statistical validation (default 0)")
+    p.add_argument("--samples", type=integer(0, 1_000_000), default=5000,
+                   help="statistical validation samples in [0, 1000000] (0: none; default 5000)")
+    p.add_argument("--seed", type=seed(), default=0, help="seed of the statistical validation (default 0)")
     p.add_argument("--plots", metavar="DIR", help="write the figures (PNG) to DIR")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=cmd_cluster)

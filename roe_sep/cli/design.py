@@ -9,7 +9,7 @@ from pathlib import Path
 from ..core.config import load_scenario
 from ..core.montecarlo.sweep import SweepResult, sweep
 from ..core.separation.double_impulse import DoubleImpulseDesign, design
-from .common import emit, p_list, positive_int, vec
+from .common import emit, finite_float, p_list, samples, seed, vec
 
 
 def design_report(d: DoubleImpulseDesign) -> dict:
@@ -98,8 +98,11 @@ def run_sweep(scenario, args) -> SweepResult:
         overrides["j2"] = True
     mc = dataclasses.replace(mc, **overrides)
     p_values = args.p if args.p is not None else scenario.p_values
-    d = design(scenario.separation)
+    d = design(separation_config(scenario, args))
     return sweep(d, mc, p_values, progress=_progress(not args.json and sys.stderr.isatty()))
+
+SWEEP_NULLS = {"crossing_min_within_3sigma_f1": "no sample with f1 >= 1 - 3 sigma (too few samples)"}
+
 
 def sweep_report(res: SweepResult) -> dict:
     out = res.to_dict()
@@ -108,11 +111,21 @@ def sweep_report(res: SweepResult) -> dict:
 
 STRATEGIES = ("double_impulse", "multi_impulse")
 
+
+def _ejection_overrides(args) -> dict:
+    """``--spl-dv`` and ``--u1`` as config fields (both strategies name them ``spl_dv`` and ``u1_deg``)."""
+    return {k: v for k, v in (("spl_dv", args.spl_dv), ("u1_deg", args.u1)) if v is not None}
+
+
+def separation_config(scenario, args):
+    """The scenario's double-impulse inputs with ``--spl-dv`` and ``--u1`` applied (they override
+    ``separation.spl_dv`` and ``separation.u1_deg``)."""
+    return dataclasses.replace(scenario.separation, **_ejection_overrides(args))
+
 def _multi_design(scenario, args):
     from ..core.separation import multi_impulse
 
-    overrides = {k: v for k, v in (("spl_dv", args.spl_dv), ("u1_deg", args.u1)) if v is not None}
-    mcfg = dataclasses.replace(multi_impulse.MultiImpulseConfig(), **overrides)
+    mcfg = dataclasses.replace(multi_impulse.MultiImpulseConfig(), **_ejection_overrides(args))
     return multi_impulse.design(scenario.separation, mcfg, scenario.monte_carlo)
 
 def print_multi_design(rep: dict, out=None):
@@ -150,7 +163,7 @@ def cmd_design(args):
 
         emit(multi_report(_multi_design(scenario, args)), args.json, print_multi_design)
         return
-    emit(design_report(design(scenario.separation)), args.json, print_design)
+    emit(design_report(design(separation_config(scenario, args))), args.json, print_design)
 
 def print_acceptance(rep: dict, out=None):
     w = (out or sys.stdout).write
@@ -190,13 +203,17 @@ def cmd_mc(args):
         from ..plots.montecarlo import write_figures
 
         rep["figures"] = [str(p) for p in write_figures(res, Path(args.plots))]
-    emit(rep, args.json, print_sweep)
+    emit(rep, args.json, print_sweep, why=SWEEP_NULLS)
 
 def _strategy_args(p):
     p.add_argument("--strategy", choices=STRATEGIES, default="double_impulse",
                    help="separation strategy (default double_impulse; multi_impulse: seed 001)")
-    p.add_argument("--spl-dv", type=float, help="multi_impulse: SPL |dv| [m/s] (default 1.53)")
-    p.add_argument("--u1", type=float, help="multi_impulse: ejection argument of latitude [deg] (default 90)")
+    p.add_argument("--spl-dv", type=finite_float(0.0, 10.0, lo_open=True, unit="m/s"),
+                   help="SPL ejection |dv| [m/s] in (0, 10] (default: double_impulse the scenario's "
+                   "separation.spl_dv, 1.41; multi_impulse 1.53)")
+    p.add_argument("--u1", type=finite_float(-360.0, 360.0, unit="deg"),
+                   help="ejection mean argument of latitude [deg] in [-360, 360] (default: double_impulse the "
+                   "scenario's separation.u1_deg, 88; multi_impulse 90)")
 
 def register(subparsers):
     """Add ``design`` and ``mc`` to the ``roe-sep`` subparsers."""
@@ -208,9 +225,9 @@ def register(subparsers):
 
     p = subparsers.add_parser("mc", help="Monte Carlo sweep over the drift-stop reduction p")
     p.add_argument("--config", help="scenario YAML")
-    p.add_argument("--samples", type=positive_int, help="number of samples (default 100000)")
-    p.add_argument("--seed", type=int, help="random seed (default from the scenario: 0)")
-    p.add_argument("--p", type=p_list, help="comma-separated p values [m/s]")
+    p.add_argument("--samples", type=samples, help="number of samples in [1, 10000000] (default 100000)")
+    p.add_argument("--seed", type=seed(), help="random seed in [0, 2**32 - 1] (default from the scenario: 0)")
+    p.add_argument("--p", type=p_list, help="comma-separated p values [m/s], each in [0, 1] (double_impulse only)")
     p.add_argument("--no-drag", action="store_true", help="switch differential drag off")
     p.add_argument("--j2", action="store_true", help="include secular J2 in the propagation")
     p.add_argument("--plots", metavar="DIR", help="write the figures (PNG) to DIR")

@@ -4,43 +4,29 @@
 ``roe_sep.cli.main`` reports with exit status 2, as every other subcommand.
 """
 
-import argparse
 import dataclasses
 import math
 import sys
 
 import numpy as np
 
-from .common import emit, nonneg_int, p_list
+from .common import check_number, emit, finite_float, integer, number_list, p_list, seed
 
 MODELS = ("keplerian", "j2", "j2drag", "nonlinear")
 
 
-def _roe_arg(text):
-    try:
-        values = [float(x) for x in text.split(",")]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"--roe expects six comma-separated numbers [m], got {text!r}") from None
-    if len(values) != 6 or not all(math.isfinite(v) for v in values):
-        raise argparse.ArgumentTypeError(f"--roe expects six finite comma-separated numbers [m], got {text!r}")
-    return values
+# a*ROE [m]: the close-formation model needs |a dROE| well below a (checked against 1 % of a once a is known)
+_roe_arg = number_list(-1e6, 1e6, unit="m", length=6)
+_days_values = number_list(1, 30, integer_values=True)
 
 
 def _days_list(text):
-    try:
-        values = [int(x) for x in text.split(",") if x.strip()]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"--days expects comma-separated whole days, got {text!r}") from None
-    if not values or not all(1 <= v <= 30 for v in values):
-        raise argparse.ArgumentTypeError(f"--days expects whole days in [1, 30], got {text!r}")
-    return sorted(set(values))
+    """``--days`` of ``validate``: whole days in [1, 30], sorted, each once."""
+    return sorted(set(_days_values(text)))
 
 
-def _finite(name, value, positive=False):
-    if value is None:
-        return
-    if not math.isfinite(value) or (positive and value <= 0):
-        raise ValueError(f"{name} must be {'positive and ' if positive else ''}finite, got {value}")
+_days_list.__name__ = "days"
+MAX_POINTS = 100_000  # output samples of `propagate` (days * 86400 / step)
 
 
 def propagate_report(roe_m, altitude, inc_deg, u_deg, days, step, model, scenario):
@@ -51,23 +37,23 @@ def propagate_report(roe_m, altitude, inc_deg, u_deg, days, step, model, scenari
     from ..core.relmotion.roe import roe_to_kepler
     from ..core.truth.validation import Case
 
-    _finite("--alt", altitude, positive=True)
-    _finite("--days", days, positive=True)
-    _finite("--step", step, positive=True)
-    _finite("--u", u_deg)
-    if altitude < 200e3 or altitude >= 1100e3:
-        raise ValueError(f"--alt must be in [200, 1100) km (the tabulated density), got {altitude:g} m")
-    if days > 30:
-        raise ValueError(f"--days must be at most 30, got {days:g}")
+    check_number("--alt", altitude, 200e3, 1100e3, hi_open=True, unit="m (the tabulated density)")
+    check_number("--days", days, 0.0, 30.0, lo_open=True, unit="days")
+    check_number("--step", step, 1.0, 86400.0, unit="s")
+    check_number("--u", u_deg, -360.0, 360.0, unit="deg")
+    if inc_deg is not None:
+        check_number("--inc", inc_deg, 0.0, 180.0, lo_open=True, hi_open=True, unit="deg")
+    if days * SECONDS_PER_DAY / step > MAX_POINTS:
+        raise ValueError(f"--step: {step:g} s over --days {days:g} gives {days * SECONDS_PER_DAY / step:.0f} output "
+                         f"points; at most {MAX_POINTS} allowed (a step >= {days * SECONDS_PER_DAY / MAX_POINTS:g} s)")
     a = float(semi_major_axis(altitude))
     inc = float(sun_synchronous_inclination(a)) if inc_deg is None else math.radians(inc_deg)
-    if inc_deg is not None and not (0.0 < inc_deg < 180.0):
-        raise ValueError(f"--inc must be in (0, 180) deg, got {inc_deg:g}")
     mc = scenario.monte_carlo
     chief = np.array([a, 0.0, inc, 0.0, 0.0, math.radians(u_deg)])
     roe = np.asarray(roe_m, dtype=float) / a
     if np.any(np.abs(roe[[0, 2, 3, 4, 5]]) > 0.01):
-        raise ValueError("--roe: |a da|, |a de|, |a di| must be below 1 % of a (near-circular, close formation)")
+        raise ValueError(f"--roe: |a da|, |a dex|, |a dey|, |a dix|, |a diy| must be below 1 % of a ({0.01 * a:.0f} m; "
+                         f"near-circular, close formation), got {','.join(f'{x:g}' for x in roe_m)}")
     times = np.arange(0.0, days * SECONDS_PER_DAY + step / 2, step)
     b_c, b_d = (mc.carrier.ballistic, mc.picosat.ballistic) if mc.drag else (0.0, 0.0)
     case = Case("propagate", chief, (), b_c, b_d, mc.density)
@@ -163,6 +149,10 @@ def print_validate(rep, out=None):
 def cmd_validate(args):
     from ..core.config import load_scenario
 
+    for name, value in (("--p", args.p), ("--seed", args.seed)):
+        if value is not None and not args.mc:
+            raise ValueError(f"{name} applies to the Monte Carlo only: give --mc N (N >= 1) with it")
+
     rep = validate_report(load_scenario(args.config), args.days, args.mc or 0, args.p, args.seed)
     emit(rep, args.json, print_validate)
     return 0
@@ -173,11 +163,16 @@ def register(subparsers):
     p = subparsers.add_parser("propagate", help="propagate ROE with a secular model or the nonlinear truth")
     p.add_argument("--roe", type=_roe_arg, required=True, metavar="DA,DL,DEX,DEY,DIX,DIY",
                    help="initial mean ROE a*[da dl dex dey dix diy] [m]")
-    p.add_argument("--alt", type=float, default=515e3, help="chief mean altitude a - R_E [m] (default 515000)")
-    p.add_argument("--inc", type=float, help="chief inclination [deg] (default: sun-synchronous)")
-    p.add_argument("--u", type=float, default=0.0, help="chief mean argument of latitude at t = 0 [deg]")
-    p.add_argument("--days", type=float, default=1.0, help="propagation span [days] (default 1)")
-    p.add_argument("--step", type=float, default=600.0, help="output step [s] (default 600)")
+    p.add_argument("--alt", type=finite_float(200e3, 1100e3, hi_open=True, unit="m"), default=515e3,
+                   help="chief mean altitude a - R_E [m] in [200000, 1100000) (default 515000)")
+    p.add_argument("--inc", type=finite_float(0.0, 180.0, lo_open=True, hi_open=True, unit="deg"),
+                   help="chief inclination [deg] in (0, 180) (default: sun-synchronous)")
+    p.add_argument("--u", type=finite_float(-360.0, 360.0, unit="deg"), default=0.0,
+                   help="chief mean argument of latitude at t = 0 [deg] in [-360, 360]")
+    p.add_argument("--days", type=finite_float(0.0, 30.0, lo_open=True, unit="days"), default=1.0,
+                   help="propagation span [days] in (0, 30] (default 1)")
+    p.add_argument("--step", type=finite_float(1.0, 86400.0, unit="s"), default=600.0,
+                   help=f"output step [s] in [1, 86400], at most {MAX_POINTS} points (default 600)")
     p.add_argument("--model", choices=MODELS, default="j2drag", help="dynamics (default j2drag)")
     p.add_argument("--config", help="scenario YAML (drag properties and density)")
     p.add_argument("--json", action="store_true", help="machine-readable output (t [s], roe [m])")
@@ -185,10 +180,11 @@ def register(subparsers):
 
     p = subparsers.add_parser("validate", help="model error of the secular ROE model against the nonlinear truth")
     p.add_argument("--config", help="scenario YAML")
-    p.add_argument("--days", type=_days_list, default=[1, 2, 3], help="comma-separated days (default 1,2,3)")
-    p.add_argument("--mc", type=nonneg_int, metavar="N",
-                   help="also run the nonlinear Monte Carlo with N samples next to the linear one")
-    p.add_argument("--p", type=p_list, help="comma-separated p values [m/s] for --mc")
-    p.add_argument("--seed", type=int, help="Monte Carlo seed")
+    p.add_argument("--days", type=_days_list, default=(1, 2, 3),
+                   help="comma-separated whole days, each in [1, 30] (default 1,2,3)")
+    p.add_argument("--mc", type=integer(0, 100_000), metavar="N",
+                   help="also run the nonlinear Monte Carlo with N samples (N in [0, 100000]) next to the linear one")
+    p.add_argument("--p", type=p_list, help="comma-separated p values [m/s], each in [0, 1], for --mc (needs --mc)")
+    p.add_argument("--seed", type=seed(), help="Monte Carlo seed in [0, 2**32 - 1] (needs --mc)")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=cmd_validate)

@@ -4,16 +4,31 @@ import argparse
 import sys
 from pathlib import Path
 
-from .common import emit
+from .common import emit, finite_float
+
+
+def _span():
+    import datetime
+
+    # DE421 covers 1899-07-29 .. 2053-10-09; the plan needs up to 7 days after the date
+    return datetime.date(1900, 1, 1), datetime.date(2053, 9, 30)
+
+
+EPHEMERIS_SPAN = _span()
 
 
 def _date(text):
     import datetime
 
+    first, last = EPHEMERIS_SPAN
     try:
-        return datetime.date.fromisoformat(text)
+        day = datetime.date.fromisoformat(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"--date expects YYYY-MM-DD, got {text!r}") from None
+        day = None
+    if day is None or not first <= day <= last:
+        raise argparse.ArgumentTypeError(f"expected a date YYYY-MM-DD from {first} to {last} (the DE421 ephemeris), "
+                                         f"got {text!r}")
+    return day
 
 def cmd_ops(args):
     from ..core.ops import plan as ops
@@ -35,7 +50,8 @@ def register(subparsers):
     p.add_argument("--date", required=True, type=_date, help="separation date YYYY-MM-DD (UTC)")
     p.add_argument("--tle", help="carrier TLE file (2 or 3 lines); default: mean elements of config/ops.yaml")
     p.add_argument("--ops-config", help="stations/radar/camera/orbit YAML (default: config/ops.yaml)")
-    p.add_argument("--days", type=float, default=2.0, help="length of the plan [days] (default 2)")
+    p.add_argument("--days", type=finite_float(0.0, 7.0, lo_open=True, unit="days"), default=2.0,
+                   help="length of the plan [days] in (0, 7] (default 2)")
     p.add_argument("--plot", metavar="PNG", help="write the timeline figure (like seed 001 Fig. 7)")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=cmd_ops)

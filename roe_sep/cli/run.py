@@ -1,11 +1,14 @@
 """``roe-sep run``, ``roe-sep replay`` and ``roe-sep bag``: the scenario end to end over ROS 2 (the README's main
 command), and the tools for its bags."""
 
-import json
+import math
 import sys
 from pathlib import Path
 
-from .common import emit, vec
+from .. import jsonutil
+from .common import emit, finite_float, seed, vec
+
+DAY = 86400.0
 
 
 def print_run(rep: dict, out=None):
@@ -33,8 +36,39 @@ def print_run(rep: dict, out=None):
     for name, ok in rep["criteria"].items():
         w(f"  {'pass' if ok else 'FAIL'}  {name}\n")
 
+def check_params_file(path):
+    """``--params``: readable YAML in the ROS layout ``{node: {ros__parameters: {...}}}`` with finite numbers only
+    (the nodes check their own ranges at start-up); ValueError/ConfigError naming the file and the key."""
+    from ..core.config import read_yaml
+
+    data = read_yaml(path)
+    if data is None:
+        return
+    if not isinstance(data, dict) or not all(isinstance(v, dict) and isinstance(v.get("ros__parameters"), dict)
+                                             for v in data.values()):
+        raise ValueError(f"--params {path}: expected {{node: {{ros__parameters: {{name: value}}}}}}")
+
+    def walk(x, where):
+        if isinstance(x, dict):
+            for k, v in x.items():
+                walk(v, f"{where}.{k}")
+        elif isinstance(x, list):
+            for i, v in enumerate(x):
+                walk(v, f"{where}[{i}]")
+        elif isinstance(x, float) and not math.isfinite(x):
+            raise ValueError(f"--params {path}: {where} = {x}: parameters must be finite numbers")
+
+    for node, v in data.items():
+        walk(v["ros__parameters"], str(node))
+
+
 def cmd_run(args):
+    from ..core.config import load_scenario
     from ..run import run
+
+    load_scenario(args.config)  # a bad scenario is refused before any node starts
+    if args.params:
+        check_params_file(args.params)
 
     rep = run(config=args.config, out=args.out, params=args.params, duration=args.duration, seed=args.seed,
               timeout=args.timeout, progress=not args.json and sys.stderr.isatty(),
@@ -60,6 +94,8 @@ def delegated(argv):
     return None
 
 def cmd_bag_info(args):
+    """Exit 0 for a complete, consistent bag; 1 for a damaged one (the report says what and where); 2 when nothing
+    can be read (no such path, not an MCAP file)."""
     from ..bag import BagError, info
     from ..bag.reader import format_info
 
@@ -67,8 +103,11 @@ def cmd_bag_info(args):
         d = info(args.bag)
     except (BagError, OSError) as exc:
         raise ValueError(str(exc)) from exc
-    print(json.dumps(d, indent=2) if args.json else format_info(d))
-    return 0
+    if args.json:
+        jsonutil.dump(d, sys.stdout)
+    else:
+        print(format_info(d))
+    return 0 if d["complete"] and not d.get("problems") else 1
 
 def register_run(subparsers):
     """Add ``run`` and ``replay`` to the ``roe-sep`` subparsers."""
@@ -77,10 +116,12 @@ def register_run(subparsers):
     p.add_argument("--config", help="scenario YAML")
     p.add_argument("--params", help="ROS parameter YAML overriding node parameters ({node: {ros__parameters: ...}})")
     p.add_argument("--out", default="out/run", help="output directory: bag/, report.json, logs/ (default out/run)")
-    p.add_argument("--duration", type=float, help="sim seconds to run (default 280800 = 3.25 days)")
-    p.add_argument("--seed", type=int, help="seed of the simulated dispersions (default 0)")
-    p.add_argument("--timeout", type=float, default=1800.0, help="wall-time limit [s] (default 1800)")
-    p.add_argument("--real-time-factor", type=float, metavar="X",
+    p.add_argument("--duration", type=finite_float(0.0, 30 * DAY, lo_open=True, unit="s"),
+                   help="sim seconds to run, in (0, 2592000] (default 280800 = 3.25 days)")
+    p.add_argument("--seed", type=seed(), help="seed of the simulated dispersions in [0, 2**32 - 1] (default 0)")
+    p.add_argument("--timeout", type=finite_float(0.0, 7 * DAY, lo_open=True, unit="s"), default=1800.0,
+                   help="wall-time limit [s] in (0, 604800] (default 1800)")
+    p.add_argument("--real-time-factor", type=finite_float(0.0, 1e9, unit="sim s per wall s"), metavar="X",
                    help="pace the lockstep clock at X sim seconds per wall second at most (default 0: as fast as "
                         "the machine allows; the results are the same either way)")
     p.add_argument("--json", action="store_true", help="print the report as JSON")

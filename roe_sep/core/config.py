@@ -13,12 +13,47 @@ import types
 import typing
 from dataclasses import dataclass, field
 
-from .montecarlo.sweep import DEFAULT_P_VALUES, MonteCarloConfig
+from ..checks import SEED_MAX, check_number, one_line
+from .constants import SECONDS_PER_DAY
+from .montecarlo.sweep import DEFAULT_P_VALUES, MonteCarloConfig, Spacecraft
 from .separation.double_impulse import SeparationConfig
 
 
 class ConfigError(ValueError):
     """A configuration key or value is invalid; the message names it."""
+
+
+# The range of every numeric key: (class, field) -> (lo, hi, lo_open, hi_open, unit). Physical limits or the domain
+# of the models (LEO circular carrier, close formation); a value outside is refused with the key, value and range.
+RANGES = {
+    (SeparationConfig, "altitude"): (150e3, 2000e3, False, False, "m"),
+    (SeparationConfig, "inclination_deg"): (0.0, 180.0, True, True, "deg"),
+    (SeparationConfig, "u1_deg"): (-360.0, 360.0, False, False, "deg"),
+    (SeparationConfig, "spl_dv"): (0.0, 10.0, True, False, "m/s"),
+    (SeparationConfig, "a_de_f"): (0.0, 1e5, True, False, "m"),
+    (SeparationConfig, "a_di_f"): (0.0, 1e5, True, False, "m"),
+    (SeparationConfig, "k"): (1, 99, False, False, "(odd)"),
+    (SeparationConfig, "eta_deg"): (-360.0, 360.0, False, False, "deg"),
+    (SeparationConfig, "spl_sigma"): (0.0, 1.0, False, True, "(fraction of |dv|)"),
+    (SeparationConfig, "thruster_sigma"): (0.0, 1.0, False, True, "(fraction of |dv|)"),
+    (SeparationConfig, "p_sigma_level"): (0.0, 10.0, False, False, "sigma"),
+    (SeparationConfig, "a_dl_min"): (0.0, 1e7, True, False, "m"),
+    (SeparationConfig, "a_dl_max"): (0.0, 1e7, True, False, "m"),
+    (SeparationConfig, "min_rn_distance"): (0.0, 1e5, False, False, "m"),
+    (SeparationConfig, "fov_half_r_deg"): (0.0, 90.0, True, True, "deg"),
+    (SeparationConfig, "fov_half_n_deg"): (0.0, 90.0, True, True, "deg"),
+    (MonteCarloConfig, "samples"): (1, 10_000_000, False, False, ""),
+    (MonteCarloConfig, "seed"): (0, SEED_MAX, False, False, ""),
+    (MonteCarloConfig, "attitude_sigma_arcsec"): (0.0, 36000.0, False, False, "arcsec"),
+    (MonteCarloConfig, "ballistic_sigma"): (0.0, 10.0, False, False, "(relative)"),
+    (MonteCarloConfig, "density"): (0.0, 1e-6, False, False, "kg/m^3"),
+    (MonteCarloConfig, "horizon"): (0.0, 30 * SECONDS_PER_DAY, True, False, "s"),
+    (MonteCarloConfig, "evaporation_distance"): (0.0, 1e8, True, False, "m"),
+    (Spacecraft, "cd"): (0.0, 10.0, True, False, ""),
+    (Spacecraft, "area"): (0.0, 1e3, True, False, "m^2"),
+    (Spacecraft, "mass"): (0.0, 1e6, True, False, "kg"),
+}
+P_RANGE = (0.0, 1.0)  # m/s, drift-stop reductions |p| (as `roe-sep mc --p`)
 
 
 @dataclass(frozen=True)
@@ -68,6 +103,14 @@ def _build(path, cls, data):
     if unknown:
         raise ConfigError(f"{path}: unknown key(s) {unknown}; known keys: {names}")
     kwargs = {k: _coerce(f"{path}.{k}", v, hints[k]) for k, v in data.items()}
+    for k, v in kwargs.items():
+        if (cls, k) in RANGES and v is not None and not dataclasses.is_dataclass(v):
+            lo, hi, lo_open, hi_open, unit = RANGES[(cls, k)]
+            try:
+                check_number(f"{path}.{k}", v, lo, hi, lo_open=lo_open, hi_open=hi_open, integer=hints[k] is not float
+                             and isinstance(lo, int), unit=unit)
+            except ValueError as exc:
+                raise ConfigError(str(exc)) from None
     return cls(**kwargs)
 
 
@@ -84,8 +127,9 @@ def scenario_from_dict(data) -> Scenario:
     if not isinstance(p_values, (list, tuple)) or not p_values:
         raise ConfigError(f"monte_carlo.p_values: expected a non-empty list of numbers [m/s], got {p_values!r}")
     p_values = tuple(_coerce(f"monte_carlo.p_values[{i}]", p, float) for i, p in enumerate(p_values))
-    if any(p < 0 for p in p_values):
-        raise ConfigError(f"monte_carlo.p_values: reductions |p| must be non-negative, got {list(p_values)}")
+    if any(not P_RANGE[0] <= p <= P_RANGE[1] for p in p_values):
+        raise ConfigError(f"monte_carlo.p_values: reductions |p| must be non-negative and at most {P_RANGE[1]:g} m/s, "
+                          f"got {list(p_values)}")
     return Scenario(
         separation=_build("separation", SeparationConfig, data.get("separation")),
         monte_carlo=_build("monte_carlo", MonteCarloConfig, mc),
@@ -102,13 +146,28 @@ def read_yaml(path):
             return yaml.safe_load(fh)
     except OSError as exc:
         raise ConfigError(f"cannot read configuration {path}: {exc.strerror}") from exc
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"configuration {path} is not UTF-8 text (byte {exc.start})") from exc
     except yaml.YAMLError as exc:
-        raise ConfigError(f"configuration {path} is not valid YAML: {exc}") from exc
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
+        what = getattr(exc, "problem", None) or one_line(exc)
+        raise ConfigError(f"configuration {path} is not valid YAML{where}: {what}") from exc
+
+
+def load_yaml_config(path, build, what="configuration"):
+    """``build(read_yaml(path))``; a :class:`ConfigError` of ``build`` gets the file's name in front
+    (``configuration FILE: separation.spl_dv: expected ...``)."""
+    data = read_yaml(path)
+    try:
+        return build(data)
+    except ConfigError as exc:
+        raise ConfigError(f"{what} {path}: {exc}") from None
 
 
 def load_scenario(path=None) -> Scenario:
     """Read a scenario YAML file; ``None`` gives the embedded default scenario."""
-    return Scenario() if path is None else scenario_from_dict(read_yaml(path))
+    return Scenario() if path is None else load_yaml_config(path, scenario_from_dict)
 
 
-__all__ = ["ConfigError", "Scenario", "load_scenario", "read_yaml", "scenario_from_dict"]
+__all__ = ["ConfigError", "Scenario", "load_scenario", "load_yaml_config", "read_yaml", "scenario_from_dict"]

@@ -116,23 +116,23 @@ class ClusterConfig:
         if len(set(names)) != len(names):
             raise ValueError(f"sats: names must be unique, got {names}")
         for s in self.sats:
-            if not (np.isfinite(s.velocity) and s.velocity > 0):
-                raise ValueError(f"sats.{s.name}.velocity must be positive [m/s], got {s.velocity}")
-            if not np.isfinite(s.delta_q):
-                raise ValueError(f"sats.{s.name}.delta_q must be finite [m^2/kg], got {s.delta_q}")
+            if not (np.isfinite(s.velocity) and 0 < s.velocity <= 100.0):
+                raise ValueError(f"sats.{s.name}.velocity must be in (0, 100] m/s, got {s.velocity}")
+            if not (np.isfinite(s.delta_q) and abs(s.delta_q) <= 1.0):
+                raise ValueError(f"sats.{s.name}.delta_q must be finite and |delta_q| <= 1 [m^2/kg], got {s.delta_q}")
         if sum(s.cluster for s in self.sats) > 4:
             raise ValueError("sats: at most 4 cluster members (the minimax search is exhaustive)")
         checks = (
             ("altitude", 100e3 <= self.altitude <= 2000e3, "between 100 km and 2000 km [m]"),
-            ("density", self.density >= 0, "non-negative [kg/m^3]"),
-            ("sigma_deg_s", self.sigma_deg_s > 0, "positive [deg/s]"),
+            ("density", 0 <= self.density <= 1e-6, "in [0, 1e-6] kg/m^3"),
+            ("sigma_deg_s", 0 < self.sigma_deg_s <= 90.0, "in (0, 90] deg/s"),
             ("p_required", 0.5 <= self.p_required < 1.0, "in [0.5, 1)"),
-            ("r_safe", self.r_safe > 0, "positive [m]"),
-            ("r_max", self.r_max > self.r_safe, "larger than r_safe [m]"),
+            ("r_safe", 0 < self.r_safe <= 1e6, "in (0, 1e6] m"),
+            ("r_max", self.r_safe < self.r_max <= 1e7, "larger than r_safe and at most 1e7 [m]"),
             ("turns", 0 < self.turns <= 20, "in (0, 20]"),
-            ("departure_time", self.departure_time >= 0, "non-negative [s]"),
-            ("min_delay", self.min_delay >= 0, "non-negative [s]"),
-            ("max_delay", self.max_delay > self.min_delay, "larger than min_delay [s]"),
+            ("departure_time", 0 <= self.departure_time <= 86400.0, "in [0, 86400] s"),
+            ("min_delay", 0 <= self.min_delay <= 3600.0, "in [0, 3600] s"),
+            ("max_delay", self.min_delay < self.max_delay <= 3600.0, "larger than min_delay and at most 3600 [s]"),
             ("delay_step", self.delay_step > 0, "positive [s]"),
             ("time_step", 0 < self.time_step <= 120, "in (0, 120] s"),
         )
@@ -178,11 +178,11 @@ def cluster_config_from_dict(data) -> ClusterConfig:
 
     data = {} if data is None else data
     if not isinstance(data, dict):
-        raise ConfigError(f"cluster configuration: expected a mapping, got {type(data).__name__}")
+        raise ConfigError(f"expected a mapping at the top level, got {type(data).__name__}")
     hints = {f.name: f.type for f in dataclasses.fields(ClusterConfig)}
     unknown = sorted(set(data) - set(hints))
     if unknown:
-        raise ConfigError(f"cluster configuration: unknown key(s) {unknown}; known keys: {sorted(hints)}")
+        raise ConfigError(f"unknown key(s) {unknown}; known keys: {sorted(hints)}")
     kw = {}
     for k, v in data.items():
         if k == "sats":
@@ -210,9 +210,9 @@ def load_cluster_config(path=None) -> ClusterConfig:
     """Read a cluster YAML (config/cluster.yaml layout); ``None`` gives the embedded Soyuz-stage example."""
     if path is None:
         return ClusterConfig()
-    from ..config import read_yaml
+    from ..config import load_yaml_config
 
-    return cluster_config_from_dict(read_yaml(path))
+    return load_yaml_config(path, cluster_config_from_dict, "cluster configuration")
 
 
 # ---------------------------------------------------------------- the probabilistic model

@@ -27,11 +27,14 @@ from pathlib import Path
 
 import numpy as np
 
+from ..constants import MU_EARTH, R_EARTH
 from ..od.radar import raan_from_sun
 from ..relmotion.dynamics import sun_synchronous_inclination
 from ..relmotion.orbit import mean_motion, orbital_period, semi_major_axis
 
 DEFAULT_OPS_CONFIG = Path(__file__).resolve().parents[3] / "config" / "ops.yaml"
+MIN_PERIGEE = 100e3  # m: a TLE whose perigee is lower describes no orbit
+MAX_TLE_AGE_DAYS = 30.0  # SGP4 element sets degrade within days (drag); a plan this far from the epoch is refused
 
 
 @dataclass(frozen=True)
@@ -44,37 +47,118 @@ class OpsConfig:
     tle: tuple | None = None  # (line1, line2)
 
 
-def load_ops_config(path=None) -> OpsConfig:
-    """Read ``config/ops.yaml`` (or ``path``); every missing section or station field is named in the error."""
-    import yaml
+# every numeric key of config/ops.yaml: (lo, hi, lo_open, hi_open, unit); a key outside its range is refused
+_SITE_KEYS = {"lat_deg": (-90.0, 90.0, False, False, "deg"), "lon_deg": (-180.0, 360.0, False, False, "deg"),
+              "height_m": (-500.0, 9000.0, False, False, "m"), "min_elevation_deg": (0.0, 90.0, False, True, "deg")}
+_RULE_KEYS = {"pole_tolerance_deg": (0.0, 45.0, False, False, "deg"),
+              "radar_min_delay_orbits": (0.0, 30.0, False, False, "orbits"),
+              "radar_target_delay_orbits": (0.0, 30.0, False, False, "orbits"),
+              "radar_backup_max_h": (0.0, 48.0, False, False, "h"), "confirm_after_h": (0.0, 48.0, False, False, "h"),
+              "confirm_before_h": (0.0, 72.0, False, False, "h"), "time_step_s": (0.0, 600.0, True, False, "s")}
+_CAMERA_KEYS = {"sun_exclusion_deg": (0.0, 180.0, False, False, "deg")}
+_ORBIT_KEYS = {"altitude_m": (150e3, 2000e3, False, False, "m"), "inclination_deg": (0.0, 180.0, True, True, "deg"),
+               "ltan_h": (0.0, 24.0, False, True, "h"), "u0_deg": (-360.0, 360.0, False, False, "deg")}
 
-    p = Path(path) if path else DEFAULT_OPS_CONFIG
-    try:
-        data = yaml.safe_load(p.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise ValueError(f"cannot read ops configuration {p}: {exc.strerror}") from exc
+
+def _check_section(where, section, keys, required=(), other=()):
+    """Refuse unknown keys and numbers out of range in one mapping of the ops configuration (ConfigError)."""
+    from ...checks import check_number
+    from ..config import ConfigError
+
+    unknown = sorted(set(section) - set(keys) - set(other))
+    if unknown:
+        raise ConfigError(f"{where}: unknown key(s) {unknown}; known keys: {sorted(set(keys) | set(other))}")
+    missing = [k for k in required if k not in section]
+    if missing:
+        raise ConfigError(f"{where}: missing key(s) {missing}")
+    for key, (lo, hi, lo_open, hi_open, unit) in keys.items():
+        if key in section and not (key == "inclination_deg" and section[key] is None):
+            try:
+                check_number(f"{where}.{key}", section[key], lo, hi, lo_open=lo_open, hi_open=hi_open, unit=unit)
+            except ValueError as exc:
+                raise ConfigError(str(exc)) from None
+
+
+def ops_config_from_dict(data) -> OpsConfig:
+    """Validate a parsed ops YAML: every section, key and number is checked (ConfigError naming the key)."""
+    from ..config import ConfigError
+
     if not isinstance(data, dict):
-        raise ValueError(f"ops configuration {p}: expected a mapping")
-    for section in ("stations", "radar", "camera", "rules", "orbit"):
+        raise ConfigError(f"expected a mapping at the top level, got {type(data).__name__}")
+    sections = ("stations", "radar", "camera", "rules", "orbit")
+    unknown = sorted(set(data) - set(sections))
+    if unknown:
+        raise ConfigError(f"unknown section(s) {unknown}; known: {list(sections)}")
+    for section in sections:
         if not isinstance(data.get(section), dict):
-            raise ValueError(f"ops configuration {p}: section '{section}' missing or not a mapping")
+            raise ConfigError(f"section '{section}' missing or not a mapping")
     for group in ("stations", "radar"):
+        if not data[group]:
+            raise ConfigError(f"{group}: at least one site is required")
         for code, st in data[group].items():
-            for key in ("lat_deg", "lon_deg", "height_m", "min_elevation_deg"):
-                v = st.get(key) if isinstance(st, dict) else None
-                if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-                    raise ValueError(f"ops configuration {p}: {group}.{code}.{key} must be a finite number")
+            if not isinstance(st, dict):
+                raise ConfigError(f"{group}.{code}: expected a mapping of {sorted(_SITE_KEYS)}")
+            _check_section(f"{group}.{code}", st, _SITE_KEYS, required=tuple(_SITE_KEYS), other=("name",))
+    _check_section("camera", data["camera"], _CAMERA_KEYS, other=("boresight_rtn",))
+    b = data["camera"].get("boresight_rtn", "ejection")
+    if b != "ejection":
+        vec = b if isinstance(b, list) and len(b) == 3 else None
+        if vec is None or any(isinstance(x, bool) or not isinstance(x, (int, float)) for x in vec) \
+                or not np.all(np.isfinite(vec)) or np.linalg.norm(vec) == 0:
+            raise ConfigError(f"camera.boresight_rtn: expected 'ejection' or three finite numbers [R, T, N] not all "
+                              f"zero, got {b!r}")
+    _check_section("rules", data["rules"], _RULE_KEYS)
+    rules = data["rules"]
+    if rules.get("confirm_before_h", 16.0) <= rules.get("confirm_after_h", 11.0):
+        raise ConfigError(f"rules.confirm_before_h ({rules.get('confirm_before_h', 16.0)}) must be larger than "
+                          f"rules.confirm_after_h ({rules.get('confirm_after_h', 11.0)})")
+    _check_section("orbit", data["orbit"], _ORBIT_KEYS, required=("altitude_m", "ltan_h"))
     return OpsConfig(data["stations"], data["radar"], data["camera"], data["rules"], data["orbit"])
 
 
+def load_ops_config(path=None) -> OpsConfig:
+    """Read ``config/ops.yaml`` (or ``path``); every missing or unknown section, key or bad number is named."""
+    from ..config import load_yaml_config
+
+    return load_yaml_config(Path(path) if path else DEFAULT_OPS_CONFIG, ops_config_from_dict, "ops configuration")
+
+
 def read_tle(path):
-    """The two element lines of a TLE file (an optional name line is skipped)."""
-    lines = [ln.rstrip() for ln in Path(path).read_text(encoding="utf-8").splitlines() if ln.strip()]
+    """The two element lines of a TLE file (an optional name line is skipped); checked by SGP4's parser."""
+    from sgp4.api import Satrec
+
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ValueError(f"--tle {path}: cannot read it: {exc.strerror}") from None
+    except UnicodeDecodeError:
+        raise ValueError(f"--tle {path}: not a text file") from None
+    lines = [ln.rstrip() for ln in text.splitlines() if ln.strip()]
     l1 = [ln for ln in lines if ln.startswith("1 ")]
     l2 = [ln for ln in lines if ln.startswith("2 ")]
     if len(l1) != 1 or len(l2) != 1:
         raise ValueError(f"--tle {path}: expected one TLE (lines starting with '1 ' and '2 ')")
+    try:
+        sat = Satrec.twoline2rv(l1[0], l2[0])
+    except Exception as exc:  # noqa: BLE001  (sgp4 raises ValueError or IndexError on malformed lines)
+        raise ValueError(f"--tle {path}: not a valid TLE ({exc})") from None
+    if not (math.isfinite(sat.no_kozai) and sat.no_kozai > 0 and 0 <= sat.ecco < 1):
+        raise ValueError(f"--tle {path}: not a valid TLE (mean motion {sat.no_kozai}, eccentricity {sat.ecco})")
+    a = (MU_EARTH / (sat.no_kozai / 60.0) ** 2) ** (1.0 / 3.0)  # m, from the mean motion [rad/min]
+    perigee = a * (1.0 - sat.ecco) - R_EARTH
+    if perigee < MIN_PERIGEE:
+        raise ValueError(f"--tle {path}: perigee altitude {perigee / 1e3:.0f} km (mean motion "
+                         f"{sat.no_kozai * 1440 / (2 * math.pi):.3f} rev/day) is below {MIN_PERIGEE / 1e3:.0f} km: "
+                         "not an orbit")
     return l1[0], l2[0]
+
+
+def tle_epoch(cfg: OpsConfig) -> _dt.datetime:
+    """The epoch of the configured TLE (UTC)."""
+    from sgp4.api import Satrec
+    from sgp4.conveniences import sat_epoch_datetime
+
+    return sat_epoch_datetime(Satrec.twoline2rv(*cfg.tle))
 
 
 def with_tle(cfg: OpsConfig, path) -> OpsConfig:
@@ -180,8 +264,14 @@ def plan(cfg: OpsConfig, date: _dt.date, days: float = 2.0, boresight_rtn=None) 
 
     if not (isinstance(days, (int, float)) and 0 < days <= 7):
         raise ValueError(f"days must be in (0, 7], got {days!r}")
-    ts, eph = _skyfield()
     start = _dt.datetime(date.year, date.month, date.day, tzinfo=_dt.timezone.utc)
+    if cfg.tle:
+        age = (start - tle_epoch(cfg)).total_seconds() / 86400.0
+        if not -MAX_TLE_AGE_DAYS <= age <= MAX_TLE_AGE_DAYS - days:
+            raise ValueError(f"--tle: the plan from {date.isoformat()} (+{days:g} d) lies {age:+.1f} days from the TLE "
+                             f"epoch {tle_epoch(cfg):%Y-%m-%d %H:%M} UTC; SGP4 predictions are allowed within "
+                             f"{MAX_TLE_AGE_DAYS:g} days of it")
+    ts, eph = _skyfield()
     t0, t1 = ts.from_datetime(start), ts.from_datetime(start + _dt.timedelta(days=days))
     sat = carrier_satellite(cfg, start, ts, eph)
     rules = cfg.rules
