@@ -57,9 +57,11 @@ class EjectorNode(Node):
         self.lockstep = ls = Lockstep(self)
         self.pub = ls.publisher(EjectionEvent, interfaces.EJECTION_TOPIC, interfaces.LATCHED)
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
-        ls.subscribe(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, self.on_state, interfaces.STREAM)
+        ls.subscribe(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, self.on_state, interfaces.STREAM,
+                     what="carrier state")
         # a restarted ejector finds its own latched event and does not eject twice
-        ls.subscribe(EjectionEvent, interfaces.EJECTION_TOPIC, self.on_existing_event, interfaces.LATCHED)
+        ls.subscribe(EjectionEvent, interfaces.EJECTION_TOPIC, self.on_existing_event, interfaces.LATCHED,
+                     what="ejection event")
         publish_status(self, self.diag_pub, OK, "waiting for the ejection epoch")
 
     def on_existing_event(self, _event: EjectionEvent):

@@ -117,13 +117,13 @@ class IcPlannerNode(Node):
         self.plan_pub = ls.publisher(ManeuverPlan, interfaces.ACQUISITION_PLAN_TOPIC, interfaces.LATCHED)
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
         ls.subscribe(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, self.on_executed, interfaces.EXECUTED,
-                     stamp=lambda m: time_to_sec(m.epoch))
+                     stamp=lambda m: time_to_sec(m.epoch), what="executed maneuver")
         # the acquisition starts once the separation plan (drift-stop, or the multi-impulse burns) is flown
         ls.subscribe(ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, self.on_separation_plan, interfaces.LATCHED)
         self.separation_end = -math.inf  # s, epoch of the separation plan's last burn
         # a restarted ic_planner keeps the IC epoch of the acquisition in progress: its own latched plan
         ls.subscribe(ManeuverPlan, interfaces.ACQUISITION_PLAN_TOPIC, self.on_own_plan, interfaces.LATCHED)
-        ls.subscribe(OrbitDetermination, interfaces.OD_TOPIC, self.on_estimate, interfaces.LATCHED)
+        ls.subscribe(OrbitDetermination, interfaces.OD_TOPIC, self.on_estimate, interfaces.LATCHED, what="OD estimate")
         self.executed = []  # carrier burns flown so far (relative impulses), from the simulator/executor
         self.t_final = None  # s, IC epoch of the acquisition in progress (fixed by its first plan)
         self.last_key = None  # (solution stamp, estimate epoch) of the newest OD seen

@@ -26,6 +26,8 @@ from roe_sep_msgs.msg import LockstepAck, LockstepStep
 
 from .. import interfaces
 from .convert import sec_to_time, time_to_sec
+from .diagnostics import ERROR, publish_status
+from .validate import BadMessage, validator_for
 
 STEP_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10, reliability=ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.VOLATILE)
@@ -67,6 +69,9 @@ class Lockstep:
         self.acknowledge = acknowledge
         self.inputs = {}  # topic -> (callback, rank, stamp function)
         self.subscriptions = {}
+        self.validators = {}
+        self.what = {}  # topic -> how the node's reports name its messages
+        self.rejected = collections.Counter()
         self.buffer = collections.defaultdict(collections.deque)  # topic -> messages not processed yet
         self.received = collections.Counter()
         self.processed = collections.Counter()
@@ -83,10 +88,13 @@ class Lockstep:
             if acknowledge else None
 
     # ------------------------------------------------------------------ declaration
-    def subscribe(self, msg_type, topic, callback, qos, stamp=header_stamp):
+    def subscribe(self, msg_type, topic, callback, qos, stamp=header_stamp, what=None):
         """Subscribe ``callback`` to ``topic`` through the lockstep buffer (inputs are ranked in declaration
-        order for messages with equal stamps)."""
-        self.inputs[topic] = (callback, len(self.inputs), stamp)
+        order for messages with equal stamps). Every message is validated first (:mod:`.validate`); a bad one,
+        or one whose callback raises, is reported on ``/diagnostics`` and the node goes on."""
+        self.inputs[topic] = (self._guarded(topic, callback), len(self.inputs), stamp)
+        self.validators[topic] = validator_for(msg_type)
+        self.what[topic] = what or f"message on {topic}"
         self.subscriptions[topic] = self.node.create_subscription(msg_type, topic,
                                                                   lambda m, tp=topic: self._on_input(tp, m), qos)
         return self.subscriptions[topic]
@@ -104,7 +112,33 @@ class Lockstep:
         return CountingPublisher(self, self.node.create_publisher(msg_type, topic, qos), topic)
 
     # ------------------------------------------------------------------ protocol
+    def _report(self, text):
+        self.node.get_logger().error(text)
+        diag = getattr(self.node, "diag_pub", None)
+        if diag is not None:
+            try:
+                publish_status(self.node, diag, ERROR, text, {"rejected": sum(self.rejected.values())})
+            except Exception:  # noqa: BLE001  (shutting down)
+                pass
+
+    def _guarded(self, topic, callback):
+        def call(msg):
+            try:
+                callback(msg)
+            except Exception as exc:  # noqa: BLE001 -- a node never dies on a message; it says why it dropped it
+                self.rejected[topic] += 1
+                self._report(f"{self.what[topic]} dropped [{topic}]: {type(exc).__name__}: {exc}")
+        return call
+
     def _on_input(self, topic, msg):
+        check = self.validators.get(topic)
+        if check is not None:
+            try:
+                check(msg)
+            except BadMessage as exc:  # dropped before it is counted: it cannot displace a good message
+                self.rejected[topic] += 1
+                self._report(f"{self.what[topic]} rejected [{topic}]: {exc}")
+                return
         self.received[topic] += 1
         if self.active and topic in self.last_counts:
             self.buffer[topic].append(msg)

@@ -87,7 +87,8 @@ class PlannerNode(Node):
         self.lockstep = ls = Lockstep(self)
         self.plan_pub = ls.publisher(ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.LATCHED)
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
-        ls.subscribe(EjectionEvent, interfaces.EJECTION_TOPIC, self.on_ejection, interfaces.LATCHED)
+        ls.subscribe(EjectionEvent, interfaces.EJECTION_TOPIC, self.on_ejection, interfaces.LATCHED,
+                     what="ejection event")
         self.create_service(PlanSeparation, interfaces.PLAN_SERVICE, self.on_plan_request)
         self.plans = 0
         publish_status(self, self.diag_pub, OK, "waiting for the ejection event", self._values())

@@ -133,8 +133,9 @@ class RadarODNode(Node):
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
         # a burn and the truth right after it share a stamp: the burn is processed first
         ls.subscribe(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, self.on_maneuver, interfaces.EXECUTED,
-                     stamp=lambda m: time_to_sec(m.epoch))
-        ls.subscribe(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, self.on_truth, interfaces.STREAM)
+                     stamp=lambda m: time_to_sec(m.epoch), what="executed maneuver")
+        ls.subscribe(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, self.on_truth, interfaces.STREAM,
+                     what="truth message")
         self.create_subscription(Clock, interfaces.CLOCK_TOPIC, self.on_clock, interfaces.CLOCK_SUB)
         publish_status(self, self.diag_pub, OK, "waiting for truth", self._values())
 

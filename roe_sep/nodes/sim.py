@@ -184,11 +184,14 @@ class SimNode(Node):
         self.rtn_pub = ls.publisher(RelativeState, interfaces.TRUTH_RTN_TOPIC, interfaces.STREAM)
         self.exec_pub = ls.publisher(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, interfaces.EXECUTED)
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
-        ls.subscribe(EjectionEvent, interfaces.EJECTION_TOPIC, self.on_ejection, interfaces.LATCHED)
+        ls.subscribe(EjectionEvent, interfaces.EJECTION_TOPIC, self.on_ejection, interfaces.LATCHED,
+                     what="ejection event")
         for topic in PLAN_TOPICS:
-            ls.subscribe(ManeuverPlan, topic, lambda m, tp=topic: self.on_plan(tp, m), interfaces.LATCHED)
-        ls.subscribe(SafetyStatus, interfaces.PLAN_CHECK_TOPIC, self.on_plan_check, interfaces.EXECUTED)
-        ls.subscribe(OrbitDetermination, interfaces.OD_TOPIC, self.on_od, interfaces.LATCHED)
+            ls.subscribe(ManeuverPlan, topic, lambda m, tp=topic: self.on_plan(tp, m), interfaces.LATCHED,
+                         what=f"plan on {topic}")
+        ls.subscribe(SafetyStatus, interfaces.PLAN_CHECK_TOPIC, self.on_plan_check, interfaces.EXECUTED,
+                     what="plan check")
+        ls.subscribe(OrbitDetermination, interfaces.OD_TOPIC, self.on_od, interfaces.LATCHED, what="OD solution")
         if self.participants:
             self.step_pub = self.create_publisher(LockstepStep, interfaces.LOCKSTEP_STEP_TOPIC, STEP_QOS)
             self.create_subscription(LockstepAck, interfaces.LOCKSTEP_ACK_TOPIC, self.on_ack, ACK_QOS)

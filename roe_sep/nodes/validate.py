@@ -1,0 +1,129 @@
+"""Validation of every message a node reads, before it is buffered, counted or used.
+
+A bad message (not finite, an impossible orbit, an implausible impulse, an unknown spacecraft, a negative epoch, a
+wrong array size) raises :class:`BadMessage` naming the field; :class:`roe_sep.nodes.lockstep.Lockstep` drops it with
+an ERROR on ``/diagnostics`` naming the topic and the field, and the node goes on. Dropped before it is counted, a
+bad message cannot take the place of a good one in a lockstep round.
+"""
+
+import math
+
+from ..core.constants import R_EARTH
+
+MAX_DV = 10.0  # m/s: far above any impulse of the scenario (SPL 1.4-1.5 m/s, carrier burns <= 1.4 m/s)
+MAX_ROE_M = 1.0e7  # m: a*delta alpha of a relative orbit still worth the name
+MAX_BURNS = 1000
+SPACECRAFT = ("carrier", "picosatellite")
+
+
+class BadMessage(ValueError):
+    """A message that fails validation; ``field`` names what is wrong."""
+
+    def __init__(self, field, value, must):
+        super().__init__(f"{field} = {value!r}: must be {must}")
+        self.field = field
+
+
+def _join(field, name):
+    return f"{field}.{name}" if field else name
+
+
+def _finite(field, value, lo=-math.inf, hi=math.inf, must=None):
+    if not (isinstance(value, (int, float)) and math.isfinite(value) and lo <= value <= hi):
+        raise BadMessage(field, value, must or f"a finite number in [{lo:g}, {hi:g}]")
+
+
+def time_of(field, t):
+    """A builtin_interfaces/Time: a non-negative sim time [s]."""
+    if t.sec < 0 or not 0 <= t.nanosec < 1_000_000_000:
+        raise BadMessage(field, (t.sec, t.nanosec), "a non-negative time")
+    return t.sec + t.nanosec * 1e-9
+
+
+def elements(field, el):
+    """OrbitalElements of a near-circular low Earth orbit."""
+    _finite(_join(field, "semi_major_axis"), el.semi_major_axis, R_EARTH + 1.0e5, R_EARTH + 5.0e6,
+            "a low-Earth-orbit semi-major axis [m]")
+    _finite(_join(field, "eccentricity"), el.eccentricity, 0.0, 0.1, "a near-circular eccentricity in [0, 0.1]")
+    _finite(_join(field, "inclination"), el.inclination, 0.0, math.pi, "an inclination in [0, pi] rad")
+    for name in ("raan", "arg_perigee", "mean_arg_latitude"):
+        _finite(_join(field, name), getattr(el, name), -100.0, 100.0, "a finite angle [rad]")
+
+
+def roe(field, msg):
+    """RelativeOrbitalElements: stamp, chief and a*ROE [m] plausible; covariance 36 finite entries or empty."""
+    time_of(_join(field, "header.stamp"), msg.header.stamp)
+    elements(_join(field, "chief"), msg.chief)
+    for name in ("a_da", "a_dl", "a_dex", "a_dey", "a_dix", "a_diy"):
+        _finite(_join(field, name), getattr(msg, name), -MAX_ROE_M, MAX_ROE_M)
+    cov = list(msg.covariance)
+    if len(cov) not in (0, 36) or not all(math.isfinite(c) for c in cov):
+        raise BadMessage(_join(field, "covariance"), f"{len(cov)} values", "36 finite values (or none)")
+
+
+def maneuver(field, m):
+    """ImpulsiveManeuver: epoch, finite impulse below MAX_DV, a known spacecraft."""
+    time_of(_join(field, "epoch"), m.epoch)
+    dv = (m.dv_rtn.x, m.dv_rtn.y, m.dv_rtn.z)
+    if not all(math.isfinite(c) for c in dv) or math.sqrt(sum(c * c for c in dv)) > MAX_DV:
+        raise BadMessage(_join(field, "dv_rtn"), dv, f"finite, at most {MAX_DV:g} m/s")
+    _finite(_join(field, "mean_arg_latitude"), m.mean_arg_latitude, -100.0, 100.0, "a finite angle [rad]")
+    if m.spacecraft not in SPACECRAFT:
+        raise BadMessage(_join(field, "spacecraft"), m.spacecraft, f"one of {SPACECRAFT}")
+
+
+def ejection(msg):
+    time_of("header.stamp", msg.header.stamp)
+    maneuver("ejection", msg.ejection)
+    if msg.ejection.spacecraft != "picosatellite":
+        raise BadMessage("ejection.spacecraft", msg.ejection.spacecraft, "'picosatellite'")
+    elements("chief", msg.chief)
+
+
+def plan(msg):
+    time_of("header.stamp", msg.header.stamp)
+    if len(msg.maneuvers) > MAX_BURNS:
+        raise BadMessage("maneuvers", f"{len(msg.maneuvers)} burns", f"at most {MAX_BURNS}")
+    for k, m in enumerate(msg.maneuvers):
+        maneuver(f"maneuvers[{k}]", m)
+    if msg.aimed.chief.semi_major_axis != 0.0:  # the state the plan aims at, when it says one
+        roe("aimed", msg.aimed)
+
+
+def orbit_determination(msg):
+    time_of("header.stamp", msg.header.stamp)
+    roe("estimate", msg.estimate)
+    for name in ("a_da_dot", "a_da_dot_sigma", "residual_rms"):
+        _finite(name, getattr(msg, name))
+    if len(msg.estimate.covariance) != 36:
+        raise BadMessage("estimate.covariance", f"{len(msg.estimate.covariance)} values", "36 values")
+
+
+def safety_status(msg):
+    time_of("header.stamp", msg.header.stamp)
+    time_of("plan_stamp", msg.plan_stamp)
+    if not msg.source:
+        raise BadMessage("source", msg.source, "'truth', 'estimate' or 'plan:<topic>'")
+
+
+def truth(msg):
+    roe("", msg)
+
+
+def executed(msg):
+    maneuver("", msg)
+
+
+def validator_for(msg_type):
+    """The validation function of a message type read by our nodes (None: no check)."""
+    from roe_sep_msgs.msg import (
+        EjectionEvent,
+        ImpulsiveManeuver,
+        ManeuverPlan,
+        OrbitDetermination,
+        RelativeOrbitalElements,
+        SafetyStatus,
+    )
+
+    return {RelativeOrbitalElements: truth, EjectionEvent: ejection, ManeuverPlan: plan, ImpulsiveManeuver: executed,
+            OrbitDetermination: orbit_determination, SafetyStatus: safety_status}.get(msg_type)
