@@ -3,7 +3,9 @@
 Dispersions, each drawn once per sample and shared by every p of a sweep (common random numbers, so differences
 between p values are not sampling noise):
 
-* f1 ~ N(1, spl_sigma): SPL magnitude factor on the ejection; f2 ~ N(1, thruster_sigma) on the drift-stop.
+* f1 ~ N(1, spl_sigma): SPL magnitude factor on the ejection; f2 ~ N(1, thruster_sigma) on the drift-stop, as an
+  error on the *unreduced* burn with the reduction |p| subtracted after it (seed 002 Eq. 18, see
+  :func:`~roe_sep.core.relmotion.maneuvers.dispersed_dv`): dv_T2* = f2 dv_T2 - |p|.
 * attitude errors eps_x, eps_y, eps_z ~ N(0, 30 arcsec) per axis on both impulses, applied with Eq. (22).
 * differential ballistic coefficient dB = dB_nominal * N(1, ballistic_sigma), the drag of Eqs. (23)-(24).
 
@@ -126,9 +128,10 @@ def pre_stop(design: DoubleImpulseDesign, mc: MonteCarloConfig, d: Draws) -> Pre
 
 
 def after_stop(design: DoubleImpulseDesign, mc: MonteCarloConfig, d: Draws, pre: PreStop, p: float) -> Outcome:
-    """Drift-stop commanded with reduction ``p`` (Eq. 18), executed with Eq. (22), then ``horizon`` of drift."""
+    """Drift-stop commanded with reduction ``p`` and executed as Eq. (18): the thruster error f2 on the unreduced
+    burn, |p| subtracted after it, attitude errors of Eq. (22); then ``horizon`` of drift."""
     inc = design.inc
-    dv2 = dispersed_dv(design.drift_stop_dv(p), d.f2, d.eps2)
+    dv2 = dispersed_dv(design.drift_stop_dv(p), d.f2, d.eps2, design.drift_stop_dv(0.0))
     roe2 = pre.roe_before_stop + delta_roe(dv2, design.u2, design.a, design.n)
     roe_h = propagate(roe2, mc.horizon, design.a, inc, mc.j2, pre.da_dot)
     return Outcome(roe2, roe_h, min_rn_distance(roe2) * design.a)

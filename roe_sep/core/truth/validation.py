@@ -189,7 +189,8 @@ def nonlinear_sweep(d: DoubleImpulseDesign, mc: MonteCarloConfig, p_values, zona
 
     Per sample: the dispersed ejection (Eq. 22, f1, eps1) applied to the picosatellite at u1; both spacecraft
     integrated to the drift-stop epoch k pi later (secular J2 rate of u: the truth always has J2); the carrier's
-    dispersed drift-stop (f2, eps2, its own burn -dv2(p)); then ``mc.horizon``. Differential drag: the carrier keeps
+    dispersed drift-stop (f2 on the unreduced burn as Eq. 18, eps2, its own burn -dv2(p)); then ``mc.horizon``.
+    Differential drag: the carrier keeps
     its nominal B, the picosatellite gets B_c + dB_nominal * db_factor (the linear model's dB), the density
     profile is :meth:`Atmosphere.scaled` to ``mc.density`` at the orbit. Without ``mc.drag`` both B are 0.
     """
@@ -212,7 +213,7 @@ def nonlinear_sweep(d: DoubleImpulseDesign, mc: MonteCarloConfig, p_values, zona
     rows, agreement, diffs = [], [], {}
     for lrow in lin.rows:
         pv = lrow["p"]
-        dv2_own = dispersed_dv(0.0 - d.drift_stop_dv(pv), draws.f2, draws.eps2)
+        dv2_own = dispersed_dv(0.0 - d.drift_stop_dv(pv), draws.f2, draws.eps2, 0.0 - d.drift_stop_dv(0.0))
         s2 = apply_impulse(s_stop, dv2_own, np.zeros(n, bool))
         roe2 = mean_roe(s2)
         s_h = propagate_pairs(s2, dt_stop, dt_stop + mc.horizon, b_c, b_d, atm, zonals, tol, workers)
