@@ -133,7 +133,7 @@ class SimNode(Node):
 
             b_c = mc.carrier.ballistic if mc.drag else 0.0
             b_d = b_c + mc.delta_b * db_factor if mc.drag else 0.0
-            self.truth = NonlinearTruth(chief0, 0.0, b_c, b_d, Atmosphere.scaled(mc.density, sep.altitude),
+            self.truth = NonlinearTruth(chief0, 0.0, b_c, b_d, Atmosphere.normalised(mc.density, chief0),
                                         da_dot=da_dot)
         else:
             self.truth = TruthModel(chief0, 0.0, da_dot, self.j2)
