@@ -40,6 +40,7 @@ setup(
         'skyfield-data',
         'sgp4',
         'heyoka',
+        'pymsis',
     ],
     extras_require={
         'plots': ['matplotlib'],

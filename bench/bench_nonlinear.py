@@ -30,7 +30,7 @@ def setup(d, mc, p):
     chief = np.array([d.a, 0.0, d.inc, 0.0, 0.0, d.u1])
     s0 = np.broadcast_to(nl.pair_state(chief, chief), (n, 12))
     s1 = nl.apply_impulse(s0, dispersed_dv(d.dv1_rtn, dr.f1, dr.eps1), np.ones(n, bool))
-    dv2 = dispersed_dv(0.0 - d.drift_stop_dv(p), dr.f2, dr.eps2)
+    dv2 = dispersed_dv(0.0 - d.drift_stop_dv(p), dr.f2, dr.eps2, 0.0 - d.drift_stop_dv(0.0))
     b_d = mc.carrier.ballistic + mc.delta_b * dr.db_factor
     return s1, dv2, b_d
 

@@ -142,3 +142,63 @@ def test_propagate_pairs_grid_is_the_single_pair_propagation():
         assert np.max(np.abs(grid[k, :, :3] - one[:, :3])) < 1e-3  # m, after 20,000 s
     with pytest.raises(ValueError, match="sorted"):
         nl.propagate_pairs_grid(s0, 0.0, times[::-1], 0.0, 0.01, ATM)
+
+
+def test_normalised_atmosphere_gives_the_model_drag_rate():
+    """The default truth atmosphere (issue 20): its orbit-mean drag is the stated density by construction, and the
+    integrated truth's differential a*da rate is then the model's (seed 002 Eq. 24) within 1.5 %, where the
+    atmosphere referenced at a - R_E (``scaled``) is 5 % below it (the test above)."""
+    norm = nl.Atmosphere.normalised(1e-12, CHIEF)
+    assert nl.effective_density(norm, CHIEF) == pytest.approx(1e-12, rel=1e-12)
+    assert norm.scale_height == ATM.scale_height and norm.h_ref == ATM.h_ref
+    assert norm.rho_ref / ATM.rho_ref == pytest.approx(1e-12 / nl.effective_density(ATM, CHIEF), rel=1e-12)
+    assert 0.93 < nl.effective_density(ATM, CHIEF) / 1e-12 < 0.97
+    t = np.arange(0.0, 43200.0 + 1, 20.0)
+    s = nl.propagate_pair(nl.pair_state(CHIEF, CHIEF), 0.0, t, (), 0.0079, 0.0230, norm, zonals=2)
+    rate = np.polyfit(t, nl.mean_roe(s)[:, 0] * A, 1)[0]
+    assert rate == pytest.approx(drag_da_dot(0.0230 - 0.0079, 1e-12, A) * A, rel=0.015)
+
+
+def test_ecef_to_geodetic_inverts_geodetic_to_ecef():
+    from roe_sep.core.od.radar import geodetic_to_ecef
+
+    lat = np.radians([0.0, 35.0, -60.0, 82.5])
+    lon = np.radians([10.0, -120.0, 170.0, 45.0])
+    h = np.array([515e3, 400e3, 520e3, 530e3])
+    r = np.stack([geodetic_to_ecef(*x) for x in zip(lat, lon, h)])
+    lat2, lon2, h2 = nl.ecef_to_geodetic(r)
+    np.testing.assert_allclose(lat2, lat, atol=1e-11)
+    np.testing.assert_allclose(lon2, lon, atol=1e-12)
+    np.testing.assert_allclose(h2, h, atol=1e-4)
+
+
+def test_nrlmsis_atmosphere_fit_and_integrator_expression():
+    """NRLMSIS 2.0 through pymsis (no download: the indices are parameters), its fit along the sun-synchronous
+    orbit at LTAN 09:30 on the default epoch, and the heyoka expression the truth integrates."""
+    import heyoka as hy
+
+    from roe_sep.core.truth.validation import sso_raan
+
+    chief = np.array([A, 0.0, INC, sso_raan(), 0.0, np.radians(88.0)])
+    m = nl.MsisAtmosphere.fit(chief, 43200.0)
+    assert m.fit_rms < 0.10 and m.kind == "msis"
+
+    class Raw:
+        def density_at(self, pos, t):
+            return nl.nrlmsis_density(pos, t, m.epoch_utc, m.f107, m.f107a, m.ap)
+
+    raw = nl.effective_density(Raw(), chief, span=43200.0, samples=720)
+    assert nl.effective_density(m, chief, span=43200.0, samples=720) == pytest.approx(raw, rel=0.01)
+    assert 1e-13 < raw < 1e-12  # moderate solar activity at 515 km: a few 1e-13 kg/m^3, below the seeds' 1e-12
+    high = nl.MsisAtmosphere.fit(chief, 5700.0, f107=250.0, f107a=250.0)
+    assert nl.effective_density(high, chief) > 2.0 * nl.effective_density(m, chief)
+    x, y, z = hy.make_vars("x", "y", "z")
+    cf = hy.cfunc([nl.density_expression("msis", x, y, z)], vars=[x, y, z])
+    t = np.linspace(0.0, 43200.0, 4)
+    pos = mean_to_cartesian(nl.propagate_chief(chief, t))[0]
+    expr = [cf(p, pars=np.array([0.0, 0.0, *m.pars()]), time=tt)[0] for p, tt in zip(pos, t)]
+    np.testing.assert_allclose(expr, m.density_at(pos, t), rtol=1e-9)  # sums of 46 terms: rounding
+    with pytest.raises(ValueError, match="atmosphere"):
+        nl.truth_atmosphere("jacchia", 1e-12, chief)
+    with pytest.raises(ValueError, match="f107"):
+        nl.MsisAtmosphere.fit(chief, 5700.0, f107=float("nan"))

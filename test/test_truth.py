@@ -46,6 +46,25 @@ def test_execution_errors_follow_eq22_statistics():
     np.testing.assert_array_equal(exact.executed(dv, "carrier"), dv)
 
 
+def test_execution_errors_of_a_reduced_drift_stop_act_on_the_unreduced_burn():
+    """The sim's execution errors follow seed 002 Eq. (18) like the Monte Carlo: the spread of a drift-stop
+    commanded with |p| is sigma * |unreduced|, its mean the commanded burn."""
+    from roe_sep.core.truth.secular import error_references
+
+    p = 0.06
+    stop = -D.drift_stop_dv(p)  # the carrier's own burn
+    refs = error_references(["drift_stop", "ic_acquisition"], [stop, stop], p)
+    np.testing.assert_allclose(refs[0], -D.drift_stop_dv(0.0), atol=1e-15)
+    assert refs[1] is None
+    assert error_references(["drift_stop"], [stop], 0.0) == [None]
+    with pytest.raises(ValueError, match="p_reduction"):
+        error_references(["drift_stop"], [stop], float("nan"))
+    errs = ExecutionErrors(np.random.default_rng(1), 0.1, 0.05, 0.0)
+    out = np.array([errs.executed(stop, "carrier", refs[0]) for _ in range(4000)])
+    assert np.std(out[:, 1]) == pytest.approx(0.05 * abs(D.dv2_rtn[1]), rel=0.05)
+    assert np.mean(out[:, 1]) == pytest.approx(stop[1], abs=5e-4)
+
+
 def test_seed_drag_value():
     # the scenario's nominal drift: about -68 m/day of a*da (seed 002 Eq. 24, hand value)
     assert drag_da_dot(0.0151, 1e-12, D.a) * D.a * 86400 == pytest.approx(-68.4, abs=0.3)

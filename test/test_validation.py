@@ -1,25 +1,30 @@
 """Model error of the secular ROE model against the nonlinear truth (issue 5 item 3), the nonlinear Monte Carlo
 (item 4) and the ``propagate``/``validate`` subcommands (item 5).
 
-Bounds are derived, not tuned: the j2drag model's dominant error is the differential-drag magnitude. The truth's
+Bounds are derived, not tuned. With the truth atmosphere referenced at a - R_E (``Atmosphere.scaled``, the
+default before issue 20) the j2drag model's dominant error is the differential-drag magnitude: the truth's
 orbit-averaged along-track drag is a factor g = <rho(h)/rho_ref |v_r| v_r.T> / v^2 = 0.952 of the model's (mean
 radius 4.2 km above a - R_E: rho x 0.936; co-rotating atmosphere, retrograde orbit: x 1.017; measured in
 test_nonlinear). With aDa' = the model's a*da rate (68.45 m/day), the errors are then
     a da:  (1 - g) aDa' t,         a dl:  3/4 n (1 - g) aDa' t^2,
 i.e. 3.3 m and 233 m after one day, 9.8 m and 2.1 km after three. The tests allow 25 % above these; the e/i vector
 errors (J2 of second order, J3/J4, the O(J2 dv) burn mapping, drag normal to the orbit) stay below 10 m in 3 days.
+The default truth atmosphere (``normalised``) has g = 1 by construction: that error must be gone.
 """
 
 import argparse
+import dataclasses
 import math
 
 import numpy as np
 import pytest
 
+from roe_sep.core.constants import R_EARTH
 from roe_sep.core.montecarlo.sweep import MonteCarloConfig
 from roe_sep.core.relmotion.dynamics import drag_da_dot
 from roe_sep.core.separation import multi_impulse
 from roe_sep.core.separation.double_impulse import design
+from roe_sep.core.truth.nonlinear import Atmosphere
 from roe_sep.core.truth.validation import double_impulse_case, model_errors, multi_impulse_case, nonlinear_sweep
 
 G_DRAG = 0.952  # truth / model differential drag (derived above, measured in test_nonlinear)
@@ -33,11 +38,40 @@ def _predicted(case, days):
     return (1 - G_DRAG) * rate * t, 0.75 * n * (1 - G_DRAG) * rate * t**2
 
 
+def _cases():
+    mc = MonteCarloConfig()
+    return [double_impulse_case(design(), mc), multi_impulse_case(multi_impulse.design(), mc)]
+
+
 @pytest.fixture(scope="module")
 def errors():
-    mc = MonteCarloConfig()
-    cases = [double_impulse_case(design(), mc), multi_impulse_case(multi_impulse.design(), mc)]
-    return {c.name: (c, {e.model: e for e in model_errors(c, (1, 2, 3), step=120.0)}) for c in cases}
+    """Model errors against the truth in the atmosphere referenced at a - R_E (g = 0.952)."""
+    out = {}
+    for c in _cases():
+        c = dataclasses.replace(c, truth_atmosphere=Atmosphere.scaled(c.density, c.a - R_EARTH))
+        out[c.name] = (c, {e.model: e for e in model_errors(c, (1, 2, 3), step=120.0)})
+    return out
+
+
+@pytest.fixture(scope="module")
+def errors_normalised():
+    return {c.name: (c, {e.model: e for e in model_errors(c, (1, 2, 3), step=120.0, effective=True)})
+            for c in _cases()}
+
+
+@pytest.mark.parametrize("name", ["double_impulse", "multi_impulse"])
+def test_normalised_truth_removes_the_drag_magnitude_error(errors, errors_normalised, name):
+    """Issue 20: with the orbit-mean drag equal to the model's density the along-track error is no longer the
+    drag-magnitude one: after 3 days below a quarter of it, and the model at the truth's effective density
+    (``j2drag_eff``) differs from the model by less than the rounding of that mean (< 20 m)."""
+    case, errs = errors_normalised[name]
+    e, eff = errs["j2drag"], errs["j2drag_eff"]
+    _, dl_pred = _predicted(case, e.days)
+    assert np.all(np.abs(e.roe_error[:, 1]) < 0.25 * dl_pred)
+    assert np.all(np.abs(e.roe_error[:, 1]) < 0.25 * np.abs(errors[name][1]["j2drag"].roe_error[:, 1]))
+    assert np.all(np.abs(e.roe_error[:, 0]) < 0.5 * _predicted(case, e.days)[0] + 1.0)
+    assert np.all(np.abs(eff.roe_error[:, 1] - e.roe_error[:, 1]) < 20.0)
+    assert np.all(np.abs(e.roe_error[:, 2:]) < 10.0)
 
 
 @pytest.mark.parametrize("name", ["double_impulse", "multi_impulse"])
@@ -107,3 +141,31 @@ def test_cli_rejects_bad_input(capsys):
     assert exc.value.code == 2
     with pytest.raises(ValueError, match="--alt"):
         cli_nonlinear.propagate_report([0] * 6, -1.0, None, 0.0, 1.0, 600.0, "j2", load_scenario())
+    with pytest.raises(SystemExit) as exc:
+        _parser().parse_args(["validate", "--atmosphere", "normalised,jacchia"])
+    assert exc.value.code == 2
+    with pytest.raises(ValueError, match="--f107"):
+        cli_nonlinear.validate_report(load_scenario(), [1], f107=float("nan"))
+
+
+def test_validate_reports_each_truth_atmosphere(capsys):
+    """``roe-sep validate``: the model error under the normalised atmosphere and under NRLMSIS 2.0. NRLMSIS at
+    moderate activity (F10.7 = 140, Ap = 15) has a third of the seeds' 1 g/km^3 as its orbit mean, so the model
+    with 1 g/km^3 over-predicts the drift by the derived amount 3/4 n (1 - rho_eff/rho) aDa' t^2; at the truth's
+    orbit-mean density the model error is a few tens of meters."""
+    rep = _run(["validate", "--days", "1"], capsys)
+    assert list(rep["atmospheres"]) == ["normalised", "msis"]
+    rows = {(r["atmosphere"], r["case"], r["model"]): r for r in rep["rows"]}
+    assert len(rows) == 2 * 2 * 4
+    for case in ("double_impulse", "multi_impulse"):
+        assert rep["atmospheres"]["normalised"]["effective_density"][case] == pytest.approx(1e-12, rel=0.01)
+        rho_eff = rep["atmospheres"]["msis"]["effective_density"][case]
+        assert 1e-13 < rho_eff < 0.6e-12
+        c = next(c for c in _cases() if c.name == case)
+        rate = abs(drag_da_dot(c.b_deputy - c.b_chief, c.density, c.a)) * c.a
+        n = math.sqrt(3.986004418e14 / c.a**3)
+        pred = 0.75 * n * (1 - rho_eff / c.density) * rate * DAY**2
+        assert rows[("msis", case, "j2drag")]["roe_error"]["dl"][0] == pytest.approx(pred, rel=0.1)
+        assert abs(rows[("msis", case, "j2drag_eff")]["roe_error"]["dl"][0]) < 100.0
+        assert abs(rows[("normalised", case, "j2drag")]["roe_error"]["dl"][0]) < 50.0
+    assert rep["atmospheres"]["msis"]["f107"] == 140.0 and rep["atmospheres"]["msis"]["fit_rms_ln_rho"] < 0.1

@@ -4,6 +4,7 @@
 ``roe_sep.cli.main`` reports with exit status 2, as every other subcommand.
 """
 
+import argparse
 import dataclasses
 import math
 import sys
@@ -27,6 +28,16 @@ def _days_list(text):
 
 _days_list.__name__ = "days"
 MAX_POINTS = 100_000  # output samples of `propagate` (days * 86400 / step)
+
+
+def _atmospheres(text):
+    """``--atmosphere``: a comma-separated list of the truth's density models."""
+    from ..core.truth.nonlinear import ATMOSPHERES
+
+    values = [x.strip() for x in text.split(",") if x.strip()]
+    if not values or any(v not in ATMOSPHERES for v in values):
+        raise argparse.ArgumentTypeError(f"expected a comma-separated list of {', '.join(ATMOSPHERES)}, got {text!r}")
+    return list(dict.fromkeys(values))
 
 
 def propagate_report(roe_m, altitude, inc_deg, u_deg, days, step, model, scenario):
@@ -93,25 +104,49 @@ def print_propagate(rep, step, out=None):
         w(f"  {t[k] / 3600:8.2f}" + "".join(f"{x:14.2f}" for x in rep["roe"][k]) + "\n")
 
 
-def validate_report(scenario, days, mc_samples=0, p_values=None, seed=None):
-    """The model-error table (item 3) for the double- and multi-impulse cases, optionally the nonlinear MC."""
+def validate_report(scenario, days, mc_samples=0, p_values=None, seed=None, atmospheres=("normalised", "msis"),
+                    f107=140.0, f107a=140.0, ap=15.0):
+    """The model-error table (item 3) for the double- and multi-impulse cases under each truth atmosphere
+    (``normalised``: the seeds' density as the orbit mean; ``msis``: NRLMSIS 2.0 at F10.7 ``f107``, its 81-day
+    mean ``f107a`` and Ap ``ap``, orbit at LTAN 09:30 on the default epoch), optionally the nonlinear MC."""
+    from ..core.constants import SECONDS_PER_DAY
     from ..core.separation import multi_impulse
     from ..core.separation.double_impulse import design
+    from ..core.truth.nonlinear import ATMOSPHERES, truth_atmosphere
     from ..core.truth.validation import (
         double_impulse_case,
         model_errors,
         multi_impulse_case,
         nonlinear_sweep,
+        sso_raan,
+        truth_effective_density,
         zonal_effect,
     )
 
+    for name, value in (("--f107", f107), ("--f107a", f107a), ("--ap", ap)):
+        if not math.isfinite(value) or value < 0 or value > 1000:
+            raise ValueError(f"{name} must be a number in [0, 1000], got {value:g}")
+    if not atmospheres or any(a not in ATMOSPHERES for a in atmospheres):
+        raise ValueError(f"--atmosphere must be a comma-separated list of {', '.join(ATMOSPHERES)}, "
+                         f"got {','.join(atmospheres)!r}")
     mc = scenario.monte_carlo
     d = design(scenario.separation)
-    cases = [double_impulse_case(d, mc), multi_impulse_case(multi_impulse.design(scenario.separation, mc=mc), mc)]
-    rep = {"days": days, "rows": [], "zonal_effect": {}}
-    for case in cases:
-        rep["rows"] += [e.to_dict() for e in model_errors(case, days)]
-        rep["zonal_effect"][case.name] = zonal_effect(case, days).tolist()
+    raan = sso_raan()
+    cases = [double_impulse_case(d, mc, raan),
+             multi_impulse_case(multi_impulse.design(scenario.separation, mc=mc), mc, raan)]
+    span = max(days) * SECONDS_PER_DAY
+    rep = {"days": days, "rows": [], "zonal_effect": {}, "atmospheres": {}}
+    for atm_name in dict.fromkeys(atmospheres):
+        for case in cases:
+            atm = truth_atmosphere(atm_name, case.density, case.chief_mean, span, f107=f107, f107a=f107a, ap=ap)
+            case = dataclasses.replace(case, truth_atmosphere=atm)
+            info = rep["atmospheres"].setdefault(atm_name, atm.describe())
+            info.setdefault("effective_density", {})[case.name] = truth_effective_density(case, span)
+            info["model_density"] = case.density
+            for e in model_errors(case, days, effective=True):
+                rep["rows"].append({"atmosphere": atm_name, **e.to_dict()})
+            if atm_name == "normalised":
+                rep["zonal_effect"][case.name] = zonal_effect(case, days).tolist()
     if mc_samples:
         over = {"samples": mc_samples}
         if seed is not None:
@@ -125,13 +160,20 @@ def print_validate(rep, out=None):
     w = (out or sys.stdout).write
     w("Model error: core secular ROE model minus nonlinear truth (J2-J4 + drag, mean ROE via Brouwer-Lyddane)\n")
     names = ("da", "dl", "dex", "dey", "dix", "diy")
-    w(f"  {'case':15s}{'model':10s}{'day':>4s}" + "".join(f"{'a ' + n:>10s}" for n in names)
-      + f"{'max|dr|':>10s}{'max|d|r||':>11s}   [m]\n")
-    for row in rep["rows"]:
-        for k, day in enumerate(row["days"]):
-            w(f"  {row['case']:15s}{row['model']:10s}{day:4d}"
-              + "".join(f"{row['roe_error'][n][k]:10.1f}" for n in names)
-              + f"{row['rtn_error_max'][k]:10.1f}{row['distance_error_max'][k]:11.1f}\n")
+    for atm_name, info in rep["atmospheres"].items():
+        w(f"\ntruth atmosphere: {atm_name}" + (
+            f" (NRLMSIS 2.0, F10.7 = {info['f107']:g}, F10.7a = {info['f107a']:g}, Ap = {info['ap']:g}, "
+            f"fit RMS {info['fit_rms_ln_rho']:.1%} in ln rho)" if atm_name == "msis" else
+            " (exponential, orbit-mean drag = the model's density)")
+          + "; orbit-mean density " + ", ".join(f"{k} {v * 1e12:.3f}" for k, v in info["effective_density"].items())
+          + f" g/km^3, model {info['model_density'] * 1e12:g} g/km^3\n")
+        w(f"  {'case':15s}{'model':11s}{'day':>4s}" + "".join(f"{'a ' + n:>10s}" for n in names)
+          + f"{'max|dr|':>10s}{'max|d|r||':>11s}   [m]\n")
+        for row in (r for r in rep["rows"] if r["atmosphere"] == atm_name):
+            for k, day in enumerate(row["days"]):
+                w(f"  {row['case']:15s}{row['model']:11s}{day:4d}"
+                  + "".join(f"{row['roe_error'][n][k]:10.1f}" for n in names)
+                  + f"{row['rtn_error_max'][k]:10.1f}{row['distance_error_max'][k]:11.1f}\n")
     for name, z in rep["zonal_effect"].items():
         w(f"  J3+J4 effect on the truth ({name}, last day): a*dROE = [" + " ".join(f"{x:.1f}" for x in z[-1])
           + "] m\n")
@@ -153,7 +195,8 @@ def cmd_validate(args):
         if value is not None and not args.mc:
             raise ValueError(f"{name} applies to the Monte Carlo only: give --mc N (N >= 1) with it")
 
-    rep = validate_report(load_scenario(args.config), args.days, args.mc or 0, args.p, args.seed)
+    rep = validate_report(load_scenario(args.config), args.days, args.mc or 0, args.p, args.seed, args.atmosphere,
+                          args.f107, args.f107a, args.ap)
     emit(rep, args.json, print_validate)
     return 0
 
@@ -186,5 +229,14 @@ def register(subparsers):
                    help="also run the nonlinear Monte Carlo with N samples (N in [0, 100000]) next to the linear one")
     p.add_argument("--p", type=p_list, help="comma-separated p values [m/s], each in [0, 1], for --mc (needs --mc)")
     p.add_argument("--seed", type=seed(), help="Monte Carlo seed in [0, 2**32 - 1] (needs --mc)")
+    p.add_argument("--atmosphere", type=_atmospheres, default=["normalised", "msis"], metavar="LIST",
+                   help="truth atmospheres, comma-separated: normalised (exponential, orbit-mean drag = the "
+                        "scenario density), msis (NRLMSIS 2.0) (default both)")
+    p.add_argument("--f107", type=finite_float(50.0, 400.0, unit="sfu"), default=140.0,
+                   help="NRLMSIS: F10.7 of the previous day [sfu] in [50, 400] (default 140)")
+    p.add_argument("--f107a", type=finite_float(50.0, 400.0, unit="sfu"), default=140.0,
+                   help="NRLMSIS: 81-day mean F10.7 [sfu] in [50, 400] (default 140)")
+    p.add_argument("--ap", type=finite_float(0.0, 400.0), default=15.0,
+                   help="NRLMSIS: daily Ap in [0, 400] (default 15)")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=cmd_validate)

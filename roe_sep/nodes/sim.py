@@ -39,7 +39,7 @@ from ..core.constants import ARCSEC
 from ..core.od.radar import DEFAULT_EPOCH_UTC, julian_date, raan_from_ltan
 from ..core.relmotion.dynamics import drag_da_dot
 from ..core.separation.double_impulse import InfeasibleDesignError, design
-from ..core.truth.secular import ExecutionErrors, TruthModel, chief_from_u
+from ..core.truth.secular import ExecutionErrors, TruthModel, chief_from_u, error_references
 from .convert import (
     array_to_elements,
     array_to_vector,
@@ -65,6 +65,7 @@ class PendingBurn:
     maneuver: ImpulsiveManeuver
     topic: str
     plan_stamp: float
+    error_reference: np.ndarray | None = None  # the unreduced drift-stop its magnitude error acts on (Eq. 18)
 
 
 class SimNode(Node):
@@ -148,7 +149,7 @@ class SimNode(Node):
 
             b_c = mc.carrier.ballistic if mc.drag else 0.0
             b_d = b_c + mc.delta_b * db_factor if mc.drag else 0.0
-            self.truth = NonlinearTruth(chief0, 0.0, b_c, b_d, Atmosphere.scaled(mc.density, sep.altitude),
+            self.truth = NonlinearTruth(chief0, 0.0, b_c, b_d, Atmosphere.normalised(mc.density, chief0),
                                         da_dot=da_dot)
         else:
             self.truth = TruthModel(chief0, 0.0, da_dot, self.j2)
@@ -240,6 +241,10 @@ class SimNode(Node):
                 relative_dv(b.maneuver)
                 if not (math.isfinite(b.epoch) and np.all(np.isfinite(vector_to_array(b.maneuver.dv_rtn)))):
                     raise ValueError("non-finite epoch or dv")
+            refs = error_references([b.maneuver.purpose for b in burns],
+                                    [vector_to_array(b.maneuver.dv_rtn) for b in burns], plan.p_reduction)
+            for b, ref in zip(burns, refs):
+                b.error_reference = ref
         except ValueError as exc:
             self._status(ERROR, f"plan on {topic} rejected: {exc}")
             return
@@ -562,7 +567,7 @@ class SimNode(Node):
         if burn.epoch < self.t - 1e-6:
             self._status(WARN, f"{m.purpose} burn executed late at t = {self.t:.0f} s (planned {burn.epoch:.0f} s)")
         self._advance(t_exec)
-        executed = self.errors.executed(vector_to_array(m.dv_rtn), m.spacecraft)
+        executed = self.errors.executed(vector_to_array(m.dv_rtn), m.spacecraft, burn.error_reference)
         done = maneuver_msg(t_exec, float(self.truth.u_at(t_exec)), executed, m.spacecraft, m.purpose)
         if self.dynamics == "nonlinear":
             self.truth.apply(t_exec, relative_dv(done), m.spacecraft)

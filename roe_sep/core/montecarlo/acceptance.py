@@ -2,7 +2,8 @@
 
 Same dispersions as the double-impulse Monte Carlo (:func:`roe_sep.core.montecarlo.sweep.draw`): SPL factor f1 and the
 attitude errors eps1 on the ejection, thruster factor f2 and eps2 on the (blind) drift reduction (seed 001 Eq. 2 =
-seed 002 Eq. 22; a drift reduction split into several burns shares one f2/eps2: a calibration error), differential
+seed 002 Eq. 22, the magnitude error on the unreduced burn as in seed 002 Eq. 18; a drift reduction split into
+several burns shares one f2/eps2: a calibration error), differential
 drag with its 20 % uncertainty. Keplerian + drag unless ``mc.j2``. Vectorized over samples.
 
 * AC1: the relative semi-major axis right after the drift reduction is negative (outward drift for a leading
@@ -19,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..relmotion.dynamics import arg_latitude_rate, drag_da_dot, propagate
-from ..relmotion.maneuvers import delta_roe, dispersed_dv
+from ..relmotion.maneuvers import delta_roe, dispersed_dv, unreduced_burns
 from ..safety.metrics import min_rn_distance, nearest_crossing
 from ..separation.multi_impulse import MultiImpulseDesign
 from .sweep import Draws, MonteCarloConfig, draw
@@ -84,13 +85,15 @@ def run(design: MultiImpulseDesign, mc: MonteCarloConfig = MonteCarloConfig()) -
     da_dot = drag_da_dot(mc.delta_b * d.db_factor, mc.density, a) if mc.drag else np.zeros_like(d.f1)
     roe1 = delta_roe(dispersed_dv(design.dv1_rtn, d.f1, d.eps1), design.u1, a, n)
     reductions = [b for b in design.plan.burns if b.purpose == "drift_reduction"]
+    # the thruster error acts on the unreduced drift-stop (Eq. 18), shared over the split burns
+    refs = unreduced_burns([b.dv_relative_rtn for b in reductions], design.plan.p) if reductions else []
     state, u_state, crossings = roe1, design.u1, []
-    for b in reductions:  # a handful of burns: the loop is over burns, never samples
+    for b, ref in zip(reductions, refs):  # a handful of burns: the loop is over burns, never samples
         dt = (b.u - u_state) / u_rate
         crossings.append(nearest_crossing(state, u_state, dt, a, inc, mc.j2, da_dot,
                                           t_min=None if u_state == design.u1 else 1e-3)[0])
         state = propagate(state, dt, a, inc, mc.j2, da_dot)
-        state = state + delta_roe(dispersed_dv(b.dv_relative_rtn, d.f2, d.eps2), b.u, a, n)
+        state = state + delta_roe(dispersed_dv(b.dv_relative_rtn, d.f2, d.eps2, ref), b.u, a, n)
         u_state = b.u
     crossings.append(nearest_crossing(state, u_state, mc.horizon, a, inc, mc.j2, da_dot, t_min=1e-3)[0])
     crossing = np.min(np.stack(crossings), axis=0) * a

@@ -3,7 +3,9 @@
 Dispersions, each drawn once per sample and shared by every p of a sweep (common random numbers, so differences
 between p values are not sampling noise):
 
-* f1 ~ N(1, spl_sigma): SPL magnitude factor on the ejection; f2 ~ N(1, thruster_sigma) on the drift-stop.
+* f1 ~ N(1, spl_sigma): SPL magnitude factor on the ejection; f2 ~ N(1, thruster_sigma) on the drift-stop, as an
+  error on the *unreduced* burn with the reduction |p| subtracted after it (seed 002 Eq. 18, see
+  :func:`~roe_sep.core.relmotion.maneuvers.dispersed_dv`): dv_T2* = f2 dv_T2 - |p|.
 * attitude errors eps_x, eps_y, eps_z ~ N(0, 30 arcsec) per axis on both impulses, applied with Eq. (22).
 * differential ballistic coefficient dB = dB_nominal * N(1, ballistic_sigma), the drag of Eqs. (23)-(24).
 
@@ -115,22 +117,38 @@ class Outcome:
     min_rn: np.ndarray  # m, Eq. (25) after the drift-stop
 
 
+def ejection_roe(design: DoubleImpulseDesign, d: Draws):
+    """Dimensionless ROE right after the dispersed ejection (Eq. 2 of the burn of Eq. 22, f1 and eps1)."""
+    return delta_roe(dispersed_dv(design.dv1_rtn, d.f1, d.eps1), design.u1, design.a, design.n)
+
+
+def drift_stop_delta_roe(design: DoubleImpulseDesign, d: Draws, p: float):
+    """ROE change of the drift-stop commanded with reduction ``p`` and executed as Eq. (18): the thruster error f2
+    on the unreduced burn, |p| subtracted after it, attitude errors of Eq. (22)."""
+    dv2 = dispersed_dv(design.drift_stop_dv(p), d.f2, d.eps2, design.drift_stop_dv(0.0))
+    return delta_roe(dv2, design.u2, design.a, design.n)
+
+
+def time_to_stop(design: DoubleImpulseDesign, mc: MonteCarloConfig):
+    """s from the ejection to the drift-stop, k pi of argument of latitude (with J2 when ``mc.j2``)."""
+    return (design.u2 - design.u1) / arg_latitude_rate(design.a, design.inc, mc.j2)
+
+
 def pre_stop(design: DoubleImpulseDesign, mc: MonteCarloConfig, d: Draws) -> PreStop:
     """Ejection with its dispersion, propagation to the drift-stop and the nearest R = 0 transit in between."""
-    a, n, inc = design.a, design.n, design.inc
-    roe1 = delta_roe(dispersed_dv(design.dv1_rtn, d.f1, d.eps1), design.u1, a, n)
+    a, inc = design.a, design.inc
+    roe1 = ejection_roe(design, d)
     da_dot = drag_da_dot(mc.delta_b * d.db_factor, mc.density, a) if mc.drag else np.zeros_like(d.f1)
-    dt_stop = (design.u2 - design.u1) / arg_latitude_rate(a, inc, mc.j2)
+    dt_stop = time_to_stop(design, mc)
     crossing, _ = nearest_crossing(roe1, design.u1, dt_stop, a, inc, mc.j2, da_dot)
     return PreStop(propagate(roe1, dt_stop, a, inc, mc.j2, da_dot), da_dot, crossing * a, dt_stop)
 
 
 def after_stop(design: DoubleImpulseDesign, mc: MonteCarloConfig, d: Draws, pre: PreStop, p: float) -> Outcome:
-    """Drift-stop commanded with reduction ``p`` (Eq. 18), executed with Eq. (22), then ``horizon`` of drift."""
-    inc = design.inc
-    dv2 = dispersed_dv(design.drift_stop_dv(p), d.f2, d.eps2)
-    roe2 = pre.roe_before_stop + delta_roe(dv2, design.u2, design.a, design.n)
-    roe_h = propagate(roe2, mc.horizon, design.a, inc, mc.j2, pre.da_dot)
+    """Drift-stop commanded with reduction ``p`` (:func:`drift_stop_delta_roe`, Eq. 18), then ``horizon`` of
+    drift."""
+    roe2 = pre.roe_before_stop + drift_stop_delta_roe(design, d, p)
+    roe_h = propagate(roe2, mc.horizon, design.a, design.inc, mc.j2, pre.da_dot)
     return Outcome(roe2, roe_h, min_rn_distance(roe2) * design.a)
 
 

@@ -1,4 +1,4 @@
-"""Impulsive maneuvers in ROE: the Gauss-equation control matrix (seed 002 Eq. 2) and execution errors (Eq. 22)."""
+"""Impulsive maneuvers in ROE: the Gauss-equation control matrix (seed 002 Eq. 2) and execution errors (Eqs. 18, 22)."""
 
 import numpy as np
 
@@ -45,15 +45,50 @@ def dv_for_delta_roe(droe, u, a, n):
     return np.einsum("...ij,...j->...i", gt, np.asarray(droe, dtype=float)) * (n * a)
 
 
-def dispersed_dv(dv_rtn, factor, eps):
-    """Executed impulse under magnitude factor ``f`` and small attitude errors, seed 002 Eq. (22).
+def dispersed_dv(dv_rtn, factor, eps, reference=None):
+    """The executed impulse: the one dispersed-burn function of the project (seed 002 Eqs. 18 and 22).
 
-    dv_s = f [[1, ez, -ey], [-ez, 1, ex], [ey, -ex, 1]] dv, with ``eps = (ex, ey, ez)`` [rad], shape ``(..., 3)``,
-    and ``factor`` shape ``(...)``.
+    dv_s = R(eps) [dv + (f - 1) dv_ref],  R(eps) = [[1, ez, -ey], [-ez, 1, ex], [ey, -ex, 1]],
+
+    ``dv_rtn`` the commanded burn ``(..., 3)`` [m/s], ``factor`` f ``(...)``, ``eps = (ex, ey, ez)`` [rad]
+    ``(..., 3)``. ``reference`` dv_ref is the burn the magnitude error is a fraction of; ``None`` means the
+    commanded burn itself, which is Eq. (22) exactly: dv_s = f R(eps) dv (the ejection, every burn that is not
+    a reduced drift-stop).
+
+    For a drift-stop commanded with a reduction |p|, ``reference`` is the *unreduced* burn (:func:`unreduced_burns`).
+    Seed 002 Eq. (18) decides it: "δv*_T2 = δv_T2 + e2 − |p|": the error e2 is added to the nominal
+    δv_T2 of Eq. (16) (+0.162718 m/s) and the reduction |p| subtracted after it, so e2 = (f2 − 1) δv_T2 of the
+    unreduced burn; Eqs. (20)-(21) and the design value "assuming a maximum under performance of 3σ for both
+    maneuvers, a reduction value of p = 0.0732231 m/s is determined" (= 3 (0.10 + 0.05) 0.162718) size e2 on that
+    same unreduced δv_T2, and Eq. (22) multiplies "the second maneuver" of Eq. (16) by f2. Seed 000 (Eqs. 19, 21
+    and Sec. IV) says the same. The attitude error rotates the whole commanded burn (the reduction included: the
+    thruster points once); it is linear, so R(eps) commutes with f.
     """
     dv = np.asarray(dv_rtn, dtype=float)
+    if reference is not None:
+        dv = dv + (np.asarray(factor, dtype=float)[..., None] - 1.0) * np.asarray(reference, dtype=float)
+        factor = 1.0
     e = np.asarray(eps, dtype=float)
     ex, ey, ez = e[..., 0], e[..., 1], e[..., 2]
     r, t, nn = dv[..., 0], dv[..., 1], dv[..., 2]
     rotated = np.stack([r + ez * t - ey * nn, -ez * r + t + ex * nn, ey * r - ex * t + nn], axis=-1)
     return np.asarray(factor, dtype=float)[..., None] * rotated
+
+
+def unreduced_burns(dv_parts, p):
+    """The burns a thruster's magnitude error acts on for a drift-stop commanded with reduction |p| (Eq. 18).
+
+    ``dv_parts`` ``(k, 3)`` [m/s]: the commanded drift-stop, one burn or split into k burns (the multi-impulse
+    scheme's drift reduction over consecutive orbits); the reduction |p| was taken off their tangential
+    components. Returns the burns with the tangential magnitude enlarged again by |p| in total, shared in
+    proportion to each part's tangential size (one burn: exactly the unreduced dv_T2 of Eqs. 9/16); radial and
+    normal parts unchanged. The reference of :func:`dispersed_dv`. Valid for |p| below the unreduced tangential
+    burn (Eq. 20, first line: the commanded burn keeps its sign); parts without a tangential component are
+    returned unchanged.
+    """
+    parts = np.array(dv_parts, dtype=float, ndmin=2)
+    t = parts[:, 1]
+    total = np.sum(np.abs(t))
+    if total > 0.0:
+        parts[:, 1] = t + np.sign(t) * abs(float(p)) * np.abs(t) / total
+    return parts

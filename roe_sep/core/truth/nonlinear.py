@@ -7,13 +7,22 @@ Force model (per spacecraft, inertial equator-and-equinox-of-date frame of :mod:
   grad U, differentiated symbolically by heyoka (no hand-expanded gradients to get wrong).
 * Atmospheric drag a = -1/2 B rho(h) |v_r| v_r (Vallado Eq. 8-28), B = c_d A / m per spacecraft, v_r = v -
   omega_E x r relative to an atmosphere co-rotating with the Earth, h = |r| - R_E (spherical altitude).
-  Density: the exponential model rho = rho_ref exp(-(h - h_ref) / H) with the scale height H of Vallado's
-  exponential atmosphere (Table 8-4) for the band containing h_ref. Vallado's table gives 0.55 g/km^3 at 515 km;
-  the seeds (000/002) assume 1 g/km^3, so :meth:`Atmosphere.seeds` keeps Vallado's H = 63.822 km and scales the
-  profile to rho_ref = 1e-12 kg/m^3 at 515 km (factor 1.82, within the solar-cycle spread of the real density).
-  With that reference the model's differential drag :func:`~roe_sep.core.relmotion.dynamics.drag_da_dot` and this
-  truth use the same density at the reference altitude.
+  Density: an explicit choice of two models (:func:`truth_atmosphere`, ``ATMOSPHERES``):
 
+  * ``normalised`` (default, the seeds' assumption): the exponential model rho = rho_ref exp(-(h - h_ref) / H)
+    with the scale height H of Vallado's exponential atmosphere (Table 8-4) for the band containing the orbit,
+    normalised (:meth:`Atmosphere.normalised`) so that the *orbit-mean* drag of the carrier's osculating orbit,
+    <rho(h) |v_r| (v_r . v)>, equals the stated density times v^2 = mu / a: the density the linear model of seed
+    002 Eqs. (23)-(24) assumes (1 g/km^3). Referenced at the mean altitude a - R_E instead
+    (:meth:`Atmosphere.scaled`), the truth's drag is 4.8 % below Eq. (24): the spherical altitude of the
+    sun-synchronous orbit averages 4.2 km above a - R_E (the Earth's flattening and the short-period J2 terms of
+    the radius) and the co-rotating atmosphere adds 1.7 % of relative velocity.
+  * ``msis``: NRLMSIS 2.0 (Emmert et al., Earth and Space Science 2021) through the ``pymsis`` package (the
+    model's data ship with it, nothing is downloaded; F10.7, its 81-day mean and Ap are parameters, never
+    looked up). heyoka needs the density as an expression, so :class:`MsisAtmosphere` fits ln rho by least
+    squares over the band the pair flies through (the nominal orbit over the propagation span, +-20 km radially)
+    in the basis :func:`msis_basis`: polynomials of the direction in a frame turning with the Sun (the diurnal
+    bulge, latitude and season) times a quadratic in altitude. The fit's RMS error in ln rho is reported.
 Integrator: heyoka's adaptive Taylor method (Biscani & Izzo, MNRAS 2021), JIT-compiled with LLVM. Both spacecraft
 form one 12-dimensional system so that they share every step: integration error is then common-mode and largely
 cancels in the relative state. The compiled integrator is cached per process and configuration
@@ -22,7 +31,8 @@ thread pool over blocks of lanes run the Monte Carlo (:func:`propagate_pairs`) a
 (:func:`propagate_pairs_grid`).
 
 State layout: ``(..., 12)`` = chief (carrier) position [m], velocity [m/s], then deputy (picosatellite) likewise.
-Parameters: ``[B_chief, B_deputy, rho_ref, h_ref, H]`` (m^2/kg, m^2/kg, kg/m^3, m, m).
+Parameters: ``[B_chief, B_deputy, *atmosphere.pars()]``: exponential ``[rho_ref, h_ref, H]`` (kg/m^3, m, m),
+msis ``[alpha_0, h_0, c_1 .. c_46]`` (rad, m, fit coefficients).
 """
 
 import copy
@@ -34,8 +44,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..constants import EARTH_ROTATION, J2, J3, J4, MU_EARTH, R_EARTH
-from ..od.radar import rtn_matrix
+from ..constants import EARTH_ROTATION, J2, J3, J4, MU_EARTH, R_EARTH, SECONDS_PER_DAY
+from ..od.radar import (
+    DEFAULT_EPOCH_UTC,
+    WGS84_E2,
+    gmst,
+    julian_date,
+    rtn_matrix,
+    sun_right_ascension,
+)
+from ..relmotion.dynamics import propagate_chief
 from ..relmotion.roe import kepler_to_roe
 from .mean_osc import cartesian_to_mean, mean_to_cartesian
 
@@ -80,6 +98,7 @@ class Atmosphere:
     rho_ref: float
     h_ref: float
     scale_height: float
+    kind = "exponential"
 
     @classmethod
     def vallado(cls, h_ref):
@@ -92,12 +111,203 @@ class Atmosphere:
         1 g/km^3 at 515 km: Vallado's 0.551 g/km^3 times 1.82)."""
         return cls(float(rho_ref), float(h_ref), vallado_band(h_ref)[2])
 
+    @classmethod
+    def normalised(cls, rho_mean, chief_mean):
+        """The ``normalised`` truth atmosphere: Vallado's scale height at the mean altitude a - R_E of
+        ``chief_mean`` (mean ``[a, e, i, raan, argp, M]``), scaled so that the orbit-mean drag of that orbit equals
+        that of the constant density ``rho_mean`` [kg/m^3] (:func:`effective_density`), as seed 002 Eq. (24)
+        assumes."""
+        base = cls.scaled(1.0, float(chief_mean[0]) - R_EARTH)
+        return cls(float(rho_mean) / effective_density(base, chief_mean), base.h_ref, base.scale_height)
+
     def density(self, h):
         """rho(h) [kg/m^3]."""
         return self.rho_ref * np.exp(-(np.asarray(h, dtype=float) - self.h_ref) / self.scale_height)
 
+    def density_at(self, pos, t=0.0):
+        """rho [kg/m^3] at inertial positions ``pos`` ``(..., 3)`` [m] (time-independent)."""
+        return self.density(np.linalg.norm(np.asarray(pos, dtype=float), axis=-1) - R_EARTH)
+
     def pars(self):
         return [self.rho_ref, self.h_ref, self.scale_height]
+
+    def describe(self):
+        return {"model": self.kind, "rho_ref": self.rho_ref, "h_ref": self.h_ref, "scale_height": self.scale_height}
+
+
+SUN_RATE = 2.0 * np.pi / (365.2422 * SECONDS_PER_DAY)
+"""Mean rate of the Sun's right ascension [rad/s] (one tropical year)."""
+
+MSIS_SCALE = 50e3
+"""m, altitude normalisation of :func:`msis_basis`."""
+
+MSIS_SPAN = 20e3
+"""m, radial half-width of the band the NRLMSIS fit covers around the nominal orbit."""
+
+
+def _monomials(x, y, z, degree):
+    out = []
+    for d in range(degree + 1):
+        for i in range(d, -1, -1):
+            for j in range(d - i, -1, -1):
+                term = 1.0
+                for base, k in ((x, i), (y, j), (z, d - i - j)):
+                    for _ in range(k):
+                        term = term * base
+                out.append(term)
+    return out
+
+
+def msis_basis(x, y, z, dh):
+    """The 46 basis functions of the NRLMSIS fit: monomials X^i Y^j Z^k of degree <= 4 of the unit position
+    vector in the frame (X towards the Sun's right ascension, Z the Earth's axis) (35), ``dh`` times those of
+    degree <= 2 (10) and dh^2, with dh = (|r| - R_E - h_0) / ``MSIS_SCALE``. Products and sums only, so the same
+    code builds numpy arrays and heyoka expressions."""
+    terms = _monomials(x, y, z, 4)
+    terms += [dh * m for m in _monomials(x, y, z, 2)]
+    return terms + [dh * dh]
+
+
+N_MSIS_BASIS = 46
+
+
+def _sun_frame(pos_x, pos_y, pos_z, r, alpha, cos=np.cos, sin=np.sin):
+    ca, sa = cos(alpha), sin(alpha)
+    return (pos_x * ca + pos_y * sa) / r, (pos_y * ca - pos_x * sa) / r, pos_z / r
+
+
+def ecef_to_geodetic(r_ef):
+    """WGS-84 geodetic latitude [rad], longitude [rad] and ellipsoidal height [m] of Earth-fixed positions
+    ``(..., 3)`` (fixed-point iteration on the latitude, converged to < 1e-12 rad in 6 steps in LEO)."""
+    x, y, z = (np.asarray(r_ef, dtype=float)[..., k] for k in range(3))
+    p = np.hypot(x, y)
+    lat = np.arctan2(z, p * (1.0 - WGS84_E2))
+    for _ in range(6):
+        big_n = R_EARTH / np.sqrt(1.0 - WGS84_E2 * np.sin(lat) ** 2)
+        h = p / np.cos(lat) - big_n
+        lat = np.arctan2(z, p * (1.0 - WGS84_E2 * big_n / (big_n + h)))
+    big_n = R_EARTH / np.sqrt(1.0 - WGS84_E2 * np.sin(lat) ** 2)
+    return lat, np.arctan2(y, x), p / np.cos(lat) - big_n
+
+
+def nrlmsis_density(pos, t, epoch_utc=DEFAULT_EPOCH_UTC, f107=140.0, f107a=140.0, ap=15.0):
+    """NRLMSIS 2.0 total mass density [kg/m^3] (``pymsis``, version 2.0) at inertial positions ``pos`` ``(N, 3)``
+    [m] and times ``t`` ``(N,)`` [s after ``epoch_utc``]: Earth-fixed by the GMST rotation (the frame of
+    :mod:`roe_sep.core.od.radar`), WGS-84 geodetic coordinates, the given F10.7 (previous day), its 81-day mean
+    and daily Ap (every 3-h ap equal to it)."""
+    from pymsis import msis
+
+    pos = np.asarray(pos, dtype=float).reshape(-1, 3)
+    t = np.broadcast_to(np.asarray(t, dtype=float), pos.shape[:1])
+    jd0 = julian_date(epoch_utc)
+    theta = gmst(jd0 + t / SECONDS_PER_DAY)
+    c, s = np.cos(theta), np.sin(theta)
+    r_ef = np.stack([c * pos[:, 0] + s * pos[:, 1], -s * pos[:, 0] + c * pos[:, 1], pos[:, 2]], axis=-1)
+    lat, lon, h = ecef_to_geodetic(r_ef)
+    dates = np.datetime64(epoch_utc.rstrip("Zz"), "ms") + np.round(t * 1e3).astype("timedelta64[ms]")
+    n = pos.shape[0]
+    out = msis.calculate(dates, np.degrees(lon), np.degrees(lat), h / 1e3, np.full(n, float(f107)),
+                         np.full(n, float(f107a)), np.full((n, 7), float(ap)), version=2.0)
+    return np.asarray(out[..., msis.Variable.MASS_DENSITY], dtype=float).reshape(n)
+
+
+@dataclass(frozen=True)
+class MsisAtmosphere:
+    """NRLMSIS 2.0 as the truth's density: ln rho = sum_k c_k phi_k (:func:`msis_basis`), fitted by
+    :meth:`fit`. The frame of the basis turns with the Sun's mean right ascension alpha(t) = alpha_0 + SUN_RATE t,
+    t the integrator's time [s after ``epoch_utc``]."""
+
+    coefficients: tuple
+    alpha0: float  # rad, Sun's right ascension at t = 0
+    h0: float  # m, reference altitude of the basis
+    epoch_utc: str
+    f107: float
+    f107a: float
+    ap: float
+    fit_rms: float  # RMS error of the fit in ln rho (relative density error)
+    fit_max: float  # largest |error| in ln rho over the fit points
+    kind = "msis"
+
+    @classmethod
+    def fit(cls, chief_mean, span, epoch_utc=DEFAULT_EPOCH_UTC, f107=140.0, f107a=140.0, ap=15.0, step=60.0):
+        """Fit to NRLMSIS 2.0 (:func:`nrlmsis_density`) along the nominal orbit of ``chief_mean`` (mean elements at
+        t = 0, secular J2, osculating positions) every ``step`` s over [0, ``span``] s, at radial offsets of
+        0, +-``MSIS_SPAN``/2 and +-``MSIS_SPAN``."""
+        for name, v in (("f107", f107), ("f107a", f107a), ("ap", ap), ("span", span), ("step", step)):
+            if not np.isfinite(v) or v < 0 or (name in ("span", "step") and v <= 0):
+                raise ValueError(f"{name} must be a finite {'positive' if name in ('span', 'step') else 'non-negative'}"
+                                 f" number, got {v}")
+        t = np.arange(0.0, float(span) + step, step)
+        pos = mean_to_cartesian(propagate_chief(np.asarray(chief_mean, dtype=float), t))[0]
+        r = np.linalg.norm(pos, axis=-1, keepdims=True)
+        offsets = np.linspace(-MSIS_SPAN, MSIS_SPAN, 5)
+        pts = np.concatenate([pos * (1.0 + o / r) for o in offsets])
+        tt = np.tile(t, offsets.size)
+        rho = nrlmsis_density(pts, tt, epoch_utc, f107, f107a, ap)
+        alpha0 = float(sun_right_ascension(julian_date(epoch_utc)))
+        h0 = float(chief_mean[0]) - R_EARTH
+        basis = np.stack(_basis_numpy(pts, tt, alpha0, h0), axis=-1)
+        coef, *_ = np.linalg.lstsq(basis, np.log(rho), rcond=1e-10)
+        res = basis @ coef - np.log(rho)
+        return cls(tuple(float(c) for c in coef), alpha0, h0, str(epoch_utc), float(f107), float(f107a), float(ap),
+                   float(np.sqrt(np.mean(res**2))), float(np.max(np.abs(res))))
+
+    def density_at(self, pos, t=0.0):
+        """The fitted rho [kg/m^3] at inertial positions ``(..., 3)`` [m] and times ``t`` [s]."""
+        pos = np.asarray(pos, dtype=float)
+        basis = np.stack(_basis_numpy(pos, np.asarray(t, dtype=float), self.alpha0, self.h0), axis=-1)
+        return np.exp(basis @ np.asarray(self.coefficients))
+
+    def pars(self):
+        return [self.alpha0, self.h0, *self.coefficients]
+
+    def describe(self):
+        return {"model": self.kind, "epoch_utc": self.epoch_utc, "f107": self.f107, "f107a": self.f107a,
+                "ap": self.ap, "fit_rms_ln_rho": self.fit_rms, "fit_max_ln_rho": self.fit_max}
+
+
+def _basis_numpy(pos, t, alpha0, h0):
+    pos = np.asarray(pos, dtype=float)
+    r = np.linalg.norm(pos, axis=-1)
+    x, y, z = _sun_frame(pos[..., 0], pos[..., 1], pos[..., 2], r, alpha0 + SUN_RATE * t)
+    terms = msis_basis(x, y, z, (r - R_EARTH - h0) / MSIS_SCALE)
+    return [np.broadcast_to(np.asarray(b, dtype=float), r.shape) for b in terms]
+
+
+def effective_density(atmosphere, chief_mean, t0=0.0, span=None, samples=720):
+    """Orbit-mean drag of ``atmosphere`` as a constant density [kg/m^3]: <rho |v_r| (v_r . v)> / (mu / a)^(3/2).
+
+    Averaged over the osculating states of the nominal orbit of ``chief_mean`` (mean elements at ``t0``, secular J2)
+    over one orbit (``span`` None) or ``span`` seconds, ``samples`` points evenly in time; v_r = v - omega_E x r.
+    The secular drift of a is <da/dt> = (2 a^2 / mu) <v . a_drag> = -(a^2 / mu) B <rho |v_r| (v_r . v)>, which is
+    seed 002 Eq. (24), da/dt = -B rho v^2 / n = -(a^2 / mu) B rho v^3 with v^2 = mu / a, for rho = rho_eff: the
+    constant density the linear model needs to reproduce this atmosphere's orbit-mean drag.
+    """
+    from ..relmotion.orbit import mean_motion
+
+    chief_mean = np.asarray(chief_mean, dtype=float)
+    a = float(chief_mean[0])
+    span = 2.0 * np.pi / float(mean_motion(a)) if span is None else float(span)
+    t = t0 + np.arange(samples) * (span / samples)
+    pos, vel = mean_to_cartesian(propagate_chief(chief_mean, t - t0))
+    vr = vel - np.cross([0.0, 0.0, EARTH_ROTATION], pos)
+    rho = atmosphere.density_at(pos, t)
+    return float(np.mean(rho * np.linalg.norm(vr, axis=-1) * np.sum(vr * vel, axis=-1)) / (MU_EARTH / a) ** 1.5)
+
+
+ATMOSPHERES = ("normalised", "msis")
+"""The truth's density models (see the module docstring)."""
+
+
+def truth_atmosphere(model, density, chief_mean, span=3.0 * SECONDS_PER_DAY, epoch_utc=DEFAULT_EPOCH_UTC,
+                     f107=140.0, f107a=140.0, ap=15.0):
+    """The truth's atmosphere by name: ``normalised`` (:meth:`Atmosphere.normalised` to ``density``, the default)
+    or ``msis`` (:meth:`MsisAtmosphere.fit` over ``span`` s from ``epoch_utc``; ``density`` unused)."""
+    if model == "normalised":
+        return Atmosphere.normalised(density, chief_mean)
+    if model == "msis":
+        return MsisAtmosphere.fit(chief_mean, span, epoch_utc, f107, f107a, ap)
+    raise ValueError(f"atmosphere must be one of {ATMOSPHERES}, got {model!r}")
 
 
 @dataclass(frozen=True)
@@ -143,31 +353,51 @@ def zonal_potential(x, y, z, zonals):
     return MU_EARTH / r * (1.0 - pert)
 
 
-def drag_acceleration(pos, vel, b, rho_ref, h_ref, scale_height):
-    """a = -1/2 B rho(h) |v_r| v_r, v_r = v - omega_E x r (Vallado Eq. 8-28), heyoka expressions."""
+def density_expression(kind, x, y, z):
+    """rho as a heyoka expression of the inertial position (and time, ``msis``), parameters from ``hy.par[2]``:
+    ``exponential``: rho_ref exp((h_ref + R_E - r) / H); ``msis``: exp(sum_k c_k phi_k) (:func:`msis_basis`)."""
+    import heyoka as hy
+
+    r = hy.sqrt(x * x + y * y + z * z)
+    if kind == "exponential":
+        return hy.par[2] * hy.exp((hy.par[3] + R_EARTH - r) / hy.par[4])
+    if kind == "msis":
+        sx, sy, sz = _sun_frame(x, y, z, r, hy.par[2] + SUN_RATE * hy.time, hy.cos, hy.sin)
+        terms = msis_basis(sx, sy, sz, (r - R_EARTH - hy.par[3]) / MSIS_SCALE)
+        log_rho = hy.par[4] * terms[0]
+        for k, term in enumerate(terms[1:], start=5):
+            log_rho = log_rho + hy.par[k] * term
+        return hy.exp(log_rho)
+    raise ValueError(f"unknown density model {kind!r}")
+
+
+def drag_acceleration(pos, vel, b, rho):
+    """a = -1/2 B rho |v_r| v_r, v_r = v - omega_E x r (Vallado Eq. 8-28), heyoka expressions."""
     import heyoka as hy
 
     x, y, z = pos
     vrx, vry, vrz = vel[0] + EARTH_ROTATION * y, vel[1] - EARTH_ROTATION * x, vel[2]
-    r = hy.sqrt(x * x + y * y + z * z)
-    rho = rho_ref * hy.exp((h_ref + R_EARTH - r) / scale_height)
     k = -0.5 * b * rho * hy.sqrt(vrx * vrx + vry * vry + vrz * vrz)
     return k * vrx, k * vry, k * vrz
 
 
-def pair_equations(zonals=4):
+def pair_equations(zonals=4, density="exponential"):
     """The 12 first-order ODEs of chief and deputy (heyoka ``(var, rhs)`` pairs), parameters as in the module doc."""
     import heyoka as hy
 
-    rho_ref, h_ref, big_h = hy.par[2], hy.par[3], hy.par[4]
     sys = []
     for k, tag in enumerate(("c", "d")):
         x, y, z, vx, vy, vz = hy.make_vars(*(f"{q}_{tag}" for q in ("x", "y", "z", "vx", "vy", "vz")))
         u = zonal_potential(x, y, z, zonals)
-        dx, dy, dz = drag_acceleration((x, y, z), (vx, vy, vz), hy.par[k], rho_ref, h_ref, big_h)
+        dx, dy, dz = drag_acceleration((x, y, z), (vx, vy, vz), hy.par[k], density_expression(density, x, y, z))
         sys += [(x, vx), (y, vy), (z, vz),
                 (vx, hy.diff(u, x) + dx), (vy, hy.diff(u, y) + dy), (vz, hy.diff(u, z) + dz)]
     return sys
+
+
+def n_pars(density="exponential"):
+    """Number of runtime parameters of the pair system with ``density``."""
+    return 2 + (3 if density == "exponential" else 2 + N_MSIS_BASIS)
 
 
 DEFAULT_TOL = 1e-15
@@ -176,7 +406,7 @@ SEGMENT = 3600.0  # s, the simulator truth integrates in segments ending on this
 
 
 @functools.lru_cache(maxsize=None)
-def pair_integrator(zonals=4, batch_size=None, tol=DEFAULT_TOL):
+def pair_integrator(zonals=4, batch_size=None, tol=DEFAULT_TOL, density="exponential"):
     """The compiled Taylor integrator for one pair (``batch_size`` None) or ``batch_size`` pairs (SIMD lanes).
 
     Cached per process; callers get a template and :func:`copy.deepcopy` it (no recompilation). Measured LLVM
@@ -186,10 +416,12 @@ def pair_integrator(zonals=4, batch_size=None, tol=DEFAULT_TOL):
     """
     import heyoka as hy
 
-    sys = pair_equations(zonals)
+    sys = pair_equations(zonals, density)
+    npar = n_pars(density)
     if batch_size is None:
-        return hy.taylor_adaptive(sys, np.zeros(12), pars=np.zeros(5), tol=tol, compact_mode=True)
-    return hy.taylor_adaptive_batch(sys, np.zeros((12, batch_size)), pars=np.zeros((5, batch_size)), tol=tol)
+        return hy.taylor_adaptive(sys, np.zeros(12), pars=np.zeros(npar), tol=tol, compact_mode=True)
+    return hy.taylor_adaptive_batch(sys, np.zeros((12, batch_size)), pars=np.zeros((npar, batch_size)), tol=tol,
+                                    compact_mode=density != "exponential")
 
 
 def simd_size():
@@ -254,7 +486,7 @@ def relative_rtn(state):
 
 
 # ---------------------------------------------------------------- single pair
-def _pars(b_chief, b_deputy, atmosphere: Atmosphere):
+def _pars(b_chief, b_deputy, atmosphere):
     return np.array([b_chief, b_deputy, *atmosphere.pars()], dtype=float)
 
 
@@ -268,7 +500,7 @@ def propagate_pair(state0, t0, times, maneuvers, b_chief, b_deputy, atmosphere: 
     times = np.asarray(times, dtype=float)
     if np.any(times < t0):
         raise ValueError("propagation times must not precede t0")
-    ta = copy.deepcopy(pair_integrator(zonals, None, tol))
+    ta = copy.deepcopy(pair_integrator(zonals, None, tol, atmosphere.kind))
     ta.time = float(t0)
     ta.state[:] = np.asarray(state0, dtype=float)
     ta.pars[:] = _pars(b_chief, b_deputy, atmosphere)
@@ -337,13 +569,13 @@ def _run_lanes(states0, t0, grid, b_chief, b_deputy, atmosphere, zonals, tol, wo
     (default: the cores available). Returns ``(final states (12, N_pad), grid output (n_t, 12, N_pad) or None)``."""
     s0 = np.asarray(states0, dtype=float)
     n = s0.shape[0]
-    template = pair_integrator(zonals, simd_size(), tol)
+    template = pair_integrator(zonals, simd_size(), tol, atmosphere.kind)
     bs = template.batch_size
     npad = -(-n // bs) * bs
     states = np.empty((12, npad))
     states[:, :n] = s0.T
     states[:, n:] = s0[-1:].T
-    pars = np.empty((5, npad))
+    pars = np.empty((n_pars(atmosphere.kind), npad))
     pars[0, :n] = np.broadcast_to(np.asarray(b_chief, dtype=float), (n,))
     pars[1, :n] = np.broadcast_to(np.asarray(b_deputy, dtype=float), (n,))
     pars[:2, n:] = pars[:2, n - 1:n]
@@ -444,7 +676,7 @@ class NonlinearTruth:
         self.da_dot = float(da_dot)
         self.b_deputy = float(b_deputy)
         self.separated = False
-        self._ta = copy.deepcopy(pair_integrator(zonals, None, DEFAULT_TOL))
+        self._ta = copy.deepcopy(pair_integrator(zonals, None, DEFAULT_TOL, atmosphere.kind))
         self._ta.time = self.t0
         self._ta.state[:] = pair_state(self.chief0, self.chief0)
         self._ta.pars[:] = _pars(b_chief, b_chief, atmosphere)

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..relmotion.dynamics import arg_latitude_rate, propagate, propagate_chief
-from ..relmotion.maneuvers import delta_roe, dispersed_dv
+from ..relmotion.maneuvers import delta_roe, dispersed_dv, unreduced_burns
 from ..relmotion.orbit import mean_motion
 from ..relmotion.roe import roe_to_rtn
 from ..relmotion.trajectory import Chief
@@ -82,21 +82,43 @@ class TruthModel:
         self.separated = True
 
 
+REDUCED_PURPOSES = ("drift_stop", "drift_reduction")
+"""Purposes of the burns commanded with the drift-stop reduction |p| of seed 002 Eq. (18) (the double impulse's
+drift-stop, the multi-impulse scheme's drift-reduction burns)."""
+
+
+def error_references(purposes, dvs, p):
+    """Per burn of one plan, the burn its magnitude error acts on (the ``reference`` of
+    :func:`~roe_sep.core.relmotion.maneuvers.dispersed_dv`): for the burns of ``REDUCED_PURPOSES`` together the
+    unreduced drift-stop (:func:`~roe_sep.core.relmotion.maneuvers.unreduced_burns` with the plan's |p|, seed 002
+    Eq. 18), ``None`` (the commanded burn itself, Eq. 22) for every other burn."""
+    if not np.isfinite(p) or p < 0:
+        raise ValueError(f"p_reduction must be a finite non-negative number [m/s], got {p}")
+    idx = [k for k, purpose in enumerate(purposes) if purpose in REDUCED_PURPOSES]
+    refs = [None] * len(purposes)
+    if idx and p:
+        for k, ref in zip(idx, unreduced_burns([dvs[k] for k in idx], p)):
+            refs[k] = ref
+    return refs
+
+
 @dataclass
 class ExecutionErrors:
-    """Seeded execution errors of seed 002 Eq. (22): magnitude factor and attitude errors per burn."""
+    """Seeded execution errors of seed 002 Eqs. (18) and (22): magnitude factor and attitude errors per burn."""
 
     rng: np.random.Generator
     spl_sigma: float
     thruster_sigma: float
     attitude_sigma: float  # rad, per axis
 
-    def executed(self, dv_own, spacecraft):
-        """The burn as executed: ``f R(eps) dv`` with f ~ N(1, sigma of the SPL or of the carrier thruster)."""
+    def executed(self, dv_own, spacecraft, reference=None):
+        """The burn as executed: :func:`~roe_sep.core.relmotion.maneuvers.dispersed_dv` with f ~ N(1, sigma of the SPL
+        or of the carrier thruster); ``reference`` the unreduced burn of a reduced drift-stop
+        (:func:`error_references`), ``None``: the error is a fraction of ``dv_own`` itself."""
         sigma = self.spl_sigma if spacecraft == "picosatellite" else self.thruster_sigma
         factor = self.rng.normal(1.0, sigma)
         eps = self.rng.normal(0.0, self.attitude_sigma, 3)
-        return dispersed_dv(dv_own, factor, eps)
+        return dispersed_dv(dv_own, factor, eps, reference)
 
 
 def chief_from_u(a, inc, raan, u):

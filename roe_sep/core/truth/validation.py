@@ -19,8 +19,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..constants import R_EARTH, SECONDS_PER_DAY
+from ..constants import SECONDS_PER_DAY
 from ..montecarlo.sweep import MonteCarloConfig, Outcome, draw, summarize, sweep
+from ..od.radar import DEFAULT_EPOCH_UTC, julian_date, raan_from_ltan
 from ..relmotion.dynamics import arg_latitude_rate, drag_da_dot
 from ..relmotion.maneuvers import dispersed_dv
 from ..relmotion.roe import ROE_NAMES, roe_to_rtn
@@ -31,6 +32,7 @@ from .nonlinear import (
     Atmosphere,
     Maneuver,
     apply_impulse,
+    effective_density,
     mean_roe,
     pair_state,
     propagate_pair,
@@ -52,14 +54,17 @@ MC_TOL = 1e-12
 @dataclass(frozen=True)
 class Case:
     """A separation case on a common time scale: chief mean elements at t = 0 (the ejection), the burns
-    (:class:`~roe_sep.core.truth.nonlinear.Maneuver`), the drag properties and the scenario density at the orbit."""
+    (:class:`~roe_sep.core.truth.nonlinear.Maneuver`), the drag properties, the scenario density (the linear
+    model's rho) and the truth's atmosphere (``None``: the default, :meth:`Atmosphere.normalised` to ``density``;
+    any other model of :func:`~roe_sep.core.truth.nonlinear.truth_atmosphere`)."""
 
     name: str
     chief_mean: np.ndarray  # [a, e, i, raan, argp, M] at t = 0
     maneuvers: tuple
     b_chief: float  # m^2/kg
     b_deputy: float  # m^2/kg
-    density: float  # kg/m^3 at the orbit's altitude (the linear model's rho)
+    density: float  # kg/m^3, the linear model's rho (seed 002: 1 g/km^3)
+    truth_atmosphere: object = None
 
     @property
     def a(self):
@@ -74,12 +79,21 @@ class Case:
         return Chief(self.a, self.inc, float(self.chief_mean[4] + self.chief_mean[5]), 0.0)
 
     @property
-    def atmosphere(self) -> Atmosphere:
-        return Atmosphere.scaled(self.density, self.a - R_EARTH)
+    def atmosphere(self):
+        """The truth's density model."""
+        if self.truth_atmosphere is not None:
+            return self.truth_atmosphere
+        return Atmosphere.normalised(self.density, self.chief_mean)
 
     def burns(self):
         """The maneuvers as the core's relative burns (seed convention)."""
         return [Burn(m.epoch, tuple(m.relative())) for m in self.maneuvers]
+
+
+def sso_raan(ltan_hours=9.5, epoch_utc=DEFAULT_EPOCH_UTC):
+    """RAAN [rad] of the carrier's orbit at ``epoch_utc`` for a local time of the ascending node (BIROS: 09:30):
+    where the Sun is relative to the orbit, which the empirical atmosphere's diurnal bulge depends on."""
+    return float(raan_from_ltan(ltan_hours, julian_date(epoch_utc)))
 
 
 def double_impulse_case(d: DoubleImpulseDesign, mc: MonteCarloConfig = MonteCarloConfig(), raan=0.0) -> Case:
@@ -100,12 +114,14 @@ def multi_impulse_case(md, mc: MonteCarloConfig = MonteCarloConfig(), raan=0.0) 
     return Case("multi_impulse", chief, tuple(burns), mc.carrier.ballistic, mc.picosat.ballistic, mc.density)
 
 
-def model_trajectory(case: Case, times, model="j2drag"):
-    """The core's secular model along ``times`` [s]: dimensionless ROE ``(T, 6)``."""
+def model_trajectory(case: Case, times, model="j2drag", density=None):
+    """The core's secular model along ``times`` [s]: dimensionless ROE ``(T, 6)``; ``density`` [kg/m^3] of the
+    drag model (default ``case.density``)."""
     if model not in MODELS:
         raise ValueError(f"model must be one of {MODELS}, got {model!r}")
     j2 = model != "keplerian"
-    da_dot = float(drag_da_dot(case.b_deputy - case.b_chief, case.density, case.a)) if model == "j2drag" else 0.0
+    rho = case.density if density is None else density
+    da_dot = float(drag_da_dot(case.b_deputy - case.b_chief, rho, case.a)) if model == "j2drag" else 0.0
     return trajectory(np.zeros(6), 0.0, case.burns(), times, case.chief, j2, da_dot)
 
 
@@ -134,10 +150,13 @@ class ModelError:
                 "truth_roe": self.truth_roe.tolist()}
 
 
-def model_errors(case: Case, days=(1, 2, 3), step=60.0, models=MODELS, zonals=4):
+def model_errors(case: Case, days=(1, 2, 3), step=60.0, models=MODELS, zonals=4, effective=False):
     """Model error of each of ``models`` against the nonlinear truth (see the module docstring).
 
-    One truth integration serves every model. The RTN comparison samples every ``step`` seconds.
+    One truth integration serves every model. The RTN comparison samples every ``step`` seconds. ``effective``
+    adds the row ``j2drag_eff``: the j2drag model with the truth atmosphere's orbit-mean drag as its density
+    (:func:`~roe_sep.core.truth.nonlinear.effective_density` over the span), what a perfectly known mean density
+    would leave.
     """
     t_end = max(days) * SECONDS_PER_DAY
     times = np.arange(0.0, t_end + step / 2, step)
@@ -146,16 +165,24 @@ def model_errors(case: Case, days=(1, 2, 3), step=60.0, models=MODELS, zonals=4)
     r_true = relative_rtn(states)[0]
     idx = np.searchsorted(times, np.asarray(days, dtype=float) * SECONDS_PER_DAY)
     out = []
-    for model in models:
-        roe_m = model_trajectory(case, times, model)
+    runs = [(m, m, None) for m in models]
+    if effective:
+        runs.append(("j2drag_eff", "j2drag", truth_effective_density(case, times[-1])))
+    for name, model, rho in runs:
+        roe_m = model_trajectory(case, times, model, rho)
         u = case.chief.u_at(times, model != "keplerian")
         r_model = roe_to_rtn(roe_m, u)[0] * case.a
         dr = np.linalg.norm(r_model - r_true, axis=-1)
         dd = np.abs(np.linalg.norm(r_model, axis=-1) - np.linalg.norm(r_true, axis=-1))
-        out.append(ModelError(case.name, model, list(days), (roe_m[idx] - truth[idx]) * case.a,
+        out.append(ModelError(case.name, name, list(days), (roe_m[idx] - truth[idx]) * case.a,
                               np.array([dr[:k + 1].max() for k in idx]), np.array([dd[:k + 1].max() for k in idx]),
                               truth[idx] * case.a))
     return out
+
+
+def truth_effective_density(case: Case, span):
+    """Orbit-mean drag of the case's truth atmosphere over [0, ``span``] s as a constant density [kg/m^3]."""
+    return effective_density(case.atmosphere, case.chief_mean, 0.0, span, samples=max(720, int(span / 60.0)))
 
 
 def zonal_effect(case: Case, days=(1, 2, 3)):
@@ -189,9 +216,10 @@ def nonlinear_sweep(d: DoubleImpulseDesign, mc: MonteCarloConfig, p_values, zona
 
     Per sample: the dispersed ejection (Eq. 22, f1, eps1) applied to the picosatellite at u1; both spacecraft
     integrated to the drift-stop epoch k pi later (secular J2 rate of u: the truth always has J2); the carrier's
-    dispersed drift-stop (f2, eps2, its own burn -dv2(p)); then ``mc.horizon``. Differential drag: the carrier keeps
-    its nominal B, the picosatellite gets B_c + dB_nominal * db_factor (the linear model's dB), the density
-    profile is :meth:`Atmosphere.scaled` to ``mc.density`` at the orbit. Without ``mc.drag`` both B are 0.
+    dispersed drift-stop (f2 on the unreduced burn as Eq. 18, eps2, its own burn -dv2(p)); then ``mc.horizon``.
+    Differential drag: the carrier keeps its nominal B, the picosatellite gets B_c + dB_nominal * db_factor (the
+    linear model's dB), the atmosphere is :meth:`Atmosphere.normalised` to ``mc.density`` (the default truth).
+    Without ``mc.drag`` both B are 0.
     """
     import time
 
@@ -199,10 +227,10 @@ def nonlinear_sweep(d: DoubleImpulseDesign, mc: MonteCarloConfig, p_values, zona
     draws = draw(d, mc)
     a = d.a
     n = mc.samples
-    atm = Atmosphere.scaled(mc.density, a - R_EARTH)
+    chief = np.array([a, 0.0, d.inc, 0.0, 0.0, d.u1])
+    atm = Atmosphere.normalised(mc.density, chief)
     b_c = mc.carrier.ballistic if mc.drag else 0.0
     b_d = b_c + mc.delta_b * draws.db_factor if mc.drag else np.zeros(n)
-    chief = np.array([a, 0.0, d.inc, 0.0, 0.0, d.u1])
     s0 = np.broadcast_to(pair_state(chief, chief), (n, 12))
     s1 = apply_impulse(s0, dispersed_dv(d.dv1_rtn, draws.f1, draws.eps1), np.ones(n, bool))
     dt_stop = d.k * math.pi / float(arg_latitude_rate(a, d.inc, True))
@@ -212,7 +240,7 @@ def nonlinear_sweep(d: DoubleImpulseDesign, mc: MonteCarloConfig, p_values, zona
     rows, agreement, diffs = [], [], {}
     for lrow in lin.rows:
         pv = lrow["p"]
-        dv2_own = dispersed_dv(0.0 - d.drift_stop_dv(pv), draws.f2, draws.eps2)
+        dv2_own = dispersed_dv(0.0 - d.drift_stop_dv(pv), draws.f2, draws.eps2, 0.0 - d.drift_stop_dv(0.0))
         s2 = apply_impulse(s_stop, dv2_own, np.zeros(n, bool))
         roe2 = mean_roe(s2)
         s_h = propagate_pairs(s2, dt_stop, dt_stop + mc.horizon, b_c, b_d, atm, zonals, tol, workers)
