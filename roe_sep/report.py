@@ -52,6 +52,32 @@ def truth_at(truth, t, truth_da_dot):
                      truth_da_dot / a / 86400.0) * a
 
 
+def valid_only(data):
+    """Drop what the nodes themselves reject (:mod:`roe_sep.nodes.validate`): a bag records every message on a
+    topic, also a foreign publisher's garbage, which must not enter the report."""
+    from .nodes import validate
+
+    checks = {interfaces.TRUTH_ROE_TOPIC: validate.truth, interfaces.EXECUTED_TOPIC: validate.executed,
+              interfaces.OD_TOPIC: validate.orbit_determination, interfaces.DRIFT_STOP_PLAN_TOPIC: validate.plan,
+              interfaces.ACQUISITION_PLAN_TOPIC: validate.plan, interfaces.PLAN_CHECK_TOPIC: validate.safety_status,
+              interfaces.SAFETY_TOPIC: validate.safety_status}
+    out = {}
+    for topic, msgs in data.items():
+        check = checks.get(topic)
+        kept = []
+        for item in msgs:
+            try:
+                if check is not None:
+                    check(item[1])
+            except ValueError:
+                continue
+            kept.append(item)
+        out[topic] = kept
+    out[interfaces.PLAN_CHECK_TOPIC] = [(t, m) for t, m in out[interfaces.PLAN_CHECK_TOPIC]
+                                        if m.source.startswith("plan:")]
+    return out
+
+
 def planner_model_error(plans, truth, truth_da_dot):
     """The planner's prediction against truth: the aimed a*ROE of the last plan on a topic (its ``aimed`` field,
     stamped with the epoch it is aimed at) minus the truth there [m]; None without a plan or truth. The planners
@@ -100,7 +126,7 @@ def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()
     topics = (interfaces.EXECUTED_TOPIC, interfaces.TRUTH_ROE_TOPIC, interfaces.DIAGNOSTICS_TOPIC,
               interfaces.SAFETY_TOPIC, interfaces.PLAN_CHECK_TOPIC, interfaces.OD_TOPIC,
               interfaces.ACQUISITION_PLAN_TOPIC, interfaces.DRIFT_STOP_PLAN_TOPIC)
-    data = read_topics(bag_dir, topics)
+    data = valid_only(read_topics(bag_dir, topics))
 
     maneuvers = []
     for _, m in data[interfaces.EXECUTED_TOPIC]:

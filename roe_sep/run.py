@@ -5,7 +5,6 @@ one generated parameter file, waits until the simulator reports the scenario com
 SIGINT (the recorder last, so the bag closes cleanly) and writes ``report.json`` from the recorded bag.
 """
 
-import json
 import os
 import signal
 import subprocess
@@ -96,6 +95,23 @@ class Deployment:
     def dead(self):
         return [n for n, (p, _) in self.procs.items() if p.poll() is not None]
 
+    def last_line(self, node):
+        """The last non-empty line of a node's log (why it stopped, mostly)."""
+        try:
+            lines = (self.out / "logs" / f"{node}.log").read_text(encoding="utf-8", errors="replace").splitlines()
+        except OSError:
+            return ""
+        return next((ln.strip() for ln in reversed(lines) if ln.strip()), "")
+
+    def death(self, nodes):
+        """One line naming each dead node, its exit status and its last log line."""
+        parts = []
+        for n in nodes:
+            code = self.procs[n][0].poll()
+            how = f"killed by signal {-code}" if code is not None and code < 0 else f"exit status {code}"
+            parts.append(f"{n} exited early ({how}); last log line: {self.last_line(n) or '(none)'}")
+        return "; ".join(parts)
+
     def stop(self, nodes, timeout=20.0):
         for n in nodes:
             p, _ = self.procs[n]
@@ -150,7 +166,7 @@ def wait_for_completion(duration, deployment, timeout, progress):
                 return now["end"] == "scenario complete", now["end"]
             dead = deployment.dead()
             if dead:
-                return False, f"node(s) exited early: {dead} (see logs/)"
+                return False, deployment.death(dead)
             if time.monotonic() - start > timeout:
                 return False, f"wall-time limit of {timeout:g} s reached at sim time {now['t']:.0f} s"
             day = int(now["t"] // 21600)
@@ -168,7 +184,6 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
         progress=False, real_time_factor=None):
     """Run the scenario; returns the report dict (``report['safe']``) and writes it to ``out/report.json``."""
     from .nodes.sim import DEFAULT_DURATION
-    from .report import build_report
 
     out = Path(out)
     bag_dir = out / "bag"
@@ -188,19 +203,68 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
     sim_duration = float(sim.setdefault("duration", DEFAULT_DURATION))
 
     deployment = Deployment(out, params_file, ros_environment(domain_id))
+    reached, reason = False, "not started"
     try:
         for node in NODES:
             deployment.start(node)
             if node == "recorder":
                 time.sleep(1.0)  # let the recorder discover the graph before the clock starts
         reached, reason = wait_for_completion(sim_duration, deployment, timeout, progress)
-        time.sleep(1.0)  # last messages reach the recorder
+        time.sleep(0.5)  # last messages reach the recorder
+    except KeyboardInterrupt:
+        reached, reason = False, "interrupted (Ctrl-C)"
+    except Exception as exc:  # noqa: BLE001 -- the runner outlives what goes wrong and says what it was
+        reached, reason = False, f"runner error: {type(exc).__name__}: {exc}"
     finally:
         codes = deployment.stop([n for n in NODES if n != "recorder"])
         codes.update(deployment.stop(["recorder"]))
-    report = build_report(bag_dir, sim_duration)
-    report["run"] = {"completed": reached, "reason": reason, "exit_codes": codes, "params_file": str(params_file)}
-    if not reached:
-        report["safe"] = False
-    (out / "report.json").write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
+    report = report_from_bag(bag_dir, out, sim_duration, codes.get("recorder"))
+    report["run"].update({"completed": reached, "reason": reason, "exit_codes": codes,
+                          "params_file": str(params_file)})
+    if not reached and report.get("safe") is not False:
+        report["safe"] = None  # not known: the run did not complete (the criteria hold what could be evaluated)
+    write_report(out / "report.json", report)
     return report
+
+
+def report_from_bag(bag_dir, out, duration, recorder_code):
+    """The run report from the bag; when the recorder died (or the bag is unfinished) the bag is recovered first
+    (``roe-sep bag recover``) and the report says how much was lost. Never raises: a report that cannot be built
+    says why, with ``safe: null``."""
+    from .bag import BagError, info
+    from .bag.recover import recover, summary_line
+    from .report import build_report
+
+    run_info = {}
+    source = bag_dir
+    try:
+        complete = info(bag_dir).get("complete", False)
+    except (BagError, OSError) as exc:
+        complete, run_info["bag_problem"] = False, str(exc)
+    if recorder_code != 0 or not complete:
+        try:
+            rec = recover(bag_dir, out / "bag_recovered")
+            source = out / "bag_recovered"
+            last = rec.get("last_log_time_ns")
+            run_info["bag_recovered"] = {
+                "path": str(source), "messages": rec["messages"], "summary": summary_line(rec),
+                "last_log_time": None if last is None else last * 1e-9,
+                "seconds_lost": None if last is None else max(0.0, duration - last * 1e-9)}
+        except Exception as exc:  # noqa: BLE001
+            run_info["bag_problem"] = f"bag could not be recovered: {type(exc).__name__}: {exc}"
+    try:
+        report = build_report(source, duration)
+    except Exception as exc:  # noqa: BLE001
+        report = {"safe": None, "criteria": {}, "maneuvers": [], "duration": duration,
+                  "report_error": f"report not built from {source}: {type(exc).__name__}: {exc}"}
+    report["run"] = run_info
+    return report
+
+
+def write_report(path, report):
+    """report.json, strict JSON (no NaN: null with the reason in ``null_reasons``), written atomically."""
+    from . import jsonutil
+
+    tmp = Path(path).with_suffix(".json.tmp")
+    tmp.write_text(jsonutil.dumps(report) + "\n", encoding="utf-8")
+    os.replace(tmp, path)

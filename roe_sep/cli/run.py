@@ -12,29 +12,41 @@ DAY = 86400.0
 
 
 def print_run(rep: dict, out=None):
+    """The run report as a table; copes with a partial report (a run that did not complete)."""
     w = (out or sys.stdout).write
-    w(f"Run {'SAFE' if rep['safe'] else 'UNSAFE'} ({rep['run']['reason']})\n")
-    for m in rep["maneuvers"]:
+    verdict = {True: "SAFE", False: "UNSAFE", None: "INCOMPLETE"}[rep.get("safe")]
+    w(f"Run {verdict} ({rep.get('run', {}).get('reason', '')})\n")
+    if rep.get("report_error"):
+        w(f"  {rep['report_error']}\n")
+    recovered = rep.get("run", {}).get("bag_recovered")
+    if recovered:
+        lost = recovered.get("seconds_lost")
+        w(f"  bag recovered to {recovered['path']}" + ("" if lost is None else f" ({lost:.0f} s of sim time lost)")
+          + "\n")
+    for m in rep.get("maneuvers", []):
         w(f"  t = {m['epoch']:10.1f} s  u = {m['u_deg'] % 360:7.2f} deg  {m['spacecraft']:13s} {m['purpose']:15s} "
           f"dv RTN = {vec(m['dv_rtn'])} m/s  |dv| = {m['dv']:.4f} m/s\n")
-    w(f"  carrier dv total = {rep['dv_total']:.4f} m/s "
-      f"({', '.join(f'{k} {v:.4f}' for k, v in rep['dv_by_purpose'].items())})\n")
-    if rep["time_to_ic"] is not None:
+    if "dv_total" in rep:
+        w(f"  carrier dv total = {rep['dv_total']:.4f} m/s "
+          f"({', '.join(f'{k} {v:.4f}' for k, v in rep['dv_by_purpose'].items())})\n")
+    if rep.get("time_to_ic") is not None:
         w(f"  time to initial conditions = {rep['time_to_ic'] / 3600:.1f} h after the ejection\n")
-    if rep["final_roe"]:
+    if rep.get("final_roe"):
         w("  final truth a*ROE [da dl dex dey dix diy] = [" + " ".join(f"{x:.1f}" for x in rep["final_roe"]) + "] m\n")
-    md = rep["min_distance"]
-    w(f"  closest approach after departure = {'none' if md is None else f'{md:.1f} m'}\n")
-    if rep["ic"]:
+    if "min_distance" in rep:
+        md = rep["min_distance"]
+        w(f"  closest approach after departure = {'none' if md is None else f'{md:.1f} m'}\n")
+    if rep.get("ic"):
         ic = rep["ic"]
         w(f"  truth at the IC epoch t = {ic['epoch']:.0f} s: a*ROE = [" + " ".join(f"{x:.1f}" for x in ic["roe"])
           + f"] m, e/i angle {ic['ei_angle_deg']:.1f} deg, min R-N {ic['min_rn_distance']:.0f} m\n")
-    if rep["od"]:
+    if rep.get("od"):
         od = rep["od"]
         w(f"  first OD: t = {od['epoch']:.0f} s, {od['passes']} passes, {od['measurements']} measurements, "
           f"NEES = {od.get('nees') if od.get('nees') is None else round(od['nees'], 2)}\n")
-    for name, ok in rep["criteria"].items():
+    for name, ok in rep.get("criteria", {}).items():
         w(f"  {'pass' if ok else 'FAIL'}  {name}\n")
+
 
 def check_params_file(path):
     """``--params``: readable YAML in the ROS layout ``{node: {ros__parameters: {...}}}`` with finite numbers only

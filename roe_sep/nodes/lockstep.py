@@ -31,6 +31,7 @@ from .validate import BadMessage, validator_for
 
 STEP_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10, reliability=ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.VOLATILE)
+READER_DEPTH = 1000  # messages a counted input may queue before the node takes them
 ACK_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100, reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.VOLATILE)
 
@@ -95,8 +96,12 @@ class Lockstep:
         self.inputs[topic] = (self._guarded(topic, callback), len(self.inputs), stamp)
         self.validators[topic] = validator_for(msg_type)
         self.what[topic] = what or f"message on {topic}"
+        # a deep reader queue: a counted message must never be overwritten before it is taken (a flood of bad
+        # messages on a depth-1 latched topic would otherwise push out the good one)
+        deep = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=max(qos.depth, READER_DEPTH),
+                          reliability=qos.reliability, durability=qos.durability)
         self.subscriptions[topic] = self.node.create_subscription(msg_type, topic,
-                                                                  lambda m, tp=topic: self._on_input(tp, m), qos)
+                                                                  lambda m, tp=topic: self._on_input(tp, m), deep)
         return self.subscriptions[topic]
 
     def unsubscribe(self, topic):

@@ -1,0 +1,158 @@
+"""Fault injection (issue 15): every node of a running `roe-sep run` killed in turn, and every subscribed topic
+fuzzed while the closed loop runs. Marked ``fault`` (``pytest -m fault`` runs them apart, ``make chaos`` runs them
+with more cases); they are part of ``make test``.
+
+Killed node: the runner ends with one line naming the node, its exit status and its last log line, writes a strict
+report.json (``safe`` null or false), recovers the bag itself when the recorder died, and exits non-zero; never a
+Python traceback. Fuzzed topics: no node dies, each bad message is an ERROR on /diagnostics naming the topic and
+field, and the run completes safe.
+"""
+
+import json
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+from roe_sep_msgs.msg import (  # noqa: E402
+    EjectionEvent,
+    ImpulsiveManeuver,
+    ManeuverPlan,
+    OrbitDetermination,
+    RelativeOrbitalElements,
+    SafetyStatus,
+)
+from rosutil import ROOT, rclpy, ros_env  # noqa: I001  (skips without rclpy)
+
+from roe_sep import interfaces  # noqa: E402
+from roe_sep.bag import info  # noqa: E402
+from roe_sep.jsonutil import loads_strict  # noqa: E402
+from roe_sep.nodes.convert import maneuver_msg, sec_to_time  # noqa: E402
+from roe_sep.run import NODES, run  # noqa: E402
+
+pytestmark = pytest.mark.fault
+COUNTS = {"killed": 0, "reason_named": 0, "reports_strict": 0, "bags_readable": 0, "tracebacks": 0}
+
+
+def start_run(out, *args):
+    cmd = [sys.executable, "-m", "roe_sep.cli", "run", "--out", str(out), "--json", *args]
+    return subprocess.Popen(cmd, env=ros_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT)
+
+
+def wait_for_text(path, text, timeout):
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        if path.exists() and text in path.read_text(errors="replace"):
+            return True
+        time.sleep(0.2)
+    return False
+
+
+def node_pid(node, out):
+    params = str(out / "params.yaml")
+    found = subprocess.run(["pgrep", "-f", f"roe_sep.nodes.{node} --ros-args --params-file {params}"],
+                           capture_output=True, text=True).stdout.split()
+    return int(found[0]) if found else None
+
+
+@pytest.mark.parametrize("node", NODES)
+def test_killing_a_node_mid_run(tmp_path, node):
+    out = tmp_path / "run"
+    proc = start_run(out, "--duration", "40000", "--real-time-factor", "4000")  # 10 s of stepping
+    try:
+        assert wait_for_text(out / "logs" / "sim.log", "executed ejection", 120), "the run did not start"
+        pid = node_pid(node, out)
+        assert pid is not None, node
+        os.kill(pid, signal.SIGKILL)
+        COUNTS["killed"] += 1
+        stdout, stderr = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode not in (0, None), (proc.returncode, stderr)
+    COUNTS["tracebacks"] += "Traceback" in stderr
+    assert "Traceback" not in stderr, stderr
+    rep = loads_strict((out / "report.json").read_text())  # written, and strict JSON
+    COUNTS["reports_strict"] += 1
+    assert json.loads(stdout) == rep
+    assert rep["safe"] in (None, False) and rep["run"]["completed"] is False
+    reason = rep["run"]["reason"]
+    assert node in reason and "last log line" in reason and "signal 9" in reason, reason
+    COUNTS["reason_named"] += 1
+    bag = out / ("bag_recovered" if node == "recorder" else "bag")
+    if node == "recorder":
+        recovered = rep["run"]["bag_recovered"]
+        assert recovered["messages"] > 0 and recovered["seconds_lost"] is not None
+    assert info(bag)["message_count"] > 0
+    COUNTS["bags_readable"] += 1
+    print(f"\n[faults] kill {node}: {reason[:160]}")
+    print(f"[faults] {COUNTS}")
+
+
+def bad_messages():
+    """One invalid message of each type a node reads (NaN, inf, impossible orbit, unknown spacecraft, bad size)."""
+    truth = RelativeOrbitalElements(a_da=math.nan)
+    truth.chief.semi_major_axis = 7.0e6
+    truth.header.stamp = sec_to_time(100.0)
+    event = EjectionEvent()
+    event.header.stamp = sec_to_time(300.0)
+    event.ejection = maneuver_msg(300.0, 0.0, [math.inf, 0.0, 0.0], "picosatellite", "ejection")
+    plan = ManeuverPlan(strategy="double_impulse")
+    plan.header.stamp = sec_to_time(5.0)
+    plan.maneuvers = [maneuver_msg(9000.0, 0.0, [0.1, 0.0, 0.0], "the moon", "drift_stop")]
+    od = OrbitDetermination()
+    od.header.stamp = sec_to_time(50.0)
+    od.estimate.chief.semi_major_axis = 1.0  # inside the Earth
+    executed = maneuver_msg(10.0, 0.0, [1e6, 0.0, 0.0], "carrier", "drift_stop")
+    check = SafetyStatus(source="")
+    return {
+        interfaces.TRUTH_ROE_TOPIC: (RelativeOrbitalElements, interfaces.STREAM, truth),
+        interfaces.EJECTION_TOPIC: (EjectionEvent, interfaces.LATCHED, event),
+        interfaces.DRIFT_STOP_PLAN_TOPIC: (ManeuverPlan, interfaces.LATCHED, plan),
+        interfaces.ACQUISITION_PLAN_TOPIC: (ManeuverPlan, interfaces.LATCHED, plan),
+        interfaces.OD_TOPIC: (OrbitDetermination, interfaces.LATCHED, od),
+        interfaces.EXECUTED_TOPIC: (ImpulsiveManeuver, interfaces.EXECUTED, executed),
+        interfaces.PLAN_CHECK_TOPIC: (SafetyStatus, interfaces.EXECUTED, check),
+    }
+
+
+def fuzz_main(seconds):
+    """The fuzzer process: every bad message on every topic, 20 times a second, for ``seconds``; prints the count."""
+    rclpy.init()
+    node = rclpy.create_node("fuzzer")
+    pubs = [(node.create_publisher(cls, topic, qos), msg) for topic, (cls, qos, msg) in bad_messages().items()]
+    sent, end = 0, time.monotonic() + seconds
+    while time.monotonic() < end:
+        for pub, msg in pubs:
+            pub.publish(msg)
+            sent += 1
+        time.sleep(0.05)
+    node.destroy_node()
+    rclpy.try_shutdown()
+    print(sent)
+
+
+def test_fuzzing_every_subscribed_topic(tmp_path):
+    """A fuzzer publishes invalid messages on every topic a node reads while the run starts and steps; then it
+    stops and leaves the graph, and the closed loop completes safe."""
+    fuzzer = subprocess.Popen([sys.executable, "-c", "import test_faults; test_faults.fuzz_main(25.0)"],
+                              env={**ros_env(), "PYTHONPATH": str(ROOT / "test") + os.pathsep +
+                                   os.environ.get("PYTHONPATH", "")},
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT / "test")
+    try:
+        result = run(out=tmp_path / "fuzzed", duration=100000.0, timeout=600, real_time_factor=100000.0 / 30.0)
+    finally:
+        out, err = fuzzer.communicate(timeout=60)
+    sent = int(out.strip().splitlines()[-1]) if out.strip() else 0
+    assert sent > 100, err
+    codes = result["run"]["exit_codes"]
+    assert result["run"]["completed"], result["run"]
+    assert all(code == 0 for code in codes.values()), codes  # no node died
+    assert result["safe"], result["criteria"]
+    logs = {n: (tmp_path / "fuzzed" / "logs" / f"{n}.log").read_text() for n in NODES}
+    rejected = {n: log.count("rejected [") for n, log in logs.items()}
+    assert all(rejected[n] > 0 for n in ("sim", "safety_monitor", "radar_od", "ic_planner", "planner")), rejected
+    print(f"\n[faults] fuzz: {sent} bad messages sent, rejections logged per node {rejected}, run safe")
