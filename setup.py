@@ -40,6 +40,7 @@ setup(
         'skyfield-data',
         'sgp4',
         'heyoka',
+        'ccsds-ndm',
     ],
     extras_require={
         'plots': ['matplotlib'],
