@@ -62,6 +62,7 @@ setup(
             'ejector = roe_sep.nodes.ejector:main',
             'safety_monitor = roe_sep.nodes.safety_monitor:main',
             'radar_od = roe_sep.nodes.radar_od:main',
+            'ground_bridge = roe_sep.nodes.ground_bridge:main',
             'ic_planner = roe_sep.nodes.ic_planner:main',
             'recorder = roe_sep.nodes.recorder:main',
             'analysis_server = roe_sep.nodes.analysis_server:main',

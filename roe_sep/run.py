@@ -15,7 +15,7 @@ from pathlib import Path
 
 import yaml
 
-NODES = ("recorder", "safety_monitor", "planner", "radar_od", "ic_planner", "ejector", "sim")
+NODES = ("recorder", "safety_monitor", "planner", "radar_od", "ic_planner", "ejector", "ground_bridge", "sim")
 
 
 def ros_environment(domain_id=None):
@@ -42,6 +42,7 @@ def parameters(config, bag_dir, overrides):
         "sim": {"use_sim_time": False,
                 "wait_for": ["/sim/truth/roe=4", "/separation/ejection=4", "/od/estimate=2"]},
         "recorder": {"output": str(bag_dir)},
+        "ground_bridge": {"output_dir": str(Path(bag_dir).parent / "ccsds")},  # CCSDS files of the run (issue 18)
     }
     for node, values in (overrides or {}).items():
         if node not in NODES and node != "/**":

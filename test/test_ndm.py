@@ -324,6 +324,7 @@ def test_tdm_fed_back_gives_the_runs_od_solution(exported, run):
 @pytest.mark.parametrize("text, match", [
     ("this is not a message", "not a readable CCSDS NDM"),
     ("CCSDS_OPM_VERS = 2.0\n", "not a readable|expected a TDM"),
+    ("CCSDS_TDM_VERS = 2.0\nthis is not a TDM\n", "no RANGE/ANGLE_1/ANGLE_2 measurement"),
 ])
 def test_malformed_input_is_a_clear_error(text, match):
     with pytest.raises(ndm.NdmError, match=match):

@@ -77,7 +77,7 @@ class Options:
     carrier_drag_area: float = 0.48
     carrier_drag_coeff: float = 2.3
     carrier_isp: float = 60.0
-    od_step: float = 60.0
+    od_step: float = 300.0
     departure_distance: float = 1000.0
     ca_step: float = 1.0
 
@@ -322,8 +322,9 @@ def conjunction_cdm(run: RunMessages, truth: Truth, opts: Options):
                      ["closest approach of the run after the departure (simulator truth)"])
 
 
-def messages_of(run: RunMessages, opts: Options = Options()):
-    """``{file stem: message}`` of the whole set (stems without the format suffix)."""
+def messages_of(run: RunMessages, opts: Options = Options(), ephemerides=True):
+    """``{file stem: message}`` of the set (stems without the format suffix); the OEM, TDM and CDM only with
+    ``ephemerides`` (the OPMs alone are cheap to rebuild at every plan and burn)."""
     truth = Truth(run[interfaces.TRUTH_ROE_TOPIC])
     out = {}
     if len(truth) == 0:
@@ -337,6 +338,8 @@ def messages_of(run: RunMessages, opts: Options = Options()):
     opm = executed_opm(run, truth, opts)
     if opm is not None:
         out["executed_carrier.opm"] = opm
+    if not ephemerides:
+        return out
     segs = truth_segments(run, truth, opts) + od_segments(run, truth, opts)
     if segs:
         out["ephemeris.oem"] = build_oem(opts.epoch_utc, segs, ["roe_sep run: truth and radar OD estimates"])

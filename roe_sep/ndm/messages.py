@@ -359,7 +359,8 @@ def read_tdm(source, epoch_utc, sigma_range=None, sigma_angle=None):
 
     Each segment: PARTICIPANT_1 is the station, the pass id is the number after ``_PASS_`` in TRACK_ID (else the
     segment's 1-based index). Sigmas from the ``SIGMA_RANGE_M``/``SIGMA_ANGLE_DEG`` metadata comments, else the
-    ``sigma_range`` [m] / ``sigma_angle`` [rad] given here. Raises NdmError naming what is wrong: not a TDM, a time
+    ``sigma_range`` [m] / ``sigma_angle`` [rad] given here. Raises NdmError naming what is wrong: not a TDM, no
+    measurement at all, a time
     system other than UTC, angles other than AZEL, range units other than km, an epoch without all three of range,
     azimuth and elevation, a non-finite or out-of-range value, or no sigma.
     """
@@ -402,5 +403,7 @@ def read_tdm(source, epoch_utc, sigma_range=None, sigma_angle=None):
                 raise NdmError(f"{where}: {exc}") from None
             out.append(Measurement(t, md.participant_1, pass_id, (rng * 1000.0, math.radians(az) % (2 * math.pi),
                                                                   math.radians(el)), float(sr), float(sa)))
+    if not out:
+        raise NdmError("the TDM holds no RANGE/ANGLE_1/ANGLE_2 measurement")
     out.sort(key=lambda m: (m.t, m.station))
     return out
