@@ -37,10 +37,10 @@ def parameters(config, bag_dir, overrides):
     shared = {"use_sim_time": True, "scenario_file": str(Path(config).resolve()) if config else ""}
     per_node = {
         # start the clock once every node is up: the truth stream's subscribers (ejector, safety_monitor,
-        # radar_od, recorder), the ejection's (planner after its start-up Monte Carlo, sim, safety_monitor, ejector)
-        # and the OD's (ic_planner, safety_monitor)
+        # radar_od, recorder, ground_bridge), the ejection's (planner after its start-up Monte Carlo, sim,
+        # safety_monitor, ejector) and the OD's (ic_planner, safety_monitor)
         "sim": {"use_sim_time": False,
-                "wait_for": ["/sim/truth/roe=4", "/separation/ejection=4", "/od/estimate=2"]},
+                "wait_for": ["/sim/truth/roe=5", "/separation/ejection=4", "/od/estimate=2"]},
         "recorder": {"output": str(bag_dir)},
         "ground_bridge": {"output_dir": str(Path(bag_dir).parent / "ccsds")},  # CCSDS files of the run (issue 18)
     }

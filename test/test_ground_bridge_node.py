@@ -121,6 +121,9 @@ def test_ground_bridge_writes_opms_and_feeds_tdm_files_to_radar_od(tmp_path, bag
     assert code_b == 0, log_b
     assert code_r == 0, log_r
     assert (out / "plan01_double_impulse.opm.xml").is_file()
+    # the final set at shutdown: the carrier's ephemeris over the two truth samples it got
+    segs = ndm.read_message(out / "ephemeris.oem.xml").body.segment
+    assert segs[0].metadata.object_id == "CARRIER" and len(segs[0].data.state_vector) == 2
 
 
 def test_bad_parameters_exit_2(tmp_path):

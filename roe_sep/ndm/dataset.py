@@ -67,7 +67,10 @@ class Options:
     (the scenario's ``monte_carlo.carrier``) and the specific impulse [s] of its thrusters (OPM MAN_DELTA_MASS by
     the rocket equation; the seeds give none: 60 s, a cold-gas value, is an assumption; the mass change scales
     about as 1/Isp: 0.32 kg for the 1.36 m/s drift-stop at 140 kg); the OEM step of the OD estimate's ephemeris
-    [s]; the closest-approach search (departure distance [m], sampling step [s]).
+    [s] and the smallest spacing of the truth states in the OEM [s] (the simulator's 60 s truth thinned: 8-point
+    Lagrange interpolation over 300 s steps is good to centimeters on a 95-min orbit, and the XML OEM of a whole
+    run is 5x smaller and faster to write); the closest-approach search (departure distance [m], sampling step
+    [s]).
     """
 
     epoch_utc: str = DEFAULT_EPOCH_UTC
@@ -78,6 +81,7 @@ class Options:
     carrier_drag_coeff: float = 2.3
     carrier_isp: float = 60.0
     od_step: float = 300.0
+    oem_step: float = 300.0
     departure_distance: float = 1000.0
     ca_step: float = 1.0
 
@@ -190,12 +194,24 @@ def _ejection_epoch(run: RunMessages, truth: Truth):
     return float(truth.t[sep[0]]) if sep.size else None
 
 
+def thin(t, step):
+    """Indices of ``t`` (increasing) keeping the first, the last, and each sample at least ``step`` after the
+    previous kept one."""
+    keep, last = [], -math.inf
+    for k, tk in enumerate(t):
+        if tk - last >= step - 1e-9 or k == len(t) - 1:
+            keep.append(k)
+            last = tk
+    return np.array(keep, dtype=int)
+
+
 def truth_segments(run: RunMessages, truth: Truth, opts: Options):
     """OEM segments of the truth: the carrier over the whole run, the picosatellite from the ejection, a new
     segment at every burn (the simulator publishes a truth sample right at each burn: same epoch, new state)."""
     if len(truth) < 2:
         return []
-    keep = np.concatenate([[True], np.diff(truth.t) > 0.0])
+    keep = np.nonzero(np.concatenate([[True], np.diff(truth.t) > 0.0]))[0]
+    keep = keep[thin(truth.t[keep], opts.oem_step)]
     r, v = frames.chief_state(truth.chief[keep], opts.epoch_utc, truth.t[keep])
     segs = [EphemerisSegment(opts.carrier_name, opts.carrier_name, truth.t[keep], r, v,
                              comments=["truth: the simulator's carrier (chief) orbit"])]
@@ -209,6 +225,7 @@ def truth_segments(run: RunMessages, truth: Truth, opts: Options):
         idx = np.nonzero((truth.t >= lo) & (truth.t < hi))[0]
         if idx.size and np.sum(truth.t[idx] == lo) > 1:
             idx = idx[np.sum(truth.t[idx] == lo) - 1:]
+        idx = idx[thin(truth.t[idx], opts.oem_step)] if idx.size else idx
         if idx.size < 2:
             continue
         rd, vd = frames.deputy_state(truth.roe[idx], truth.chief[idx], opts.epoch_utc, truth.t[idx])

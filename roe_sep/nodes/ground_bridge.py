@@ -15,10 +15,13 @@ alongside its own); the file then moves to ``input_dir/processed/``. A file that
 """
 
 import math
+import queue
 import shutil
+import threading
 import time
 from pathlib import Path
 
+import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.clock import Clock as RclpyClock
 from rclpy.clock import ClockType
@@ -81,6 +84,10 @@ class GroundBridgeNode(Node):
         self.out.mkdir(parents=True, exist_ok=True)
         self.sigma = (float(sigma_range), math.radians(sigma_angle))
         self.run = RunMessages()
+        self.lock = threading.Lock()
+        self.requests = queue.Queue()
+        self.writer = threading.Thread(target=self._writer, name="ccsds_writer", daemon=True)
+        self.writer.start()
         self.written = {}  # file stem -> sim time of the last write
         self.dirty = False  # something the periodic files depend on arrived
         self.t = 0.0
@@ -119,35 +126,59 @@ class GroundBridgeNode(Node):
 
     # --- out ------------------------------------------------------------------------------------------------------
     def on_message(self, topic, msg, urgent):
-        self.run.add(topic, msg)
+        with self.lock:
+            self.run.add(topic, msg)
         self.dirty = True
         if urgent:  # plan approved or burn executed: the OPMs change now
-            self.write(periodic=False)
+            self.request(periodic=False)
 
     def on_clock(self, msg: Clock):
         self.t = time_to_sec(msg.clock)
         if self.dirty and self.t - self.last_periodic >= self.write_period:
-            self.write(periodic=True)
-
-    def write(self, periodic):
-        """Write the OPMs (always: small) and, if ``periodic``, the OEM, TDM and CDM."""
-        try:
-            msgs = messages_of(self.run, self.opts, periodic)
-        except (ValueError, ArithmeticError) as exc:
-            self.get_logger().error(f"CCSDS set not written: {exc}")
-            self._status(ERROR, f"CCSDS set not written: {exc}")
-            return
-        for stem, message in msgs.items():
-            write_message(self.out / f"{stem}.{self.fmt}", message, self.fmt)
-            self.written[stem] = self.t
-        if periodic:
             self.last_periodic = self.t
             self.dirty = False
+            self.request(periodic=True)
+
+    def request(self, periodic):
+        """Queue a write for the writer thread: serializing the OEM of a whole run takes seconds, during which the
+        executor must keep taking messages (a 100-deep truth stream at 4000x real time would overflow)."""
+        self.requests.put(periodic)
+
+    def _writer(self):
+        while True:
+            batch = [self.requests.get()]
+            while not self.requests.empty():  # coalesce what queued up meanwhile
+                batch.append(self.requests.get())
+            if None in batch:  # shutdown: the final, complete set
+                self.write(True)
+                return
+            self.write(any(batch))
+
+    def write(self, periodic):
+        """Write the OPMs (always: small) and, if ``periodic``, the OEM, TDM and CDM, from a snapshot of the
+        messages received so far."""
+        with self.lock:
+            snapshot = RunMessages({t: list(ms) for t, ms in self.run.by_topic.items()})
+        try:
+            msgs = messages_of(snapshot, self.opts, periodic)
+            for stem, message in msgs.items():
+                write_message(self.out / f"{stem}.{self.fmt}", message, self.fmt)
+                self.written[stem] = self.t
+        except (ValueError, ArithmeticError, OSError) as exc:
+            self.get_logger().error(f"CCSDS set not written: {exc}")
+            if rclpy.ok():
+                self._status(ERROR, f"CCSDS set not written: {exc}")
 
     def destroy_node(self):
+        """The final, complete set: the writer thread finishes its queue, then writes everything once more."""
+        self.requests.put(None)
+        self.writer.join()
         if self.run[interfaces.TRUTH_ROE_TOPIC]:
-            self.write(periodic=True)
-            self.get_logger().info(f"final CCSDS set: {len(self.written)} files in {self.out}")
+            text = f"final CCSDS set: {len(self.written)} files in {self.out}"
+            if rclpy.ok():
+                self.get_logger().info(text)
+            else:  # after SIGINT the context is gone and /rosout with it
+                print(f"[INFO] [ground_bridge]: {text}", flush=True)
         super().destroy_node()
 
     # --- in -------------------------------------------------------------------------------------------------------
