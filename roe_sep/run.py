@@ -16,6 +16,7 @@ from pathlib import Path
 import yaml
 
 NODES = ("recorder", "safety_monitor", "planner", "radar_od", "ic_planner", "ejector", "ground_bridge", "sim")
+OPTIONAL_NODES = ("foxglove_view",)  # started on request: roe-sep run --foxglove [PORT]
 
 
 def ros_environment(domain_id=None):
@@ -45,7 +46,7 @@ def parameters(config, bag_dir, overrides):
         "ground_bridge": {"output_dir": str(Path(bag_dir).parent / "ccsds")},  # CCSDS files of the run (issue 18)
     }
     for node, values in (overrides or {}).items():
-        if node not in NODES and node != "/**":
+        if node not in NODES + OPTIONAL_NODES and node != "/**":
             raise ValueError(f"--params: unknown node {node!r}; nodes: {list(NODES)}")
         target = shared if node == "/**" else per_node.setdefault(node, {})
         target.update(values)
@@ -138,8 +139,9 @@ def wait_for_completion(duration, deployment, timeout, progress):
 
 
 def run(config=None, out="out/run", params=None, duration=None, seed=None, timeout=1800.0, domain_id=None,
-        progress=False):
-    """Run the scenario; returns the report dict (``report['safe']``) and writes it to ``out/report.json``."""
+        progress=False, foxglove=None):
+    """Run the scenario; returns the report dict (``report['safe']``) and writes it to ``out/report.json``.
+    ``foxglove``: a port on 127.0.0.1 for the live Foxglove view (the ``foxglove_view`` node), None = none."""
     from .nodes.sim import DEFAULT_DURATION
     from .report import build_report
 
@@ -154,20 +156,24 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
         sim["duration"] = float(duration)
     if seed is not None:
         sim["seed"] = int(seed)
+    nodes = NODES
+    if foxglove is not None:
+        overrides.setdefault("foxglove_view", {})["port"] = int(foxglove)
+        nodes = NODES[:-1] + OPTIONAL_NODES + NODES[-1:]  # before the sim: the clock starts with the view up
     params_file = out / "params.yaml"
     params_file.write_text(yaml.safe_dump(parameters(config, bag_dir.resolve(), overrides), sort_keys=False))
     sim_duration = float(sim.setdefault("duration", DEFAULT_DURATION))
 
     deployment = Deployment(out, params_file, ros_environment(domain_id))
     try:
-        for node in NODES:
+        for node in nodes:
             deployment.start(node)
             if node == "recorder":
                 time.sleep(1.0)  # let the recorder discover the graph before the clock starts
         reached, reason = wait_for_completion(sim_duration, deployment, timeout, progress)
         time.sleep(1.0)  # last messages reach the recorder
     finally:
-        codes = deployment.stop([n for n in NODES if n != "recorder"])
+        codes = deployment.stop([n for n in nodes if n != "recorder"])
         codes.update(deployment.stop(["recorder"]))
     report = build_report(bag_dir, sim_duration)
     report["run"] = {"completed": reached, "reason": reason, "exit_codes": codes, "params_file": str(params_file)}

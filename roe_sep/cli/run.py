@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 from .common import emit, vec
+from .foxglove import DEFAULT_PORT, port_number
 
 
 def print_run(rep: dict, out=None):
@@ -37,7 +38,7 @@ def cmd_run(args):
     from ..run import run
 
     rep = run(config=args.config, out=args.out, params=args.params, duration=args.duration, seed=args.seed,
-              timeout=args.timeout, progress=not args.json and sys.stderr.isatty())
+              timeout=args.timeout, progress=not args.json and sys.stderr.isatty(), foxglove=args.foxglove)
 
     def human(r):
         print_run(r)
@@ -50,8 +51,12 @@ def delegated(argv):
     """``replay`` and ``bag recover`` own their argument parsing (and ``--help``): hand them the rest."""
     if argv[:1] == ["replay"]:
         from ..bag import replay
+        from .foxglove import split_foxglove, with_foxglove
 
-        return replay.main(argv[1:])
+        rest, port = split_foxglove(argv[1:])
+        if port is None:
+            return replay.main(rest)
+        return with_foxglove(port, lambda: replay.main(rest), sim_time="--clock" in rest)
     if argv[:2] == ["bag", "recover"]:
         from ..bag import recover
 
@@ -80,6 +85,8 @@ def register_run(subparsers):
     p.add_argument("--seed", type=int, help="seed of the simulated dispersions (default 0)")
     p.add_argument("--timeout", type=float, default=1800.0, help="wall-time limit [s] (default 1800)")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
+    p.add_argument("--foxglove", type=port_number, nargs="?", const=DEFAULT_PORT, metavar="PORT",
+                   help=f"serve a live Foxglove view on ws://127.0.0.1:PORT (default {DEFAULT_PORT})")
     p.set_defaults(func=cmd_run)
 
     subparsers.add_parser("replay", add_help=False, help="play a bag back onto its topics (roe-sep replay --help)")
