@@ -15,7 +15,7 @@ from pathlib import Path
 
 import yaml
 
-NODES = ("recorder", "safety_monitor", "planner", "radar_od", "ic_planner", "ejector", "ground_bridge", "sim")
+NODES = ("recorder", "ground_bridge", "safety_monitor", "planner", "radar_od", "ic_planner", "ejector", "sim")
 OPTIONAL_NODES = ("foxglove_view",)  # started on request: roe-sep run --foxglove [PORT]
 
 

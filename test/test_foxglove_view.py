@@ -76,12 +76,11 @@ def test_websocket_client_receives_clock_plan_and_scene():
                 if msg.get("op") == "advertise":
                     for ch in msg["channels"]:
                         channels[ch["id"]] = ch
-                        if ch["topic"] in wanted and ch["id"] not in subscribed.values():
-                            sid = len(subscribed) + 1
-                            subscribed[ch["topic"]] = ch["id"]
+                        if ch["topic"] in wanted and ch["topic"] not in subscribed.values():
+                            sid = len(subscribed) + 1  # subscription id -> topic
+                            subscribed[sid] = ch["topic"]
                             ws.send(json.dumps({"op": "subscribe",
                                                 "subscriptions": [{"id": sid, "channelId": ch["id"]}]}))
-                            subscribed[sid] = ch["topic"]
                 continue
             assert frame[0] == 0x01  # messageData: opcode, subscription id, log time, payload
             sid, log_time = struct.unpack_from("<IQ", frame, 1)

@@ -23,9 +23,9 @@ from ccsds_ndm.models import ndmxml2 as nd
 from ccsds_ndm.ndm_io import NdmIo
 
 from . import frames
+from .options import FORMATS
 
 ORIGINATOR = "ROE_SEP"
-FORMATS = ("xml", "kvn")
 G0 = 9.80665
 """Standard gravity [m/s^2] of the rocket equation (Isp in seconds)."""
 

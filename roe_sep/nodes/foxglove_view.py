@@ -6,12 +6,14 @@ serialized CDR bytes on a channel of the same name with the ``ros2msg`` schema o
 the carrier's RTN frame (``carrier_rtn``, x = R, y = T, z = N, meters) from ``/sim/truth/roe``: the relative
 trajectory so far, the keep-out sphere and the e/i ellipse (the closed relative orbit of the current ROE over one
 revolution without the along-track drift, seed 002 Eq. 2's linear map). Log times are the node clock (sim time
-with ``use_sim_time``). The server listens on 127.0.0.1 only (``port``, 0 = any free port; the port taken is
+with ``use_sim_time``). The last message of each latched topic (plans, the ejection) is sent again to a client
+that subscribes later. The server listens on 127.0.0.1 only (``port``, 0 = any free port; the port taken is
 logged and reported on ``/diagnostics``). The layout ``config/foxglove_layout.json`` shows ROE over time,
 distance, safety state and the plan timeline.
 """
 
 import math
+import threading
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
@@ -53,8 +55,16 @@ class FoxgloveViewNode(Node):
         require("port", isinstance(port, int) and 0 <= port < 65536, port, "a TCP port number in [0, 65535]")
         require("keep_out_radius", self.keep_out > 0, self.keep_out, "a positive radius [m]")
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
+        self.latched, self.resend, self.lock = {}, set(), threading.Lock()
+        view = self
+
+        class Listener(foxglove.ServerListener):
+            def on_subscribe(self, client, channel):  # server thread: the node's timer sends
+                with view.lock:
+                    view.resend.add(channel.topic)
+
         try:
-            self.server = foxglove.start_server(name="roe_sep", host=HOST, port=port)
+            self.server = foxglove.start_server(name="roe_sep", host=HOST, port=port, server_listener=Listener())
         except Exception as exc:  # noqa: BLE001  (port in use, ...)
             from .params import ParameterError
 
@@ -68,6 +78,7 @@ class FoxgloveViewNode(Node):
         self.create_subscription(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, self.on_truth,
                                  interfaces.STREAM)
         self.create_timer(0.5, self.discover)
+        self.create_timer(0.2, self.resend_latched)
         self.get_logger().info(f"Foxglove WebSocket server on ws://{HOST}:{self.port}")
         publish_status(self, self.diag_pub, OK, f"Foxglove WebSocket server on ws://{HOST}:{self.port}",
                        {"port": self.port})
@@ -100,11 +111,23 @@ class FoxgloveViewNode(Node):
         schema = self.fg.Schema(name=definitions.canonical_type(type_name), encoding="ros2msg",
                                 data=text.encode("utf-8"))
         self.channels[name] = self.fg.Channel(name, schema=schema, message_encoding="cdr")
-        self.subs[name] = self.create_subscription(cls, name, lambda data, t=name: self.on_raw(t, data), profile,
-                                                   raw=True)
+        self.subs[name] = self.create_subscription(
+            cls, name, lambda data, t=name, keep=transient: self.on_raw(t, data, keep), profile, raw=True)
 
-    def on_raw(self, topic, data):
-        self.channels[topic].log(bytes(data), log_time=self._now())
+    def on_raw(self, topic, data, latched=False):
+        data = bytes(data)
+        if latched:  # plans, events: a client that subscribes later gets the last one too
+            self.latched[topic] = data
+        self.channels[topic].log(data, log_time=self._now())
+
+    def resend_latched(self):
+        """The last message of each latched topic again, for the clients that just subscribed to it (the others
+        see it twice, as a re-published latched message)."""
+        with self.lock:
+            topics, self.resend = self.resend, set()
+        for topic in topics:
+            if topic in self.latched:
+                self.channels[topic].log(self.latched[topic], log_time=self._now())
 
     def _now(self):
         return self.get_clock().now().nanoseconds

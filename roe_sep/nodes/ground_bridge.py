@@ -41,8 +41,7 @@ from .. import interfaces
 from ..core.config import ConfigError, load_scenario
 from ..core.od.radar import DEFAULT_EPOCH_UTC
 from ..ndm import frames
-from ..ndm.dataset import Options, RunMessages, messages_of
-from ..ndm.messages import FORMATS, NdmError, read_tdm, write_message
+from ..ndm.options import FORMATS, Options, RunMessages
 from .convert import sec_to_time, time_to_sec
 from .diagnostics import ERROR, OK, publish_status
 from .params import ParameterError, declare, finite, require
@@ -145,6 +144,8 @@ class GroundBridgeNode(Node):
         self.requests.put(periodic)
 
     def _writer(self):
+        from ..ndm import dataset  # noqa: F401  (load the NDM library here, while the executor already spins)
+
         while True:
             batch = [self.requests.get()]
             while not self.requests.empty():  # coalesce what queued up meanwhile
@@ -160,6 +161,9 @@ class GroundBridgeNode(Node):
         with self.lock:
             snapshot = RunMessages({t: list(ms) for t, ms in self.run.by_topic.items()})
         try:
+            from ..ndm.dataset import messages_of  # the NDM library loads in this thread, not at start-up
+            from ..ndm.messages import write_message
+
             msgs = messages_of(snapshot, self.opts, periodic)
             for stem, message in msgs.items():
                 write_message(self.out / f"{stem}.{self.fmt}", message, self.fmt)
@@ -186,6 +190,8 @@ class GroundBridgeNode(Node):
         for path in sorted(self.input.iterdir()):
             if not path.is_file() or path.name.startswith(".") or path.suffix.lower() not in INPUT_SUFFIXES:
                 continue
+            from ..ndm.messages import NdmError, read_tdm
+
             try:
                 meas = read_tdm(path, self.opts.epoch_utc, *self.sigma)
             except (NdmError, OSError, UnicodeDecodeError) as exc:
