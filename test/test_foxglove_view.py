@@ -74,6 +74,9 @@ def test_websocket_client_receives_clock_plan_and_scene():
             if isinstance(frame, str):
                 msg = json.loads(frame)
                 if msg.get("op") == "advertise":
+                    # foxglove-sdk 0.30.3 drops a subscription that arrives within milliseconds of the channel's
+                    # advertisement ("unknown channel"); a client a few hundred ms later is served
+                    time.sleep(0.2)
                     for ch in msg["channels"]:
                         channels[ch["id"]] = ch
                         if ch["topic"] in wanted and ch["topic"] not in subscribed.values():
@@ -147,3 +150,16 @@ def test_layout_refers_to_existing_topics_and_fields():
         if rest:
             assert _fields(definitions.message_class(types[topic]), rest.split(".")) is not None, path
     assert "/foxglove/scene" in panels["3D!rtn"]["topics"]
+
+
+def test_foxglove_option():
+    import argparse
+
+    from roe_sep.cli.foxglove import split_foxglove
+
+    assert split_foxglove(["bags/default_run", "--foxglove"]) == (["bags/default_run"], 8765)
+    assert split_foxglove(["b", "--foxglove", "9000", "--rate", "2"]) == (["b", "--rate", "2"], 9000)
+    assert split_foxglove(["b", "--foxglove=9001", "--clock"]) == (["b", "--clock"], 9001)
+    assert split_foxglove(["b", "--rate", "2"]) == (["b", "--rate", "2"], None)
+    with pytest.raises(argparse.ArgumentTypeError, match="port in"):
+        split_foxglove(["b", "--foxglove=70000"])

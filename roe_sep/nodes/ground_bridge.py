@@ -168,8 +168,8 @@ class GroundBridgeNode(Node):
             for stem, message in msgs.items():
                 write_message(self.out / f"{stem}.{self.fmt}", message, self.fmt)
                 self.written[stem] = self.t
-        except (ValueError, ArithmeticError, OSError) as exc:
-            self.get_logger().error(f"CCSDS set not written: {exc}")
+        except Exception as exc:  # noqa: BLE001  (the writer thread must survive any bad input)
+            self.get_logger().error(f"CCSDS set not written: {exc.__class__.__name__}: {exc}")
             if rclpy.ok():
                 self._status(ERROR, f"CCSDS set not written: {exc}")
 
