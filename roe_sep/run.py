@@ -1,6 +1,7 @@
 """``roe-sep run``: the default scenario end to end, every node its own process, as a deployment runs them.
 
-Starts the recorder, safety_monitor, planner, radar_od, ic_planner, ejector and sim (last: it owns ``/clock``) with
+Starts the recorder, ground_bridge (CCSDS files in OUT/ccsds), safety_monitor, planner, radar_od, ic_planner,
+ejector (and foxglove_view with ``--foxglove``) and sim (last: it owns ``/clock``) with
 one generated parameter file, waits until the simulator reports the scenario complete, stops every node with
 SIGINT (the recorder last, so the bag closes cleanly) and writes ``report.json`` from the recorded bag.
 """
