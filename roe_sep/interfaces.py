@@ -27,6 +27,10 @@ STREAM = QoSProfile(
 )
 """Periodic streams (truth, measurements, safety status): reliable, deep enough for a fast sim clock."""
 
+BULK = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE,
+                  durability=DurabilityPolicy.VOLATILE)
+"""Bursts that must all arrive (a TDM file's measurements, published at once): reliable, every sample kept."""
+
 EXECUTED = QoSProfile(
     history=HistoryPolicy.KEEP_LAST, depth=50, reliability=ReliabilityPolicy.RELIABLE,
     durability=DurabilityPolicy.TRANSIENT_LOCAL,
@@ -47,6 +51,7 @@ TRUTH_ROE_TOPIC = "/sim/truth/roe"  # RelativeOrbitalElements, STREAM, sim
 TRUTH_RTN_TOPIC = "/sim/truth/rtn"  # RelativeState, STREAM, sim
 EXECUTED_TOPIC = "/sim/executed_maneuvers"  # ImpulsiveManeuver, EXECUTED, sim (as executed, with errors)
 RADAR_TOPIC = "/radar/measurements"  # RadarMeasurement, STREAM, radar_od
+EXTERNAL_RADAR_TOPIC = "/ground/radar_measurements"  # RadarMeasurement, BULK, ground_bridge (TDM in) -> radar_od
 OD_TOPIC = "/od/estimate"  # OrbitDetermination, LATCHED, radar_od
 ACQUISITION_PLAN_TOPIC = "/acquisition/plan"  # ManeuverPlan, LATCHED, ic_planner
 SAFETY_TOPIC = "/safety/status"  # SafetyStatus, STREAM, safety_monitor (truth and estimate)

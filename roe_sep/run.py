@@ -1,6 +1,7 @@
 """``roe-sep run``: the default scenario end to end, every node its own process, as a deployment runs them.
 
-Starts the recorder, safety_monitor, planner, radar_od, ic_planner, ejector and sim (last: it owns ``/clock``) with
+Starts the recorder, ground_bridge (CCSDS files in OUT/ccsds), safety_monitor, planner, radar_od, ic_planner,
+ejector (and foxglove_view with ``--foxglove``) and sim (last: it owns ``/clock``) with
 one generated parameter file, waits until the simulator reports the scenario complete, stops every node with
 SIGINT (the recorder last, so the bag closes cleanly) and writes ``report.json`` from the recorded bag.
 """
@@ -14,21 +15,22 @@ from pathlib import Path
 
 import yaml
 
-NODES = ("recorder", "safety_monitor", "planner", "radar_od", "ic_planner", "ejector", "sim")
+NODES = ("recorder", "ground_bridge", "safety_monitor", "planner", "radar_od", "ic_planner", "ejector", "sim")
+OPTIONAL_NODES = ("foxglove_view",)  # started on request: roe-sep run --foxglove [PORT]
 PARTICIPANTS = ("ejector", "planner", "radar_od", "ic_planner", "safety_monitor")
-"""The lockstep participants: every node that reacts to the simulation (the recorder only listens)."""
+"""The lockstep participants: every node that reacts to the simulation (recorder and ground_bridge listen)."""
 # subscribers of each topic the simulator waits for before its clock starts (so that nobody misses a message)
 SUBSCRIBERS = {
-    "/sim/truth/roe": ("ejector", "radar_od", "safety_monitor", "recorder"),
+    "/sim/truth/roe": ("ejector", "radar_od", "safety_monitor", "recorder", "ground_bridge"),
     "/sim/truth/rtn": ("recorder",),
-    "/sim/executed_maneuvers": ("radar_od", "ic_planner", "safety_monitor", "recorder"),
-    "/separation/ejection": ("ejector", "planner", "safety_monitor", "sim", "recorder"),
-    "/separation/drift_stop_plan": ("ic_planner", "safety_monitor", "sim", "recorder"),
-    "/acquisition/plan": ("ic_planner", "safety_monitor", "sim", "recorder"),
-    "/od/estimate": ("ic_planner", "safety_monitor", "sim", "recorder"),
-    "/radar/measurements": ("recorder",),
+    "/sim/executed_maneuvers": ("radar_od", "ic_planner", "safety_monitor", "recorder", "ground_bridge"),
+    "/separation/ejection": ("ejector", "planner", "safety_monitor", "sim", "recorder", "ground_bridge"),
+    "/separation/drift_stop_plan": ("ic_planner", "safety_monitor", "sim", "recorder", "ground_bridge"),
+    "/acquisition/plan": ("ic_planner", "safety_monitor", "sim", "recorder", "ground_bridge"),
+    "/od/estimate": ("ic_planner", "safety_monitor", "sim", "recorder", "ground_bridge"),
+    "/radar/measurements": ("recorder", "ground_bridge"),
     "/safety/status": ("recorder",),
-    "/safety/plan_check": ("sim", "recorder"),
+    "/safety/plan_check": ("sim", "recorder", "ground_bridge"),
 }
 
 
@@ -56,9 +58,10 @@ def parameters(config, bag_dir, overrides):
                 "wait_for": [f"{topic}={len(nodes)}" for topic, nodes in SUBSCRIBERS.items()],
                 "lockstep_participants": list(PARTICIPANTS)},
         "recorder": {"output": str(bag_dir)},
+        "ground_bridge": {"output_dir": str(Path(bag_dir).parent / "ccsds")},  # CCSDS files of the run (issue 18)
     }
     for node, values in (overrides or {}).items():
-        if node not in NODES and node != "/**":
+        if node not in NODES + OPTIONAL_NODES and node != "/**":
             raise ValueError(f"--params: unknown node {node!r}; nodes: {list(NODES)}")
         target = shared if node == "/**" else per_node.setdefault(node, {})
         target.update(values)
@@ -181,8 +184,9 @@ def wait_for_completion(duration, deployment, timeout, progress):
 
 
 def run(config=None, out="out/run", params=None, duration=None, seed=None, timeout=1800.0, domain_id=None,
-        progress=False, real_time_factor=None):
-    """Run the scenario; returns the report dict (``report['safe']``) and writes it to ``out/report.json``."""
+        progress=False, real_time_factor=None, foxglove=None):
+    """Run the scenario; returns the report dict (``report['safe']``) and writes it to ``out/report.json``.
+    ``foxglove``: a port on 127.0.0.1 for the live Foxglove view (the ``foxglove_view`` node), None = none."""
     from .nodes.sim import DEFAULT_DURATION
 
     out = Path(out)
@@ -198,6 +202,10 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
         sim["seed"] = int(seed)
     if real_time_factor is not None:
         sim["real_time_factor"] = float(real_time_factor)
+    nodes = NODES
+    if foxglove is not None:
+        overrides.setdefault("foxglove_view", {})["port"] = int(foxglove)
+        nodes = NODES[:-1] + OPTIONAL_NODES + NODES[-1:]  # before the sim: the clock starts with the view up
     params_file = out / "params.yaml"
     params_file.write_text(yaml.safe_dump(parameters(config, bag_dir.resolve(), overrides), sort_keys=False))
     sim_duration = float(sim.setdefault("duration", DEFAULT_DURATION))
@@ -205,7 +213,7 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
     deployment = Deployment(out, params_file, ros_environment(domain_id))
     reached, reason = False, "not started"
     try:
-        for node in NODES:
+        for node in nodes:
             deployment.start(node)
             if node == "recorder":
                 time.sleep(1.0)  # let the recorder discover the graph before the clock starts
@@ -216,7 +224,7 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
     except Exception as exc:  # noqa: BLE001 -- the runner outlives what goes wrong and says what it was
         reached, reason = False, f"runner error: {type(exc).__name__}: {exc}"
     finally:
-        codes = deployment.stop([n for n in NODES if n != "recorder"])
+        codes = deployment.stop([n for n in nodes if n != "recorder"])
         codes.update(deployment.stop(["recorder"]))
     report = report_from_bag(bag_dir, out, sim_duration, codes.get("recorder"))
     report["run"].update({"completed": reached, "reason": reason, "exit_codes": codes,

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from .. import jsonutil
 from .common import emit, finite_float, seed, vec
+from .foxglove import DEFAULT_PORT, port_number
 
 DAY = 86400.0
 
@@ -84,7 +85,7 @@ def cmd_run(args):
 
     rep = run(config=args.config, out=args.out, params=args.params, duration=args.duration, seed=args.seed,
               timeout=args.timeout, progress=not args.json and sys.stderr.isatty(),
-              real_time_factor=args.real_time_factor)
+              real_time_factor=args.real_time_factor, foxglove=args.foxglove)
 
     def human(r):
         print_run(r)
@@ -97,8 +98,12 @@ def delegated(argv):
     """``replay`` and ``bag recover`` own their argument parsing (and ``--help``): hand them the rest."""
     if argv[:1] == ["replay"]:
         from ..bag import replay
+        from .foxglove import split_foxglove, with_foxglove
 
-        return replay.main(argv[1:])
+        rest, port = split_foxglove(argv[1:])
+        if port is None:
+            return replay.main(rest)
+        return with_foxglove(port, lambda: replay.main(rest), sim_time="--clock" in rest)
     if argv[:2] == ["bag", "recover"]:
         from ..bag import recover
 
@@ -137,6 +142,8 @@ def register_run(subparsers):
                    help="pace the lockstep clock at X sim seconds per wall second at most (default 0: as fast as "
                         "the machine allows; the results are the same either way)")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
+    p.add_argument("--foxglove", type=port_number, nargs="?", const=DEFAULT_PORT, metavar="PORT",
+                   help=f"serve a live Foxglove view on ws://127.0.0.1:PORT (default {DEFAULT_PORT})")
     p.set_defaults(func=cmd_run)
 
     subparsers.add_parser("replay", add_help=False, help="play a bag back onto its topics (roe-sep replay --help)")

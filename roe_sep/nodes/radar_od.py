@@ -16,6 +16,9 @@ determination needs several passes over about 12 h. This stub simulates those me
   ``/od/estimate`` (latched); it runs again after every further counted pass.
 * ``/sim/executed_maneuvers`` (latched history): measurements before the latest burn, and those simulated from a
   truth message older than the burn, are not used.
+* ``/ground/radar_measurements`` (RadarMeasurement, e.g. TDM files through ``ground_bridge``): external measurements
+  join the records as passes of their own (:meth:`RadarODNode.on_external`); one wall second after the last of a
+  batch the OD runs on all usable records.
 
 Parameters: see :class:`RadarODNode` and the README's parameter table.
 """
@@ -24,6 +27,8 @@ import math
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
+from rclpy.clock import Clock as RclpyClock
+from rclpy.clock import ClockType
 from rclpy.node import Node
 from roe_sep_msgs.msg import ImpulsiveManeuver, OrbitDetermination, RadarMeasurement, RelativeOrbitalElements
 from rosgraph_msgs.msg import Clock
@@ -137,6 +142,9 @@ class RadarODNode(Node):
         ls.subscribe(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, self.on_truth, interfaces.STREAM,
                      what="truth message")
         self.create_subscription(Clock, interfaces.CLOCK_TOPIC, self.on_clock, interfaces.CLOCK_SUB)
+        self.create_subscription(RadarMeasurement, interfaces.EXTERNAL_RADAR_TOPIC, self.on_external,
+                                 interfaces.BULK)
+        self.external_timer = None
         publish_status(self, self.diag_pub, OK, "waiting for truth", self._values())
 
     def _values(self):
@@ -255,6 +263,40 @@ class RadarODNode(Node):
         if count < self.min_pass:
             return
         publish_status(self, self.diag_pub, OK, f"{name} pass {pass_id}: {count} measurements", self._values())
+        self.estimate()
+
+    def on_external(self, msg: RadarMeasurement):
+        """A ground segment's measurement: a record of the external pass -(pass_id + 1) of its station (never an
+        open pass), the chief and sidereal angle from this node's truth and epoch as for its own; the OD runs one
+        wall second after the last one arrived. Rejected with an ERROR on /diagnostics: no truth yet, an unknown
+        station, non-finite values, or sigmas other than this node's (the batch weights every record alike)."""
+        t = time_to_sec(msg.header.stamp)
+        z = np.array([msg.range, msg.azimuth, msg.elevation], dtype=float)
+        names = [st.name for st in self.stations]
+        problem = ("no truth received yet" if self.truth is None else
+                   f"unknown station {msg.station!r} (stations: {names})" if msg.station not in names else
+                   "non-finite values" if not (np.all(np.isfinite(z)) and math.isfinite(t)) else
+                   f"sigmas {msg.sigma_range} m / {msg.sigma_angle} rad differ from this node's "
+                   f"{self.sigma[0]} m / {self.sigma[1]} rad"
+                   if not np.allclose([msg.sigma_range, msg.sigma_angle], self.sigma[:2], rtol=1e-9, atol=0.0)
+                   else None)
+        if problem:
+            self.get_logger().error(f"external measurement at t = {t:.1f} s rejected: {problem}")
+            publish_status(self, self.diag_pub, ERROR, f"external measurement rejected: {problem}", self._values())
+            return
+        t_tr, _, kep_tr = self.truth
+        chief = propagate_chief(kep_tr, np.array([t - t_tr]))[0]
+        theta = float(gmst(self.jd0 + t / SECONDS_PER_DAY))
+        self.records.append((t, names.index(msg.station), -int(msg.pass_id) - 1, z, chief, theta, t_tr))
+        if self.external_timer is not None:
+            self.external_timer.cancel()
+            self.destroy_timer(self.external_timer)
+        self.external_timer = self.create_timer(1.0, self._external_batch,
+                                                clock=RclpyClock(clock_type=ClockType.STEADY_TIME))
+
+    def _external_batch(self):
+        self.external_timer.cancel()
+        self.get_logger().info("external measurements received: orbit determination")
         self.estimate()
 
     # --- orbit determination -------------------------------------------------------------------------------

@@ -1,0 +1,409 @@
+"""CCSDS Navigation Data Messages built and read with the ``ccsds-ndm`` library (its xsdata models of the official
+NDM/XML 2.0.0 schemas): OPM 2.0 and OEM 2.0 (CCSDS 502.0-B-2), TDM 2.0 (503.0-B-2), CDM 1.0 (508.0-B-1).
+
+No CCSDS text is formatted here: the library writes XML and KVN from the model objects. Two of its habits are kept
+away from it, because other NDM readers (Orekit's among them) refuse the result: numpy scalars (it writes
+``NP.FLOAT64(...)`` into the XML) and :class:`datetime` epochs (written with a space instead of the 'T'). Every
+number goes in as a Python float (:func:`_f`) and every epoch as an ISO-8601 string (:func:`frames.utc_string`).
+
+Units are the standards' ones: km, km/s, km^2... in OPM/OEM and the CDM state vector, m^2... in the CDM covariance
+(RTN), deg and km in the TDM. Inputs here are SI (m, m/s, rad).
+"""
+
+import math
+import os
+import tempfile
+from dataclasses import dataclass, field
+from datetime import datetime, timezone
+from pathlib import Path
+
+import numpy as np
+from ccsds_ndm.mapping import NDMFileFormats
+from ccsds_ndm.models import ndmxml2 as nd
+from ccsds_ndm.ndm_io import NdmIo
+
+from . import frames
+from .options import FORMATS
+
+ORIGINATOR = "ROE_SEP"
+G0 = 9.80665
+"""Standard gravity [m/s^2] of the rocket equation (Isp in seconds)."""
+
+
+class NdmError(ValueError):
+    """A navigation data message that cannot be read or is not what roe_sep expects (the message says why)."""
+
+
+def _f(x) -> float:
+    """A plain, finite Python float (the library writes numpy scalars as ``NP.FLOAT64(...)``)."""
+    v = float(x)
+    if not math.isfinite(v):
+        raise ValueError(f"non-finite value {x!r} cannot go into a CCSDS message")
+    return v
+
+
+def creation_date() -> str:
+    """CREATION_DATE: now, UTC, ISO-8601 with 'T'."""
+    return datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%S.%f")
+
+
+def _km(x):
+    return nd.PositionType(value=_f(x) / 1000.0, units=nd.PositionUnits.KM)
+
+
+def _kms(x):
+    return nd.VelocityType(value=_f(x) / 1000.0, units=nd.VelocityUnits.KM_S)
+
+
+def _header(comments=()):
+    return nd.NdmHeader(comment=list(comments), creation_date=creation_date(), originator=ORIGINATOR)
+
+
+def delta_mass(dv, mass, isp):
+    """MAN_DELTA_MASS [kg] of an impulsive burn: -m (1 - exp(-|dv| / (Isp g0))) (Tsiolkovsky). OPM 2.0 XML
+    requires a strictly negative value, so a zero burn is refused."""
+    dm = -float(mass) * -math.expm1(-float(np.linalg.norm(dv)) / (float(isp) * G0))
+    if not dm < 0.0:
+        raise ValueError(f"burn of |dv| = {np.linalg.norm(dv)} m/s has no mass change (OPM requires < 0)")
+    return dm
+
+
+def _state_vector(cls, epoch, r, v, **extra):
+    return cls(epoch=epoch, x=_km(r[0]), y=_km(r[1]), z=_km(r[2]), x_dot=_kms(v[0]), y_dot=_kms(v[1]),
+               z_dot=_kms(v[2]), **extra)
+
+
+@dataclass
+class Burn:
+    """One impulsive maneuver: sim time [s], Delta-v [m/s] in ``frame`` (``RTN`` of the executing spacecraft or
+    ``EME2000``), mass change [kg] (< 0), comments."""
+
+    t: float
+    dv: np.ndarray
+    frame: str
+    delta_mass: float
+    comments: list = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class SpacecraftParameters:
+    """OPM spacecraft parameters (mandatory with maneuvers, 502.0-B-2 Sec. 3.2.4): mass [kg], drag area [m^2] and
+    coefficient; solar radiation pressure area [m^2] and coefficient (0: not modelled by roe_sep)."""
+
+    mass: float
+    drag_area: float
+    drag_coeff: float
+    solar_rad_area: float = 0.0
+    solar_rad_coeff: float = 0.0
+
+
+def build_opm(object_name, object_id, epoch_utc, t, r, v, burns, spacecraft: SpacecraftParameters, comments=()):
+    """OPM 2.0: the spacecraft's EME2000 state [m, m/s] at sim time ``t``, its parameters and its maneuvers
+    (:class:`Burn`)."""
+    meta = nd.OpmMetadata(object_name=object_name, object_id=object_id, center_name=frames.CENTER,
+                          ref_frame=frames.INERTIAL_FRAME, time_system=frames.TIME_SYSTEM)
+    mans = [nd.ManeuverParametersType(
+        comment=list(b.comments), man_epoch_ignition=frames.utc_string(epoch_utc, b.t),
+        man_duration=nd.DurationType(value=0.0, units=nd.TimeUnits.S),
+        man_delta_mass=nd.DeltamassType(value=_f(b.delta_mass), units=nd.MassUnits.KG), man_ref_frame=b.frame,
+        man_dv_1=_kms(b.dv[0]), man_dv_2=_kms(b.dv[1]), man_dv_3=_kms(b.dv[2])) for b in burns]
+    sc = spacecraft
+    params = nd.SpacecraftParametersType(
+        comment=["solar radiation pressure is not modelled (area and coefficient 0)"] if not sc.solar_rad_coeff
+        else [], mass=nd.MassType(value=_f(sc.mass), units=nd.MassUnits.KG),
+        solar_rad_area=nd.AreaType(value=_f(sc.solar_rad_area), units=nd.AreaUnits.M_2),
+        solar_rad_coeff=_f(sc.solar_rad_coeff), drag_area=nd.AreaType(value=_f(sc.drag_area), units=nd.AreaUnits.M_2),
+        drag_coeff=_f(sc.drag_coeff))
+    data = nd.OpmData(comment=list(comments), state_vector=_state_vector(
+        nd.StateVectorType, frames.utc_string(epoch_utc, t), r, v), spacecraft_parameters=params,
+        maneuver_parameters=mans)
+    return nd.Opm(header=_header(), body=nd.OpmBody(segment=nd.OpmSegment(metadata=meta, data=data)))
+
+
+@dataclass
+class EphemerisSegment:
+    """One OEM segment: object, sim times ``t`` (n,) [s], EME2000 ``r``, ``v`` (n, 3) [m, m/s], covariances as
+    ``[(t, 6x6 [m, m/s]), ...]`` in ``cov_frame`` (None: the segment's REF_FRAME), comments."""
+
+    object_name: str
+    object_id: str
+    t: np.ndarray
+    r: np.ndarray
+    v: np.ndarray
+    covariances: list = field(default_factory=list)
+    cov_frame: str = None
+    comments: list = field(default_factory=list)
+
+
+COV_NAMES = ("x", "y", "z", "x_dot", "y_dot", "z_dot")
+
+
+def _oem_covariance(epoch, cov, frame):
+    """OEM covariance block (lower triangle, km^2, km^2/s, km^2/s^2) of a 6x6 [m, m/s] covariance."""
+    c = np.asarray(cov, dtype=float) / 1e6
+    kw = {}
+    for i in range(6):
+        for j in range(i + 1):
+            kind = (nd.PositionCovarianceType if i < 3 else
+                    nd.PositionVelocityCovarianceType if j < 3 else nd.VelocityCovarianceType)
+            kw[f"c{COV_NAMES[i]}_{COV_NAMES[j]}"] = kind(value=_f(c[i, j]))
+    return nd.OemCovarianceMatrixType(epoch=epoch, cov_ref_frame=frame, **kw)
+
+
+def build_oem(epoch_utc, segments, comments=()):
+    """OEM 2.0 with one segment per :class:`EphemerisSegment` (Lagrange interpolation, degree 7)."""
+    out = []
+    for s in segments:
+        t = np.asarray(s.t, dtype=float)
+        if t.size < 2 or np.any(np.diff(t) <= 0.0):
+            raise ValueError(f"OEM segment of {s.object_name}: needs >= 2 strictly increasing epochs, got {t.size}")
+        meta = nd.OemMetadata(comment=list(s.comments), object_name=s.object_name, object_id=s.object_id,
+                              center_name=frames.CENTER, ref_frame=frames.INERTIAL_FRAME,
+                              time_system=frames.TIME_SYSTEM, start_time=frames.utc_string(epoch_utc, t[0]),
+                              stop_time=frames.utc_string(epoch_utc, t[-1]), interpolation="LAGRANGE",
+                              interpolation_degree=int(min(7, t.size - 1)))
+        states = [_state_vector(nd.StateVectorAccType, frames.utc_string(epoch_utc, tk), rk, vk)
+                  for tk, rk, vk in zip(t, s.r, s.v)]
+        covs = [_oem_covariance(frames.utc_string(epoch_utc, tc), c, s.cov_frame) for tc, c in s.covariances]
+        out.append(nd.OemSegment(metadata=meta, data=nd.OemData(state_vector=states, covariance_matrix=covs)))
+    return nd.Oem(header=_header(comments), body=nd.OemBody(segment=out))
+
+
+@dataclass
+class TrackingPass:
+    """One radar pass for a TDM segment: station, pass id, sim times ``t`` (n,) [s], ``z`` (n, 3) [range m,
+    azimuth rad (from north towards east), elevation rad], 1-sigma noise [m, rad]."""
+
+    station: str
+    pass_id: int
+    t: np.ndarray
+    z: np.ndarray
+    sigma_range: float
+    sigma_angle: float
+    target: str = "PICOSATELLITE"
+
+
+SIGMA_RANGE_KEY = "SIGMA_RANGE_M"
+SIGMA_ANGLE_KEY = "SIGMA_ANGLE_DEG"
+
+
+def build_tdm(epoch_utc, passes, comments=()):
+    """TDM 2.0, one segment per :class:`TrackingPass`: AZEL angles [deg], RANGE [km], PARTICIPANT_1 the station,
+    PARTICIPANT_2 the target, two-way path 1,2,1 with the one-way geometric range (no light time) at the time tag.
+    The TDM has no keyword for the measurement noise: it goes into metadata comments ``SIGMA_RANGE_M = ...``,
+    ``SIGMA_ANGLE_DEG = ...`` (read back by :func:`read_tdm`)."""
+    segs = []
+    for p in passes:
+        t = np.asarray(p.t, dtype=float)
+        z = np.asarray(p.z, dtype=float)
+        meta = nd.TdmMetadata(
+            comment=[f"{SIGMA_RANGE_KEY} = {_f(p.sigma_range)!r}",
+                     f"{SIGMA_ANGLE_KEY} = {_f(math.degrees(p.sigma_angle))!r}",
+                     "RANGE is the one-way geometric station-target distance at the time tag (no light time)"],
+            track_id=f"{p.station}_PASS_{int(p.pass_id)}", time_system=nd.TimeSystemType.UTC,
+            start_time=frames.utc_string(epoch_utc, t[0]), stop_time=frames.utc_string(epoch_utc, t[-1]),
+            participant_1=p.station, participant_2=p.target, mode=nd.ModeType.SEQUENTIAL, path="1,2,1",
+            timetag_ref=nd.TimetagRefType.RECEIVE, range_units=nd.RangeUnitsType.KM, angle_type=nd.AngleTypeType.AZEL)
+        obs = []
+        for tk, zk in zip(t, z):
+            ep = frames.utc_string(epoch_utc, tk)
+            obs.append(nd.TrackingDataObservationType(epoch=ep, range=_f(zk[0]) / 1000.0))
+            obs.append(nd.TrackingDataObservationType(epoch=ep, angle_1=nd.AngleType(
+                value=_f(math.degrees(zk[1])), units=nd.AngleUnits.DEG)))
+            obs.append(nd.TrackingDataObservationType(epoch=ep, angle_2=nd.AngleType(
+                value=_f(math.degrees(zk[2])), units=nd.AngleUnits.DEG)))
+        segs.append(nd.TdmSegment(metadata=meta, data=nd.TdmData(observation=obs)))
+    return nd.Tdm(header=nd.TdmHeader(comment=list(comments), creation_date=creation_date(), originator=ORIGINATOR),
+                  body=nd.TdmBody(segment=segs))
+
+
+@dataclass
+class ConjunctionObject:
+    """One CDM object: name, designator, EME2000 state [m, m/s] at TCA, RTN covariance 6x6 [m, m/s] (None: not
+    estimated, written as zeros with COVARIANCE_METHOD DEFAULT), maneuverable, comments."""
+
+    name: str
+    designator: str
+    r: np.ndarray
+    v: np.ndarray
+    cov_rtn: np.ndarray = None
+    maneuverable: bool = True
+    comments: list = field(default_factory=list)
+
+
+CDM_COV = ("r", "t", "n", "rdot", "tdot", "ndot")
+
+
+def _cdm_covariance(cov):
+    c = np.zeros((6, 6)) if cov is None else np.asarray(cov, dtype=float)
+    kw = {}
+    for i in range(6):
+        for j in range(i + 1):
+            kind, unit = ((nd.M2Type, nd.M2Units.M_2) if i < 3 else (nd.M2SType, nd.M2SUnits.M_2_S) if j < 3 else
+                          (nd.M2S2Type, nd.M2S2Units.M_2_S_2))
+            kw[f"c{CDM_COV[i]}_{CDM_COV[j]}"] = kind(value=_f(c[i, j]), units=unit)
+    return nd.CdmCovarianceMatrixType(**kw)
+
+
+def build_cdm(epoch_utc, tca, objects, message_id, comments=()):
+    """CDM 1.0 of the closest approach at sim time ``tca`` between two :class:`ConjunctionObject` (object 1 first):
+    MISS_DISTANCE [m] and RELATIVE_SPEED [m/s] from their states, the relative state in RTN of object 1."""
+    o1, o2 = objects
+    rho, rho_dot = frames.inertial_to_rtn(o1.r, o1.v, o2.r, o2.v)
+    rel_v = np.asarray(o2.v) - np.asarray(o1.v)
+    segs = []
+    for which, o in zip((nd.ObjectType.OBJECT1, nd.ObjectType.OBJECT2), objects):
+        meta = nd.CdmMetadata(
+            comment=list(o.comments), object_value=which, object_designator=o.designator, catalog_name="NONE",
+            object_name=o.name, international_designator="UNKNOWN", ephemeris_name="NONE",
+            covariance_method=nd.CovarianceMethodType.DEFAULT if o.cov_rtn is None else
+            nd.CovarianceMethodType.CALCULATED,
+            maneuverable=nd.ManeuverableType.YES if o.maneuverable else nd.ManeuverableType.NO,
+            ref_frame=nd.ReferenceFrameType.EME2000)
+        sv = nd.CdmStateVectorType(**{k: nd.CdmPositionType(value=_f(o.r[i]) / 1000.0, units=nd.PositionUnits.KM)
+                                      for i, k in enumerate("xyz")},
+                                   **{k: nd.CdmVelocityType(value=_f(o.v[i]) / 1000.0, units=nd.VelocityUnits.KM_S)
+                                      for i, k in enumerate(("x_dot", "y_dot", "z_dot"))})
+        segs.append(nd.CdmSegment(metadata=meta, data=nd.CdmData(state_vector=sv,
+                                                                covariance_matrix=_cdm_covariance(o.cov_rtn))))
+    rel = nd.RelativeMetadataData(
+        comment=list(comments), tca=frames.utc_string(epoch_utc, tca),
+        miss_distance=nd.LengthType(value=_f(np.linalg.norm(rho)), units=nd.LengthUnits.M),
+        relative_speed=nd.DvType(value=_f(np.linalg.norm(rel_v)), units=nd.DvUnits.M_S),
+        relative_state_vector=nd.RelativeStateVectorType(
+            relative_position_r=nd.LengthType(value=_f(rho[0]), units=nd.LengthUnits.M),
+            relative_position_t=nd.LengthType(value=_f(rho[1]), units=nd.LengthUnits.M),
+            relative_position_n=nd.LengthType(value=_f(rho[2]), units=nd.LengthUnits.M),
+            relative_velocity_r=nd.DvType(value=_f(rho_dot[0]), units=nd.DvUnits.M_S),
+            relative_velocity_t=nd.DvType(value=_f(rho_dot[1]), units=nd.DvUnits.M_S),
+            relative_velocity_n=nd.DvType(value=_f(rho_dot[2]), units=nd.DvUnits.M_S)))
+    header = nd.CdmHeader(creation_date=creation_date(), originator=ORIGINATOR, message_id=message_id)
+    return nd.Cdm(header=header, body=nd.CdmBody(relative_metadata_data=rel, segment=segs))
+
+
+# --- text and files -----------------------------------------------------------------------------------------------
+def to_text(message, fmt="xml") -> str:
+    """XML or KVN text of a message (the library's writers)."""
+    if fmt not in FORMATS:
+        raise ValueError(f"format must be one of {', '.join(FORMATS)}, got {fmt!r}")
+    if fmt == "xml":
+        return NdmIo().to_string(message, NDMFileFormats.XML)
+    # The library's TDM KVN has a blank line between META_STOP and DATA_START; 503.0-B-2 allows blank lines, but
+    # stricter readers (ccsds-ndm-py 0.0.9) refuse it there, so the keywords are kept adjacent.
+    return NdmIo().to_string(message, NDMFileFormats.KVN).replace("META_STOP\n\nDATA_START", "META_STOP\nDATA_START")
+
+
+def write_atomic(path, text):
+    """Write ``text`` to ``path`` atomically: a temporary file in the same directory, fsync, then rename (a watcher
+    sees either no file or the whole file)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes it private; the set is meant to be read by others
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def write_message(path, message, fmt="xml"):
+    """:func:`to_text` then :func:`write_atomic`; returns the path."""
+    return write_atomic(path, to_text(message, fmt))
+
+
+def read_message(source):
+    """Message object of an NDM file (XML or KVN, detected by the library) or of its text; NdmError on failure."""
+    try:
+        if isinstance(source, (str, os.PathLike)) and not str(source).lstrip().startswith(("<", "CCSDS_")):
+            return NdmIo().from_path(source)
+        return NdmIo().from_string(str(source))
+    except Exception as exc:  # noqa: BLE001  (the library raises many kinds: report them as one)
+        raise NdmError(f"not a readable CCSDS NDM: {exc.__class__.__name__}: {exc}") from None
+
+
+def _num(x):
+    return None if x is None else float(getattr(x, "value", x))
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """A radar measurement read from a TDM: sim time [s], station, pass id, z = [range m, az rad, el rad] and its
+    1-sigma noise [m, rad]."""
+
+    t: float
+    station: str
+    pass_id: int
+    z: tuple
+    sigma_range: float
+    sigma_angle: float
+
+
+def _comment_value(comments, key):
+    for c in comments:
+        name, sep, value = str(c).partition("=")
+        if sep and name.strip().upper() == key:
+            return float(value)
+    return None
+
+
+def read_tdm(source, epoch_utc, sigma_range=None, sigma_angle=None):
+    """Radar measurements of a TDM (file path or text): AZEL angles + RANGE in km, grouped by epoch.
+
+    Each segment: PARTICIPANT_1 is the station, the pass id is the number after ``_PASS_`` in TRACK_ID (else the
+    segment's 1-based index). Sigmas from the ``SIGMA_RANGE_M``/``SIGMA_ANGLE_DEG`` metadata comments, else the
+    ``sigma_range`` [m] / ``sigma_angle`` [rad] given here. Raises NdmError naming what is wrong: not a TDM, no
+    measurement at all, a time
+    system other than UTC, angles other than AZEL, range units other than km, an epoch without all three of range,
+    azimuth and elevation, a non-finite or out-of-range value, or no sigma.
+    """
+    msg = read_message(source)
+    if type(msg).__name__ not in ("Tdm", "TdmType"):  # the reader answers with the NDM/XML 4.0.0 models
+        raise NdmError(f"expected a TDM, got {type(msg).__name__.removesuffix('Type').upper()}")
+    out = []
+    for k, seg in enumerate(msg.body.segment, start=1):
+        md = seg.metadata
+        where = f"TDM segment {k}"
+        if getattr(md.time_system, "value", md.time_system).upper() != "UTC":
+            raise NdmError(f"{where}: TIME_SYSTEM {md.time_system} is not supported (UTC)")
+        if md.angle_type is None or md.angle_type.value.upper() != "AZEL":
+            raise NdmError(f"{where}: ANGLE_TYPE {md.angle_type and md.angle_type.value} is not supported (AZEL)")
+        if md.range_units is not None and md.range_units.value.lower() != "km":
+            raise NdmError(f"{where}: RANGE_UNITS {md.range_units.value} is not supported (km)")
+        sr = _comment_value(md.comment, SIGMA_RANGE_KEY)
+        sa = _comment_value(md.comment, SIGMA_ANGLE_KEY)
+        sr = sr if sr is not None else sigma_range
+        sa = math.radians(sa) if sa is not None else sigma_angle
+        if sr is None or sa is None or not (sr > 0 and sa > 0 and math.isfinite(sr) and math.isfinite(sa)):
+            raise NdmError(f"{where}: no positive measurement sigma (comments {SIGMA_RANGE_KEY}, {SIGMA_ANGLE_KEY})")
+        track = md.track_id or ""
+        _, sep, tail = track.rpartition("_PASS_")
+        pass_id = int(tail) if sep and tail.isdigit() else k
+        rows = {}
+        for ob in seg.data.observation:
+            row = rows.setdefault(ob.epoch, [None, None, None])
+            for i, v in enumerate((_num(ob.range), _num(ob.angle_1), _num(ob.angle_2))):
+                if v is not None:
+                    row[i] = v
+        for epoch, (rng, az, el) in rows.items():
+            if rng is None or az is None or el is None:
+                raise NdmError(f"{where}: epoch {epoch} lacks one of RANGE, ANGLE_1, ANGLE_2")
+            if not all(math.isfinite(x) for x in (rng, az, el)) or rng <= 0 or not -90 <= el <= 90:
+                raise NdmError(f"{where}: epoch {epoch}: range {rng} km, az {az} deg, el {el} deg out of range")
+            try:
+                t = frames.sim_time(epoch_utc, epoch)
+            except ValueError as exc:
+                raise NdmError(f"{where}: {exc}") from None
+            out.append(Measurement(t, md.participant_1, pass_id, (rng * 1000.0, math.radians(az) % (2 * math.pi),
+                                                                  math.radians(el)), float(sr), float(sa)))
+    if not out:
+        raise NdmError("the TDM holds no RANGE/ANGLE_1/ANGLE_2 measurement")
+    out.sort(key=lambda m: (m.t, m.station))
+    return out

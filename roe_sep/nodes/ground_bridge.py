@@ -1,0 +1,231 @@
+"""``ground_bridge``: the run's CCSDS navigation data messages for a ground segment, as the run goes, and TDM files
+from a ground segment as radar measurements.
+
+Out (``output_dir``, the runner sets OUT/ccsds): the same set as ``roe-sep export`` (:mod:`roe_sep.ndm.dataset`),
+from the same topics. An OPM pair (RTN and EME2000 maneuvers) as soon as the safety monitor approves a plan, the
+executed-burns OPM after each burn, and the OEM, TDM and CDM every ``write_period`` s of sim time and at shutdown
+(the XML OEM of a whole run takes about 3 s to serialize, so not at every message). Every file is written
+atomically (temporary file + rename).
+
+In (``input_dir``, '' = off): every ``*.xml``, ``*.kvn`` or ``*.tdm`` file that appears there is read as a TDM
+(:func:`roe_sep.ndm.messages.read_tdm`, sim time from ``epoch_utc``) and its measurements are published on
+``/ground/radar_measurements`` (RadarMeasurement, the ``/radar/measurements`` layout; ``radar_od`` takes them in
+alongside its own); the file then moves to ``input_dir/processed/``. A file that is not a valid TDM moves to
+``input_dir/rejected/`` with an ERROR on ``/diagnostics`` naming the file and the reason; the node keeps running.
+"""
+
+import math
+import queue
+import shutil
+import threading
+import time
+from pathlib import Path
+
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray
+from rclpy.clock import Clock as RclpyClock
+from rclpy.clock import ClockType
+from rclpy.node import Node
+from roe_sep_msgs.msg import (
+    EjectionEvent,
+    ImpulsiveManeuver,
+    ManeuverPlan,
+    OrbitDetermination,
+    RadarMeasurement,
+    RelativeOrbitalElements,
+    SafetyStatus,
+)
+from rosgraph_msgs.msg import Clock
+
+from .. import interfaces
+from ..core.config import ConfigError, load_scenario
+from ..core.od.radar import DEFAULT_EPOCH_UTC
+from ..ndm import frames
+from ..ndm.options import FORMATS, Options, RunMessages
+from .convert import sec_to_time, time_to_sec
+from .diagnostics import ERROR, OK, publish_status
+from .params import ParameterError, declare, finite, require
+
+EXTERNAL_RADAR_TOPIC = interfaces.EXTERNAL_RADAR_TOPIC
+INPUT_SUFFIXES = (".xml", ".kvn", ".tdm", ".txt")
+
+
+class GroundBridgeNode(Node):
+    def __init__(self):
+        super().__init__("ground_bridge")
+        out = declare(self, "output_dir", "", "directory of the CCSDS files (the runner sets OUT/ccsds)")
+        self.fmt = declare(self, "format", "xml", "xml or kvn")
+        epoch = declare(self, "epoch_utc", DEFAULT_EPOCH_UTC, "ISO-8601 UTC epoch of sim time 0 (the sim's)")
+        scenario_file = declare(self, "scenario_file", "", "scenario YAML ('' = embedded default)")
+        isp = declare(self, "carrier_isp", 60.0, "s, carrier thruster specific impulse (OPM MAN_DELTA_MASS)")
+        self.write_period = declare(self, "write_period", 86400.0, "s of sim time between OEM/TDM/CDM updates")
+        inp = declare(self, "input_dir", "", "directory watched for TDM files ('' = no input)")
+        poll = declare(self, "poll_period", 1.0, "wall s between scans of input_dir")
+        sigma_range = declare(self, "default_sigma_range_m", 10.0, "m, range sigma of a TDM without one")
+        sigma_angle = declare(self, "default_sigma_angle_deg", 0.01, "deg, angle sigma of a TDM without one")
+
+        require("output_dir", isinstance(out, str) and out != "", out, "a directory path")
+        require("format", self.fmt in FORMATS, self.fmt, "'xml' or 'kvn'")
+        for name, value in (("carrier_isp", isp), ("write_period", self.write_period), ("poll_period", poll),
+                            ("default_sigma_range_m", sigma_range), ("default_sigma_angle_deg", sigma_angle)):
+            require(name, finite(value) and value > 0, value, "a positive number")
+        try:
+            frames.parse_epoch(epoch)
+        except ValueError as exc:
+            raise ParameterError(f"parameter 'epoch_utc': {exc}") from exc
+        try:
+            carrier = load_scenario(scenario_file or None).monte_carlo.carrier
+        except ConfigError as exc:
+            raise ParameterError(f"parameter 'scenario_file': {exc}") from exc
+        self.opts = Options(epoch_utc=str(epoch), carrier_mass=carrier.mass, carrier_drag_area=carrier.area,
+                            carrier_drag_coeff=carrier.cd, carrier_isp=float(isp))
+        self.out = Path(out)
+        self.out.mkdir(parents=True, exist_ok=True)
+        self.sigma = (float(sigma_range), math.radians(sigma_angle))
+        self.run = RunMessages()
+        self.lock = threading.Lock()
+        self.requests = queue.Queue()
+        self.writer = threading.Thread(target=self._writer, name="ccsds_writer", daemon=True)
+        self.writer.start()
+        self.written = {}  # file stem -> sim time of the last write
+        self.dirty = False  # something the periodic files depend on arrived
+        self.t = 0.0
+        self.last_periodic = 0.0
+        self.files_in = 0
+        self.files_rejected = 0
+
+        self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
+        self.ext_pub = self.create_publisher(RadarMeasurement, EXTERNAL_RADAR_TOPIC, interfaces.BULK)
+        subs = ((RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, interfaces.STREAM, False),
+                (EjectionEvent, interfaces.EJECTION_TOPIC, interfaces.LATCHED, False),
+                (ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.LATCHED, False),
+                (ManeuverPlan, interfaces.ACQUISITION_PLAN_TOPIC, interfaces.LATCHED, False),
+                (SafetyStatus, interfaces.PLAN_CHECK_TOPIC, interfaces.EXECUTED, True),
+                (ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, interfaces.EXECUTED, True),
+                (OrbitDetermination, interfaces.OD_TOPIC, interfaces.LATCHED, False),
+                (RadarMeasurement, interfaces.RADAR_TOPIC, interfaces.STREAM, False))
+        for cls, topic, qos, urgent in subs:
+            self.create_subscription(cls, topic, lambda m, t=topic, u=urgent: self.on_message(t, m, u), qos)
+        self.create_subscription(Clock, interfaces.CLOCK_TOPIC, self.on_clock, interfaces.CLOCK_SUB)
+        self.input = Path(inp) if inp else None
+        if self.input is not None:
+            for sub in ("", "processed", "rejected"):
+                (self.input / sub).mkdir(parents=True, exist_ok=True)
+            # wall clock: the directory is polled also while the sim clock holds or has stopped
+            self.create_timer(float(poll), self.scan_input, clock=RclpyClock(clock_type=ClockType.STEADY_TIME))
+        self._status(OK, f"writing {self.fmt} files to {self.out}" +
+                     (f", watching {self.input} for TDM files" if self.input else ""))
+
+    def _values(self):
+        return {"output_dir": str(self.out), "files_written": len(self.written), "tdm_files_in": self.files_in,
+                "tdm_files_rejected": self.files_rejected, "sim_time_s": f"{self.t:.1f}"}
+
+    def _status(self, level, message):
+        publish_status(self, self.diag_pub, level, message, self._values())
+
+    # --- out ------------------------------------------------------------------------------------------------------
+    def on_message(self, topic, msg, urgent):
+        with self.lock:
+            self.run.add(topic, msg)
+        self.dirty = True
+        if urgent:  # plan approved or burn executed: the OPMs change now
+            self.request(periodic=False)
+
+    def on_clock(self, msg: Clock):
+        self.t = time_to_sec(msg.clock)
+        if self.dirty and self.t - self.last_periodic >= self.write_period:
+            self.last_periodic = self.t
+            self.dirty = False
+            self.request(periodic=True)
+
+    def request(self, periodic):
+        """Queue a write for the writer thread: serializing the OEM of a whole run takes seconds, during which the
+        executor must keep taking messages (a 100-deep truth stream at 4000x real time would overflow)."""
+        self.requests.put(periodic)
+
+    def _writer(self):
+        from ..ndm import dataset  # noqa: F401  (load the NDM library here, while the executor already spins)
+
+        while True:
+            batch = [self.requests.get()]
+            while not self.requests.empty():  # coalesce what queued up meanwhile
+                batch.append(self.requests.get())
+            if None in batch:  # shutdown: the final, complete set
+                self.write(True)
+                return
+            self.write(any(batch))
+
+    def write(self, periodic):
+        """Write the OPMs (always: small) and, if ``periodic``, the OEM, TDM and CDM, from a snapshot of the
+        messages received so far."""
+        with self.lock:
+            snapshot = RunMessages({t: list(ms) for t, ms in self.run.by_topic.items()})
+        try:
+            from ..ndm.dataset import messages_of  # the NDM library loads in this thread, not at start-up
+            from ..ndm.messages import write_message
+
+            msgs = messages_of(snapshot, self.opts, periodic)
+            for stem, message in msgs.items():
+                write_message(self.out / f"{stem}.{self.fmt}", message, self.fmt)
+                self.written[stem] = self.t
+        except Exception as exc:  # noqa: BLE001  (the writer thread must survive any bad input)
+            self.get_logger().error(f"CCSDS set not written: {exc.__class__.__name__}: {exc}")
+            if rclpy.ok():
+                self._status(ERROR, f"CCSDS set not written: {exc}")
+
+    def destroy_node(self):
+        """The final, complete set: the writer thread finishes its queue, then writes everything once more."""
+        self.requests.put(None)
+        self.writer.join()
+        if self.run[interfaces.TRUTH_ROE_TOPIC]:
+            text = f"final CCSDS set: {len(self.written)} files in {self.out}"
+            if rclpy.ok():
+                self.get_logger().info(text)
+            else:  # after SIGINT the context is gone and /rosout with it
+                print(f"[INFO] [ground_bridge]: {text}", flush=True)
+        super().destroy_node()
+
+    # --- in -------------------------------------------------------------------------------------------------------
+    def scan_input(self):
+        for path in sorted(self.input.iterdir()):
+            if not path.is_file() or path.name.startswith(".") or path.suffix.lower() not in INPUT_SUFFIXES:
+                continue
+            from ..ndm.messages import NdmError, read_tdm
+
+            try:
+                meas = read_tdm(path, self.opts.epoch_utc, *self.sigma)
+            except (NdmError, OSError, UnicodeDecodeError) as exc:
+                self.files_rejected += 1
+                target = self._move(path, "rejected")
+                text = f"TDM {path.name} rejected ({exc}); moved to {target}"
+                self.get_logger().error(text)
+                self._status(ERROR, text)
+                continue
+            for m in meas:
+                msg = RadarMeasurement(station=m.station, pass_id=int(m.pass_id), range=float(m.z[0]),
+                                       azimuth=float(m.z[1]), elevation=float(m.z[2]),
+                                       sigma_range=float(m.sigma_range), sigma_angle=float(m.sigma_angle))
+                msg.header.stamp = sec_to_time(m.t)
+                msg.header.frame_id = m.station
+                self.ext_pub.publish(msg)
+            self.files_in += 1
+            target = self._move(path, "processed")
+            self._status(OK, f"TDM {path.name}: {len(meas)} measurements published on {EXTERNAL_RADAR_TOPIC}")
+            self.get_logger().info(f"TDM {path.name}: {len(meas)} measurements published, moved to {target}")
+
+    def _move(self, path, sub):
+        target = self.input / sub / path.name
+        if target.exists():
+            target = target.with_name(f"{path.stem}.{time.time_ns()}{path.suffix}")
+        shutil.move(str(path), str(target))
+        return target
+
+
+def main(args=None):
+    from .spin import run
+
+    return run(GroundBridgeNode, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,386 @@
+"""CCSDS navigation data messages (roe_sep.ndm): frames against independent two-body computations, the set of the
+reference bag read back through the library, the OPM Delta-v against the plans, the TDM fed back into the batch
+OD, malformed TDMs, atomic files and the ``roe-sep export`` command."""
+
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+from oracle import kepler_to_cartesian
+
+from roe_sep import interfaces
+from roe_sep.cli import main
+from roe_sep.cli.export import read_run
+from roe_sep.core.constants import MU_EARTH, SECONDS_PER_DAY
+from roe_sep.core.od.batch import RadarBatch, batch_least_squares
+from roe_sep.core.od.radar import TIRA, gmst, julian_date
+from roe_sep.core.relmotion.maneuvers import delta_roe
+from roe_sep.core.relmotion.orbit import mean_motion
+from roe_sep.core.relmotion.roe import kepler_to_roe, roe_to_kepler
+from roe_sep.ndm import frames
+from roe_sep.ndm import messages as ndm
+from roe_sep.ndm.dataset import Options, Truth, approved, stamp, vec
+
+BAG = Path(__file__).resolve().parents[1] / "bags" / "default_run"
+EPOCH = "2016-07-01T00:00:00"
+A = 6893137.0
+INC = math.radians(97.46)
+
+
+def cartesian_to_kepler(r, v):
+    """[a, e, i, raan, argp, M] of an inertial state (Vallado Alg. 9), the test's own inverse of the oracle."""
+    h = np.cross(r, v)
+    n = np.cross([0.0, 0.0, 1.0], h)
+    rn, vn = np.linalg.norm(r), np.linalg.norm(v)
+    e_vec = ((vn**2 - MU_EARTH / rn) * r - np.dot(r, v) * v) / MU_EARTH
+    e = np.linalg.norm(e_vec)
+    a = 1.0 / (2.0 / rn - vn**2 / MU_EARTH)
+    i = math.acos(h[2] / np.linalg.norm(h))
+    raan = math.atan2(n[1], n[0])
+    argp = math.atan2(np.dot(np.cross(n, e_vec), h) / np.linalg.norm(h), np.dot(n, e_vec))
+    nu = math.atan2(np.dot(np.cross(e_vec, r), h) / np.linalg.norm(h), np.dot(e_vec, r))
+    ecc = 2.0 * math.atan2(math.sqrt(1 - e) * math.sin(nu / 2), math.sqrt(1 + e) * math.cos(nu / 2))
+    return np.array([a, e, i, raan, argp, ecc - e * math.sin(ecc)])
+
+
+def propagate_two_body(el, dt):
+    out = np.array(el, dtype=float)
+    out[5] += math.sqrt(MU_EARTH / el[0] ** 3) * dt
+    return out
+
+
+# --- frames -------------------------------------------------------------------------------------------------------
+def test_precession_matches_vallado_example_3_15():
+    """IAU 1976 angles of Vallado's Example 3-15 (T_TT = 0.0426236319): zeta 0.0273055, theta 0.0237306,
+    z 0.0273059 deg; the matrix is R3(-z) R2(theta) R3(-zeta)."""
+    jd = frames.JD_J2000 + 0.0426236319 * 36525.0
+    zeta, theta, z = np.radians([0.0273055, 0.0237306, 0.0273059])
+
+    def r3(a):
+        return np.array([[math.cos(a), math.sin(a), 0], [-math.sin(a), math.cos(a), 0], [0, 0, 1]])
+
+    def r2(a):
+        return np.array([[math.cos(a), 0, -math.sin(a)], [0, 1, 0], [math.sin(a), 0, math.cos(a)]])
+
+    expected = r3(-z) @ r2(theta) @ r3(-zeta)
+    p = frames.precession_matrix(jd)
+    assert np.max(np.abs(p - expected)) < 2e-9  # the example's 7-digit angles
+    assert np.allclose(p @ p.T, np.eye(3), atol=1e-15)
+    # 16.5 years of precession at the default epoch: the pole moves by theta = 0.0917 deg
+    pd = frames.mod_to_eme2000(EPOCH, 0.0)
+    assert math.degrees(math.acos(pd[2, 2])) == pytest.approx(0.0917, abs=2e-4)
+
+
+def test_rtn_velocity_is_the_rotating_frame_derivative_of_two_body_states():
+    """inertial_to_rtn of two independently propagated two-body orbits: its velocity is d(rho)/dt in the rotating
+    frame (central differences), and rtn_to_inertial inverts it exactly."""
+    chief = np.array([A, 0.001, INC, 1.1, 0.4, 0.3])
+    deputy = np.array([A + 120.0, 0.0012, INC + 1e-4, 1.1002, 0.5, 0.2995])
+
+    def rel(dt):
+        rc, vc = kepler_to_cartesian(propagate_two_body(chief, dt))
+        rd, vd = kepler_to_cartesian(propagate_two_body(deputy, dt))
+        return frames.inertial_to_rtn(rc, vc, rd, vd), (rc, vc, rd, vd)
+
+    (rho, rho_dot), (rc, vc, rd, vd) = rel(0.0)
+    h = 0.5
+    numeric = (rel(h)[0][0] - rel(-h)[0][0]) / (2 * h)
+    assert np.linalg.norm(rho) > 3000.0
+    assert np.max(np.abs(rho_dot - numeric)) < 1e-6  # m/s; the omega x rho term alone is ~3.5 m/s here
+    r2, v2 = frames.rtn_to_inertial(rc, vc, rho, rho_dot)
+    assert np.max(np.abs(r2 - rd)) < 1e-7 and np.max(np.abs(v2 - vd)) < 1e-10
+
+
+def test_deputy_state_of_roe_matches_two_body_to_second_order():
+    """Chief mean elements as a circular two-body orbit plus the linear ROE map: the picosatellite's EME2000 state
+    agrees with the two-body state of its own Keplerian elements (roe_to_kepler) to O(rho^2 / a)."""
+    roe = np.array([-40.0, 900.0, -20.0, -590.0, 14.0, 400.0]) / A
+    chief = np.array([A, 0.0, INC, 1.1, 0.0, 0.7])
+    t = 3600.0
+    rd, vd = frames.deputy_state(roe, chief, EPOCH, t)
+    rd0, vd0 = kepler_to_cartesian(roe_to_kepler(chief, roe))
+    p = frames.mod_to_eme2000(EPOCH, t)
+    rho = np.linalg.norm(roe) * A
+    assert np.linalg.norm(rd - p @ rd0) < 3.0 * rho**2 / A + 0.1  # 0.4 m for 1.2 km
+    assert np.linalg.norm(vd - p @ vd0) < 3.0 * rho**2 / A * mean_motion(A) + 1e-4
+    rc, vc = frames.chief_state(chief, EPOCH, t)
+    rc0, vc0 = kepler_to_cartesian(chief)
+    assert np.linalg.norm(rc - p @ rc0) < 1e-6 and np.linalg.norm(vc - p @ vc0) < 1e-9
+
+
+def test_inertial_dv_changes_the_roe_as_gauss_eq2():
+    """A carrier Delta-v in its RTN frame, rotated to inertial and added to an independent two-body state, changes
+    the orbit as seed 002 Eq. (2) predicts (-dv: the carrier's burn on the relative orbit), to second order."""
+    chief = np.array([A, 0.0, INC, 1.1, 0.0, 0.9])
+    dv_rtn = np.array([0.05, -0.08, 0.03])
+    r, v = kepler_to_cartesian(chief)
+    dv = frames.dv_rtn_to_inertial(r, v, dv_rtn)
+    assert np.allclose(frames.dv_inertial_to_rtn(r, v, dv), dv_rtn, atol=1e-15)
+    after = cartesian_to_kepler(r, v + dv)
+    before = cartesian_to_kepler(r, v)
+    picosat_rel = kepler_to_roe(after, before)  # the picosatellite stays: its ROE w.r.t. the burnt carrier
+    expected = delta_roe(-dv_rtn, chief[4] + chief[5], A, mean_motion(A))
+    assert np.max(np.abs(picosat_rel - expected)) * A < 0.02  # m, vs changes of ~100 m
+    assert np.max(np.abs(expected)) * A > 50.0
+
+
+def test_roe_covariance_maps_like_samples():
+    """The ROE covariance mapped to EME2000 equals the sample covariance of mapped ROE samples (the map is
+    linear in the ROE)."""
+    rng = np.random.default_rng(3)
+    chief = np.array([A, 0.0, INC, 1.1, 0.0, 0.7])
+    cov = np.diag(np.array([3.0, 20.0, 5.0, 5.0, 4.0, 4.0]) ** 2) / A**2
+    samples = rng.multivariate_normal(np.full(6, 1e-4), cov, 20000)
+    r, v = frames.deputy_state(samples, np.broadcast_to(chief, (20000, 6)), EPOCH, 100.0)
+    emp = np.cov(np.hstack([r, v]).T)
+    mapped = frames.roe_covariance_to_inertial(cov, chief, EPOCH, 100.0)
+    sig = np.sqrt(np.diag(mapped))
+    assert np.max(np.abs(emp - mapped) / np.outer(sig, sig)) < 0.05
+
+
+def test_epochs_are_iso_strings_both_ways():
+    assert frames.utc_string(EPOCH, 9156.408687832) == "2016-07-01T02:32:36.408688"
+    assert frames.sim_time(EPOCH, "2016-07-01T02:32:36.408688") == pytest.approx(9156.408688, abs=1e-9)
+    assert frames.sim_time(EPOCH, "2016-183T02:32:36.5Z") == pytest.approx(9156.5)
+    with pytest.raises(ValueError, match="not a CCSDS UTC epoch"):
+        frames.sim_time(EPOCH, "yesterday")
+
+
+# --- the set of the reference bag -----------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def run():
+    return read_run(BAG)
+
+
+@pytest.fixture(scope="module", params=["xml", "kvn"])
+def exported(request, tmp_path_factory):
+    out = tmp_path_factory.mktemp(f"ndm_{request.param}")
+    assert main(["export", str(BAG), "--out", str(out), "--format", request.param]) == 0
+    return request.param, out
+
+
+def test_export_writes_the_set_and_it_reads_back(exported):
+    fmt, out = exported
+    names = sorted(p.name for p in out.iterdir())
+    assert names == sorted(f"{n}.{fmt}" for n in (
+        "plan01_double_impulse.opm", "plan01_double_impulse_eme2000.opm", "plan02_ic_acquisition.opm",
+        "plan02_ic_acquisition_eme2000.opm", "plan03_ic_acquisition.opm", "plan03_ic_acquisition_eme2000.opm",
+        "executed_carrier.opm", "ephemeris.oem", "radar.tdm", "closest_approach.cdm"))
+    for p in out.iterdir():
+        text = p.read_text()
+        assert "NP.FLOAT64" not in text and "np.float64" not in text
+        msg = ndm.read_message(p)
+        assert type(msg).__name__ in ("Opm", "Oem", "Tdm", "Cdm")
+    oem = ndm.read_message(out / f"ephemeris.oem.{fmt}")
+    segs = oem.body.segment
+    assert {s.metadata.ref_frame for s in segs} == {"EME2000"} and {s.metadata.time_system for s in segs} == {"UTC"}
+    ids = [s.metadata.object_id for s in segs]
+    assert ids[0] == "CARRIER" and "PICOSATELLITE" in ids and "PICOSATELLITE-OD" in ids
+    od = [s for s in segs if s.metadata.object_id == "PICOSATELLITE-OD"]
+    assert len(od) == 5 and all(len(s.data.covariance_matrix) == 1 for s in od)
+    assert all("T" in s.metadata.start_time and " " not in s.metadata.start_time for s in segs)
+
+
+def test_oem_truth_reproduces_the_relative_orbit(exported, run):
+    """Carrier and picosatellite truth states of the OEM, back through inertial_to_rtn, give the bag's truth RTN
+    state of the linear map at the same epoch (1 mm)."""
+    fmt, out = exported
+    segs = ndm.read_message(out / f"ephemeris.oem.{fmt}").body.segment
+
+    def states(seg):
+        return {round(frames.sim_time(EPOCH, s.epoch), 3): (np.array([s.x.value, s.y.value, s.z.value]) * 1e3,
+                                                            np.array([s.x_dot.value, s.y_dot.value,
+                                                                      s.z_dot.value]) * 1e3)
+                for s in seg.data.state_vector}
+
+    carrier = states(segs[0])
+    pico = {}
+    for s in segs[1:]:
+        if s.metadata.object_id == "PICOSATELLITE":
+            pico.update(states(s))
+    truth = Truth(run[interfaces.TRUTH_ROE_TOPIC])
+    k = int(np.searchsorted(truth.t, 100000.0))
+    t = round(float(truth.t[k]), 3)
+    rho, rho_dot = frames.inertial_to_rtn(*carrier[t], *pico[t])
+    exp_rho, exp_dot = frames.roe_rtn_state(truth.roe[k], truth.chief[k])
+    assert np.max(np.abs(rho - exp_rho)) < 1e-3 and np.max(np.abs(rho_dot - exp_dot)) < 1e-6
+    assert np.linalg.norm(carrier[t][0]) == pytest.approx(A, abs=1e-3)
+
+
+def test_opm_dv_equals_the_plans_to_one_micrometer_per_second(exported, run):
+    """Every approved plan's OPM: RTN dv as planned, and the EME2000 dv rotated back with the OPM's own carrier
+    state (propagated two-body to the burn epoch) as planned; the executed OPM carries the executed burns."""
+    fmt, out = exported
+    plans = approved(run)
+    assert [p.strategy for _, p in plans] == ["double_impulse", "ic_acquisition", "ic_acquisition"]
+    worst = 0.0
+    for k, (_, plan) in enumerate(plans, start=1):
+        burns = [m for m in plan.maneuvers if m.spacecraft == "carrier" and np.any(vec(m.dv_rtn))]
+        for suffix in ("", "_eme2000"):
+            opm = ndm.read_message(out / f"plan{k:02d}_{plan.strategy}{suffix}.opm.{fmt}")
+            seg = opm.body.segment
+            mans = seg.data.maneuver_parameters
+            assert len(mans) == len(burns)
+            assert seg.metadata.ref_frame == "EME2000" and seg.metadata.time_system == "UTC"
+            sv = seg.data.state_vector
+            r0 = np.array([sv.x.value, sv.y.value, sv.z.value]) * 1e3
+            v0 = np.array([sv.x_dot.value, sv.y_dot.value, sv.z_dot.value]) * 1e3
+            t0 = frames.sim_time(EPOCH, sv.epoch)
+            mass = seg.data.spacecraft_parameters.mass.value
+            for m, b in zip(mans, burns):
+                t = frames.sim_time(EPOCH, m.man_epoch_ignition)
+                assert t == pytest.approx(stamp(b.epoch), abs=1e-6)
+                dv = np.array([m.man_dv_1.value, m.man_dv_2.value, m.man_dv_3.value]) * 1e3
+                assert m.man_delta_mass.value < 0 and m.man_duration.value == 0.0
+                mass += m.man_delta_mass.value
+                if suffix:
+                    assert m.man_ref_frame == "EME2000"
+                    assert abs(np.linalg.norm(dv) - np.linalg.norm(vec(b.dv_rtn))) < 1e-9
+                    if t == pytest.approx(t0, abs=1e-6):  # the OPM's own state is at the first burn: RTN back
+                        worst = max(worst, float(np.max(np.abs(frames.dv_inertial_to_rtn(r0, v0, dv)
+                                                                - vec(b.dv_rtn)))))
+                else:
+                    assert m.man_ref_frame == "RTN"
+                    worst = max(worst, float(np.max(np.abs(dv - vec(b.dv_rtn)))))
+            assert 0.0 < seg.data.spacecraft_parameters.mass.value - mass < 1.0
+    assert worst < 1e-6
+    # the EME2000 file's own carrier state at each burn: the RTN dv back exactly (same state, same rotation)
+    executed = {stamp(m.epoch): vec(m.dv_rtn) for m in run[interfaces.EXECUTED_TOPIC] if m.spacecraft == "carrier"}
+    opm = ndm.read_message(out / f"executed_carrier.opm.{fmt}").body.segment.data.maneuver_parameters
+    assert len(opm) == len(executed) == 8
+    for m in opm:
+        t = frames.sim_time(EPOCH, m.man_epoch_ignition)
+        dv = np.array([m.man_dv_1.value, m.man_dv_2.value, m.man_dv_3.value]) * 1e3
+        key = min(executed, key=lambda e: abs(e - t))
+        assert abs(key - t) < 1e-6 and np.max(np.abs(dv - executed[key])) < 1e-6
+
+
+def test_eme2000_dv_is_the_rtn_dv_rotated_with_the_carrier_state(run):
+    """The inertial dv of an OPM equals M dv_rtn with the carrier's exported state at the burn (1e-6 m/s)."""
+    from roe_sep.ndm.dataset import plan_opm
+
+    truth = Truth(run[interfaces.TRUTH_ROE_TOPIC])
+    _, plan = approved(run)[0]
+    inertial = plan_opm(plan, truth, Options(), frames.INERTIAL_FRAME).body.segment.data
+    m = inertial.maneuver_parameters[0]
+    sv = inertial.state_vector  # the state is at the first burn
+    r = np.array([sv.x.value, sv.y.value, sv.z.value]) * 1e3
+    v = np.array([sv.x_dot.value, sv.y_dot.value, sv.z_dot.value]) * 1e3
+    dv = np.array([m.man_dv_1.value, m.man_dv_2.value, m.man_dv_3.value]) * 1e3
+    assert np.max(np.abs(frames.dv_inertial_to_rtn(r, v, dv) - vec(plan.maneuvers[0].dv_rtn))) < 1e-9
+
+
+def test_cdm_is_the_runs_closest_approach(exported):
+    fmt, out = exported
+    cdm = ndm.read_message(out / f"closest_approach.cdm.{fmt}")
+    rel = cdm.body.relative_metadata_data
+    # the simulator's own tracking (10 s steps) reported 2756.67 m at t = 6340 s
+    assert rel.miss_distance.value == pytest.approx(2756.67, abs=0.5)
+    assert frames.sim_time(EPOCH, rel.tca) == pytest.approx(6340.0, abs=10.0)
+    assert [s.metadata.ref_frame.value for s in cdm.body.segment] == ["EME2000", "EME2000"]
+
+
+def _radar_rows(run, t_from, t_to):
+    return sorted((m for m in run[interfaces.RADAR_TOPIC] if t_from <= stamp(m.header.stamp) <= t_to),
+                  key=lambda m: stamp(m.header.stamp))
+
+
+def _batch(t, z, sigma, truth: Truth):
+    jd0 = julian_date(EPOCH)
+    t = np.asarray(t, dtype=float)
+    return RadarBatch(t=t, z=np.asarray(z), sigma=np.asarray(sigma), chief=truth.chief_at(t),
+                      theta=gmst(jd0 + t / SECONDS_PER_DAY), site_ef=np.tile(TIRA.ecef, (t.size, 1)),
+                      site_enu=np.tile(TIRA.enu, (t.size, 1, 1)))
+
+
+def test_tdm_fed_back_gives_the_runs_od_solution(exported, run):
+    """The TDM of export, read back, gives radar_od's first solution: the measurements after the drift-stop up to
+    the estimate epoch, the batch least squares of core/od/batch.py."""
+    fmt, out = exported
+    od = min(run[interfaces.OD_TOPIC], key=lambda o: stamp(o.estimate.header.stamp))
+    t_est = stamp(od.estimate.header.stamp)
+    last_burn = max(stamp(m.epoch) for m in run[interfaces.EXECUTED_TOPIC] if stamp(m.epoch) <= t_est)
+    meas = [m for m in ndm.read_tdm(out / f"radar.tdm.{fmt}", EPOCH) if last_burn <= m.t <= t_est]
+    assert len(meas) == od.measurements == 117 and len({m.pass_id for m in meas}) == od.passes == 3
+    truth = Truth(run[interfaces.TRUTH_ROE_TOPIC])
+    batch = _batch([m.t for m in meas], [m.z for m in meas],
+                   [(m.sigma_range, m.sigma_angle, m.sigma_angle) for m in meas], truth)
+    result = batch_least_squares(batch)
+    a = od.estimate.chief.semi_major_axis
+    est = np.array([getattr(od.estimate, k) for k in ("a_da", "a_dl", "a_dex", "a_dey", "a_dix", "a_diy")])
+    sigma = np.sqrt(np.diag(np.reshape(od.estimate.covariance, (6, 6))))
+    assert result.t_est == t_est
+    assert np.max(np.abs(result.x[:6] * a - est)) < 1e-3  # m, against 1-sigma of meters
+    assert np.max(np.abs(result.x[:6] * a - est) / sigma) < 1e-3
+    assert result.x[6] * a == pytest.approx(od.a_da_dot, rel=1e-4, abs=1e-9)
+    # and the TDM values are the bag's to rounding
+    bag = _radar_rows(run, last_burn, t_est)
+    assert np.max(np.abs(np.array([m.z for m in meas]) - [[b.range, b.azimuth, b.elevation] for b in bag])
+                  / [1.0, 1e-6, 1e-6]) < 1e-6
+
+
+@pytest.mark.parametrize("text, match", [
+    ("this is not a message", "not a readable CCSDS NDM"),
+    ("CCSDS_OPM_VERS = 2.0\n", "not a readable|expected a TDM"),
+    ("CCSDS_TDM_VERS = 2.0\nthis is not a TDM\n", "no RANGE/ANGLE_1/ANGLE_2 measurement"),
+])
+def test_malformed_input_is_a_clear_error(text, match):
+    with pytest.raises(ndm.NdmError, match=match):
+        ndm.read_tdm(text, EPOCH)
+
+
+def _tdm_text(fmt="kvn", **kw):
+    p = ndm.TrackingPass("TIRA", 4, np.array([10.0, 20.0]), np.array([[1.7e6, 2.4, 0.19], [1.6e6, 2.5, 0.2]]),
+                         10.0, 1.7e-4)
+    return ndm.to_text(ndm.build_tdm(EPOCH, [p]), fmt)
+
+
+def test_tdm_checks_units_time_system_and_completeness():
+    text = _tdm_text()
+    ms = ndm.read_tdm(text, EPOCH)
+    assert [(m.t, m.station, m.pass_id) for m in ms] == [(10.0, "TIRA", 4), (20.0, "TIRA", 4)]
+    assert ms[0].sigma_angle == pytest.approx(1.7e-4) and ms[0].sigma_range == 10.0
+    with pytest.raises(ndm.NdmError, match="TIME_SYSTEM"):
+        ndm.read_tdm(text.replace("= UTC", "= TAI"), EPOCH)
+    with pytest.raises(ndm.NdmError, match="ANGLE_TYPE"):
+        ndm.read_tdm(text.replace("= AZEL", "= RADEC"), EPOCH)
+    dropped = "\n".join(line for line in text.splitlines() if not line.startswith("ANGLE_2") or "00:20" not in line)
+    with pytest.raises(ndm.NdmError, match="lacks one of"):
+        ndm.read_tdm(dropped, EPOCH)
+    no_sigma = "\n".join(line for line in text.splitlines() if "SIGMA" not in line)
+    with pytest.raises(ndm.NdmError, match="no positive measurement sigma"):
+        ndm.read_tdm(no_sigma, EPOCH)
+    assert ndm.read_tdm(no_sigma, EPOCH, sigma_range=5.0, sigma_angle=1e-4)[0].sigma_range == 5.0
+    assert ndm.read_tdm(_tdm_text("xml"), EPOCH) == ms
+
+
+def test_write_is_atomic(tmp_path, monkeypatch):
+    target = tmp_path / "a.opm.xml"
+    ndm.write_atomic(target, "first")
+    assert target.read_text() == "first" and (target.stat().st_mode & 0o044) == 0o044
+
+    def fail(*_):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(os, "replace", fail)
+    with pytest.raises(OSError, match="disk full"):
+        ndm.write_atomic(target, "second")
+    assert target.read_text() == "first" and sorted(p.name for p in tmp_path.iterdir()) == ["a.opm.xml"]
+
+
+def test_numbers_go_in_as_plain_floats():
+    with pytest.raises(ValueError, match="non-finite"):
+        ndm._f(float("nan"))
+    assert type(ndm._f(np.float64(1.5))) is float
+
+
+def test_export_bad_input_exits_2(tmp_path, capsys):
+    assert main(["export", str(tmp_path / "none"), "--out", str(tmp_path / "o")]) == 2
+    assert "no such bag" in capsys.readouterr().err
+    assert main(["export", str(BAG), "--out", str(tmp_path / "o"), "--epoch-utc", "July"]) == 2
+    assert "--epoch-utc" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:
+        main(["export", str(BAG), "--out", str(tmp_path / "o"), "--format", "json"])
+    assert exc.value.code == 2
