@@ -8,7 +8,7 @@ PY    := $(VENV)/bin/python
 # extra arguments, e.g.  make test ARGS='-k planner -x'
 ARGS ?=
 
-.PHONY: setup demo test bench smoke clean distclean
+.PHONY: setup demo test bench smoke chaos clean distclean
 
 setup:
 	@bash scripts/bootstrap.sh
@@ -18,6 +18,10 @@ demo: setup
 
 test: setup
 	bash scripts/test.sh $(ARGS)
+
+# fault injection alone: every node killed in turn, every topic fuzzed, 378 bad command-line inputs
+chaos: setup
+	bash scripts/test.sh -m fault -s $(ARGS)
 
 bench: setup
 	$(PY) bench/run_all.py $(ARGS)
