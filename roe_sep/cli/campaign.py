@@ -93,7 +93,8 @@ def cmd_campaign(args):
     if args.params:
         check_params_file(args.params)
         overrides = load_overrides(args.params)
-    rep = run_campaign(args.runs, args.seed, args.out, workers=args.workers, scheduler=args.scheduler,
+    workers = args.workers or (None if args.scheduler else os.cpu_count() or 1)
+    rep = run_campaign(args.runs, args.seed, args.out, workers=workers, scheduler=args.scheduler,
                        config=args.config, overrides=overrides, duration=args.duration, timeout=args.timeout,
                        domains=args.domains, retry_failed=args.retry_failed,
                        progress=not args.json and sys.stderr.isatty(), open_loop_samples=args.open_loop_samples,
@@ -111,7 +112,7 @@ def register(subparsers):
     p.add_argument("--out", default="out/campaign", help="campaign directory: runs.csv, runs/<seed>/, report.json, "
                    "figures/ (default out/campaign); rerunning into it skips the runs done")
     where = p.add_mutually_exclusive_group()
-    where.add_argument("--workers", type=integer(1, 256), default=os.cpu_count() or 1,
+    where.add_argument("--workers", type=integer(1, 256),
                        help="embedded Dask cluster: worker processes, one run each at a time (default: CPU count)")
     where.add_argument("--scheduler", type=scheduler_address, help="use an existing Dask cluster (tcp://host:port)")
     p.add_argument("--config", help="scenario YAML")
