@@ -5,7 +5,7 @@ OD consistency beside the open-loop Monte Carlo.
 Modules: :mod:`.engine` (the Dask client), :mod:`.runner` (one run as a task: child process, DDS domain, seeds),
 :mod:`.table` (``runs.csv``), :mod:`.aggregate` (the statistics). Layout of ``--out DIR``:
 
-* ``campaign.json``: the settings the runs were made with (scenario text, node overrides, duration); a rerun with
+* ``campaign.json``: the settings the runs were made with (scenario content, node overrides, duration); a rerun with
   other settings is refused rather than mixed into one table.
 * ``runs.csv``: one row per finished run (:data:`.table.FIELDS`); ``runs/<seed>/``: its ``report.json`` (strict
   JSON), ``overrides.yaml`` (the run's node parameters), ``params.yaml``, ``bag/``, ``logs/``.
@@ -26,9 +26,12 @@ CAMPAIGN_FILE = "campaign.json"
 
 
 def settings(config, overrides, duration):
-    """What makes two campaigns' runs comparable: the scenario text (hash), the node overrides and the duration."""
-    text = Path(config).read_bytes() if config else b""
-    return {"config": str(config) if config else None, "config_sha256": hashlib.sha256(text).hexdigest(),
+    """What makes two campaigns' runs comparable: the scenario (hash of its validated content, so the embedded
+    default counts too), the node overrides and the duration."""
+    from ..core.config import load_scenario
+
+    scenario = repr(load_scenario(config)).encode("utf-8")
+    return {"config": str(config) if config else None, "scenario_sha256": hashlib.sha256(scenario).hexdigest(),
             "overrides": overrides or {}, "duration": duration}
 
 
@@ -37,7 +40,7 @@ def check_settings(out: Path, current: dict):
     path = out / CAMPAIGN_FILE
     if path.exists():
         before = json.loads(path.read_text(encoding="utf-8"))
-        diff = [k for k in ("config_sha256", "overrides", "duration") if before.get(k) != current[k]]
+        diff = [k for k in ("scenario_sha256", "overrides", "duration") if before.get(k) != current[k]]
         if diff:
             raise ValueError(f"--out {out}: holds a campaign made with other {', '.join(diff)} "
                              f"(see {path}); use another --out to run these settings")
