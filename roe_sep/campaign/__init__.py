@@ -72,9 +72,12 @@ def run_campaign(runs, seed, out, workers=1, scheduler=None, config=None, overri
            "open_loop": open_loop(config, overrides, samples=open_loop_samples)}
     rep["wall_s_per_run"] = _mean([r.get("wall_s") for r in rows])
     if figures and rows:
+        from ..core.config import load_scenario
         from ..plots.campaign import write_campaign_figures
 
-        rep["figures"] = [str(p) for p in write_campaign_figures(rows, out / "figures")]
+        sep = load_scenario(config).separation
+        rep["figures"] = [str(p) for p in write_campaign_figures(rows, out / "figures", sep.min_rn_distance,
+                                                                 (sep.a_dl_min, sep.a_dl_max))]
     (out / "report.json").write_text(jsonutil.dumps(rep, indent=2) + "\n", encoding="utf-8")
     return rep
 
