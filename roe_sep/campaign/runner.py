@@ -19,6 +19,7 @@ import contextlib
 import fcntl
 import json
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -123,7 +124,12 @@ def execute(spec: dict) -> dict:
             return _finish(failed_row(seed, "exception", f"run process failed: {why}"), t0, domain)
         rep = json.loads(report_path.read_text(encoding="utf-8"))  # run() may write NaN; the campaign's copy is strict
         report_path.write_text(jsonutil.dumps(rep, indent=2) + "\n", encoding="utf-8")
-        return _finish(row_from_report(seed, rep), t0, domain)
+        row = row_from_report(seed, rep)
+        if row["failure"] == "node_exit":  # name why: the last line each dead node logged
+            dead = re.findall(r"'(\w+)'", row["reason"])
+            row["reason"] = "; ".join([row["reason"].replace(" (see logs/)", ""),
+                                       *(f"{n}: {_last_line(run_dir / 'logs' / f'{n}.log')}" for n in dead)])[:300]
+        return _finish(row, t0, domain)
     except Exception as exc:  # noqa: BLE001  (a run's failure is a row, never a lost campaign)
         return _finish(failed_row(seed, "exception", f"{type(exc).__name__}: {exc}"[:300]), t0, domain)
 

@@ -69,8 +69,9 @@ def print_campaign(rep):
         print(f"\n  open loop (roe-sep mc, {ol['samples']} samples, p = {ol['p']:g} m/s: {ol['p_source']}):")
         print(f"    P(approaching drift) {ol['p_approach']:.4f}   P(evaporation) {ol['p_evaporation']:.4f}   "
               f"P(min R-N violation) {ol['p_min_rn_violation']:.4f}   P(FOV violation) {ol['p_fov_violation']:.4f}")
-        print(f"    closed loop: P(passive_safety fails) {1 - (rep['criteria']['passive_safety']['p'] or 0):.4f}   "
-              f"P(evaporation fails) {1 - (rep['criteria']['evaporation']['p'] or 0):.4f}")
+        if rep["completed"]:
+            print(f"    closed loop: P(passive_safety fails) {1 - rep['criteria']['passive_safety']['p']:.4f}   "
+                  f"P(evaporation fails) {1 - rep['criteria']['evaporation']['p']:.4f}")
     else:
         print(f"\n  open loop: not comparable ({ol['p_source']})")
     if rep["failures"]["by_kind"]:
