@@ -43,6 +43,7 @@ setup(
         'pymsis',
         'ccsds-ndm',
         'foxglove-sdk',
+        'dask[distributed]',
     ],
     extras_require={
         'plots': ['matplotlib'],

@@ -34,6 +34,18 @@ SUBSCRIBERS = {
 }
 
 
+RADAR_STREAM = 1  # the radar noise's stream of a run seed (the simulator uses the seed itself)
+
+
+def radar_seed(seed: int) -> int:
+    """The radar_od noise seed of a run seed: a 32-bit word of ``SeedSequence([seed, 1])``, a stream independent of
+    the simulator's ``default_rng(seed)`` (the same integer in both would correlate the first draws). ``--seed``
+    disperses the radar noise too, so a campaign's run k is reproduced by ``roe-sep run --seed S+k`` alone."""
+    import numpy as np
+
+    return int(np.random.SeedSequence([int(seed), RADAR_STREAM]).generate_state(1, np.uint32)[0])
+
+
 def ros_environment(domain_id=None):
     """This process's environment with DDS kept on loopback and a domain id of its own."""
     env = dict(os.environ)
@@ -200,6 +212,7 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
         sim["duration"] = float(duration)
     if seed is not None:
         sim["seed"] = int(seed)
+        overrides.setdefault("radar_od", {}).setdefault("seed", radar_seed(seed))
     if real_time_factor is not None:
         sim["real_time_factor"] = float(real_time_factor)
     nodes = NODES

@@ -1,10 +1,15 @@
-"""Binomial estimates of the Monte Carlo: the 95 % score interval of a fraction and its count."""
+"""Statistics of Monte Carlo outcomes: binomial score intervals, percentiles and the NEES consistency test.
+
+Pure numpy/scipy; used by the Monte Carlo (open loop) and the closed-loop campaign (:mod:`roe_sep.campaign`).
+"""
 
 import math
 
 import numpy as np
+from scipy.stats import chi2
 
 Z95 = 1.959964  # two-sided 95 % standard-normal quantile
+PERCENTILES = (5, 50, 95)
 
 
 def wilson_interval(k, n, z=1.959964):
@@ -16,6 +21,8 @@ def wilson_interval(k, n, z=1.959964):
     """
     k = np.asarray(k, dtype=float)
     n = np.asarray(n, dtype=float)
+    if n.ndim == 0 and n == 0 and k == 0:
+        return 0.0, 1.0  # nothing observed: nothing is known
     if np.any(n <= 0) or np.any(k < 0) or np.any(k > n):
         raise ValueError(f"wilson_interval needs 0 <= k <= n and n > 0, got k={k}, n={n}")
     z2 = z * z
@@ -35,3 +42,51 @@ def normal_interval(mean, std_error, z=Z95):
 def relative_half_width(lo, hi, p):
     """Half the interval width over the estimate (inf where the estimate is 0)."""
     return (hi - lo) / (2.0 * p) if p > 0 else math.inf
+
+
+def proportion(k, n, z=Z95):
+    """``{"k", "n", "p", "ci95"}`` of a proportion (p None for n = 0) with its Wilson interval."""
+    lo, hi = wilson_interval(k, n, z)
+    return {"k": int(k), "n": int(n), "p": (k / n) if n else None, "ci95": [lo, hi]}
+
+
+def distribution(values, percentiles=PERCENTILES):
+    """Summary of a sample: ``n``, ``min``, ``p5``/``p50``/``p95`` (linear interpolation), ``max`` and ``mean``;
+    None entries (no value in that run) are left out and counted in ``missing``. Empty: the statistics are None."""
+    vals = [float(v) for v in values if v is not None and math.isfinite(float(v))]
+    out = {"n": len(vals), "missing": sum(1 for v in values if v is None or not math.isfinite(float(v)))}
+    x = np.asarray(vals, dtype=float)
+    out["min"] = float(x.min()) if x.size else None
+    for q in percentiles:
+        out[f"p{q}"] = float(np.percentile(x, q)) if x.size else None
+    out["max"] = float(x.max()) if x.size else None
+    out["mean"] = float(x.mean()) if x.size else None
+    return out
+
+
+def nees_bounds(dof, runs=1, confidence=0.95):
+    """Two-sided acceptance region of the average NEES over ``runs`` independent runs of a consistent estimator of
+    dimension ``dof`` (Bar-Shalom, Li & Kirubarajan 2001, Sec. 5.4.2): runs * mean(NEES) ~ chi-square(runs * dof), so
+    mean(NEES) lies in [chi2.ppf(a/2, runs dof), chi2.ppf(1 - a/2, runs dof)] / runs with probability 1 - a."""
+    if dof < 1 or runs < 1:
+        raise ValueError(f"nees_bounds: need dof >= 1 and runs >= 1, got dof = {dof}, runs = {runs}")
+    a = 1.0 - confidence
+    return float(chi2.ppf(a / 2.0, runs * dof) / runs), float(chi2.ppf(1.0 - a / 2.0, runs * dof) / runs)
+
+
+def nees_consistency(nees, dof=6, confidence=0.95):
+    """The NEES test of a set of runs: mean NEES against :func:`nees_bounds` for that many runs, and the fraction
+    of single-run NEES inside the single-run chi-square(dof) bounds (expected: ``confidence``, with its Wilson
+    interval). An optimistic covariance (errors larger than it says) gives a mean above the upper bound."""
+    vals = [float(v) for v in nees if v is not None and math.isfinite(float(v))]
+    single = nees_bounds(dof, 1, confidence)
+    out = {"dof": dof, "confidence": confidence, "n": len(vals), "single_run_bounds": list(single),
+           "mean": None, "mean_bounds": None, "consistent": None}
+    if not vals:
+        return out
+    lo, hi = nees_bounds(dof, len(vals), confidence)
+    mean = float(np.mean(vals))
+    inside = sum(1 for v in vals if single[0] <= v <= single[1])
+    out.update(mean=mean, mean_bounds=[lo, hi], consistent=bool(lo <= mean <= hi),
+               median=float(np.median(vals)), within_single_run_bounds=proportion(inside, len(vals)))
+    return out

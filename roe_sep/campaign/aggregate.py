@@ -1,0 +1,82 @@
+"""The campaign's aggregate report from its table rows, and the open-loop Monte Carlo beside it.
+
+Keys of :func:`aggregate`: ``runs`` / ``completed`` / ``failed``; ``p_safe`` and ``criteria`` (each a proportion
+over the completed runs with its Wilson 95 % interval, :func:`roe_sep.core.montecarlo.stats.proportion`);
+``p_safe_failures_unsafe`` (the conservative reading: a failed run counts as unsafe); ``distributions`` (min
+distance, min R-N distance at the IC epoch and at the end, total dv, drift-stop and IC dv, time to IC: n, missing,
+min, p5, p50, p95, max, mean); ``od_nees`` (NEES against its chi-square(6) bounds); ``failures`` (count per kind
+and per reason).
+"""
+
+import collections
+import dataclasses
+
+from ..core.montecarlo.stats import distribution, nees_consistency, proportion
+from .table import CRITERIA
+
+DISTRIBUTIONS = {  # report key -> (row field, unit)
+    "min_distance": ("min_distance_m", "m"),
+    "min_rn_distance_ic": ("min_rn_ic_m", "m"),
+    "min_rn_distance_final": ("min_rn_final_m", "m"),
+    "dv_total": ("dv_total_m_s", "m/s"),
+    "dv_drift_stop": ("dv_drift_stop_m_s", "m/s"),
+    "dv_ic": ("dv_ic_m_s", "m/s"),
+    "time_to_ic": ("time_to_ic_s", "s"),
+}
+
+
+def aggregate(rows):
+    """The statistics of a list of rows (one per seed)."""
+    done = [r for r in rows if r["status"] == "ok"]
+    failed = [r for r in rows if r["status"] != "ok"]
+    n = len(done)
+    out = {
+        "runs": len(rows), "completed": n, "failed": len(failed),
+        "p_safe": proportion(sum(r["safe"] for r in done), n),
+        "p_safe_failures_unsafe": proportion(sum(r["safe"] for r in done), len(rows)),
+        "criteria": {c: proportion(sum(r[f"crit_{c}"] for r in done), n) for c in CRITERIA},
+        "distributions": {k: {"unit": unit, **distribution([r.get(f) for r in done])}
+                          for k, (f, unit) in DISTRIBUTIONS.items()},
+        "od_nees": nees_consistency([r.get("od_nees") for r in done], dof=6),
+        "failures": {"by_kind": dict(collections.Counter(r["failure"] for r in failed)),
+                     "by_reason": dict(collections.Counter(r["reason"] for r in failed).most_common())},
+    }
+    out["distributions"]["min_distance"]["note"] = "missing: no approach after the departure (or no value)"
+    return out
+
+
+def planner_p(scenario, overrides):
+    """The drift-stop reduction |p| [m/s] the planner node flies with these overrides, and how it was chosen; None
+    for the multi-impulse strategy (its carrier burns are sized otherwise) and for ``three_sigma`` (per ejection)."""
+    from ..core.montecarlo.sweep import sweep
+    from ..core.separation.double_impulse import design
+
+    pl = (overrides or {}).get("planner", {})
+    if pl.get("strategy", "double_impulse") != "double_impulse":
+        return None, "multi_impulse strategy: no open-loop p sweep"
+    mode = pl.get("p_mode", "monte_carlo")
+    if mode == "fixed":
+        return float(pl.get("p_reduction", 0.0)), "fixed"
+    if mode != "monte_carlo":
+        return None, f"p_mode {mode}: |p| is chosen per ejection"
+    mc = dataclasses.replace(scenario.monte_carlo, samples=int(pl.get("mc_samples", 100000)),
+                             seed=int(pl.get("mc_seed", 0)))
+    return float(sweep(design(scenario.separation), mc, scenario.p_values).p_best), \
+        f"p_best of the planner's {mc.samples}-sample sweep (mc_seed {mc.seed})"
+
+
+def open_loop(config, overrides, samples=20000, seed=0):
+    """The open-loop ``roe-sep mc`` result for the scenario's dispersions (seed 002 Monte Carlo: dispersed ejection and
+    drift-stop propagated analytically, no OD, no IC acquisition) at the |p| the planner uses: its summary row."""
+    from ..core.config import load_scenario
+    from ..core.montecarlo.sweep import sweep
+    from ..core.separation.double_impulse import design
+
+    scenario = load_scenario(config)
+    p, how = planner_p(scenario, overrides)
+    if p is None:
+        return {"p": None, "p_source": how}
+    mc = dataclasses.replace(scenario.monte_carlo, samples=int(samples), seed=int(seed))
+    row = sweep(design(scenario.separation), mc, [p]).rows[0]
+    return {"p": p, "p_source": how, "samples": mc.samples, "seed": mc.seed, "horizon_s": mc.horizon,
+            "drag": mc.drag, "j2": mc.j2, **{k: v for k, v in row.items() if k != "p"}}

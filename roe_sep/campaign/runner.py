@@ -1,0 +1,146 @@
+"""One run of a campaign as a Dask task: :func:`roe_sep.run.run` in a child process of its own, in a DDS domain of
+its own, with the seed's dispersions; returns the run's table row (never raises: a failure is a row with its reason).
+
+Isolation. The run's nodes and its observer live in a child process started in a new session (process group): the
+worker's own signals (Ctrl-C on the terminal) never reach them, the worker kills the whole group when the run
+exceeds its wall-time limit, and the child's watchdog kills its group when the worker dies (parent changed), so an
+interrupted campaign leaves no node behind. The DDS domain is taken from a range with an exclusive ``flock`` per
+domain in the temporary directory, so concurrent runs on one host (any number of workers, any number of campaigns)
+never share a domain; discovery stays on loopback (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``), so workers on
+other hosts cannot collide either. The lock is the kernel's: a dead worker releases it.
+
+Seeds. The simulator's ``seed`` is the run seed (SPL magnitude and direction, carrier burn execution and attitude
+errors, differential drag); the radar noise is seeded with :func:`radar_seed` of the run seed, an independent
+stream (written into the run's ``overrides.yaml``, so ``roe-sep run --seed S --params overrides.yaml`` repeats the
+run alone).
+"""
+
+import contextlib
+import fcntl
+import json
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+import yaml
+
+from .. import jsonutil
+from ..run import radar_seed
+from .table import failed_row, row_from_report
+
+KILL_MARGIN = 120.0  # wall s beyond the run's own time limit before the worker kills the run's process group
+
+
+def run_overrides(seed: int, base: dict) -> dict:
+    """The node parameter overrides of one run: the campaign's ``--params`` plus the run's radar-noise seed."""
+    out = {node: dict(values) for node, values in (base or {}).items()}
+    out.setdefault("radar_od", {})["seed"] = radar_seed(seed)
+    return out
+
+
+def write_overrides(path: Path, overrides: dict):
+    path.write_text(yaml.safe_dump({n: {"ros__parameters": v} for n, v in overrides.items()}, sort_keys=True),
+                    encoding="utf-8")
+
+
+@contextlib.contextmanager
+def domain_lock(lo: int, hi: int, wait=600.0):
+    """An exclusive DDS domain id in [lo, hi] for the duration of the block (``flock`` on a per-domain file)."""
+    lock_dir = Path(tempfile.gettempdir()) / "roe_sep_campaign_domains"
+    lock_dir.mkdir(exist_ok=True)
+    start = time.monotonic()
+    while True:
+        for d in range(lo, hi + 1):
+            fh = open(lock_dir / f"{d}.lock", "w")
+            try:
+                fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                fh.close()
+                continue
+            try:
+                yield d
+            finally:
+                fcntl.flock(fh, fcntl.LOCK_UN)
+                fh.close()
+            return
+        if time.monotonic() - start > wait:
+            raise RuntimeError(f"no free DDS domain in [{lo}, {hi}] within {wait:g} s")
+        time.sleep(0.5)
+
+
+def _last_line(path: Path) -> str:
+    try:
+        lines = [ln.strip() for ln in path.read_text(encoding="utf-8", errors="replace").splitlines() if ln.strip()]
+    except OSError:
+        return ""
+    return lines[-1][:300] if lines else ""
+
+
+def execute(spec: dict) -> dict:
+    """The Dask task: run seed ``spec['seed']`` into ``spec['run_dir']`` (an unfinished earlier attempt there is
+    removed first) and return its row. ``spec``: seed, run_dir, config, overrides, duration, timeout, domains."""
+    seed = int(spec["seed"])
+    run_dir = Path(spec["run_dir"])
+    t0 = time.monotonic()
+    domain = None
+    try:
+        if run_dir.exists():
+            shutil.rmtree(run_dir)
+        run_dir.mkdir(parents=True)
+        write_overrides(run_dir / "overrides.yaml", run_overrides(seed, spec.get("overrides")))
+        with domain_lock(*spec["domains"]) as domain:
+            child = {k: spec.get(k) for k in ("config", "duration", "timeout")}
+            child.update(seed=seed, out=str(run_dir), params=str(run_dir / "overrides.yaml"), domain_id=domain)
+            with open(run_dir / "campaign.log", "w", encoding="utf-8") as log:
+                proc = subprocess.Popen([sys.executable, "-m", "roe_sep.campaign.child", json.dumps(child)],
+                                        stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+                try:
+                    code = proc.wait(timeout=float(spec["timeout"]) + KILL_MARGIN)
+                except subprocess.TimeoutExpired:
+                    os.killpg(proc.pid, signal.SIGKILL)
+                    proc.wait()
+                    row = failed_row(seed, "timeout", f"run killed after {spec['timeout'] + KILL_MARGIN:g} wall s")
+                    return _finish(row, t0, domain)
+                finally:
+                    if proc.poll() is None:  # the worker is being torn down (task cancelled): take the run with it
+                        os.killpg(proc.pid, signal.SIGKILL)
+        report_path = run_dir / "report.json"
+        if code != 0 or not report_path.exists():
+            why = _last_line(run_dir / "campaign.log") or f"exit status {code}"
+            return _finish(failed_row(seed, "exception", f"run process failed: {why}"), t0, domain)
+        rep = json.loads(report_path.read_text(encoding="utf-8"))  # run() may write NaN; the campaign's copy is strict
+        report_path.write_text(jsonutil.dumps(rep, indent=2) + "\n", encoding="utf-8")
+        row = row_from_report(seed, rep)
+        if row["failure"] == "node_exit":  # name why: the last line each dead node logged
+            dead = re.findall(r"'(\w+)'", row["reason"])
+            row["reason"] = "; ".join([row["reason"].replace(" (see logs/)", ""),
+                                       *(f"{n}: {_last_line(run_dir / 'logs' / f'{n}.log')}" for n in dead)])[:300]
+        return _finish(row, t0, domain)
+    except Exception as exc:  # noqa: BLE001  (a run's failure is a row, never a lost campaign)
+        return _finish(failed_row(seed, "exception", f"{type(exc).__name__}: {exc}"[:300]), t0, domain)
+
+
+def _finish(row, t0, domain):
+    row["wall_s"] = time.monotonic() - t0
+    row["domain_id"] = domain
+    return row
+
+
+def watch_parent(interval=0.5):
+    """Kill this process's group (this run's nodes) once the parent (the Dask worker) is gone."""
+    parent = os.getppid()
+
+    def watch():
+        while True:
+            time.sleep(interval)
+            if os.getppid() != parent:
+                os.killpg(0, signal.SIGKILL)
+
+    threading.Thread(target=watch, daemon=True, name="parent-watchdog").start()

@@ -1,0 +1,165 @@
+"""The campaign table ``runs.csv``: one row per finished run, written the moment the run ends.
+
+The header is fixed (:data:`FIELDS`). A row is appended as one complete line, flushed and fsync'ed, so an
+interrupted campaign (Ctrl-C, a killed machine) leaves complete rows only; a torn last line (no newline) is ignored
+when the table is read and overwritten by the next append. A seed appearing twice (``--retry-failed``) counts with
+its last row. Empty cells are "no value" (e.g. no OD solution in a failed run).
+"""
+
+import csv
+import io
+import math
+import os
+from pathlib import Path
+
+from ..core.safety.metrics import min_rn_distance
+from ..core.safety.monitor import ERROR_CRITERIA
+
+CRITERIA = (*ERROR_CRITERIA, "min_distance", "plans_approved", "ic_reached")
+ROE_KEYS = ("a_da", "a_dl", "a_dex", "a_dey", "a_dix", "a_diy")
+FIELDS = (
+    "seed", "status", "failure", "reason", "safe", *(f"crit_{c}" for c in CRITERIA),
+    "min_distance_m", "min_rn_ic_m", "min_rn_final_m", "final_de_m", "final_di_m",
+    *(f"final_{k}_m" for k in ROE_KEYS),
+    "dv_total_m_s", "dv_drift_stop_m_s", "dv_ic_m_s", "time_to_ic_s", "ejection_epoch_s",
+    "od_epoch_s", "od_passes", "od_nees", *(f"od_err_{k}_m" for k in ROE_KEYS),
+    "truth_drag_m_per_day", "wall_s", "domain_id",
+)
+BOOL_FIELDS = {"safe", *(f"crit_{c}" for c in CRITERIA)}
+INT_FIELDS = {"seed", "od_passes", "domain_id"}
+STR_FIELDS = {"status", "failure", "reason"}
+RUN_FIELDS = ("wall_s", "domain_id")  # how the run went on this machine, not what it computed
+FAILURES = ("node_exit", "timeout", "aborted", "exception", "worker_lost")
+
+
+def failure_kind(reason: str) -> str:
+    """The failure class of an unfinished run from ``report['run']['reason']`` of :func:`roe_sep.run.run`."""
+    if reason.startswith("node(s) exited early"):
+        return "node_exit"
+    if reason.startswith("wall-time limit"):
+        return "timeout"
+    if reason.startswith("scenario aborted"):
+        return "aborted"
+    return "exception"
+
+
+def row_from_report(seed: int, rep: dict) -> dict:
+    """The table row of one run's report (:func:`roe_sep.report.build_report` + ``run``)."""
+    run = rep.get("run") or {}
+    completed = bool(run.get("completed"))
+    reason = str(run.get("reason", ""))
+    row = {"seed": seed, "status": "ok" if completed else "failed", "failure": "" if completed else
+           failure_kind(reason), "reason": reason, "safe": bool(rep.get("safe")) and completed}
+    for c in CRITERIA:
+        row[f"crit_{c}"] = bool((rep.get("criteria") or {}).get(c))
+    row["min_distance_m"] = rep.get("min_distance")
+    ic = rep.get("ic") or {}
+    row["min_rn_ic_m"] = ic.get("min_rn_distance")
+    final = rep.get("final_roe")
+    if final:
+        row["min_rn_final_m"] = float(min_rn_distance(final))  # Eq. 25 is homogeneous: a*ROE in, meters out
+        row["final_de_m"] = math.hypot(final[2], final[3])
+        row["final_di_m"] = math.hypot(final[4], final[5])
+        row.update({f"final_{k}_m": v for k, v in zip(ROE_KEYS, final)})
+    by = rep.get("dv_by_purpose") or {}
+    row.update(dv_total_m_s=rep.get("dv_total"), dv_drift_stop_m_s=by.get("drift_stop"),
+               dv_ic_m_s=by.get("ic_acquisition"), time_to_ic_s=rep.get("time_to_ic"),
+               ejection_epoch_s=rep.get("ejection_epoch"),
+               truth_drag_m_per_day=rep.get("truth_drag_a_da_dot_m_per_day"))
+    od = rep.get("od")
+    if od:
+        row.update(od_epoch_s=od.get("epoch"), od_passes=od.get("passes"), od_nees=od.get("nees"))
+        row.update({f"od_err_{k}_m": v for k, v in zip(ROE_KEYS, od.get("error") or ())})
+    return row
+
+
+def failed_row(seed: int, failure: str, reason: str) -> dict:
+    """The row of a run that produced no report (an exception, a lost worker)."""
+    return {"seed": seed, "status": "failed", "failure": failure, "reason": reason, "safe": False,
+            **{f"crit_{c}": False for c in CRITERIA}}
+
+
+def _cell(value):
+    if value is None:
+        return ""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        return repr(value) if math.isfinite(value) else ""  # a non-finite number is "no value"
+    return str(value)
+
+
+def _parse(name, text):
+    if text == "":
+        return "" if name in STR_FIELDS else None
+    if name in STR_FIELDS:
+        return text
+    if name in BOOL_FIELDS:
+        return text == "true"
+    if name in INT_FIELDS:
+        return int(text)
+    return float(text)
+
+
+def format_row(row: dict) -> str:
+    """One CSV line (with its newline) of a row, every field of :data:`FIELDS` in order."""
+    unknown = set(row) - set(FIELDS)
+    if unknown:
+        raise KeyError(f"row fields not in the table header: {sorted(unknown)}")
+    buf = io.StringIO()
+    csv.writer(buf, lineterminator="\n").writerow([_cell(row.get(f)) for f in FIELDS])
+    return buf.getvalue()
+
+
+class Table:
+    """``runs.csv`` of a campaign directory: read the done rows, append a finished one durably."""
+
+    def __init__(self, path):
+        self.path = Path(path)
+
+    def read(self) -> dict:
+        """``{seed: row}`` of the complete rows (the last row of a seed wins); {} without a table."""
+        if not self.path.exists():
+            return {}
+        text = self.path.read_text(encoding="utf-8")
+        if not text:
+            return {}
+        complete = text if text.endswith("\n") else text[: text.rfind("\n") + 1]  # drop a torn last line
+        reader = csv.reader(io.StringIO(complete))
+        header = next(reader, None)
+        if header is not None and tuple(header) != FIELDS:
+            raise ValueError(f"{self.path}: table header {header[:4]}... is not the header of this roe_sep version "
+                             f"(expected {len(FIELDS)} columns starting {list(FIELDS[:4])}); use another --out")
+        rows = {}
+        for cells in reader:
+            if len(cells) != len(FIELDS):
+                continue
+            row = {f: _parse(f, c) for f, c in zip(FIELDS, cells)}
+            rows[row["seed"]] = row
+        return rows
+
+    def append(self, row: dict):
+        """Append one complete line, flush and fsync (write the header first if the table is new; cut a torn last
+        line left by a crash so the new row starts on its own line)."""
+        line = format_row(row)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        with open(self.path, "a+", encoding="utf-8", newline="") as fh:
+            fh.seek(0, os.SEEK_END)
+            size = fh.tell()
+            if size == 0:
+                fh.write(format_header())
+            else:
+                fh.seek(0)
+                text = fh.read()
+                if not text.endswith("\n"):
+                    fh.truncate(len(text[: text.rfind("\n") + 1].encode("utf-8")))
+                    fh.seek(0, os.SEEK_END)
+            fh.write(line)
+            fh.flush()
+            os.fsync(fh.fileno())
+
+
+def format_header() -> str:
+    buf = io.StringIO()
+    csv.writer(buf, lineterminator="\n").writerow(FIELDS)
+    return buf.getvalue()

@@ -1,0 +1,71 @@
+"""Figures of a closed-loop campaign (``roe-sep campaign``): the review set of a separation campaign.
+
+* ``dv_hist.png``: carrier total dv per run (drift-stop + IC acquisition), with the 5/50/95 % percentiles;
+* ``time_to_ic_hist.png``: ejection to the IC epoch [h];
+* ``ei_vs_along_track.png``: at the end of each run, the e/i separation (minimum R-N distance, seed 002 Eq. 25)
+  against the mean along-track separation |a dl|, safe runs and unsafe runs in their own colours, with the IC
+  limits (minimum R-N distance, along-track band).
+"""
+
+from pathlib import Path
+
+import numpy as np
+
+from . import pyplot, save
+
+
+def _values(rows, field, scale=1.0):
+    return np.array([r[field] * scale for r in rows if r["status"] == "ok" and r.get(field) is not None])
+
+
+def _hist(values, xlabel, title, path):
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(6, 4))
+    if values.size:
+        ax.hist(values, bins=max(5, min(40, int(np.sqrt(values.size)) * 2)), color="tab:blue", alpha=0.8)
+        for q, style in ((5, ":"), (50, "--"), (95, ":")):
+            v = np.percentile(values, q)
+            ax.axvline(v, color="k", ls=style, lw=1, label=f"p{q} = {v:.4g}")
+        ax.legend(fontsize=8)
+    else:
+        ax.text(0.5, 0.5, "no completed run with a value", ha="center", transform=ax.transAxes)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel("runs")
+    ax.set_title(f"{title} ({values.size} runs)")
+    ax.grid(alpha=0.3)
+    save(fig, path)
+
+
+def fig_ei_vs_along_track(rows, path, min_rn=None, dl_range=None):
+    """The scatter, with the IC limits when given: minimum R-N distance [m] and the [a_dl_min, a_dl_max] band [m]."""
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    ok = [r for r in rows if r["status"] == "ok" and r.get("final_a_dl_m") is not None
+          and r.get("min_rn_final_m") is not None]
+    for safe, colour, label in ((True, "tab:green", "safe"), (False, "tab:red", "unsafe")):
+        sel = [r for r in ok if r["safe"] == safe]
+        ax.scatter([abs(r["final_a_dl_m"]) / 1e3 for r in sel], [r["min_rn_final_m"] for r in sel], s=14,
+                   c=colour, label=f"{label} ({len(sel)})", edgecolors="none")
+    if dl_range is not None:
+        ax.axvspan(dl_range[0] / 1e3, dl_range[1] / 1e3, color="tab:blue", alpha=0.08, label="IC along-track band")
+    if min_rn is not None:
+        ax.axhline(min_rn, color="tab:red", ls="--", lw=1, label=f"min R-N limit {min_rn:g} m")
+    ax.set_xlabel("|a dl| at the end [km]")
+    ax.set_ylabel("e/i separation: min R-N distance at the end [m]")
+    ax.set_title("Final e/i separation vs along-track separation")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    save(fig, path)
+
+
+def write_campaign_figures(rows, out_dir, min_rn=None, dl_range=None):
+    """Write the campaign figures into ``out_dir`` (limits as in :func:`fig_ei_vs_along_track`); returns their
+    paths."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    paths = [out_dir / "dv_hist.png", out_dir / "time_to_ic_hist.png", out_dir / "ei_vs_along_track.png"]
+    _hist(_values(rows, "dv_total_m_s"), "carrier total dv [m/s]", "Carrier dv per run", paths[0])
+    _hist(_values(rows, "time_to_ic_s", 1 / 3600), "ejection to IC epoch [h]", "Time to initial conditions",
+          paths[1])
+    fig_ei_vs_along_track(rows, paths[2], min_rn, dl_range)
+    return paths

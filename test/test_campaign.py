@@ -1,0 +1,217 @@
+"""``roe-sep campaign``: rows written per run, resume, failures as rows, run k reproduced alone, and the statistics.
+
+The closed-loop tests run short campaigns (20000 s of sim time: ejection, blind drift-stop and the first radar
+passes) on an embedded Dask cluster. The runs take DDS domains from ``ROE_SEP_TEST_CAMPAIGN_DOMAINS`` (``LO-HI``;
+default: the session's own domain only, so concurrent runs queue for it).
+"""
+
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+from roe_sep.campaign.runner import radar_seed, run_overrides
+from roe_sep.campaign.table import FIELDS, RUN_FIELDS, Table, failed_row, format_row, row_from_report
+from roe_sep.core.montecarlo.stats import distribution, nees_bounds, nees_consistency, wilson_interval
+
+ROOT = Path(__file__).resolve().parents[1]
+DURATION = 20000.0
+SEED = 100
+RUNS = 3
+
+
+def _domains():
+    own = int(os.environ.get("ROS_DOMAIN_ID", "0") or 0)
+    return os.environ.get("ROE_SEP_TEST_CAMPAIGN_DOMAINS", f"{own}-{own}")
+
+
+def _cli(*args, check=True):
+    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    proc = subprocess.run([sys.executable, "-m", "roe_sep.cli", "campaign", *args, "--domains", _domains(),
+                           "--open-loop-samples", "1000", "--json"], capture_output=True, text=True, env=env,
+                          cwd=ROOT, timeout=900)
+    if check and proc.returncode not in (0, 1):
+        raise AssertionError(f"exit {proc.returncode}: {proc.stderr[-2000:]}")
+    return proc
+
+
+def _strict(text):
+    def refuse(c):
+        raise ValueError(f"non-strict JSON constant {c}")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+def _comparable(row):
+    """A row without how it ran (wall time, domain): what the run computed."""
+    return format_row({k: v for k, v in row.items() if k not in RUN_FIELDS})
+
+
+# ----------------------------------------------------------------------------------------------- statistics
+def test_wilson_interval_known_values():
+    lo, hi = wilson_interval(5, 10)
+    assert lo == pytest.approx(0.2366, abs=1e-4) and hi == pytest.approx(0.7634, abs=1e-4)
+    assert wilson_interval(0, 10) == (0.0, pytest.approx(1.959964 ** 2 / (10 + 1.959964 ** 2)))
+    lo, hi = wilson_interval(10, 10)
+    assert hi == 1.0 and lo == pytest.approx(10 / (10 + 1.959964 ** 2))
+    assert wilson_interval(0, 0) == (0.0, 1.0)
+    with pytest.raises(ValueError, match="k = 11"):
+        wilson_interval(11, 10)
+
+
+def test_nees_bounds_and_consistency():
+    lo, hi = nees_bounds(6)
+    assert lo == pytest.approx(1.2373, abs=1e-3) and hi == pytest.approx(14.4494, abs=1e-3)
+    lo100, hi100 = nees_bounds(6, 100)
+    assert lo < lo100 < 6 < hi100 < hi  # the mean of 100 runs is held tighter
+    import numpy as np
+
+    rng = np.random.default_rng(1)
+    honest = (rng.standard_normal((400, 6)) ** 2).sum(axis=1)
+    assert nees_consistency(honest)["consistent"]
+    assert not nees_consistency(4.0 * honest)["consistent"]  # covariance 4x too small: errors 2x the sigmas
+    assert nees_consistency([None, None])["mean"] is None
+
+
+def test_distribution_skips_missing_values():
+    d = distribution([1.0, None, 3.0, 2.0])
+    assert d["n"] == 3 and d["missing"] == 1 and d["p50"] == 2.0 and d["max"] == 3.0
+    assert distribution([None])["p50"] is None
+
+
+# ------------------------------------------------------------------------------------------------- the table
+@pytest.mark.fault
+def test_table_round_trip_and_torn_line(tmp_path):
+    t = Table(tmp_path / "runs.csv")
+    row = failed_row(7, "exception", 'bad, "quoted"\nreason')
+    row.update(wall_s=1.5, domain_id=62, min_distance_m=float("nan"))
+    t.append(row)
+    with open(t.path, "a", encoding="utf-8") as fh:
+        fh.write("8,ok,,scenario compl")  # a crash in the middle of a line
+    rows = t.read()
+    assert list(rows) == [7] and rows[7]["reason"] == row["reason"] and rows[7]["min_distance_m"] is None
+    t.append(failed_row(9, "timeout", "x"))
+    assert list(t.read()) == [7, 9]
+    assert t.path.read_text().splitlines()[0].split(",") == list(FIELDS)
+
+
+def test_radar_seed_is_derived_and_independent():
+    assert radar_seed(5) == radar_seed(5) != radar_seed(6)
+    assert radar_seed(5) != 5 and 0 <= radar_seed(5) < 2**32
+    over = run_overrides(5, {"radar_od": {"sigma_range": 1.0}, "sim": {"disperse": True}})
+    assert over["radar_od"] == {"sigma_range": 1.0, "seed": radar_seed(5)} and over["sim"] == {"disperse": True}
+
+
+# ------------------------------------------------------------------------------------------ closed-loop runs
+@pytest.fixture(scope="module")
+def campaign(tmp_path_factory):
+    out = tmp_path_factory.mktemp("campaign") / "c"
+    params = out.parent / "params.yaml"
+    params.write_text(yaml.safe_dump({"planner": {"ros__parameters": {"mc_samples": 20000}}}))
+    args = ("--runs", str(RUNS), "--seed", str(SEED), "--duration", str(DURATION), "--workers", "2",
+            "--params", str(params), "--out", str(out))
+    proc = _cli(*args)
+    return out, args, params, _strict(proc.stdout)
+
+
+def test_campaign_writes_one_row_and_report_per_run(campaign):
+    out, _, _, rep = campaign
+    rows = Table(out / "runs.csv").read()
+    assert sorted(rows) == list(range(SEED, SEED + RUNS))
+    assert rep["executed_now"] == RUNS and rep["runs"] == RUNS and rep["completed"] + rep["failed"] == RUNS
+    for s, row in rows.items():
+        assert row["status"] == "ok", row["reason"]
+        assert 0.5 < row["dv_total_m_s"] < 3.0 and row["min_distance_m"] > 0
+        run_rep = _strict((out / "runs" / str(s) / "report.json").read_text())
+        assert _comparable(row) == _comparable(row_from_report(s, run_rep))
+        assert yaml.safe_load((out / "runs" / str(s) / "overrides.yaml").read_text())["radar_od"][
+            "ros__parameters"]["seed"] == radar_seed(s)
+    assert len({r["dv_total_m_s"] for r in rows.values()}) == RUNS  # each seed disperses differently
+    assert rep["p_safe"]["n"] == rep["completed"] and 0 <= rep["p_safe"]["ci95"][0] <= rep["p_safe"]["ci95"][1] <= 1
+    assert set(rep["criteria"]) >= {"keep_out", "passive_safety", "evaporation", "ic_reached"}
+    assert rep["distributions"]["dv_total"]["n"] == rep["completed"]
+    assert rep["open_loop"]["p"] is not None and 0 <= rep["open_loop"]["p_approach"] <= 1
+    assert all(Path(f).stat().st_size > 0 for f in rep["figures"])
+    assert _strict((out / "report.json").read_text())["runs"] == RUNS
+
+
+def test_rerun_skips_every_done_run(campaign):
+    out, args, _, _ = campaign
+    before = (out / "runs.csv").read_text()
+    rep = _strict(_cli(*args).stdout)
+    assert rep["executed_now"] == 0 and rep["skipped_done"] == RUNS
+    assert (out / "runs.csv").read_text() == before
+
+
+def test_interrupted_campaign_completes_only_the_missing_run_with_the_same_row(campaign):
+    """A campaign killed before its last row: the rerun (on one worker) runs that seed only, into the leftover run
+    directory, and writes the row the two-worker campaign wrote."""
+    out, args, _, _ = campaign
+    table = out / "runs.csv"
+    lines = table.read_text().splitlines(keepends=True)
+    last = Table(table).read()
+    victim = int(lines[-1].split(",")[0])
+    table.write_text("".join(lines[:-1]) + lines[-1][:25])  # the last row torn mid-line, as by a kill
+    args = tuple(a if a != "2" else "1" for a in args)  # --workers 1
+    rep = _strict(_cli(*args).stdout)
+    assert rep["executed_now"] == 1 and rep["skipped_done"] == RUNS - 1
+    again = Table(table).read()
+    assert sorted(again) == sorted(last)
+    assert _comparable(again[victim]) == _comparable(last[victim])
+
+
+def test_run_k_alone_gives_the_same_row(campaign):
+    from roe_sep.run import run
+
+    out, _, params, _ = campaign
+    k = 1
+    seed = SEED + k
+    overrides = out / "runs" / str(seed) / "overrides.yaml"
+    # the run's overrides are the campaign's --params plus the radar seed
+    assert yaml.safe_load(overrides.read_text())["planner"]["ros__parameters"]["mc_samples"] == 20000
+    rep = run(out=out.parent / "alone", params=str(overrides), duration=DURATION, seed=seed,
+              domain_id=int(_domains().split("-")[0]), timeout=600)
+    assert _comparable(row_from_report(seed, rep)) == _comparable(Table(out / "runs.csv").read()[seed])
+
+
+@pytest.mark.fault
+def test_failed_run_is_a_row_with_its_reason(tmp_path):
+    params = tmp_path / "bad.yaml"
+    params.write_text(yaml.safe_dump({"sim": {"ros__parameters": {"time_step": -1.0}},
+                                      "planner": {"ros__parameters": {"mc_samples": 20000}}}))
+    proc = _cli("--runs", "1", "--seed", "3", "--duration", str(DURATION), "--workers", "1", "--timeout", "120",
+                "--params", str(params), "--out", str(tmp_path / "c"), "--no-figures")
+    assert proc.returncode == 1  # a failed run: the campaign completes, its status says so
+    rep = _strict(proc.stdout)
+    row = Table(tmp_path / "c" / "runs.csv").read()[3]
+    assert row["status"] == "failed" and row["failure"] == "node_exit"
+    assert "['sim']" in row["reason"] and "sim: [ERROR] parameter 'time_step'" in row["reason"]
+    assert rep["failed"] == 1 and rep["failures"]["by_kind"] == {"node_exit": 1} and rep["p_safe"]["n"] == 0
+    assert rep["p_safe_failures_unsafe"] == {"k": 0, "n": 1, "p": 0.0, "ci95": [0.0, pytest.approx(0.7935, abs=1e-4)]}
+    assert not math.isnan(rep["p_safe_failures_unsafe"]["ci95"][1])
+
+
+def test_campaign_refuses_other_settings_in_the_same_directory(campaign):
+    out, args, _, _ = campaign
+    proc = _cli(*[a if a != str(DURATION) else "30000.0" for a in args], check=False)
+    assert proc.returncode == 2 and "other duration" in proc.stderr and proc.stderr.count("\n") == 1
+
+
+@pytest.mark.fault
+@pytest.mark.parametrize("args, message", [
+    (("--runs", "0"), "--runs"),
+    (("--runs", "2", "--domains", "5-3"), "--domains"),
+    (("--runs", "2", "--scheduler", "localhost:8786"), "--scheduler"),
+    (("--runs", "2", "--seed", str(2**32 - 1)), "last seed"),
+    (("--runs", "2", "--workers", "2", "--scheduler", "tcp://127.0.0.1:1"), "not allowed with"),
+])
+def test_bad_options_are_one_line_errors(tmp_path, args, message):
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.run([sys.executable, "-m", "roe_sep.cli", "campaign", "--out", str(tmp_path / "c"), *args],
+                          capture_output=True, text=True, env=env, cwd=ROOT, timeout=120)
+    assert proc.returncode == 2 and message in proc.stderr and proc.stderr.strip().count("\n") == 0
