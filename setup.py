@@ -40,6 +40,7 @@ setup(
         'skyfield-data',
         'sgp4',
         'heyoka',
+        'dask[distributed]',
     ],
     extras_require={
         'plots': ['matplotlib'],
