@@ -2,7 +2,8 @@
 
 One module per command group, each with a ``register(subparsers)``: :mod:`.design` (``design``, ``mc``), :mod:`.ops`
 (``ops``), :mod:`.run` (``run``, ``replay``, ``bag``), :mod:`.nonlinear` (``propagate``, ``validate``) and
-:mod:`.analysis` (``deploy-sweep``, ``cluster``); :mod:`.common` holds the output and the option parsers they share.
+:mod:`.analysis` (``deploy-sweep``, ``cluster``), :mod:`.collision` (``collision``); :mod:`.common` holds the output
+and the option parsers they share.
 ``python -m roe_sep.cli`` is the same as ``roe-sep``.
 """
 
@@ -11,7 +12,7 @@ import sys
 
 from ..core.config import ConfigError
 from ..core.separation.double_impulse import InfeasibleDesignError
-from . import analysis, design, nonlinear, ops, run
+from . import analysis, collision, design, nonlinear, ops, run
 
 
 def build_parser():
@@ -23,6 +24,7 @@ def build_parser():
     nonlinear.register(sub)
     analysis.register(sub)
     run.register_bag(sub)
+    collision.register(sub)
     return parser
 
 
