@@ -341,6 +341,16 @@ def evaluate_chunk(chunk, design, mc, cfg: CollisionConfig, proposal=None, block
     return st
 
 
+def _fit(z, w, min_std):
+    """Gaussian of the samples ``z`` (weights ``w`` or equal), principal standard deviations >= ``min_std``."""
+    w = np.full(z.shape[0], 1.0) if w is None else w
+    w = w / w.sum()
+    mean = w @ z
+    dz = z - mean
+    lam, vec = np.linalg.eigh((dz * w[:, None]).T @ dz)
+    return Proposal(mean, (vec * np.maximum(lam, min_std**2)) @ vec.T)
+
+
 def cross_entropy(design, mc, cfg: CollisionConfig, samples_per_level=2000, rho=0.1, max_levels=25, progress=None,
                   min_std=1.0, patience=4):
     """Multilevel cross-entropy tuning of the Gaussian proposal (module docstring).
@@ -365,21 +375,23 @@ def cross_entropy(design, mc, cfg: CollisionConfig, samples_per_level=2000, rho=
             raise RuntimeError(f"cross-entropy level {level}: too few samples come back after the departure")
         gamma = max(cfg.hard_body_radius, float(np.quantile(dist[finite], rho)))
         elite = dist <= gamma
-        mean = np.mean(z[elite], axis=0)
-        dz = z[elite] - mean
-        lam, vec = np.linalg.eigh(dz.T @ dz / max(1, dz.shape[0] - 1))
-        prop = Proposal(mean, (vec * np.maximum(lam, min_std**2)) @ vec.T)
+        # steering levels: the plain elite mean and covariance; the last level (gamma = R) and the bound level use
+        # the likelihood ratios phi/q of the sampling proposal: the CE fit of phi restricted to the failure set
+        w = np.exp(prop.log_weight(z[elite])) if gamma <= cfg.hard_body_radius else None
+        fitted = _fit(z[elite], w, min_std)
+        w_best = np.exp(prop.log_weight(z[elite]))
         levels.append({"gamma": gamma, "elites": int(np.count_nonzero(elite))})
         if progress is not None:
             progress(level, gamma)
         if gamma <= cfg.hard_body_radius:
-            return prop, levels, True
+            return fitted, levels, True
         if gamma < best_gamma:
-            best, best_gamma, since = prop, gamma, 0
+            best, best_gamma, since = _fit(z[elite], w_best, min_std), gamma, 0
         else:
             since += 1
             if since >= patience:
                 break
+        prop = fitted
     return best, levels, False
 
 
