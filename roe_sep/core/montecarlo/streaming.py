@@ -26,7 +26,7 @@ from .stats import wilson_interval
 from .sweep import Draws, SweepResult, after_stop, draw, pre_stop, summarize
 
 BLOCK_SIZE = 10_000  # samples per random-number block: part of the definition of a seeded result
-DEFAULT_CHUNK_SIZE = 100_000  # samples per vectorized batch (about 60 MB of working memory)
+DEFAULT_CHUNK_SIZE = 20_000  # samples per vectorized batch: the fastest per sample here (cache), ~40 MB
 
 # fixed histogram bins [m] (under- and overflow counted apart)
 CROSSING_EDGES = np.arange(0.0, 20_001.0, 250.0)  # nearest R = 0 transit before the drift-stop
