@@ -47,7 +47,7 @@ def cluster(workers=None, scheduler=None, connect_timeout=10.0):
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise ValueError(f"--workers must be a positive integer, got {workers!r}")
     with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
-                      dashboard_address=None, silence_logs=logging.ERROR) as lc, Client(lc) as client:
+                      dashboard_address=None, silence_logs=logging.CRITICAL) as lc, Client(lc) as client:
         yield client
 
 
