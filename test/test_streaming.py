@@ -103,6 +103,7 @@ def _fail(x):
 
 def test_ordered_map_in_process_and_errors():
     assert list(ordered_map(None, _square, range(5), 1)) == [1, 2, 5, 10, 17]
+    assert sorted(ordered_map(None, _square, range(3), 0, ordered=False)) == [(0, 0), (1, 1), (2, 4)]
     with pytest.raises(ArithmeticError):
         list(ordered_map(None, _fail, range(5)))
     with pytest.raises(ValueError, match="exclude"):
