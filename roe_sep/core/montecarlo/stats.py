@@ -1,7 +1,5 @@
 """Binomial estimates of the Monte Carlo: the 95 % score interval of a fraction and its count."""
 
-import math
-
 import numpy as np
 
 Z95 = 1.959964  # two-sided 95 % standard-normal quantile
@@ -31,7 +29,3 @@ def normal_interval(mean, std_error, z=Z95):
     """(lo, hi) = mean -/+ z * std_error, the large-sample interval of an importance-sampling estimate."""
     return mean - z * std_error, mean + z * std_error
 
-
-def relative_half_width(lo, hi, p):
-    """Half the interval width over the estimate (inf where the estimate is 0)."""
-    return (hi - lo) / (2.0 * p) if p > 0 else math.inf
