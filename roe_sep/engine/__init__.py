@@ -46,8 +46,10 @@ def cluster(workers=None, scheduler=None, connect_timeout=10.0):
         return
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise ValueError(f"--workers must be a positive integer, got {workers!r}")
+    # dashboard off; the scheduler's plain HTTP routes (health, metrics) on a free port of 127.0.0.1, not 8787
     with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
-                      dashboard_address=None, silence_logs=logging.CRITICAL) as lc, Client(lc) as client:
+                      dashboard_address=None, scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
+                      silence_logs=logging.CRITICAL) as lc, Client(lc) as client:
         yield client
 
 
