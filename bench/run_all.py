@@ -5,7 +5,7 @@ import sys
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-BENCHMARKS = ["bench_mc.py", "bench_nodes.py", "bench_nonlinear.py", "bench_cluster.py"]
+BENCHMARKS = ["bench_mc.py", "bench_nodes.py", "bench_nonlinear.py", "bench_cluster.py", "bench_stream.py"]
 
 if __name__ == "__main__":
     rc = 0

@@ -76,7 +76,7 @@ def cases():
                                                                 "scenario_neg_density"])
     # mc
     mc = ["--samples", "10", "--p", "0.05"]
-    c += opt_cases(["mc"], mc, "--samples", N + NEG + ["2.5", "20000000"])
+    c += opt_cases(["mc"], mc, "--samples", N + NEG + ["2.5", "20000000000"])
     c += opt_cases(["mc"], mc, "--seed", N + ["-1", "4294967296", "1.5"])
     c += opt_cases(["mc"], ["--samples", "10"], "--p", ["nan", "inf", "-0.1", "x", "", "0,nan", "2"])
     c += opt_cases(["mc"], mc, "--spl-dv", ["nan", "-1"])

@@ -7,9 +7,10 @@ import sys
 from pathlib import Path
 
 from ..core.config import load_scenario
-from ..core.montecarlo.sweep import SweepResult, sweep
+from ..core.montecarlo import streaming
 from ..core.separation.double_impulse import DoubleImpulseDesign, design
-from .common import emit, finite_float, p_list, samples, seed, vec
+from ..engine import cluster, ordered_map
+from .common import SAMPLES_MAX, emit, finite_float, integer, p_list, positive_int, seed, vec
 
 
 def design_report(d: DoubleImpulseDesign) -> dict:
@@ -61,32 +62,17 @@ def print_design(rep: dict, out=None):
     w(f"\nDrift-stop reduction (Eq. 21, {rep['p_sigma_level']:g} sigma): "
       f"{rep['p_min_3sigma']:.7f} <= |p| < {rep['p_max']:.7f} m/s\n")
 
-def print_sweep(res: dict, out=None):
-    w = (out or sys.stdout).write
-    w(f"Monte Carlo p sweep: {res['samples']} samples, seed {res['seed']}, drag {'on' if res['drag'] else 'off'}, "
-      f"J2 {'on' if res['j2'] else 'off'}, dB = {res['delta_b']:.5f} m^2/kg\n")
-    cols = (("p", "p [m/s]", "{:9.4f}"), ("p_approach", "P(approach)", "{:11.3%}"),
-            ("p_evaporation", "P(evap.)", "{:9.3%}"), ("p_below_radar_horizon", "P(<5km@24h)", "{:11.3%}"),
-            ("p_min_rn_violation", "P(RN<min)", "{:9.3%}"), ("p_fov_violation", "P(FOV)", "{:8.3%}"),
-            ("p_table2_violation", "P(>Tab.2)", "{:9.3%}"),
-            ("a_dl_horizon_mean", "mean a dl@24h", "{:13.0f}"))
-    w("  " + "  ".join(f"{h:>{len(fmt.format(0.0))}s}" for _, h, fmt in cols) + "\n")
-    for row in res["rows"]:
-        mark = "  <- p_best" if row["p"] == res["p_best"] else ""
-        w("  " + "  ".join(fmt.format(row[k]) for k, _, fmt in cols) + mark + "\n")
-    w(f"  p_best = {res['p_best']:g} m/s (minimum of P(approach) + P(evaporation))\n")
-    w(f"  nearest R=0 transit before the drift-stop: min {res['crossing_min']:.0f} m over all samples, "
-      f"{res['crossing_min_within_3sigma_f1']:.0f} m for f1 >= {res['f1_3sigma']:.2f}\n")
-
-def _progress(enabled):
-    if not enabled:
-        return iter
+def progress_bar(total, desc):
+    """A tqdm bar with ETA on stderr when stderr is a terminal, else None; call ``bar.update(n)``, ``bar.close()``."""
+    if not sys.stderr.isatty():
+        return None
     from tqdm import tqdm
 
-    return lambda it: tqdm(it, desc="p sweep", unit="p", leave=False)
+    return tqdm(total=total, desc=desc, unit="sample", unit_scale=True, leave=False, file=sys.stderr)
 
-def run_sweep(scenario, args) -> SweepResult:
-    mc = scenario.monte_carlo
+
+def mc_config(scenario, args):
+    """The scenario's Monte Carlo settings with the command line's overrides (seed resolved to an int)."""
     overrides = {}
     if args.samples is not None:
         overrides["samples"] = args.samples
@@ -96,20 +82,79 @@ def run_sweep(scenario, args) -> SweepResult:
         overrides["drag"] = False
     if args.j2:
         overrides["j2"] = True
-    mc = dataclasses.replace(mc, **overrides)
+    mc = dataclasses.replace(scenario.monte_carlo, **overrides)
+    return dataclasses.replace(mc, seed=streaming.resolve_seed(mc.seed))
+
+
+def streamed(fn, total, args, desc):
+    """Run ``fn(mapper, on_chunk)`` on the engine chosen by ``--workers``/``--scheduler`` with a progress bar."""
+    bar = progress_bar(total, desc)
+    try:
+        with cluster(workers=args.workers, scheduler=args.scheduler) as client:
+            def mapper(f, items, *a):
+                return ordered_map(client, f, items, *a)
+
+            return fn(mapper, bar.update if bar is not None else None)
+    finally:
+        if bar is not None:
+            bar.close()
+
+
+PLOT_SAMPLES_MAX = 1_000_000  # --plots keeps every sample in memory (about 1.7 kB each)
+
+
+def run_stream(scenario, args):
+    """The streamed p sweep of ``roe-sep mc`` (double impulse): (report dict, design, mc, stats)."""
+    mc = mc_config(scenario, args)
     p_values = args.p if args.p is not None else scenario.p_values
+    if args.plots and mc.samples > PLOT_SAMPLES_MAX:
+        raise ValueError(f"--plots keeps every sample in memory: at most {PLOT_SAMPLES_MAX} samples, "
+                         f"got --samples {mc.samples}")
     d = design(separation_config(scenario, args))
-    return sweep(d, mc, p_values, progress=_progress(not args.json and sys.stderr.isatty()))
+    stats = streamed(lambda mapper, on_chunk: streaming.stream_sweep(
+        d, mc, p_values, args.chunk_size, mapper=mapper, on_chunk=on_chunk), mc.samples, args, "mc")
+    rep = streaming.report(stats, mc, args.chunk_size)
+    rep["workers"] = args.workers
+    rep["scheduler"] = args.scheduler
+    return rep, d, mc, stats
 
-SWEEP_NULLS = {"crossing_min_within_3sigma_f1": "no sample with f1 >= 1 - 3 sigma (too few samples)"}
+
+def _cell(row, key):
+    k, (lo, hi) = row[f"n_{key[2:]}"], row[f"{key}_ci95"]
+    return f"{k} [{lo:.3%},{hi:.3%}]"
 
 
-def sweep_report(res: SweepResult) -> dict:
-    out = res.to_dict()
-    out["f1_3sigma"] = 1.0 - 3.0 * res.design.config.spl_sigma
-    return out
+PROB_COLUMNS = (("p_approach", "P(approach)", "{:11.3%}"), ("p_evaporation", "P(evap.)", "{:9.3%}"),
+                ("p_below_radar_horizon", "P(<5km@24h)", "{:11.3%}"), ("p_min_rn_violation", "P(RN<min)", "{:9.3%}"),
+                ("p_fov_violation", "P(FOV)", "{:8.3%}"), ("p_table2_violation", "P(>Tab.2)", "{:9.3%}"))
+
+
+def print_sweep(res: dict, out=None):
+    w = (out or sys.stdout).write
+    w(f"Monte Carlo p sweep: {res['samples']} samples, seed {res['seed']}, drag {'on' if res['drag'] else 'off'}, "
+      f"J2 {'on' if res['j2'] else 'off'}, dB = {res['delta_b']:.5f} m^2/kg\n")
+    cols = (("p", "p [m/s]", "{:9.4f}"),) + PROB_COLUMNS + (("a_dl_horizon_mean", "mean a dl@24h", "{:13.0f}"),)
+    w("  " + "  ".join(f"{h:>{len(fmt.format(0.0))}s}" for _, h, fmt in cols) + "\n")
+    for row in res["rows"]:
+        mark = "  <- p_best" if row["p"] == res["p_best"] else ""
+        w("  " + "  ".join(fmt.format(row[k]) for k, _, fmt in cols) + mark + "\n")
+    w("  counts and Wilson 95 % intervals\n")
+    width = {k: max(len(h), *(len(_cell(r, k)) for r in res["rows"])) for k, h, _ in PROB_COLUMNS}
+    w("  " + f"{'p [m/s]':>9s}  " + "  ".join(f"{h:>{width[k]}s}" for k, h, _ in PROB_COLUMNS) + "\n")
+    for row in res["rows"]:
+        w("  " + f"{row['p']:9.4f}  " + "  ".join(f"{_cell(row, k):>{width[k]}s}" for k, _, _ in PROB_COLUMNS)
+          + "\n")
+    w(f"  p_best = {res['p_best']:g} m/s (minimum of P(approach) + P(evaporation))\n")
+    within = res["crossing_min_within_3sigma_f1"]
+    w(f"  nearest R=0 transit before the drift-stop: min {res['crossing_min']:.0f} m over all samples, "
+      + (f"{within:.0f} m" if within is not None else "none") + f" for f1 >= {res['f1_3sigma']:.2f}\n")
+
 
 STRATEGIES = ("double_impulse", "multi_impulse")
+
+SWEEP_NULLS = {"crossing_min_within_3sigma_f1": "no sample with f1 >= 1 - 3 sigma (too few samples)"}
+STREAM_SAMPLES_MAX = 10**10  # the streamed sweep keeps counts only: memory does not grow with the sample count
+stream_samples = integer(1, STREAM_SAMPLES_MAX)
 
 
 def _ejection_overrides(args) -> dict:
@@ -121,6 +166,7 @@ def separation_config(scenario, args):
     """The scenario's double-impulse inputs with ``--spl-dv`` and ``--u1`` applied (they override
     ``separation.spl_dv`` and ``separation.u1_deg``)."""
     return dataclasses.replace(scenario.separation, **_ejection_overrides(args))
+
 
 def _multi_design(scenario, args):
     from ..core.separation import multi_impulse
@@ -188,6 +234,11 @@ def cmd_mc(args):
             overrides["j2"] = True
         if args.p is not None:
             raise ValueError("--p applies to the double_impulse sweep only (multi_impulse sizes p by Eq. 21)")
+        if args.samples is not None and args.samples > SAMPLES_MAX:
+            raise ValueError(f"--samples {args.samples}: the multi_impulse acceptance Monte Carlo holds every sample "
+                             f"in memory: at most {SAMPLES_MAX}")
+        if args.workers is not None or args.scheduler is not None or args.chunk_size != streaming.DEFAULT_CHUNK_SIZE:
+            raise ValueError("--workers, --scheduler and --chunk-size apply to the double_impulse sweep only")
         mc = dataclasses.replace(scenario.monte_carlo, **overrides)
         res = run_acceptance(_multi_design(scenario, args), mc)
         rep = res.to_dict()
@@ -197,11 +248,11 @@ def cmd_mc(args):
             rep["figures"] = [str(p) for p in write_acceptance_figures(res, Path(args.plots))]
         emit(rep, args.json, print_acceptance)
         return
-    res = run_sweep(load_scenario(args.config), args)
-    rep = sweep_report(res)
+    rep, d, mc, stats = run_stream(load_scenario(args.config), args)
     if args.plots:
         from ..plots.montecarlo import write_figures
 
+        res = streaming.in_memory_result(d, mc, stats)
         rep["figures"] = [str(p) for p in write_figures(res, Path(args.plots))]
     emit(rep, args.json, print_sweep, why=SWEEP_NULLS)
 
@@ -225,12 +276,25 @@ def register(subparsers):
 
     p = subparsers.add_parser("mc", help="Monte Carlo sweep over the drift-stop reduction p")
     p.add_argument("--config", help="scenario YAML")
-    p.add_argument("--samples", type=samples, help="number of samples in [1, 10000000] (default 100000)")
+    p.add_argument("--samples", type=stream_samples,
+                   help=f"number of samples in [1, {STREAM_SAMPLES_MAX:.0e}] (default 100000; multi_impulse at most "
+                        f"{SAMPLES_MAX})")
     p.add_argument("--seed", type=seed(), help="random seed in [0, 2**32 - 1] (default from the scenario: 0)")
     p.add_argument("--p", type=p_list, help="comma-separated p values [m/s], each in [0, 1] (double_impulse only)")
     p.add_argument("--no-drag", action="store_true", help="switch differential drag off")
     p.add_argument("--j2", action="store_true", help="include secular J2 in the propagation")
-    p.add_argument("--plots", metavar="DIR", help="write the figures (PNG) to DIR")
+    p.add_argument("--plots", metavar="DIR", help="write the figures (PNG) to DIR (at most 1e6 samples)")
     p.add_argument("--json", action="store_true", help="machine-readable output")
+    engine_args(p)
     _strategy_args(p)
     p.set_defaults(func=cmd_mc)
+
+
+def engine_args(p):
+    """--chunk-size, --workers, --scheduler: the streamed Monte Carlo's chunking and its Dask engine."""
+    p.add_argument("--chunk-size", type=positive_int, default=streaming.DEFAULT_CHUNK_SIZE,
+                   help=f"samples per vectorized chunk, a multiple of {streaming.BLOCK_SIZE} "
+                        f"(default {streaming.DEFAULT_CHUNK_SIZE}); the result does not depend on it")
+    p.add_argument("--workers", type=integer(1, 256),
+                   help="distribute the chunks over W local Dask worker processes (127.0.0.1)")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="distribute over an existing Dask scheduler (tcp://host:port)")

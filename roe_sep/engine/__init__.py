@@ -1,0 +1,102 @@
+"""The distributed engine: Dask for any embarrassingly parallel campaign of roe_sep (the streamed Monte Carlo of
+``roe-sep mc``/``roe-sep collision``; closed-loop run campaigns reuse it).
+
+Two calls::
+
+    with cluster(workers=W, scheduler=ADDRESS) as client:     # client is None: in-process, no Dask
+        for result in ordered_map(client, fn, items, *args):  # fn(item, *args), yielded in the order of items
+            total.merge(result)                               # ordered reduction: deterministic
+
+* :func:`cluster`: ``workers=W`` starts an embedded ``distributed.LocalCluster`` of W single-threaded worker
+  *processes* bound to 127.0.0.1 with the dashboard off; ``scheduler="tcp://host:port"`` connects to an existing
+  scheduler; neither runs everything in this process.
+* :func:`ordered_map`: submits at most ``max_in_flight`` tasks at a time (default twice the cluster's threads),
+  so neither the scheduler nor this process ever holds more than that many results, whatever the number of items;
+  results are yielded strictly in item order (out-of-order completions wait in a bounded buffer). With the items
+  chosen so that each result depends on its item alone (e.g. a block index that seeds its own random numbers), the
+  reduction is identical for every worker count. ``ordered=False`` yields ``(index, result)`` as completed, for
+  consumers that store each result at once (a resumable campaign).
+
+A task that raises re-raises here with the worker's exception; the cluster is closed on exit in every case.
+"""
+
+import contextlib
+import logging
+
+__all__ = ["cluster", "ordered_map", "client_threads"]
+
+
+@contextlib.contextmanager
+def cluster(workers=None, scheduler=None, connect_timeout=10.0):
+    """A Dask client (``workers`` local processes or the scheduler at ``scheduler``), or ``None`` for in-process."""
+    if workers is not None and scheduler is not None:
+        raise ValueError("--workers and --scheduler exclude each other: give one of them")
+    if workers is None and scheduler is None:
+        yield None
+        return
+    from distributed import Client, LocalCluster
+
+    if scheduler is not None:
+        try:
+            client = Client(scheduler, timeout=connect_timeout)
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise ValueError(f"--scheduler {scheduler!r}: cannot connect ({exc.__class__.__name__}: {exc})") from None
+        with client:
+            yield client
+        return
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ValueError(f"--workers must be a positive integer, got {workers!r}")
+    # dashboard off; the scheduler's plain HTTP routes (health, metrics) on a free port of 127.0.0.1, not 8787
+    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None, scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
+                      silence_logs=logging.CRITICAL) as lc, Client(lc) as client:
+        yield client
+
+
+def client_threads(client):
+    """Total worker threads of ``client`` (1 in-process)."""
+    return 1 if client is None else max(1, sum(client.nthreads().values()))
+
+
+def ordered_map(client, fn, items, *args, max_in_flight=None, ordered=True):
+    """Yield ``fn(item, *args)`` for every item, in item order (``ordered=False``: ``(index, result)`` as they
+    complete), computed on ``client`` (or here when it is ``None``) with at most ``max_in_flight`` tasks pending."""
+    items = list(items)
+    if client is None:
+        for i, item in enumerate(items):
+            yield fn(item, *args) if ordered else (i, fn(item, *args))
+        return
+    from distributed import as_completed
+
+    limit = max_in_flight or 2 * client_threads(client)
+    index_of, buffer = {}, {}
+    pending = as_completed()
+    next_submit = next_yield = 0
+
+    def submit():
+        nonlocal next_submit
+        fut = client.submit(fn, items[next_submit], *args, pure=False)
+        index_of[fut.key] = next_submit
+        pending.add(fut)
+        next_submit += 1
+
+    try:
+        while next_submit < len(items) and next_submit - next_yield < limit:
+            submit()
+        for fut in pending:
+            i = index_of.pop(fut.key)
+            result = fut.result()
+            fut.release()
+            if not ordered:
+                next_yield += 1
+                yield i, result
+            else:
+                buffer[i] = result
+                while next_yield in buffer:
+                    yield buffer.pop(next_yield)
+                    next_yield += 1
+            while next_submit < len(items) and next_submit - next_yield < limit:
+                submit()
+    finally:
+        for fut in list(pending.futures):
+            fut.cancel()
