@@ -19,7 +19,6 @@ import contextlib
 import fcntl
 import json
 import os
-import re
 import shutil
 import signal
 import subprocess
@@ -118,10 +117,7 @@ def execute(spec: dict) -> dict:
         rep = json.loads(report_path.read_text(encoding="utf-8"))  # run() may write NaN; the campaign's copy is strict
         report_path.write_text(jsonutil.dumps(rep, indent=2) + "\n", encoding="utf-8")
         row = row_from_report(seed, rep)
-        if row["failure"] == "node_exit":  # name why: the last line each dead node logged
-            dead = re.findall(r"'(\w+)'", row["reason"])
-            row["reason"] = "; ".join([row["reason"].replace(" (see logs/)", ""),
-                                       *(f"{n}: {_last_line(run_dir / 'logs' / f'{n}.log')}" for n in dead)])[:300]
+        row["reason"] = row["reason"][:300]  # a node's death: the runner names it with its last log line
         return _finish(row, t0, domain)
     except Exception as exc:  # noqa: BLE001  (a run's failure is a row, never a lost campaign)
         return _finish(failed_row(seed, "exception", f"{type(exc).__name__}: {exc}"[:300]), t0, domain)

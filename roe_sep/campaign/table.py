@@ -34,7 +34,7 @@ FAILURES = ("node_exit", "timeout", "aborted", "exception", "worker_lost")
 
 def failure_kind(reason: str) -> str:
     """The failure class of an unfinished run from ``report['run']['reason']`` of :func:`roe_sep.run.run`."""
-    if reason.startswith("node(s) exited early"):
+    if " exited early (" in reason:  # "<node> exited early (exit status 2); last log line: ..."
         return "node_exit"
     if reason.startswith("wall-time limit"):
         return "timeout"

@@ -24,7 +24,8 @@ def wilson_interval(k, n, z=1.959964):
     if n.ndim == 0 and n == 0 and k == 0:
         return 0.0, 1.0  # nothing observed: nothing is known
     if np.any(n <= 0) or np.any(k < 0) or np.any(k > n):
-        raise ValueError(f"wilson_interval needs 0 <= k <= n and n > 0, got k={k}, n={n}")
+        show = (lambda x: f"{x:g}") if k.ndim == 0 and n.ndim == 0 else str
+        raise ValueError(f"wilson_interval: need 0 <= k <= n and n > 0, got k = {show(k)}, n = {show(n)}")
     z2 = z * z
     centre = (k + 0.5 * z2) / (n + z2)
     half = z * np.sqrt(k * (n - k) / n + 0.25 * z2) / (n + z2)
