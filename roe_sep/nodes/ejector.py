@@ -74,7 +74,8 @@ class EjectorNode(Node):
             publish_status(self, self.diag_pub, ERROR, "carrier state rejected: not finite")
             return
         if self.sent:
-            self.lockstep.unsubscribe(interfaces.TRUTH_ROE_TOPIC)  # nothing left to command: stop reading the truth
+            if self.lockstep.active:  # nothing left to command: no step waits for this node's truth any more
+                self.lockstep.unsubscribe(interfaces.TRUTH_ROE_TOPIC)
             return
         if self.epoch >= 0:
             t_ej = self.epoch
