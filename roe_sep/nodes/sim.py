@@ -306,6 +306,10 @@ class SimNode(Node):
         return True
 
     def on_od(self, od: OrbitDetermination):
+        """Free-running clock only: a new OD solution opens the wall-clock hold for the acquisition planner's decision
+        (under lockstep the reaction rounds of the step already wait for it)."""
+        if self.participants:
+            return
         stamp = time_to_sec(od.header.stamp)
         if stamp not in self.od_seen:
             self.od_seen.add(stamp)
