@@ -16,7 +16,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1] / "roe_sep"
 
-LAYERS = {"core": 0, "checks": 0, "jsonutil": 0, "interfaces": 1, "bag": 1, "ndm": 1, "nodes": 2, "run": 3,
+LAYERS = {"core": 0, "checks": 0, "jsonutil": 0, "interfaces": 1, "bag": 1, "ndm": 1, "graph": 1, "nodes": 2, "run": 3,
           "report": 3, "plots": 3, "engine": 3, "campaign": 3, "cli": 4}
 ROS_MODULES = ("rclpy", "roe_sep_msgs", "rosgraph_msgs", "diagnostic_msgs", "builtin_interfaces", "geometry_msgs",
                "std_msgs", "rcl_interfaces", "ament_index_python")

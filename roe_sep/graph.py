@@ -1,0 +1,75 @@
+"""The node graph of a run, in one place: which nodes, which of them take part in lockstep, which subscribers the
+simulator waits for before its clock starts, and the run's ROS parameter file.
+
+``roe-sep run`` (:mod:`roe_sep.run`), the composed suite process (:mod:`roe_sep.nodes.suite`) and the launch files
+(``share/roe_sep/launch``) all start the graph described here, so they start the same nodes with the same
+parameters.
+"""
+
+from pathlib import Path
+
+import yaml
+
+NODES = ("recorder", "ground_bridge", "safety_monitor", "planner", "radar_od", "ic_planner", "ejector", "sim")
+OPTIONAL_NODES = ("foxglove_view",)  # started on request: roe-sep run --foxglove [PORT]
+PARTICIPANTS = ("ejector", "planner", "radar_od", "ic_planner", "safety_monitor")
+"""The lockstep participants: every node that reacts to the simulation (recorder and ground_bridge listen)."""
+# subscribers of each topic the simulator waits for before its clock starts (so that nobody misses a message)
+SUBSCRIBERS = {
+    "/sim/truth/roe": ("ejector", "radar_od", "safety_monitor", "recorder", "ground_bridge"),
+    "/sim/truth/rtn": ("recorder",),
+    "/sim/executed_maneuvers": ("radar_od", "ic_planner", "safety_monitor", "recorder", "ground_bridge"),
+    "/separation/ejection": ("ejector", "planner", "safety_monitor", "sim", "recorder", "ground_bridge"),
+    "/separation/drift_stop_plan": ("ic_planner", "safety_monitor", "sim", "recorder", "ground_bridge"),
+    "/acquisition/plan": ("ic_planner", "safety_monitor", "sim", "recorder", "ground_bridge"),
+    "/od/estimate": ("ic_planner", "safety_monitor", "sim", "recorder", "ground_bridge"),
+    "/radar/measurements": ("recorder", "ground_bridge"),
+    "/safety/status": ("recorder",),
+    "/safety/plan_check": ("sim", "recorder", "ground_bridge"),
+}
+
+
+RADAR_STREAM = 1  # the radar noise's stream of a run seed (the simulator uses the seed itself)
+
+
+def radar_seed(seed: int) -> int:
+    """The radar_od noise seed of a run seed: a 32-bit word of ``SeedSequence([seed, 1])``, a stream independent of
+    the simulator's ``default_rng(seed)`` (the same integer in both would correlate the first draws). ``--seed``
+    disperses the radar noise too, so a campaign's run k is reproduced by ``roe-sep run --seed S+k`` alone."""
+    import numpy as np
+
+    return int(np.random.SeedSequence([int(seed), RADAR_STREAM]).generate_state(1, np.uint32)[0])
+
+
+def parameters(config, bag_dir, overrides):
+    """The run's ROS parameter file content: shared values for every node, then per-node values."""
+    shared = {"use_sim_time": True, "scenario_file": str(Path(config).resolve()) if config else ""}
+    per_node = {
+        # start the clock once every node is up (the planner after its start-up Monte Carlo) and subscribed to what
+        # it reads, the recorder to every topic; then run in lockstep with every reacting node
+        "sim": {"use_sim_time": False,
+                "wait_for": [f"{topic}={len(nodes)}" for topic, nodes in SUBSCRIBERS.items()],
+                "lockstep_participants": list(PARTICIPANTS)},
+        "recorder": {"output": str(bag_dir)},
+        "ground_bridge": {"output_dir": str(Path(bag_dir).parent / "ccsds")},  # CCSDS files of the run (issue 18)
+    }
+    for node, values in (overrides or {}).items():
+        if node not in NODES + OPTIONAL_NODES and node != "/**":
+            raise ValueError(f"--params: unknown node {node!r}; nodes: {list(NODES)}")
+        target = shared if node == "/**" else per_node.setdefault(node, {})
+        target.update(values)
+    out = {"/**": {"ros__parameters": shared}}
+    out.update({node: {"ros__parameters": values} for node, values in per_node.items()})
+    return out
+
+
+def load_overrides(path):
+    """A params YAML in the ROS layout ``{node: {ros__parameters: {...}}}``."""
+    if not path:
+        return {}
+    with open(path, encoding="utf-8") as fh:
+        data = yaml.safe_load(fh) or {}
+    try:
+        return {node: dict(v["ros__parameters"]) for node, v in data.items()}
+    except (TypeError, KeyError) as exc:
+        raise ValueError(f"--params {path}: expected {{node: {{ros__parameters: {{...}}}}}}") from exc
