@@ -1,9 +1,11 @@
-"""``roe-sep run``: the default scenario end to end, every node its own process, as a deployment runs them.
+"""``roe-sep run``: the default scenario end to end.
 
 Starts the recorder, ground_bridge (CCSDS files in OUT/ccsds), safety_monitor, planner, radar_od, ic_planner,
-ejector (and foxglove_view with ``--foxglove``) and sim (last: it owns ``/clock``) with
-one generated parameter file, waits until the simulator reports the scenario complete, stops every node with
-SIGINT (the recorder last, so the bag closes cleanly) and writes ``report.json`` from the recorded bag.
+ejector (and foxglove_view with ``--foxglove``) and sim (last: it owns ``/clock``) with one generated parameter
+file (:mod:`roe_sep.graph`): by default in two processes, the closed loop and the listeners, each on one executor
+(:mod:`roe_sep.nodes.suite`); with ``process_per_node`` every node its own process as a deployment runs them.
+Waits until the simulator reports the scenario complete, stops the nodes with SIGINT (the recorder last, so the
+bag closes cleanly) and writes ``report.json`` from the recorded bag.
 """
 
 import os
@@ -41,8 +43,15 @@ def ros_environment(domain_id=None):
     return env
 
 
+# the composed layout: two processes, each its nodes on one executor (roe_sep.nodes.suite). The closed loop (the
+# simulator and the lockstep participants) in one; the nodes that only listen (recorder, ground_bridge, the
+# Foxglove view) in the other, off the loop's critical path, on the machine's second core.
+LISTENERS = ("recorder", "ground_bridge", "foxglove_view")
+SUITES = ("listeners", "loop")
+
+
 class Deployment:
-    """The node processes of one run, their logs, and an orderly shutdown."""
+    """The node processes of one run (one per node, or one ``suite``), their logs, and an orderly shutdown."""
 
     def __init__(self, out: Path, params_file: Path, env):
         self.out, self.params_file, self.env = out, params_file, env
@@ -50,9 +59,17 @@ class Deployment:
         (out / "logs").mkdir(parents=True, exist_ok=True)
 
     def start(self, node):
-        log = open(self.out / "logs" / f"{node}.log", "w", encoding="utf-8")
-        cmd = [sys.executable, "-m", f"roe_sep.nodes.{node}", "--ros-args", "--params-file", str(self.params_file)]
-        self.procs[node] = (subprocess.Popen(cmd, env=self.env, stdout=log, stderr=subprocess.STDOUT), log)
+        """One node in a process of its own (log ``logs/<node>.log``)."""
+        self._spawn(node, [f"roe_sep.nodes.{node}"])
+
+    def start_suite(self, name, nodes, executor="events"):
+        """``nodes`` in one process on one executor (:mod:`roe_sep.nodes.suite`; log ``logs/<name>.log``)."""
+        self._spawn(name, ["roe_sep.nodes.suite", "--executor", executor, *nodes])
+
+    def _spawn(self, name, module_args):
+        log = open(self.out / "logs" / f"{name}.log", "w", encoding="utf-8")
+        cmd = [sys.executable, "-m", *module_args, "--ros-args", "--params-file", str(self.params_file)]
+        self.procs[name] = (subprocess.Popen(cmd, env=self.env, stdout=log, stderr=subprocess.STDOUT), log)
 
     def dead(self):
         return [n for n, (p, _) in self.procs.items() if p.poll() is not None]
@@ -143,9 +160,13 @@ def wait_for_completion(duration, deployment, timeout, progress):
 
 
 def run(config=None, out="out/run", params=None, duration=None, seed=None, timeout=1800.0, domain_id=None,
-        progress=False, real_time_factor=None, foxglove=None):
+        progress=False, real_time_factor=None, foxglove=None, process_per_node=False, executor="events"):
     """Run the scenario; returns the report dict (``report['safe']``) and writes it to ``out/report.json``.
-    ``foxglove``: a port on 127.0.0.1 for the live Foxglove view (the ``foxglove_view`` node), None = none."""
+    ``foxglove``: a port on 127.0.0.1 for the live Foxglove view (the ``foxglove_view`` node), None = none.
+    ``process_per_node``: every node its own process, as a deployment runs them (log per node); default: two
+    processes (:data:`SUITES`: the closed loop, and the listeners), each its nodes on one executor
+    (:mod:`roe_sep.nodes.suite`, ``executor`` ``events`` or ``single_threaded``). Under lockstep every layout and
+    executor gives the same report."""
     from .nodes.sim import DEFAULT_DURATION
 
     out = Path(out)
@@ -173,7 +194,10 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
     deployment = Deployment(out, params_file, ros_environment(domain_id))
     reached, reason = False, "not started"
     try:
-        for node in nodes:
+        if not process_per_node:
+            deployment.start_suite("listeners", [n for n in nodes if n in LISTENERS], executor)
+            deployment.start_suite("loop", [n for n in nodes if n not in LISTENERS], executor)
+        for node in nodes if process_per_node else ():
             deployment.start(node)
             if node == "recorder":
                 time.sleep(1.0)  # let the recorder discover the graph before the clock starts
@@ -184,10 +208,15 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
     except Exception as exc:  # noqa: BLE001 -- the runner outlives what goes wrong and says what it was
         reached, reason = False, f"runner error: {type(exc).__name__}: {exc}"
     finally:
-        codes = deployment.stop([n for n in nodes if n != "recorder"])
-        codes.update(deployment.stop(["recorder"]))
-    report = report_from_bag(bag_dir, out, sim_duration, codes.get("recorder"))
+        if process_per_node:
+            codes = deployment.stop([n for n in nodes if n != "recorder"])
+            codes.update(deployment.stop(["recorder"]))
+        else:
+            codes = deployment.stop(["loop"])
+            codes.update(deployment.stop(["listeners"]))  # the recorder last
+    report = report_from_bag(bag_dir, out, sim_duration, codes.get("recorder", codes.get("listeners")))
     report["run"].update({"completed": reached, "reason": reason, "exit_codes": codes,
+                          "layout": "process_per_node" if process_per_node else f"suites ({executor} executor)",
                           "params_file": str(params_file)})
     if not reached and report.get("safe") is not False:
         report["safe"] = None  # not known: the run did not complete (the criteria hold what could be evaluated)

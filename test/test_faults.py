@@ -31,7 +31,7 @@ from roe_sep import interfaces  # noqa: E402
 from roe_sep.bag import info  # noqa: E402
 from roe_sep.jsonutil import loads_strict  # noqa: E402
 from roe_sep.nodes.convert import maneuver_msg, sec_to_time  # noqa: E402
-from roe_sep.run import NODES, run  # noqa: E402
+from roe_sep.run import NODES, SUITES, run  # noqa: E402
 
 pytestmark = pytest.mark.fault
 COUNTS = {"killed": 0, "reason_named": 0, "reports_strict": 0, "bags_readable": 0, "tracebacks": 0}
@@ -52,18 +52,25 @@ def wait_for_text(path, text, timeout):
 
 
 def node_pid(node, out):
+    """The pid of a node's process, or of a suite process (``loop``: the one with the sim; ``listeners``)."""
     params = str(out / "params.yaml")
-    found = subprocess.run(["pgrep", "-f", f"roe_sep.nodes.{node} --ros-args --params-file {params}"],
-                           capture_output=True, text=True).stdout.split()
+    if node in SUITES:
+        pattern = f"roe_sep.nodes.suite .*{'sim' if node == 'loop' else 'recorder'}.* --ros-args --params-file {params}"
+    else:
+        pattern = f"roe_sep.nodes.{node} --ros-args --params-file {params}"
+    found = subprocess.run(["pgrep", "-f", pattern], capture_output=True, text=True).stdout.split()
     return int(found[0]) if found else None
 
 
-@pytest.mark.parametrize("node", NODES)
+@pytest.mark.parametrize("node", NODES + SUITES)
 def test_killing_a_node_mid_run(tmp_path, node):
+    """A node's process killed (``--process-per-node``), or one of the two processes of the default layout."""
     out = tmp_path / "run"
-    proc = start_run(out, "--duration", "40000", "--real-time-factor", "4000")  # 10 s of stepping
+    layout = [] if node in SUITES else ["--process-per-node"]
+    proc = start_run(out, "--duration", "40000", "--real-time-factor", "4000", *layout)  # 10 s of stepping
     try:
-        assert wait_for_text(out / "logs" / "sim.log", "executed ejection", 120), "the run did not start"
+        log = "loop.log" if node in SUITES else "sim.log"
+        assert wait_for_text(out / "logs" / log, "executed ejection", 120), "the run did not start"
         pid = node_pid(node, out)
         assert pid is not None, node
         os.kill(pid, signal.SIGKILL)
@@ -82,8 +89,8 @@ def test_killing_a_node_mid_run(tmp_path, node):
     reason = rep["run"]["reason"]
     assert node in reason and "last log line" in reason and "signal 9" in reason, reason
     COUNTS["reason_named"] += 1
-    bag = out / ("bag_recovered" if node == "recorder" else "bag")
-    if node == "recorder":
+    bag = out / ("bag_recovered" if node in ("recorder", "listeners") else "bag")
+    if node in ("recorder", "listeners"):
         recovered = rep["run"]["bag_recovered"]
         assert recovered["messages"] > 0 and recovered["seconds_lost"] is not None
     assert info(bag)["message_count"] > 0
@@ -143,7 +150,8 @@ def test_fuzzing_every_subscribed_topic(tmp_path):
                                    os.environ.get("PYTHONPATH", "")},
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT / "test")
     try:
-        result = run(out=tmp_path / "fuzzed", duration=100000.0, timeout=600, real_time_factor=100000.0 / 30.0)
+        result = run(out=tmp_path / "fuzzed", duration=100000.0, timeout=600, real_time_factor=100000.0 / 30.0,
+                     process_per_node=True)  # a log per node: each node's rejections counted
     finally:
         out, err = fuzzer.communicate(timeout=60)
     sent = int(out.strip().splitlines()[-1]) if out.strip() else 0

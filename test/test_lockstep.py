@@ -64,12 +64,16 @@ def runs(tmp_path_factory):
                        real_time_factor=DURATION / 8.0)  # at least 8 s of stepping
     out["paced_wall"] = time.monotonic() - t0
     out["other_seed"] = run(out=base / "other", duration=DURATION, seed=SEED + 1, timeout=600)
+    # the other layout (a process per node, each on rclpy's SingleThreadedExecutor) and the other executor
+    out["per_node"] = run(out=base / "per_node", duration=DURATION, seed=SEED, timeout=600, process_per_node=True)
+    out["single_threaded"] = run(out=base / "single", duration=DURATION, seed=SEED, timeout=600,
+                                 executor="single_threaded")
     out["dir"] = base
     return out
 
 
 def test_runs_complete(runs):
-    for key in ("fast", "loaded", "paced", "other_seed"):
+    for key in ("fast", "loaded", "paced", "other_seed", "per_node", "single_threaded"):
         assert runs[key]["run"]["completed"], (key, runs[key]["run"])
         purposes = [m["purpose"] for m in runs[key]["maneuvers"]]
         assert purposes[:2] == ["ejection", "drift_stop"] and "ic_acquisition" in purposes, (key, purposes)
@@ -80,6 +84,17 @@ def test_same_seed_same_run_whatever_the_pacing_and_the_load(runs):
     assert essentials(runs["loaded"]) == fast
     assert essentials(runs["paced"]) == fast
     assert runs["paced_wall"] > 8.0  # the real-time factor did pace the run
+
+
+def test_same_run_whatever_the_layout_and_the_executor(runs):
+    """Two processes on EventsExecutors (default), on SingleThreadedExecutors, a process per node: one report."""
+    assert runs["fast"]["run"]["layout"] == "suites (events executor)"
+    assert runs["per_node"]["run"]["layout"] == "process_per_node"
+    assert set(runs["per_node"]["run"]["exit_codes"]) == {"recorder", "ground_bridge", "safety_monitor", "planner",
+                                                          "radar_od", "ic_planner", "ejector", "sim"}
+    fast = essentials(runs["fast"])
+    assert essentials(runs["per_node"]) == fast
+    assert essentials(runs["single_threaded"]) == fast
 
 
 def test_another_seed_other_dispersions(runs):

@@ -8,7 +8,7 @@ import math
 import sys
 
 from ..core.config import load_scenario
-from ..core.montecarlo import collision, streaming
+from ..core.montecarlo import streaming
 from ..core.separation.double_impulse import design
 from .common import emit, positive_int
 from .design import engine_args, mc_config, streamed
@@ -40,6 +40,8 @@ def _nonneg_float(text):
 
 
 def run(args) -> dict:
+    from ..core.montecarlo import collision  # SciPy's statistics load with the command, not with every roe-sep call
+
     scenario = load_scenario(args.config)
     samples = args.samples
     if samples is None:

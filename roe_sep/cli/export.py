@@ -10,8 +10,7 @@ from ..bag.errors import BagError
 from ..bag.reader import resolve
 from ..core.config import load_scenario
 from ..ndm import frames
-from ..ndm.dataset import TOPICS, Options, RunMessages, write_set
-from ..ndm.messages import FORMATS
+from ..ndm.options import FORMATS, TOPICS, Options, RunMessages  # light: the NDM library loads when a set is written
 from .common import emit
 
 
@@ -66,6 +65,8 @@ def cmd_export(args):
     carrier = load_scenario(args.config or scenario_file).monte_carlo.carrier
     opts = Options(epoch_utc=epoch, carrier_mass=carrier.mass, carrier_drag_area=carrier.area,
                    carrier_drag_coeff=carrier.cd, carrier_isp=args.carrier_isp)
+    from ..ndm.dataset import write_set
+
     try:
         paths = write_set(read_run(args.bag), args.out, args.format, opts)
     except BagError as exc:

@@ -85,7 +85,8 @@ def cmd_run(args):
 
     rep = run(config=args.config, out=args.out, params=args.params, duration=args.duration, seed=args.seed,
               timeout=args.timeout, progress=not args.json and sys.stderr.isatty(),
-              real_time_factor=args.real_time_factor, foxglove=args.foxglove)
+              real_time_factor=args.real_time_factor, foxglove=args.foxglove,
+              process_per_node=args.process_per_node, executor=args.executor)
 
     def human(r):
         print_run(r)
@@ -142,6 +143,12 @@ def register_run(subparsers):
                    help="pace the lockstep clock at X sim seconds per wall second at most (default 0: as fast as "
                         "the machine allows; the results are the same either way)")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
+    p.add_argument("--process-per-node", action="store_true",
+                   help="every node its own process, as a deployment runs them (default: two processes, the closed "
+                        "loop and the listeners, each on one executor; same report)")
+    p.add_argument("--executor", choices=("events", "single_threaded"), default="events",
+                   help="rclpy executor of the two processes (default events: rclpy's EventsExecutor); "
+                        "--process-per-node always uses single_threaded")
     p.add_argument("--foxglove", type=port_number, nargs="?", const=DEFAULT_PORT, metavar="PORT",
                    help=f"serve a live Foxglove view on ws://127.0.0.1:PORT (default {DEFAULT_PORT})")
     p.set_defaults(func=cmd_run)

@@ -5,7 +5,8 @@ Every 0.5 s (wall time) it looks for new topics that have a publisher and subscr
 publisher's offer: RELIABLE if all publishers are reliable, TRANSIENT_LOCAL if all are transient-local -- latched
 messages published before the recorder started are recorded too. Each message is written with
 ``log_time`` = the node clock at reception (sim time under ``use_sim_time``; messages arriving before the first
-``/clock`` wait and take the first clock time) and ``publish_time`` = the DDS source timestamp.
+``/clock`` wait and take the first clock time); ``publish_time`` = ``log_time``: the callback takes no DDS message
+info, so the node runs on any executor, the ``EventsExecutor`` of :mod:`roe_sep.nodes.suite` included.
 File format and crash safety: :mod:`roe_sep.bag.writer` (flushed and fsync'ed every ``flush_period``);
 SIGINT/SIGTERM close the file (summary, footer, ``metadata.yaml``); after a SIGKILL run
 ``roe-sep bag recover``.
@@ -153,15 +154,15 @@ class RecorderNode(Node):
             durability=DurabilityPolicy.TRANSIENT_LOCAL if transient else DurabilityPolicy.VOLATILE)
         self.writer.add_topic(name, type_name, offers, hashes[0] if hashes else "", definition)
         self.subs[name] = self.create_subscription(
-            cls, name, lambda data, info, topic=name: self.on_message(topic, data, info), profile, raw=True)
+            cls, name, lambda data, topic=name: self.on_message(topic, data), profile, raw=True)
         self.get_logger().info(f"recording {name} [{type_name}] "
                                f"({'reliable' if reliable else 'best_effort'}, "
                                f"{'transient_local' if transient else 'volatile'})")
 
     # -- messages ------------------------------------------------------------------------------------------------
-    def on_message(self, topic, data, info):
+    def on_message(self, topic, data):
         try:
-            source = info.get("source_timestamp") if isinstance(info, dict) else None
+            source = None  # publish_time = log_time
             if self.step_time is not None:
                 self._lockstep_message(topic, data, source)
                 return
