@@ -62,6 +62,7 @@ setup(
             'roe-sep = roe_sep.cli:main',
             'planner = roe_sep.nodes.planner:main',
             'sim = roe_sep.nodes.sim:main',
+            'suite = roe_sep.nodes.suite:main',
             'ejector = roe_sep.nodes.ejector:main',
             'safety_monitor = roe_sep.nodes.safety_monitor:main',
             'radar_od = roe_sep.nodes.radar_od:main',

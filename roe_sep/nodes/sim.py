@@ -56,6 +56,7 @@ from .params import ParameterError, declare, finite, require
 
 PLAN_TOPICS = (interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.ACQUISITION_PLAN_TOPIC)
 ACQUISITION_PLANNER = "roe_sep/ic_planner"  # its /diagnostics status name
+EJECTION_TIMING_STREAM = 2  # the ejection delay's stream of a run seed (graph.RADAR_STREAM = 1: the radar noise)
 DEFAULT_DURATION = 280800.0  # s: 3.25 days, through OD and the initial-condition acquisition and half a day on
 
 
@@ -73,7 +74,11 @@ class SimNode(Node):
         super().__init__("sim")
         scenario_file = declare(self, "scenario_file", "", "scenario YAML ('' = embedded default)")
         self.seed = declare(self, "seed", 0, "seed of the ejection/burn/drag dispersions")
-        self.disperse = declare(self, "disperse", True, "apply execution errors and the drag uncertainty")
+        self.disperse = declare(self, "disperse", True, "apply execution errors, the drag uncertainty and the "
+                                                        "ejection delay")
+        self.ejection_delay_max = declare(
+            self, "ejection_delay_max", 10.0, "s, the release mechanism fires uniformly within this delay after "
+            "the commanded ejection epoch (an assumption: no seed gives a value; 0: on time)")
         self.duration = declare(self, "duration", DEFAULT_DURATION, "s, sim time at which the run ends")
         self.time_step = declare(self, "time_step", 600.0, "s of sim time per clock tick (lockstep: per step)")
         tick_period = declare(self, "tick_period", 0.01, "wall s between clock ticks")
@@ -153,6 +158,11 @@ class SimNode(Node):
                                         da_dot=da_dot)
         else:
             self.truth = TruthModel(chief0, 0.0, da_dot, self.j2)
+        require("ejection_delay_max", finite(self.ejection_delay_max) and 0.0 <= self.ejection_delay_max <= 600.0,
+                self.ejection_delay_max, "a delay in [0, 600] s")
+        # its own stream of the run seed, so the other dispersions keep their draws
+        timing = np.random.default_rng(np.random.SeedSequence([int(self.seed), EJECTION_TIMING_STREAM]))
+        self.ejection_delay = float(timing.uniform(0.0, self.ejection_delay_max)) if self.disperse else 0.0
         self.errors = ExecutionErrors(rng, sep.spl_sigma if self.disperse else 0.0,
                                       sep.thruster_sigma if self.disperse else 0.0,
                                       mc.attitude_sigma_arcsec * ARCSEC if self.disperse else 0.0)
@@ -229,7 +239,8 @@ class SimNode(Node):
             self._status(WARN, "second ejection event ignored: the picosatellite is already released")
             return
         self.seen_ejections.add(key)
-        self.pending.append(PendingBurn(key, ev.ejection, interfaces.EJECTION_TOPIC, key))
+        # the spring fires ejection_delay after the commanded epoch (the executed maneuver says when)
+        self.pending.append(PendingBurn(key + self.ejection_delay, ev.ejection, interfaces.EJECTION_TOPIC, key))
 
     def on_plan(self, topic, plan: ManeuverPlan):
         stamp = time_to_sec(plan.header.stamp)
