@@ -2,8 +2,10 @@
 
 * planner latency: wall time from publishing an EjectionEvent to receiving the drift-stop ManeuverPlan (DDS round
   trip included), against the bare in-process computation of the same plan (``make_plan``);
-* the default scenario (nonlinear truth, node start-up included): ``roe-sep run`` wall time in lockstep (as fast as
-  the machine allows) beside the wall-paced free-running clock of before (40 s of sim time per 10 ms).
+* the default scenario (nonlinear truth, node start-up and report included): ``roe-sep run`` wall and CPU time in
+  lockstep (as fast as the machine allows) in the default layout (two processes on rclpy's EventsExecutor), the
+  same on SingleThreadedExecutors, a process per node, beside the wall-paced free-running clock of before (a process
+  per node, 40 s of sim time per 10 ms).
 """
 
 import argparse
@@ -82,37 +84,55 @@ FREE_RUNNING = {"sim": {"ros__parameters": {"lockstep_participants": [""], "time
 """The wall-paced mode of before the lockstep: 40 s of sim time every 10 ms of wall time, holds on wall timeouts."""
 
 
+MODES = {
+    "lockstep": [],  # the default: two processes (closed loop, listeners), each on an EventsExecutor
+    "lockstep_single_threaded": ["--executor", "single_threaded"],
+    "lockstep_process_per_node": ["--process-per-node"],
+    "free": ["--process-per-node"],  # and FREE_RUNNING: the wall-paced mode of before
+}
+
+
 def scenario(mode):
-    """One default run (nonlinear truth, node start-up included) in ``mode``: 'lockstep' or 'free' (wall-paced)."""
+    """One default run (nonlinear truth, node start-up included) in ``mode`` (:data:`MODES`)."""
+    import resource
+
     import yaml
 
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "run"
-        cmd = [sys.executable, "-m", "roe_sep.cli", "run", "--out", str(out), "--json"]
+        cmd = [sys.executable, "-m", "roe_sep.cli", "run", "--out", str(out), "--json", *MODES[mode]]
         if mode == "free":
             params = Path(tmp) / "free.yaml"
             params.write_text(yaml.safe_dump(FREE_RUNNING))
             cmd += ["--params", str(params)]
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
         t0 = time.perf_counter()
         proc = subprocess.run(cmd, capture_output=True, text=True)
         wall = time.perf_counter() - t0
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
         if proc.returncode not in (0, 1):
             raise RuntimeError(proc.stderr[-2000:])
         report = json.loads(proc.stdout)
         span = report["duration"]
-    return {"mode": mode, "sim_seconds": span, "wall_seconds": wall, "faster_than_real_time": span / wall,
-            "safe": report["safe"], "dv_total": report["dv_total"]}
+    return {"mode": mode, "sim_seconds": span, "wall_seconds": wall, "cpu_seconds": cpu,
+            "faster_than_real_time": span / wall, "safe": report["safe"], "dv_total": report["dv_total"],
+            "maneuvers": report["maneuvers"]}
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--events", type=int, default=50)
     ap.add_argument("--skip-scenario", action="store_true")
+    ap.add_argument("--modes", default=",".join(MODES), help=f"comma-separated, of {list(MODES)}")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)
     result = {"planner_latency": planner_latency(args.events)}
     if not args.skip_scenario:
-        result["scenario"] = [scenario("lockstep"), scenario("free")]
+        result["scenario"] = [scenario(m) for m in args.modes.split(",")]
+        lockstep = [sc for sc in result["scenario"] if sc["mode"] != "free"]
+        result["same_maneuvers_in_every_lockstep_mode"] = all(sc["maneuvers"] == lockstep[0]["maneuvers"]
+                                                              for sc in lockstep)
     if args.json:
         print(jsonutil.dumps(result))
         return 0
@@ -121,12 +141,13 @@ def main(argv=None):
     print(f"  median {lat['median_ms']:.2f} ms   p95 {lat['p95_ms']:.2f} ms   max {lat['max_ms']:.2f} ms   "
           f"(plan computation alone {lat['compute_only_ms']:.3f} ms)")
     if "scenario" in result:
+        base = result["scenario"][0]
         for sc in result["scenario"]:
-            print(f"default scenario, {sc['mode']:8s}: {sc['sim_seconds'] / 86400:.2f} days simulated in "
-                  f"{sc['wall_seconds']:.1f} s wall = {sc['faster_than_real_time']:.0f}x real time "
+            print(f"default scenario, {sc['mode']:26s}: {sc['sim_seconds'] / 86400:.2f} days in "
+                  f"{sc['wall_seconds']:5.1f} s wall ({sc['wall_seconds'] / base['wall_seconds']:.2f}x "
+                  f"{base['mode']}), {sc['cpu_seconds']:5.1f} CPU-s = {sc['faster_than_real_time']:.0f}x real time "
                   f"(safe: {sc['safe']}, carrier dv {sc['dv_total']:.4f} m/s)")
-        lock, free = result["scenario"]
-        print(f"  lockstep / wall-paced wall time: {lock['wall_seconds'] / free['wall_seconds']:.2f}")
+        print(f"  same maneuvers in every lockstep mode: {result['same_maneuvers_in_every_lockstep_mode']}")
     return 0
 
 
