@@ -134,12 +134,27 @@ def _vec(v):
     return [float(v.getX()), float(v.getY()), float(v.getZ())]
 
 
+UNKNOWN_FRAMES = []
+"""Frame names read in the current file that Orekit parsed but could not map to a frame it knows."""
+
+
 def _frame(facade):
-    return None if facade is None else str(facade.getName())
+    """Name of a CCSDS frame as Orekit read it; a name Orekit maps to no inertial, body-fixed, orbit-relative
+    (RTN, TNW...) or spacecraft frame is noted in UNKNOWN_FRAMES (Orekit keeps such names instead of failing)."""
+    if facade is None:
+        return None
+    name = str(facade.getName())
+    if (facade.asFrame() is None and facade.asCelestialBodyFrame() is None and facade.asOrbitRelativeFrame() is None
+            and facade.asSpacecraftBodyFrame() is None):
+        UNKNOWN_FRAMES.append(name)
+    return name
 
 
-def _matrix(m):
-    return [[float(m.getEntry(i, j)) for j in range(m.getColumnDimension())] for i in range(m.getRowDimension())]
+def _matrix(m, n=None):
+    """Rows of a Hipparchus matrix (its leading n x n block)."""
+    rows = m.getRowDimension() if n is None else n
+    cols = m.getColumnDimension() if n is None else n
+    return [[float(m.getEntry(i, j)) for j in range(cols)] for i in range(rows)]
 
 
 def read_opm(opm, utc):
@@ -206,7 +221,8 @@ def read_cdm(cdm, utc):
                         "name": str(md.getObjectName()), "ref_frame": _frame(md.getRefFrame()),
                         "covariance_method": str(md.getCovarianceMethod().name()),
                         "position_m": _vec(sv.getPositionVector()), "velocity_m_s": _vec(sv.getVelocityVector()),
-                        "covariance_rtn_si": _matrix(rtn.getRTNCovarianceMatrix()) if rtn is not None else None})
+                        # Orekit's RTN block is 9x9 (drag and SRP rows, NaN when absent): the 6x6 position-velocity part
+                        "covariance_rtn_si": _matrix(rtn.getRTNCovarianceMatrix(), 6) if rtn is not None else None})
     return {"message_id": str(cdm.getHeader().getMessageId()), "tca": _iso(rel.getTca(), utc),
             "miss_distance_m": float(rel.getMissDistance()), "relative_speed_m_s": float(rel.getRelativeSpeed()),
             "relative_position_rtn_m": _vec(rel.getRelativePosition()),
@@ -232,7 +248,10 @@ def check_files(paths, context):
         try:
             build, read = READERS[kind]
             message = getattr(builder, build)().parseMessage(DataSource(str(p)))
+            UNKNOWN_FRAMES.clear()
             entry.update(ok=True, read=read(message, utc))
+            if UNKNOWN_FRAMES:
+                entry.update(ok=False, error=f"frame names Orekit does not know: {sorted(set(UNKNOWN_FRAMES))}")
         except Exception as exc:  # noqa: BLE001  (Orekit's OrekitException and friends, reported per file)
             entry.update(ok=False, error=f"{exc.__class__.__name__}: {exc}")
         out[str(p)] = entry
@@ -283,9 +302,6 @@ def main(argv=None):
     except OrekitUnavailable as exc:
         print(f"orekit_check: {exc}", file=sys.stderr)
         return 2
-    from org.orekit.utils import Constants  # noqa: F401  (only to name the version below)
-    from org.orekit.utils import OrekitConfiguration  # noqa: F401
-
     result = check_files(files, context)
     if args.json:
         print(json.dumps(_finite({"reader": "orekit " + orekit_version(), "files": result}), allow_nan=False))
