@@ -515,3 +515,87 @@ def test_orekit_reads_the_set_as_written_and_refuses_broken_files(exported, run,
         [rel.relative_state_vector.relative_position_r.value, rel.relative_state_vector.relative_position_t.value,
          rel.relative_state_vector.relative_position_n.value], abs=1e-9)
     assert [o["ref_frame"] for o in cdm["objects"]] == ["EME2000", "EME2000"]
+
+
+# --- XML Schema validation (test/ndm_schema.py) --------------------------------------------------------------------
+def _xml_of(path, fmt):
+    """The file's XML: itself, or a KVN file read by the library and written as NDM/XML."""
+    return path.read_text() if fmt == "xml" else ndm.to_text(ndm.read_message(path), "xml")
+
+
+def _model_schemas():
+    from ccsds_ndm.models import ndmxml2 as nd
+    from ndm_schema import model_schema
+
+    return {k: model_schema(c) for k, c in (("opm", nd.Opm), ("oem", nd.Oem), ("tdm", nd.Tdm), ("cdm", nd.Cdm))}
+
+
+def test_the_set_validates_against_the_schema_of_the_ndm_models(exported):
+    """All ten files (KVN: as read back and written in XML) are valid against the XML Schema written from ccsds-ndm's
+    models of the NDM/XML 2.0.0 schemas: element order, mandatory elements, units, enumerations, the epoch pattern,
+    MAN_DELTA_MASS < 0."""
+    from ndm_schema import errors
+
+    fmt, out = exported
+    schemas = _model_schemas()
+    files = sorted(out.iterdir())
+    assert len(files) == 10 and {p.name.split(".")[-2] for p in files} == set(schemas)
+    for p in files:
+        assert errors(schemas[p.name.split(".")[-2]], _xml_of(p, fmt)) == [], p.name
+
+
+def _small_opm():
+    sc = ndm.SpacecraftParameters(140.0, 0.48, 2.3)
+    burn = ndm.Burn(10.0, np.array([0.0, 0.01, 0.0]), "RTN", ndm.delta_mass([0.0, 0.01, 0.0], 140.0, 60.0))
+    return ndm.build_opm("CARRIER", "CARRIER", EPOCH, 10.0, [A, 0.0, 0.0], [0.0, 7600.0, 0.0], [burn], sc)
+
+
+@pytest.mark.parametrize("what, edit, match", [
+    ("positive delta mass", lambda t: t.replace('<MAN_DELTA_MASS units="kg">-', '<MAN_DELTA_MASS units="kg">'),
+     "MAN_DELTA_MASS.*maxExclusive"),
+    ("epoch with a space", lambda t: t.replace("2016-07-01T00:00:10", "2016-07-01 00:00:10", 1), "EPOCH.*pattern"),
+    ("numpy repr", lambda t: t.replace(">140.0<", ">NP.FLOAT64(140.0)<"), "MASS.*NP.FLOAT64"),
+    ("missing CENTER_NAME", lambda t: t.replace("<CENTER_NAME>EARTH</CENTER_NAME>", ""), "Expected is .*CENTER_NAME"),
+    ("unknown keyword", lambda t: t.replace("<MAN_DURATION", "<MAN_DURATION_X").replace(
+        "</MAN_DURATION>", "</MAN_DURATION_X>"), "MAN_DURATION_X.*not expected"),
+    ("velocity in m/s", lambda t: t.replace('units="km/s"', 'units="m/s"', 1), "units.*enumeration"),
+    ("OPM version 3.0", lambda t: t.replace('version="2.0"', 'version="3.0"'), "fixed value"),
+])
+def test_schema_validation_refuses_broken_files(what, edit, match):
+    """The check can fail: each edit of a valid OPM is refused with the rule it breaks; a numpy scalar handed to the
+    library comes out as NP.FLOAT64(...) and is refused too (why messages.py converts every number)."""
+    import re
+
+    from ndm_schema import errors
+
+    schema = _model_schemas()["opm"]
+    text = ndm.to_text(_small_opm(), "xml")
+    assert errors(schema, text) == []
+    broken = edit(text)
+    assert broken != text, what
+    errs = errors(schema, broken)
+    assert errs and any(re.search(match, e) for e in errs), (what, errs)
+    opm = _small_opm()
+    opm.body.segment.data.spacecraft_parameters.mass.value = np.float64(140.0)
+    assert any("NP.FLOAT64" in e for e in errors(schema, ndm.to_text(opm, "xml")))
+
+
+def _official_missing():
+    from ndm_schema import OFFICIAL_DIRS, OFFICIAL_MASTER
+
+    if any((d / OFFICIAL_MASTER).is_file() for d in OFFICIAL_DIRS):
+        return None
+    return (f"the official CCSDS NDM/XML 2.0.0 XSD set ({OFFICIAL_MASTER} and the files it includes) is not in "
+            f"{' or '.join(map(str, OFFICIAL_DIRS))}: no installed package ships it (see test/ndm_schema.py)")
+
+
+@pytest.mark.skipif(_official_missing() is not None, reason=str(_official_missing()))
+def test_the_set_validates_against_the_official_ndm_xml_schemas(exported):
+    from ndm_schema import errors, official_schema
+
+    fmt, out = exported
+    schema = official_schema()
+    for p in sorted(out.iterdir()):
+        assert errors(schema, _xml_of(p, fmt)) == [], p.name
+    opm = _xml_of(out / f"plan01_double_impulse.opm.{fmt}", fmt)
+    assert errors(schema, opm.replace('<MAN_DELTA_MASS units="kg">-', '<MAN_DELTA_MASS units="kg">'))
