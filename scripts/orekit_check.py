@@ -243,9 +243,9 @@ def check_files(paths, context):
     out = {}
     for p in paths:
         kind = kind_of(p)
-        entry = {"kind": kind, "format": "xml" if Path(p).read_text(encoding="utf-8").lstrip().startswith("<")
-                 else "kvn"}
+        entry = {"kind": kind, "format": None}
         try:
+            entry["format"] = "xml" if Path(p).read_text(encoding="utf-8").lstrip().startswith("<") else "kvn"
             build, read = READERS[kind]
             message = getattr(builder, build)().parseMessage(DataSource(str(p)))
             UNKNOWN_FRAMES.clear()
@@ -292,7 +292,9 @@ def main(argv=None):
     args = ap.parse_args(argv)
     files = []
     for p in map(Path, args.paths):
-        files += sorted(q for q in p.iterdir() if q.is_file() and kind_of(q)) if p.is_dir() else [p]
+        # in a directory: the NDM files, not the hidden temporaries of a writer (write then rename)
+        files += (sorted(q for q in p.iterdir() if q.is_file() and kind_of(q) and not q.name.startswith("."))
+                  if p.is_dir() else [p])
     unknown = [str(f) for f in files if kind_of(f) is None or not f.is_file()]
     if unknown or not files:
         print(f"orekit_check: not an existing *.opm/oem/tdm/cdm.* file: {unknown or args.paths}", file=sys.stderr)
@@ -308,7 +310,7 @@ def main(argv=None):
     else:
         print(f"Orekit {orekit_version()}")
         for path, e in result.items():
-            print(f"{'OK ' if e['ok'] else 'BAD'} {e['kind'].upper()} {e['format']:3s} {Path(path).name}: "
+            print(f"{'OK ' if e['ok'] else 'BAD'} {e['kind'].upper()} {e['format'] or '?':3s} {Path(path).name}: "
                   + (summary(e["kind"], e["read"]) if e["ok"] else e["error"]))
     return 0 if all(e["ok"] for e in result.values()) else 1
 
