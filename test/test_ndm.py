@@ -384,3 +384,218 @@ def test_export_bad_input_exits_2(tmp_path, capsys):
     with pytest.raises(SystemExit) as exc:
         main(["export", str(BAG), "--out", str(tmp_path / "o"), "--format", "json"])
     assert exc.value.code == 2
+
+
+# --- an independent reader: Orekit's NDM parsers (scripts/orekit_check.py) ---------------------------------------
+ORE_CHECK = Path(__file__).resolve().parents[1] / "scripts" / "orekit_check.py"
+
+
+def _orekit_missing():
+    """Why Orekit cannot run here (None: it can): orekit-jpype or a Java runtime missing."""
+    import importlib.util
+
+    if importlib.util.find_spec("orekit_jpype") is None or importlib.util.find_spec("jpype") is None:
+        return "orekit-jpype is not installed (pip install orekit-jpype; it is in requirements.txt)"
+    import jpype
+
+    try:
+        jpype.getDefaultJVMPath()
+    except Exception as exc:  # noqa: BLE001  (JVMNotFoundException and platform errors)
+        return f"no Java runtime for Orekit ({exc}); Debian: apt-get install openjdk-17-jre-headless"
+    return None
+
+
+def _orekit_read(*paths):
+    import json
+    import subprocess
+    import sys
+
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(ORE_CHECK.parents[1]),
+                                                                      os.environ.get("PYTHONPATH")])))
+    proc = subprocess.run([sys.executable, str(ORE_CHECK), "--json", *map(str, paths)], capture_output=True,
+                          text=True, timeout=600, env=env)
+    assert proc.stdout, f"orekit_check printed nothing (exit {proc.returncode}): {proc.stderr[-2000:]}"
+    return proc.returncode, {Path(p).name: e for p, e in json.loads(proc.stdout)["files"].items()}
+
+
+def _broken_copies(out, fmt, dest):
+    """Three files Orekit must refuse: an OPM without its mandatory TIME_SYSTEM, an OPM whose REF_FRAME is no
+    CCSDS frame name, a TDM whose ANGLE_TYPE is not one the standard defines."""
+    dest.mkdir()
+    opm = (out / f"plan01_double_impulse.opm.{fmt}").read_text()
+    tdm = (out / f"radar.tdm.{fmt}").read_text()
+    if fmt == "xml":
+        no_ts = opm.replace("<TIME_SYSTEM>UTC</TIME_SYSTEM>", "")
+        frame = opm.replace("<REF_FRAME>EME2000</REF_FRAME>", "<REF_FRAME>J2000_OF_DATE</REF_FRAME>")
+        angle = tdm.replace("<ANGLE_TYPE>AZEL</ANGLE_TYPE>", "<ANGLE_TYPE>AZIMUTH_ELEVATION</ANGLE_TYPE>")
+    else:
+        no_ts = "\n".join(line for line in opm.splitlines() if not line.startswith("TIME_SYSTEM"))
+        frame = opm.replace("= EME2000", "= J2000_OF_DATE")
+        angle = tdm.replace("= AZEL", "= AZIMUTH_ELEVATION")
+    for name, text, original in (("no_time_system.opm", no_ts, opm), ("unknown_frame.opm", frame, opm),
+                                 ("bad_angle_type.tdm", angle, tdm)):
+        assert text != original
+        (dest / f"{name}.{fmt}").write_text(text)
+    return dest
+
+
+@pytest.mark.skipif(_orekit_missing() is not None, reason=str(_orekit_missing()))
+def test_orekit_reads_the_set_as_written_and_refuses_broken_files(exported, run, tmp_path):
+    """Orekit's parsers (ParserBuilder) read all ten files of the reference bag in XML and KVN, with the frame and
+    time system names of the standard, and give in SI the values the library reads: the OPM Delta-v equals the
+    approved plans' to 1 um/s, the OEM segments and covariances, the TDM measurements and the CDM miss distance are
+    ours; three broken copies are refused (so the check can fail)."""
+    fmt, out = exported
+    rc, files = _orekit_read(out, _broken_copies(out, fmt, tmp_path / "broken"))
+    assert rc == 1
+    bad = {n: e for n, e in files.items() if not e["ok"]}
+    assert sorted(bad) == sorted(f"{n}.{fmt}" for n in ("no_time_system.opm", "unknown_frame.opm",
+                                                         "bad_angle_type.tdm")), bad
+    assert "TIME_SYSTEM" in bad[f"no_time_system.opm.{fmt}"]["error"]
+    assert "J2000_OF_DATE" in bad[f"unknown_frame.opm.{fmt}"]["error"]
+    assert "ANGLE_TYPE" in bad[f"bad_angle_type.tdm.{fmt}"]["error"]
+    good = {n: e["read"] for n, e in files.items() if e["ok"]}
+    assert sorted(good) == sorted(p.name for p in out.iterdir()) and len(good) == 10
+    assert {e["format"] for e in files.values()} == {fmt}
+
+    # OPM: frames, time system, the plans' Delta-v (Orekit converts km/s to m/s itself)
+    worst = 0.0
+    for k, (_, plan) in enumerate(approved(run), start=1):
+        burns = [m for m in plan.maneuvers if m.spacecraft == "carrier" and np.any(vec(m.dv_rtn))]
+        for suffix, frame in (("", "RTN"), ("_eme2000", "EME2000")):
+            opm = good[f"plan{k:02d}_{plan.strategy}{suffix}.opm.{fmt}"]
+            assert (opm["ref_frame"], opm["time_system"], opm["center"]) == ("EME2000", "UTC", "EARTH")
+            assert len(opm["maneuvers"]) == len(burns) and opm["mass_kg"] == 140.0
+            for m, b in zip(opm["maneuvers"], burns):
+                assert m["ref_frame"] == frame and m["delta_mass_kg"] < 0 and m["duration_s"] == 0.0
+                assert frames.sim_time(EPOCH, m["epoch_ignition"]) == pytest.approx(stamp(b.epoch), abs=1e-6)
+                if suffix:
+                    assert abs(np.linalg.norm(m["dv_m_s"]) - np.linalg.norm(vec(b.dv_rtn))) < 1e-9
+                else:
+                    worst = max(worst, float(np.max(np.abs(np.array(m["dv_m_s"]) - vec(b.dv_rtn)))))
+    assert worst < 1e-6
+    assert len(good[f"executed_carrier.opm.{fmt}"]["maneuvers"]) == 8
+
+    # OEM: the library's segments, states and covariances (km^2... -> m^2...) as Orekit reads them
+    ours = ndm.read_message(out / f"ephemeris.oem.{fmt}").body.segment
+    theirs = good[f"ephemeris.oem.{fmt}"]["segments"]
+    assert [s["object_id"] for s in theirs] == [s.metadata.object_id for s in ours]
+    for o, t in zip(ours, theirs):
+        assert (t["ref_frame"], t["time_system"], t["interpolation"]) == ("EME2000", "UTC", "LAGRANGE")
+        assert t["n_states"] == len(o.data.state_vector)
+        sv = o.data.state_vector[0]
+        assert np.allclose(t["first_state"]["position_m"], np.array([sv.x.value, sv.y.value, sv.z.value]) * 1e3,
+                           rtol=0, atol=1e-6)
+        assert len(t["covariances"]) == len(o.data.covariance_matrix)
+        for oc, tc in zip(o.data.covariance_matrix, t["covariances"]):
+            c = np.array([[getattr(oc, f"c{ndm.COV_NAMES[max(i, j)]}_{ndm.COV_NAMES[min(i, j)]}").value
+                           for j in range(6)] for i in range(6)]) * 1e6
+            assert tc["ref_frame"] == "EME2000"
+            assert np.allclose(tc["matrix_si"], c, rtol=1e-12, atol=0)
+    assert sum(len(s["covariances"]) for s in theirs) == 5
+
+    # TDM: participants, angle type and every measurement in SI (m, rad)
+    meas = ndm.read_tdm(out / f"radar.tdm.{fmt}", EPOCH)
+    segs = good[f"radar.tdm.{fmt}"]["segments"]
+    assert {(s["participants"]["1"], s["participants"]["2"], s["angle_type"], s["time_system"]) for s in segs} == {
+        ("TIRA", "PICOSATELLITE", "AZEL", "UTC")}
+    got = sorted((frames.sim_time(EPOCH, o["epoch"]), o["value_si"]) for s in segs for o in s["observations"]["RANGE"])
+    assert len(got) == len(meas) == sum(s["n_observations"] for s in segs) // 3
+    assert np.max(np.abs(np.array(got) - [(m.t, m.z[0]) for m in meas])) < 1e-6
+    az = sorted((frames.sim_time(EPOCH, o["epoch"]), o["value_si"] % (2 * math.pi)) for s in segs
+                for o in s["observations"]["ANGLE_1"])
+    assert np.max(np.abs(np.array(az) - [(m.t, m.z[1]) for m in meas])) < 1e-9
+
+    # CDM: the library's miss distance, TCA and relative state
+    rel = ndm.read_message(out / f"closest_approach.cdm.{fmt}").body.relative_metadata_data
+    cdm = good[f"closest_approach.cdm.{fmt}"]
+    assert cdm["miss_distance_m"] == pytest.approx(rel.miss_distance.value, abs=1e-9)
+    assert frames.sim_time(EPOCH, cdm["tca"]) == pytest.approx(frames.sim_time(EPOCH, rel.tca), abs=1e-6)
+    assert cdm["relative_position_rtn_m"] == pytest.approx(
+        [rel.relative_state_vector.relative_position_r.value, rel.relative_state_vector.relative_position_t.value,
+         rel.relative_state_vector.relative_position_n.value], abs=1e-9)
+    assert [o["ref_frame"] for o in cdm["objects"]] == ["EME2000", "EME2000"]
+
+
+# --- XML Schema validation (test/ndm_schema.py) --------------------------------------------------------------------
+def _xml_of(path, fmt):
+    """The file's XML: itself, or a KVN file read by the library and written as NDM/XML."""
+    return path.read_text() if fmt == "xml" else ndm.to_text(ndm.read_message(path), "xml")
+
+
+def _model_schemas():
+    from ccsds_ndm.models import ndmxml2 as nd
+    from ndm_schema import model_schema
+
+    return {k: model_schema(c) for k, c in (("opm", nd.Opm), ("oem", nd.Oem), ("tdm", nd.Tdm), ("cdm", nd.Cdm))}
+
+
+def test_the_set_validates_against_the_schema_of_the_ndm_models(exported):
+    """All ten files (KVN: as read back and written in XML) are valid against the XML Schema written from ccsds-ndm's
+    models of the NDM/XML 2.0.0 schemas: element order, mandatory elements, units, enumerations, the epoch pattern,
+    MAN_DELTA_MASS < 0."""
+    from ndm_schema import errors
+
+    fmt, out = exported
+    schemas = _model_schemas()
+    files = sorted(out.iterdir())
+    assert len(files) == 10 and {p.name.split(".")[-2] for p in files} == set(schemas)
+    for p in files:
+        assert errors(schemas[p.name.split(".")[-2]], _xml_of(p, fmt)) == [], p.name
+
+
+def _small_opm():
+    sc = ndm.SpacecraftParameters(140.0, 0.48, 2.3)
+    burn = ndm.Burn(10.0, np.array([0.0, 0.01, 0.0]), "RTN", ndm.delta_mass([0.0, 0.01, 0.0], 140.0, 60.0))
+    return ndm.build_opm("CARRIER", "CARRIER", EPOCH, 10.0, [A, 0.0, 0.0], [0.0, 7600.0, 0.0], [burn], sc)
+
+
+@pytest.mark.parametrize("what, edit, match", [
+    ("positive delta mass", lambda t: t.replace('<MAN_DELTA_MASS units="kg">-', '<MAN_DELTA_MASS units="kg">'),
+     "MAN_DELTA_MASS.*maxExclusive"),
+    ("epoch with a space", lambda t: t.replace("2016-07-01T00:00:10", "2016-07-01 00:00:10", 1), "EPOCH.*pattern"),
+    ("numpy repr", lambda t: t.replace(">140.0<", ">NP.FLOAT64(140.0)<"), "MASS.*NP.FLOAT64"),
+    ("missing CENTER_NAME", lambda t: t.replace("<CENTER_NAME>EARTH</CENTER_NAME>", ""), "Expected is .*CENTER_NAME"),
+    ("unknown keyword", lambda t: t.replace("<MAN_DURATION", "<MAN_DURATION_X").replace(
+        "</MAN_DURATION>", "</MAN_DURATION_X>"), "MAN_DURATION_X.*not expected"),
+    ("velocity in m/s", lambda t: t.replace('units="km/s"', 'units="m/s"', 1), "units.*enumeration"),
+    ("OPM version 3.0", lambda t: t.replace('version="2.0"', 'version="3.0"'), "fixed value"),
+])
+def test_schema_validation_refuses_broken_files(what, edit, match):
+    """The check can fail: each edit of a valid OPM is refused with the rule it breaks; a numpy scalar handed to the
+    library comes out as NP.FLOAT64(...) and is refused too (why messages.py converts every number)."""
+    import re
+
+    from ndm_schema import errors
+
+    schema = _model_schemas()["opm"]
+    text = ndm.to_text(_small_opm(), "xml")
+    assert errors(schema, text) == []
+    broken = edit(text)
+    assert broken != text, what
+    errs = errors(schema, broken)
+    assert errs and any(re.search(match, e) for e in errs), (what, errs)
+    opm = _small_opm()
+    opm.body.segment.data.spacecraft_parameters.mass.value = np.float64(140.0)
+    assert any("NP.FLOAT64" in e for e in errors(schema, ndm.to_text(opm, "xml")))
+
+
+def _official_missing():
+    from ndm_schema import OFFICIAL_DIRS, OFFICIAL_MASTER
+
+    if any((d / OFFICIAL_MASTER).is_file() for d in OFFICIAL_DIRS):
+        return None
+    return (f"the official CCSDS NDM/XML 2.0.0 XSD set ({OFFICIAL_MASTER} and the files it includes) is not in "
+            f"{' or '.join(map(str, OFFICIAL_DIRS))}: no installed package ships it (see test/ndm_schema.py)")
+
+
+@pytest.mark.skipif(_official_missing() is not None, reason=str(_official_missing()))
+def test_the_set_validates_against_the_official_ndm_xml_schemas(exported):
+    from ndm_schema import errors, official_schema
+
+    fmt, out = exported
+    schema = official_schema()
+    for p in sorted(out.iterdir()):
+        assert errors(schema, _xml_of(p, fmt)) == [], p.name
+    opm = _xml_of(out / f"plan01_double_impulse.opm.{fmt}", fmt)
+    assert errors(schema, opm.replace('<MAN_DELTA_MASS units="kg">-', '<MAN_DELTA_MASS units="kg">'))

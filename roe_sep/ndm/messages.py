@@ -114,9 +114,11 @@ def build_opm(object_name, object_id, epoch_utc, t, r, v, burns, spacecraft: Spa
         solar_rad_area=nd.AreaType(value=_f(sc.solar_rad_area), units=nd.AreaUnits.M_2),
         solar_rad_coeff=_f(sc.solar_rad_coeff), drag_area=nd.AreaType(value=_f(sc.drag_area), units=nd.AreaUnits.M_2),
         drag_coeff=_f(sc.drag_coeff))
-    data = nd.OpmData(comment=list(comments), state_vector=_state_vector(
-        nd.StateVectorType, frames.utc_string(epoch_utc, t), r, v), spacecraft_parameters=params,
-        maneuver_parameters=mans)
+    # The comments go into the state vector block, not before it at the data level: both are schema-valid and give
+    # the same KVN, but Orekit's XML parser refuses a COMMENT directly under <data>.
+    data = nd.OpmData(state_vector=_state_vector(
+        nd.StateVectorType, frames.utc_string(epoch_utc, t), r, v, comment=list(comments)),
+        spacecraft_parameters=params, maneuver_parameters=mans)
     return nd.Opm(header=_header(), body=nd.OpmBody(segment=nd.OpmSegment(metadata=meta, data=data)))
 
 
