@@ -91,7 +91,9 @@ class Deployment:
             parts.append(f"{n} exited early ({how}); last log line: {self.last_line(n) or '(none)'}")
         return "; ".join(parts)
 
-    def stop(self, nodes, timeout=20.0):
+    def stop(self, nodes, timeout=120.0):
+        """SIGINT to each of ``nodes``, then wait; SIGKILL after ``timeout`` s (the ground_bridge writes the final
+        CCSDS set of the whole run at shutdown: seconds, many more on a loaded machine)."""
         for n in nodes:
             p, _ = self.procs[n]
             if p.poll() is None:

@@ -83,13 +83,13 @@ def test_replay_of_the_run(scenario):
     node = rclpy.create_node("replay_check")
     got = []
     node.create_subscription(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, got.append, 10000)
+    plans = []  # subscribed before the replay starts: under load, discovery may outlast the replay's linger
+    node.create_subscription(ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, plans.append, interfaces.LATCHED)
     proc = bag_replay_process(str(bag), "--rate", "40000", "--delay", "10", "--linger", "3", "--topics",
                               interfaces.TRUTH_ROE_TOPIC, interfaces.DRIFT_STOP_PLAN_TOPIC)
     try:
         assert spin_until(node, lambda: len(got) >= len(recorded), timeout=60), (len(got), len(recorded))
         assert [norm(m) for m in got] == [norm(m) for m in recorded]
-        plans = []
-        node.create_subscription(ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, plans.append, interfaces.LATCHED)
         assert spin_until(node, lambda: len(plans) == 1, timeout=10)
         assert math.isclose(plans[0].p_reduction, 0.06, abs_tol=0.03)
     finally:
@@ -125,7 +125,8 @@ def test_multi_impulse_scenario_runs_end_to_end(tmp_path):
     assert rep["run"]["completed"] and rep["safe"] and all(rep["criteria"].values()), rep["criteria"]
     purposes = [m["purpose"] for m in rep["maneuvers"]]
     assert purposes[:2] == ["ejection", "drift_reduction"] and "e_vector_pair" in purposes
-    assert math.degrees(math.radians(rep["maneuvers"][0]["u_deg"])) % 180 == pytest.approx(90.0, abs=0.05)
+    # commanded at u = 90 deg; the release fires up to ejection_delay_max = 10 s (0.64 deg of u) later
+    assert 90.0 - 0.05 <= rep["maneuvers"][0]["u_deg"] % 180 <= 90.0 + 0.65
     burns = [m for m in rep["maneuvers"] if m["spacecraft"] == "carrier"]
     assert all(m["dv"] <= 0.3 * 1.25 for m in burns)  # commanded <= 0.3 m/s, executed with the 5 % thruster error
     assert rep["dv_total"] < 1.0  # purely tangential: far below the double impulse's radial drift-stop
