@@ -169,12 +169,19 @@ rm -rf "$OUT"
 mkdir -p "$OUT"
 export ROS_DOMAIN_ID="${ROS_DOMAIN_ID:-$(( ($$ % 100) + 1 ))}"
 say "checks (ROS_DOMAIN_ID=$ROS_DOMAIN_ID): outputs in build/ros2cli/checks"
-PIDS=()
-cleanup() {
-  local p
-  for p in "${PIDS[@]}"; do kill -INT "$p" 2>/dev/null || true; done
-  sleep 1
-  for p in "${PIDS[@]}"; do kill -KILL "$p" 2>/dev/null || true; done
+PIDS=()  # process groups of the nodes started here (setsid: `ros2 run` and its node process)
+cleanup() {  # SIGINT to each group, up to 15 s to exit cleanly, then SIGKILL
+  local p i
+  for p in "${PIDS[@]}"; do kill -INT -- "-$p" 2>/dev/null || true; done
+  for i in $(seq 30); do
+    local alive=0
+    for p in "${PIDS[@]}"; do kill -0 -- "-$p" 2>/dev/null && alive=1; done
+    [[ $alive == 0 ]] && break
+    sleep 0.5
+  done
+  for p in "${PIDS[@]}"; do kill -KILL -- "-$p" 2>/dev/null || true; done
+  wait 2>/dev/null || true
+  PIDS=()
 }
 trap cleanup EXIT
 section() { printf '\n==== %s\n' "$*"; }
@@ -191,12 +198,14 @@ r2 interface list --only-msgs | grep roe_sep_msgs || true
 } > "$OUT/static.txt"
 say "pkg/interface: $(grep -c '^roe_sep ' "$OUT/static.txt") executables listed"
 
-# every node executable, standalone, with the config/ parameter file of the run (a 2 s-short Monte Carlo for the
-# planner); each is then seen by `ros2 node list`
+# every node executable, standalone, with the installed config/ parameter file of the reference run (the share
+# directory of the colcon install) plus a few standalone values; each is then seen by `ros2 node list`
+SHARE="$(ros2 pkg prefix --share roe_sep)"
 cat > "$OUT/params.yaml" <<EOF
 /**:
   ros__parameters:
     use_sim_time: false
+    scenario_file: $SHARE/config/default.yaml
 planner:
   ros__parameters:
     mc_samples: 2000
@@ -206,13 +215,13 @@ recorder:
 ground_bridge:
   ros__parameters:
     output_dir: $OUT/standalone_ccsds
-sim:
+foxglove_view:
   ros__parameters:
-    wait_for: ['/nothing=1']
+    port: 0
 EOF
-EXES=(planner radar_od ic_planner safety_monitor ejector ground_bridge recorder analysis_server sim)
+EXES=(planner radar_od ic_planner safety_monitor ejector ground_bridge recorder analysis_server foxglove_view sim)
 for exe in "${EXES[@]}"; do
-  ros2 run roe_sep "$exe" --ros-args --params-file "$ROOT/config/default.yaml" --params-file "$OUT/params.yaml" \
+  setsid ros2 run roe_sep "$exe" --ros-args --params-file "$SHARE/config/bag_params.yaml" --params-file "$OUT/params.yaml" \
     > "$OUT/run_$exe.log" 2>&1 &
   PIDS+=($!)
 done
@@ -233,36 +242,46 @@ r2 param get /radar_od seed --no-daemon --spin-time 3
 section "topic echo/hz"
 r2 topic echo /separation/drift_stop_plan --once --no-daemon --spin-time 3 --qos-durability transient_local \
   --qos-reliability reliable --timeout 5
-r2 topic hz /diagnostics --window 5 --no-daemon --spin-time 3 & hzpid=$!
-sleep 8; kill -INT $hzpid 2>/dev/null || true; wait $hzpid 2>/dev/null || true
+printf '$ ros2 topic hz /diagnostics --window 5\n'
+timeout -s INT 8 ros2 topic hz /diagnostics --window 5 2>&1 || true
 } > "$OUT/standalone.txt" 2>&1
 cleanup
-PIDS=()
-sleep 2
 say "ros2 run: $(grep -c '^/' <(sed -n '/node list/,/topic list/p' "$OUT/standalone.txt")) nodes in ros2 node list"
 
-# a managed node left unconfigured (autostart:=false), then driven by ros2 lifecycle set
-ros2 run roe_sep safety_monitor --ros-args -p autostart:=false -p use_sim_time:=false > "$OUT/run_managed.log" 2>&1 &
+# managed nodes left unconfigured (autostart:=false), then driven by `ros2 lifecycle set`; the planner with a bad
+# parameter (k must be odd): its configure transition fails and its log names the parameter
+setsid ros2 run roe_sep safety_monitor --ros-args -p autostart:=false -p use_sim_time:=false \
+  > "$OUT/run_managed_safety_monitor.log" 2>&1 &
+PIDS+=($!)
+setsid ros2 run roe_sep planner --ros-args -p autostart:=false -p k:=2 > "$OUT/run_managed_planner.log" 2>&1 &
 PIDS+=($!)
 sleep 6
 {
 section "lifecycle set (autostart:=false)"
 r2 lifecycle get /safety_monitor --no-daemon --spin-time 3
+r2 param list /safety_monitor --no-daemon --spin-time 3
 r2 lifecycle set /safety_monitor configure --no-daemon --spin-time 3
 r2 lifecycle get /safety_monitor --no-daemon --spin-time 3
 r2 lifecycle set /safety_monitor activate --no-daemon --spin-time 3
 r2 lifecycle get /safety_monitor --no-daemon --spin-time 3
+section "a parameter error at configure (planner k:=2)"
+r2 lifecycle set /planner configure --no-daemon --spin-time 6
+r2 lifecycle get /planner --no-daemon --spin-time 3
 } > "$OUT/managed.txt" 2>&1
 cleanup
-PIDS=()
-sleep 2
+printf '$ (log of planner k:=2)\n%s\n' "$(grep -i 'configure failed' "$OUT/run_managed_planner.log")" >> "$OUT/managed.txt"
 
-# the whole scenario with ros2 launch: report.json in OUT/launch (the same report as `roe-sep run`)
-section "launch" > "$OUT/launch.txt"
-printf '$ ros2 launch roe_sep separation.launch.py output:=%s seed:=1 duration:=%s\n' "$OUT/launch" "$DURATION" \
-  >> "$OUT/launch.txt"
-t=$SECONDS
-timeout 900 ros2 launch roe_sep separation.launch.py output:="$OUT/launch" seed:=1 duration:="$DURATION" \
-  >> "$OUT/launch.txt" 2>&1 || printf '(exit status %s)\n' "$?" >> "$OUT/launch.txt"
-say "ros2 launch: done in $((SECONDS - t)) s; report $( [[ -f "$OUT/launch/report.json" ]] && echo "$OUT/launch/report.json" || echo MISSING)"
+# the whole scenario with ros2 launch (report.json in OUT/launch), the XML front-end with the managed start-up
+# (OUT/launch_xml), and `roe-sep run` of the colcon install for the same seed and duration (OUT/run): the same report
+run_timed() {  # name, command...: output in OUT/<name>.txt
+  local name=$1; shift
+  local t=$SECONDS
+  { printf '$ %s\n' "$*"; timeout 900 "$@" 2>&1 || printf '(exit status %s)\n' "$?"; } > "$OUT/$name.txt"
+  printf '(%s s)\n' "$((SECONDS - t))" >> "$OUT/$name.txt"
+  say "$name: done in $((SECONDS - t)) s; report $([[ -f "$OUT/$name/report.json" ]] && echo "$OUT/$name/report.json" || echo MISSING)"
+}
+run_timed launch ros2 launch roe_sep separation.launch.py output:="$OUT/launch" seed:=1 duration:="$DURATION"
+run_timed launch_xml ros2 launch roe_sep separation.launch.xml output:="$OUT/launch_xml" seed:=1 \
+  duration:="$DURATION" managed:=true
+run_timed run ros2 run roe_sep roe-sep run --out "$OUT/run" --seed 1 --duration "$DURATION"
 say "all checks done in $((SECONDS - T0)) s"
