@@ -185,8 +185,19 @@ cleanup() {  # SIGINT to each group, up to 15 s to exit cleanly, then SIGKILL
 }
 trap cleanup EXIT
 section() { printf '\n==== %s\n' "$*"; }
-# ros2 <args> with its output in the report (never the daemon: every call discovers the graph itself)
-r2() { printf '$ ros2 %s\n' "$*"; timeout 60 ros2 "$@" 2>&1 || printf '(exit status %s)\n' "$?"; }
+# ros2 <args> with its output in the report (never the daemon: every call discovers the graph itself, within its
+# --spin-time; on a loaded machine discovery can take longer: "Node not found" is retried, up to 3 attempts)
+r2() {
+  local out code attempt
+  printf '$ ros2 %s\n' "$*"
+  for attempt in 1 2 3; do
+    code=0
+    out="$(timeout 60 ros2 "$@" 2>&1)" || code=$?
+    grep -q "Node not found" <<< "$out" || break
+  done
+  printf '%s\n' "$out"
+  [[ $code == 0 ]] || printf '(exit status %s)\n' "$code"
+}
 
 {
 section "pkg executables"
