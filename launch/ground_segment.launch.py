@@ -50,7 +50,8 @@ def _nodes(context):
     params_file = out / "params.yaml"
     params_file.write_text(yaml.safe_dump(params, sort_keys=False))
     names = NODES + (("lifecycle_manager",) if managed else ())
-    return [Node(package="roe_sep", executable=n, name=n, output="screen", parameters=[str(params_file)])
+    return [Node(package="roe_sep", executable=n, name=n, output="screen", sigterm_timeout="20",
+                 parameters=[str(params_file)])
             for n in names]
 
 

@@ -71,7 +71,9 @@ def _graph(context):
     timeout = _arg(context, "timeout", float) or 1800.0
 
     state = {"end": None, "codes": {}, "start": time.monotonic()}
-    nodes = {name: Node(package="roe_sep", executable=name, name=name, output="screen",
+    # up to 20 s from SIGINT to SIGTERM, as roe-sep run waits (the recorder closes the bag, ground_bridge writes
+    # its final CCSDS set; launch's default of 5 s is too short on a loaded machine)
+    nodes = {name: Node(package="roe_sep", executable=name, name=name, output="screen", sigterm_timeout="20",
                         parameters=[str(params_file)]) for name in graph_nodes(managed=managed)}
 
     def shutdown(reason):
