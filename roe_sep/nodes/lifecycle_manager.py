@@ -8,7 +8,8 @@ publishes OK "managed nodes active" and keeps running (so that a launch does not
 the nodes as they are.
 
 Parameters: ``node_names`` (string list, the managed nodes of :data:`roe_sep.graph.MANAGED`), ``timeout`` (double,
-30.0 s): how long to wait for each node's service, and for each transition.
+30.0 s): how long to wait for each node's service, and for each transition (a call without an answer is made
+again, up to 3 times, unless the node's state shows it was done).
 """
 
 import sys
@@ -25,6 +26,9 @@ from ..graph import MANAGED
 from .diagnostics import ERROR, OK, publish_status
 from .params import declare, finite, require
 
+GOAL = {"configure": "inactive", "activate": "active"}
+ATTEMPTS = 3  # calls of a transition that got no answer
+MATCH_DELAY = 0.5  # s
 STEPS = (("configure", Transition.TRANSITION_CONFIGURE), ("activate", Transition.TRANSITION_ACTIVATE))
 
 
@@ -41,6 +45,9 @@ class LifecycleManager(Node):
     def _call(self, client, request):
         if not client.wait_for_service(timeout_sec=self.timeout):
             return None, f"service {client.srv_name} not available within {self.timeout:g} s"
+        # the server is discovered; give it a moment to match this client's request writer too (a request sent
+        # before that is lost)
+        rclpy.spin_once(self, timeout_sec=MATCH_DELAY)
         future = client.call_async(request)
         rclpy.spin_until_future_complete(self, future, timeout_sec=self.timeout)
         if not future.done():
@@ -56,11 +63,19 @@ class LifecycleManager(Node):
         """Configure, then activate, every node in order; returns (ok, message)."""
         for label, transition in STEPS:
             for name in self.node_names:
-                client = self.create_client(ChangeState, f"/{name}/change_state")
-                request = ChangeState.Request()
-                request.transition.id = transition
-                result, problem = self._call(client, request)
-                self.destroy_client(client)
+                for _ in range(ATTEMPTS):
+                    client = self.create_client(ChangeState, f"/{name}/change_state")
+                    request = ChangeState.Request()
+                    request.transition.id = transition
+                    result, problem = self._call(client, request)
+                    self.destroy_client(client)
+                    if problem is None:
+                        break
+                    # no answer: a lost request or a lost response; the node's state tells which
+                    if self.state(name) == GOAL[label]:
+                        problem, result = None, ChangeState.Response(success=True)
+                        break
+                    self.get_logger().warning(f"{problem}; asking again")
                 if problem is None and not result.success:
                     problem = (f"{label} of /{name} failed (state now {self.state(name)!r}; the node's log says "
                                f"why, e.g. a parameter error)")
