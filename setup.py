@@ -16,8 +16,8 @@ def _data_files():
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
     ]
-    for sub, pattern in (('config', 'config/*.yaml'), ('launch', 'launch/*.py')):
-        matches = sorted(glob(pattern))
+    for sub, patterns in (('config', ('config/*.yaml',)), ('launch', ('launch/*.py', 'launch/*.xml'))):
+        matches = sorted(f for pattern in patterns for f in glob(pattern))
         if matches:  # an empty list would still create an empty dir entry; skip it
             files.append(('share/{}/{}'.format(package_name, sub), matches))
     return files
@@ -71,6 +71,7 @@ setup(
             'ic_planner = roe_sep.nodes.ic_planner:main',
             'recorder = roe_sep.nodes.recorder:main',
             'analysis_server = roe_sep.nodes.analysis_server:main',
+            'lifecycle_manager = roe_sep.nodes.lifecycle_manager:main',
         ],
     },
 )

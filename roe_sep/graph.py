@@ -12,6 +12,9 @@ import yaml
 
 NODES = ("recorder", "ground_bridge", "safety_monitor", "planner", "radar_od", "ic_planner", "ejector", "sim")
 OPTIONAL_NODES = ("foxglove_view",)  # started on request: roe-sep run --foxglove [PORT]
+MANAGED = ("safety_monitor", "planner", "radar_od", "ic_planner")
+"""The managed (lifecycle) nodes, in start-up order: configured, then activated, by ``lifecycle_manager`` when the
+graph is started managed (``ros2 launch roe_sep separation.launch.py managed:=true``), else each autostarts."""
 PARTICIPANTS = ("ejector", "planner", "radar_od", "ic_planner", "safety_monitor")
 """The lockstep participants: every node that reacts to the simulation (recorder and ground_bridge listen)."""
 # subscribers of each topic the simulator waits for before its clock starts (so that nobody misses a message)
@@ -54,13 +57,48 @@ def parameters(config, bag_dir, overrides):
         "ground_bridge": {"output_dir": str(Path(bag_dir).parent / "ccsds")},  # CCSDS files of the run (issue 18)
     }
     for node, values in (overrides or {}).items():
-        if node not in NODES + OPTIONAL_NODES and node != "/**":
+        if node not in NODES + OPTIONAL_NODES + ("lifecycle_manager",) and node != "/**":
             raise ValueError(f"--params: unknown node {node!r}; nodes: {list(NODES)}")
         target = shared if node == "/**" else per_node.setdefault(node, {})
         target.update(values)
     out = {"/**": {"ros__parameters": shared}}
     out.update({node: {"ros__parameters": values} for node, values in per_node.items()})
     return out
+
+
+def run_overrides(params=None, duration=None, seed=None, real_time_factor=None, foxglove=None, managed=False):
+    """The per-node parameter overrides of a run's options (``roe-sep run`` and the launch files' arguments):
+    ``params`` (a params YAML, :func:`load_overrides`), the sim ``duration`` [s], the run ``seed`` (the simulator's,
+    and the radar noise's :func:`radar_seed` unless the params file sets it), ``real_time_factor``, the
+    ``foxglove`` port, and ``managed`` (the :data:`MANAGED` nodes wait unconfigured for ``lifecycle_manager``,
+    which then starts them in order)."""
+    overrides = load_overrides(params)
+    sim = overrides.setdefault("sim", {})
+    if duration is not None:
+        sim["duration"] = float(duration)
+    if seed is not None:
+        sim["seed"] = int(seed)
+        overrides.setdefault("radar_od", {}).setdefault("seed", radar_seed(seed))
+    if real_time_factor is not None:
+        sim["real_time_factor"] = float(real_time_factor)
+    if foxglove is not None:
+        overrides.setdefault("foxglove_view", {})["port"] = int(foxglove)
+    if managed:
+        for node in MANAGED:
+            overrides.setdefault(node, {})["autostart"] = False
+        overrides.setdefault("lifecycle_manager", {})["node_names"] = list(MANAGED)
+    return overrides
+
+
+def graph_nodes(foxglove=False, managed=False):
+    """The nodes of a run, in start order (the recorder first, the simulator last: it owns ``/clock``); with
+    ``foxglove`` the view before the simulator, ``managed`` the lifecycle manager after the managed nodes."""
+    nodes = list(NODES)
+    if foxglove:
+        nodes[-1:-1] = list(OPTIONAL_NODES)
+    if managed:
+        nodes.insert(max(nodes.index(n) for n in MANAGED) + 1, "lifecycle_manager")
+    return tuple(nodes)
 
 
 def load_overrides(path):

@@ -23,9 +23,11 @@ from .graph import (  # noqa: F401 (re-exported)
     PARTICIPANTS,
     RADAR_STREAM,
     SUBSCRIBERS,
+    graph_nodes,
     load_overrides,
     parameters,
     radar_seed,
+    run_overrides,
 )
 
 
@@ -176,19 +178,10 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
     if bag_dir.exists():
         raise ValueError(f"output bag {bag_dir} exists already: choose another --out or remove it")
     out.mkdir(parents=True, exist_ok=True)
-    overrides = load_overrides(params)
-    sim = overrides.setdefault("sim", {})
-    if duration is not None:
-        sim["duration"] = float(duration)
-    if seed is not None:
-        sim["seed"] = int(seed)
-        overrides.setdefault("radar_od", {}).setdefault("seed", radar_seed(seed))
-    if real_time_factor is not None:
-        sim["real_time_factor"] = float(real_time_factor)
-    nodes = NODES
-    if foxglove is not None:
-        overrides.setdefault("foxglove_view", {})["port"] = int(foxglove)
-        nodes = NODES[:-1] + OPTIONAL_NODES + NODES[-1:]  # before the sim: the clock starts with the view up
+    # the same overrides and node order as the launch files (share/roe_sep/launch), from roe_sep.graph
+    overrides = run_overrides(params, duration, seed, real_time_factor, foxglove)
+    sim = overrides["sim"]
+    nodes = graph_nodes(foxglove=foxglove is not None)  # foxglove_view before the sim: the clock starts with it up
     params_file = out / "params.yaml"
     params_file.write_text(yaml.safe_dump(parameters(config, bag_dir.resolve(), overrides), sort_keys=False))
     sim_duration = float(sim.setdefault("duration", DEFAULT_DURATION))

@@ -34,7 +34,6 @@ import math
 import traceback
 
 from diagnostic_msgs.msg import DiagnosticArray
-from rclpy.node import Node
 from roe_sep_msgs.msg import ImpulsiveManeuver, ManeuverPlan, OrbitDetermination
 
 from .. import interfaces
@@ -60,10 +59,11 @@ from .convert import (
 )
 from .diagnostics import ERROR, OK, WARN, publish_status
 from .lockstep import Lockstep
+from .managed import ManagedNode
 from .params import ParameterError, declare
 
 
-class IcPlannerNode(Node):
+class IcPlannerNode(ManagedNode):
     """Parameters (name, default, unit):
 
     * ``a_dl_min`` 5000.0 m, ``a_dl_max`` 10000.0 m: mean along-track separation at the ICs (and >= a_dl_min
@@ -85,6 +85,9 @@ class IcPlannerNode(Node):
 
     def __init__(self):
         super().__init__("ic_planner")
+
+    def configure(self):
+        """Parameters and start-up work (the managed node's ``configure`` transition)."""
         d = AcquisitionConfig()
         values = {
             "a_dl_min": declare(self, "a_dl_min", d.a_dl_min, "m, minimum mean along-track separation"),
@@ -113,6 +116,8 @@ class IcPlannerNode(Node):
         except InvalidAcquisitionConfig as exc:
             raise ParameterError(f"parameter '{exc.name}' must be {exc.must}, got {exc.value!r}") from exc
 
+    def activate(self):
+        """Publishers, subscriptions, services (the ``activate`` transition)."""
         self.lockstep = ls = Lockstep(self)
         self.plan_pub = ls.publisher(ManeuverPlan, interfaces.ACQUISITION_PLAN_TOPIC, interfaces.LATCHED)
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)

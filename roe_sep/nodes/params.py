@@ -15,6 +15,9 @@ def declare(node, name, default, description):
 
     A value of the wrong type (e.g. an integer for a double) raises :class:`ParameterError` naming the parameter.
     """
+    if node.has_parameter(name):  # a managed node configured again (configure -> cleanup -> configure)
+        value = node.get_parameter(name).value
+        return list(value) if isinstance(default, list) else value
     try:
         value = node.declare_parameter(name, default, ParameterDescriptor(description=description)).value
     except ParameterException as exc:

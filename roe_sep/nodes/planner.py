@@ -27,7 +27,6 @@ import math
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
-from rclpy.node import Node
 from roe_sep_msgs.msg import EjectionEvent, ManeuverPlan
 from roe_sep_msgs.srv import PlanSeparation
 
@@ -41,15 +40,19 @@ from ..core.separation.multi_impulse import MultiImpulseConfig, multi_config, pl
 from .convert import maneuver_msg, roe_to_msg, sec_to_time, time_to_sec, vector_to_array
 from .diagnostics import ERROR, OK, publish_status
 from .lockstep import Lockstep
+from .managed import ManagedNode
 from .params import ParameterError, declare, finite, require
 
 P_MODES = ("monte_carlo", "three_sigma", "fixed")
 STRATEGIES = ("double_impulse", "multi_impulse")
 
 
-class PlannerNode(Node):
+class PlannerNode(ManagedNode):
     def __init__(self):
         super().__init__("planner")
+
+    def configure(self):
+        """Parameters and start-up work (the managed node's ``configure`` transition)."""
         self.k = declare(self, "k", 3, "odd number of half revolutions from ejection to drift-stop")
         self.p_mode = declare(self, "p_mode", "monte_carlo", f"choice of the reduction |p|: one of {P_MODES}")
         p_fixed = declare(self, "p_reduction", 0.0, "m/s, |p| used when p_mode is 'fixed'")
@@ -84,6 +87,8 @@ class PlannerNode(Node):
         else:
             self.p = None  # computed from each commanded ejection
 
+    def activate(self):
+        """Publishers, subscriptions, services (the ``activate`` transition)."""
         self.lockstep = ls = Lockstep(self)
         self.plan_pub = ls.publisher(ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.LATCHED)
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)

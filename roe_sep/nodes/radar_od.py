@@ -29,7 +29,6 @@ import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.clock import Clock as RclpyClock
 from rclpy.clock import ClockType
-from rclpy.node import Node
 from roe_sep_msgs.msg import ImpulsiveManeuver, OrbitDetermination, RadarMeasurement, RelativeOrbitalElements
 from rosgraph_msgs.msg import Clock
 
@@ -51,13 +50,14 @@ from ..core.relmotion.roe import wrap_angle
 from .convert import array_to_elements, elements_to_array, msg_to_roe, roe_to_msg, sec_to_time, time_to_sec
 from .diagnostics import ERROR, OK, WARN, publish_status
 from .lockstep import Lockstep
+from .managed import ManagedNode
 from .params import ParameterError, declare, finite, require
 
 MAX_SAMPLE_INTERVAL = 600.0  # s: a pass above 10 deg lasts a few minutes
 CHUNK = 10000  # measurement epochs propagated at once
 
 
-class RadarODNode(Node):
+class RadarODNode(ManagedNode):
     """Parameters (name, default, unit):
 
     * ``stations`` ["TIRA"], ``station_latitudes_deg`` [50.6166], ``station_longitudes_deg`` [7.1296],
@@ -70,6 +70,9 @@ class RadarODNode(Node):
 
     def __init__(self):
         super().__init__("radar_od")
+
+    def configure(self):
+        """Parameters and start-up work (the managed node's ``configure`` transition)."""
         names = declare(self, "stations", ["TIRA"], "radar station names")
         lats = declare(self, "station_latitudes_deg", [50.6166], "deg, geodetic latitude of each station (WGS-84)")
         lons = declare(self, "station_longitudes_deg", [7.1296], "deg, east longitude of each station")
@@ -132,6 +135,8 @@ class RadarODNode(Node):
         self.estimates = 0
         self.published = 0
 
+    def activate(self):
+        """Publishers, subscriptions, services (the ``activate`` transition)."""
         self.lockstep = ls = Lockstep(self)
         self.meas_pub = ls.publisher(RadarMeasurement, interfaces.RADAR_TOPIC, interfaces.STREAM)
         self.od_pub = ls.publisher(OrbitDetermination, interfaces.OD_TOPIC, interfaces.LATCHED)

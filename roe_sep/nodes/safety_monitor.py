@@ -11,7 +11,6 @@ import math
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
-from rclpy.node import Node
 from roe_sep_msgs.msg import (
     EjectionEvent,
     ImpulsiveManeuver,
@@ -31,6 +30,7 @@ from ..core.safety.monitor import MonitorLimits, assess
 from .convert import msg_to_roe, plan_burns, sec_to_time, time_to_sec, vector_to_array
 from .diagnostics import publish_status
 from .lockstep import Lockstep
+from .managed import ManagedNode
 from .params import ParameterError, declare, finite, require
 
 PLAN_TOPICS = (interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.ACQUISITION_PLAN_TOPIC)
@@ -48,9 +48,12 @@ def chief_of(msg: RelativeOrbitalElements, t):
     return Chief(c.semi_major_axis, c.inclination, c.mean_arg_latitude, t)
 
 
-class SafetyMonitorNode(Node):
+class SafetyMonitorNode(ManagedNode):
     def __init__(self):
         super().__init__("safety_monitor")
+
+    def configure(self):
+        """Parameters and start-up work (the managed node's ``configure`` transition)."""
         scenario_file = declare(self, "scenario_file", "", "scenario YAML ('' = embedded default)")
         self.period = declare(self, "period", 600.0, "s of sim time between state assessments")
         lim = MonitorLimits()
@@ -86,6 +89,8 @@ class SafetyMonitorNode(Node):
         self.checked = set()
         self.pending_plans = {}
 
+    def activate(self):
+        """Publishers, subscriptions, services (the ``activate`` transition)."""
         self.lockstep = ls = Lockstep(self)
         self.status_pub = ls.publisher(SafetyStatus, interfaces.SAFETY_TOPIC, interfaces.STREAM)
         self.check_pub = ls.publisher(SafetyStatus, interfaces.PLAN_CHECK_TOPIC, interfaces.EXECUTED)

@@ -22,6 +22,7 @@ Hard rules (1-4 first pass) make a window eligible; the rest rank it (backup, co
 
 import datetime as _dt
 import math
+import sys
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -32,7 +33,19 @@ from ..od.radar import raan_from_sun
 from ..relmotion.dynamics import sun_synchronous_inclination
 from ..relmotion.orbit import mean_motion, orbital_period, semi_major_axis
 
-DEFAULT_OPS_CONFIG = Path(__file__).resolve().parents[3] / "config" / "ops.yaml"
+
+def config_file(name: str) -> Path:
+    """A file of the package's ``config/``: the source tree's (``<repo>/config``, the editable install), else the
+    installed one, ``<prefix>/share/roe_sep/config`` (setup.py data_files: a colcon install, where this module is
+    ``<prefix>/lib/pythonX.Y/site-packages/roe_sep/core/ops/plan.py``, or a pip install into ``sys.prefix``)."""
+    here = Path(__file__).resolve()
+    prefix = here.parents[min(6, len(here.parents) - 1)]
+    candidates = [here.parents[3] / "config" / name, prefix / "share" / "roe_sep" / "config" / name,
+                  Path(sys.prefix) / "share" / "roe_sep" / "config" / name]
+    return next((c for c in candidates if c.is_file()), candidates[0])
+
+
+DEFAULT_OPS_CONFIG = config_file("ops.yaml")
 MIN_PERIGEE = 100e3  # m: a TLE whose perigee is lower describes no orbit
 MAX_TLE_AGE_DAYS = 30.0  # SGP4 element sets degrade within days (drag); a plan this far from the epoch is refused
 

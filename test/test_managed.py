@@ -1,0 +1,138 @@
+"""Managed (lifecycle) nodes: autostart as before, or configure -> activate driven from outside (lifecycle_manager,
+``ros2 lifecycle set``); parameter errors surface at ``configure``."""
+
+import time
+
+import pytest
+from lifecycle_msgs.msg import State  # noqa: E402
+from lifecycle_msgs.srv import GetState  # noqa: E402
+from rclpy.lifecycle import TransitionCallbackReturn  # noqa: E402
+from rosutil import rclpy, start_node, stop_node, wait_exit  # noqa: I001  (skips without rclpy)
+
+from roe_sep import interfaces  # noqa: E402
+from roe_sep.nodes.params import ParameterError  # noqa: E402
+from roe_sep.nodes.planner import PlannerNode  # noqa: E402
+from roe_sep.nodes.safety_monitor import SafetyMonitorNode  # noqa: E402
+
+FAST_PLANNER = ("-p", "p_mode:=fixed", "-p", "p_reduction:=0.06")
+
+
+@pytest.fixture
+def context():
+    """``context(*params)``: rclpy's default context, initialised with these ``-p`` parameters for every node."""
+    def init(*params):
+        rclpy.try_shutdown()
+        rclpy.init(args=["--ros-args", *[a for p in params for a in ("-p", p)]])
+    yield init
+    rclpy.try_shutdown()
+
+
+def label(node):
+    return node._state_machine.current_state[1]
+
+
+def subscribers(node, topic):
+    return [s for s in node.subscriptions if s.topic_name == topic]
+
+
+def test_autostart_node_is_active_after_construction(context):
+    context("use_sim_time:=false")
+    node = SafetyMonitorNode()
+    try:
+        assert isinstance(node, rclpy.lifecycle.Node)
+        assert label(node) == "active" and node.autostart is True
+        assert len(subscribers(node, interfaces.TRUTH_ROE_TOPIC)) == 1
+        assert node.has_parameter("keep_out") and node.status_pub is not None
+    finally:
+        node.destroy_node()
+
+
+def test_unconfigured_node_is_driven_through_its_states(context):
+    context("autostart:=false", "use_sim_time:=false")
+    node = SafetyMonitorNode()
+    try:
+        assert label(node) == "unconfigured"
+        assert not node.has_parameter("keep_out") and not subscribers(node, interfaces.TRUTH_ROE_TOPIC)
+        assert node.trigger_configure() == TransitionCallbackReturn.SUCCESS and label(node) == "inactive"
+        assert node.has_parameter("keep_out") and not subscribers(node, interfaces.TRUTH_ROE_TOPIC)
+        assert node.trigger_activate() == TransitionCallbackReturn.SUCCESS and label(node) == "active"
+        assert len(subscribers(node, interfaces.TRUTH_ROE_TOPIC)) == 1
+        assert node.count_publishers(interfaces.SAFETY_TOPIC) == 1
+        # deactivate removes exactly what activate created; activate again recreates it
+        assert node.trigger_deactivate() == TransitionCallbackReturn.SUCCESS and label(node) == "inactive"
+        assert not subscribers(node, interfaces.TRUTH_ROE_TOPIC)
+        assert not [p for p in node.publishers if p.topic_name == interfaces.SAFETY_TOPIC]
+        assert node.trigger_activate() == TransitionCallbackReturn.SUCCESS
+        assert len(subscribers(node, interfaces.TRUTH_ROE_TOPIC)) == 1
+        # cleanup -> configure again (parameters already declared)
+        assert node.trigger_deactivate() == TransitionCallbackReturn.SUCCESS
+        assert node.trigger_cleanup() == TransitionCallbackReturn.SUCCESS and label(node) == "unconfigured"
+        assert node.trigger_configure() == TransitionCallbackReturn.SUCCESS and label(node) == "inactive"
+    finally:
+        node.destroy_node()
+
+
+def test_parameter_error_fails_configure_or_construction(context):
+    context("autostart:=false", "k:=2", "p_mode:=fixed")
+    node = PlannerNode()
+    try:
+        assert node.trigger_configure() == TransitionCallbackReturn.FAILURE
+        assert label(node) == "unconfigured"
+        assert isinstance(node.transition_error, ParameterError)
+        assert "parameter 'k' must be an odd natural number, got 2" in str(node.transition_error)
+    finally:
+        node.destroy_node()
+    context("k:=2", "p_mode:=fixed")  # autostart: the constructor raises, as before (main exits 2)
+    with pytest.raises(ParameterError, match="parameter 'k'"):
+        PlannerNode()
+
+
+def _state(node, name):
+    """The node's lifecycle state id, None when it did not answer (yet)."""
+    client = node.create_client(GetState, f"/{name}/get_state")
+    try:
+        if not client.wait_for_service(timeout_sec=2.0):
+            return None
+        future = client.call_async(GetState.Request())
+        rclpy.spin_until_future_complete(node, future, timeout_sec=3.0)
+        return future.result().current_state.id if future.done() else None
+    finally:
+        node.destroy_client(client)
+
+
+def test_lifecycle_manager_starts_the_nodes_in_order():
+    monitor = start_node("safety_monitor", "-p", "autostart:=false", "-p", "use_sim_time:=false")
+    planner = start_node("planner", "-p", "autostart:=false", "-p", "use_sim_time:=false", *FAST_PLANNER)
+    manager = start_node("lifecycle_manager", "-p", "node_names:=['safety_monitor', 'planner']")
+    rclpy.init()
+    probe = rclpy.create_node("managed_probe")
+    try:
+        active = State.PRIMARY_STATE_ACTIVE
+        deadline = time.monotonic() + 90.0
+        while time.monotonic() < deadline and _state(probe, "planner") != active:
+            time.sleep(0.5)
+        states = [_state(probe, "planner"), _state(probe, "safety_monitor")]
+    finally:
+        probe.destroy_node()
+        rclpy.try_shutdown()
+        code_m, out_m = stop_node(manager)
+        outs = [stop_node(p) for p in (monitor, planner)]
+    assert states == [State.PRIMARY_STATE_ACTIVE] * 2, (states, out_m, outs)
+    assert code_m == 0, out_m
+    order = [line for line in out_m.splitlines() if ": configure ok" in line or ": activate ok" in line]
+    assert [line.split("]: ")[-1] for line in order] == [
+        "/safety_monitor: configure ok", "/planner: configure ok", "/safety_monitor: activate ok",
+        "/planner: activate ok"]
+    assert "managed nodes active: safety_monitor, planner" in out_m
+    assert all(code == 0 for code, _ in outs), outs
+
+
+def test_lifecycle_manager_stops_at_a_failed_configure():
+    planner = start_node("planner", "-p", "autostart:=false", "-p", "use_sim_time:=false", "-p", "k:=4",
+                         *FAST_PLANNER)
+    manager = start_node("lifecycle_manager", "-p", "node_names:=['planner']")
+    code, out = wait_exit(manager, timeout=60.0)
+    _, out_p = stop_node(planner)
+    assert code == 1, out
+    assert "configure of /planner failed (state now 'unconfigured'" in out
+    assert "configure failed: parameter 'k' must be an odd natural number, got 4" in out_p
