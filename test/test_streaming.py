@@ -11,7 +11,7 @@ from roe_sep.core.montecarlo import streaming
 from roe_sep.core.montecarlo.stats import wilson_interval
 from roe_sep.core.montecarlo.sweep import MonteCarloConfig, after_stop, pre_stop, summarize
 from roe_sep.core.separation.double_impulse import design
-from roe_sep.engine import cluster, ordered_map
+from roe_sep.engine import auto_batch, cluster, ordered_map
 
 D = design()
 PS = (0.0, 0.03, 0.06)
@@ -125,6 +125,14 @@ def test_ordered_map_in_process_and_errors():
     assert sorted(ordered_map(None, _square, range(3), 0, ordered=False)) == [(0, 0), (1, 1), (2, 4)]
     with pytest.raises(ArithmeticError):
         list(ordered_map(None, _fail, range(5)))
+    with cluster(workers=2) as client:
+        for batch in (1, 2, 3, 7):
+            assert list(ordered_map(client, _square, range(7), 1, batch=batch)) == [x * x + 1 for x in range(7)]
+            assert sorted(ordered_map(client, _square, range(7), 0, ordered=False, batch=batch)) == \
+                [(x, x * x) for x in range(7)]
+        with pytest.raises(ArithmeticError):
+            list(ordered_map(client, _fail, range(5), batch=2))
+        assert auto_batch(client, 5000) == 78 and auto_batch(client, 10) == 1 and auto_batch(None, 5000) == 1
     with pytest.raises(ValueError, match="exclude"):
         with cluster(workers=2, scheduler="tcp://127.0.0.1:1"):
             pass
