@@ -153,3 +153,11 @@ def test_exact_sum_is_order_free():
             s.add(v)
         b.merge(s)
     assert a.value() == b.value() == math.fsum(x)
+
+
+def test_allocator_tuning_is_idempotent_and_changes_no_number():
+    from roe_sep.core.montecarlo.allocator import keep_freed_memory
+
+    first = keep_freed_memory()
+    assert keep_freed_memory() is first  # once per process
+    assert _report(2000, 1000, samples=3000) == _report(3000, 1000, samples=3000)
