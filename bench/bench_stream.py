@@ -107,19 +107,27 @@ def main(argv=None):
         Path(out).write_text(json.dumps(r, indent=2) + "\n")
         return 0
     rows = []
-    sizes = [int(float(s)) for s in args.sizes.split(",") if float(s) <= args.max_samples]
-    for size in sizes:
-        group = [case(size, nice=args.nice)]
-        if size <= 1e6:
-            group += [case(size, chunk=10_000, nice=args.nice), case(size, chunk=1_000_000, nice=args.nice)]
-        group += [case(size, workers=1, nice=args.nice), case(size, workers=2, nice=args.nice)]
-        if size <= args.in_memory_max:
-            group.append(in_memory(size, args.nice))
-        rows += group
     for path in args.include:
         extra = json.loads(Path(path).read_text())
         extra["source"] = extra.get("source") if extra.get("source") != "this run" else f"separate run ({path})"
         rows.append(extra)
+    sizes = [int(float(s)) for s in args.sizes.split(",") if float(s) <= args.max_samples]
+    for size in sizes:
+        jobs = [lambda: case(size, nice=args.nice)]
+        if size <= 1e6:
+            jobs += [lambda: case(size, chunk=10_000, nice=args.nice),
+                     lambda: case(size, chunk=1_000_000, nice=args.nice)]
+        jobs += [lambda: case(size, workers=1, nice=args.nice), lambda: case(size, workers=2, nice=args.nice)]
+        if size <= args.in_memory_max:
+            jobs.append(lambda: in_memory(size, args.nice))
+        for job in jobs:
+            rows.append(job())
+            write(rows, args)  # after every case: a long run that is stopped keeps what it measured
+    return write(rows, args, show=True)
+
+
+def write(rows, args, show=False):
+    rows = [dict(r) for r in rows]
     for r in rows:
         same = [x for x in rows if x["samples"] == r["samples"] and x["counts"] is not None]
         ref = next((x for x in rows if x["samples"] == r["samples"] and x["case"].endswith("in-process")
@@ -132,7 +140,8 @@ def main(argv=None):
     for r in rows:
         r.pop("counts")
     md = table_md(rows)
-    print(md)
+    if show:
+        print(md)
     if args.out_json:
         Path(args.out_json).write_text(json.dumps(rows, indent=2, allow_nan=False) + "\n")
     if args.out_md:

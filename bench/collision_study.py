@@ -2,7 +2,7 @@
 (issue 17). For each p: the cross-entropy levels (as ``roe-sep collision --method is``), the closest approaches
 among fresh samples of the stalled proposal (distance, radius |z| in the standard-normal dispersion space, the SPL
 factor f1), a design-point search (SLSQP: min |z| s.t. d(z) <= R) from the closest sample, and the Gaussian mass
-outside the ball of the radius reached (chi-square, 9 degrees of freedom). Strict JSON on stdout.
+outside the ball of the radius reached (chi-square, 9 degrees of freedom). Strict JSON on stdout, one line per p.
 
     python bench/collision_study.py --p 0,0.06 > collision_study.json
 """
@@ -58,9 +58,11 @@ def main(argv=None):
     args = ap.parse_args(argv)
     keep_freed_memory()
     d = design()
-    res = [study(d, float(p), args.radius, args.ce_samples, args.probe, args.seed, args.maxiter)
-           for p in args.p.split(",")]
-    print(json.dumps(res, indent=2, allow_nan=False, default=lambda x: None if not math.isfinite(x) else x))
+    res = []
+    for p in args.p.split(","):  # one JSON line per p as soon as it is done (a long run keeps what it has)
+        res.append(study(d, float(p), args.radius, args.ce_samples, args.probe, args.seed, args.maxiter))
+        print(json.dumps(res[-1], allow_nan=False, default=lambda x: None if not math.isfinite(x) else x),
+              flush=True)
     return 0
 
 
