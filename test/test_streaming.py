@@ -11,7 +11,7 @@ from roe_sep.core.montecarlo import streaming
 from roe_sep.core.montecarlo.stats import wilson_interval
 from roe_sep.core.montecarlo.sweep import MonteCarloConfig, after_stop, pre_stop, summarize
 from roe_sep.core.separation.double_impulse import design
-from roe_sep.engine import cluster, ordered_map
+from roe_sep.engine import auto_batch, cluster, ordered_map
 
 D = design()
 PS = (0.0, 0.03, 0.06)
@@ -53,6 +53,25 @@ def test_result_identical_for_every_chunk_size_and_worker_count():
         two = _report(2000, 1000, samples=5500, mapper=lambda f, items, *a: ordered_map(client, f, items, *a))
     assert two == ref
     assert _report(1000, 1000, samples=5500, seed=4) != ref
+
+
+def test_cli_counts_identical_for_chunks_1e4_and_1e6_and_1_or_2_workers(capsys):
+    """The issue's check with the real 10^4-sample block: ``roe-sep mc`` with the same seed, chunks of 10^4 and
+    10^6 samples, in process and on 1 and 2 Dask workers: the same counts (and the same report to the last digit).
+    25,000 samples: three blocks, the last one short; chunks of 10^6 hold all three, chunks of 10^4 one each."""
+    reports = []
+    for extra in ([], ["--chunk-size", "1000000"], ["--workers", "1"], ["--workers", "2"],
+                  ["--workers", "2", "--chunk-size", "1000000"]):
+        assert main(["mc", "--samples", "25000", "--seed", "5", "--p", "0,0.06", "--json", "--chunk-size", "10000",
+                     *extra]) == 0
+        rep = json.loads(capsys.readouterr().out)
+        for key in ("chunk_size", "workers", "scheduler"):
+            rep.pop(key)
+        reports.append(rep)
+    counts = [[{k: v for k, v in row.items() if k.startswith("n_")} for row in r["rows"]] for r in reports]
+    assert all(c == counts[0] for c in counts[1:])
+    assert counts[0][0]["n_approach"] > 0
+    assert all(json.dumps(r, sort_keys=True) == json.dumps(reports[0], sort_keys=True) for r in reports[1:])
 
 
 def test_streamed_rows_are_the_sweep_summaries_of_the_same_draws():
@@ -106,6 +125,14 @@ def test_ordered_map_in_process_and_errors():
     assert sorted(ordered_map(None, _square, range(3), 0, ordered=False)) == [(0, 0), (1, 1), (2, 4)]
     with pytest.raises(ArithmeticError):
         list(ordered_map(None, _fail, range(5)))
+    with cluster(workers=2) as client:
+        for batch in (1, 2, 3, 7):
+            assert list(ordered_map(client, _square, range(7), 1, batch=batch)) == [x * x + 1 for x in range(7)]
+            assert sorted(ordered_map(client, _square, range(7), 0, ordered=False, batch=batch)) == \
+                [(x, x * x) for x in range(7)]
+        with pytest.raises(ArithmeticError):
+            list(ordered_map(client, _fail, range(5), batch=2))
+        assert auto_batch(client, 5000) == 78 and auto_batch(client, 10) == 1 and auto_batch(None, 5000) == 1
     with pytest.raises(ValueError, match="exclude"):
         with cluster(workers=2, scheduler="tcp://127.0.0.1:1"):
             pass
@@ -126,3 +153,11 @@ def test_exact_sum_is_order_free():
             s.add(v)
         b.merge(s)
     assert a.value() == b.value() == math.fsum(x)
+
+
+def test_allocator_tuning_is_idempotent_and_changes_no_number():
+    from roe_sep.core.montecarlo.allocator import keep_freed_memory
+
+    first = keep_freed_memory()
+    assert keep_freed_memory() is first  # once per process
+    assert _report(2000, 1000, samples=3000) == _report(3000, 1000, samples=3000)

@@ -9,7 +9,7 @@ from pathlib import Path
 from ..core.config import load_scenario
 from ..core.montecarlo import streaming
 from ..core.separation.double_impulse import DoubleImpulseDesign, design
-from ..engine import cluster, ordered_map
+from ..engine import auto_batch, cluster, ordered_map
 from .common import SAMPLES_MAX, emit, finite_float, integer, p_list, positive_int, seed, vec
 
 
@@ -92,7 +92,8 @@ def streamed(fn, total, args, desc):
     try:
         with cluster(workers=args.workers, scheduler=args.scheduler) as client:
             def mapper(f, items, *a):
-                return ordered_map(client, f, items, *a)
+                items = list(items)
+                return ordered_map(client, f, items, *a, batch=auto_batch(client, len(items)))
 
             return fn(mapper, bar.update if bar is not None else None)
     finally:

@@ -14,7 +14,9 @@ Two calls::
   so neither the scheduler nor this process ever holds more than that many results, whatever the number of items;
   results are yielded strictly in item order (out-of-order completions wait in a bounded buffer). With the items
   chosen so that each result depends on its item alone (e.g. a block index that seeds its own random numbers), the
-  reduction is identical for every worker count. ``ordered=False`` yields ``(index, result)`` as completed, for
+  reduction is identical for every worker count. ``batch=B`` packs B consecutive items into one task (the
+  scheduler's per-task cost, a few ms in this process, matters for thousands of short items; :func:`auto_batch`);
+  the results are still yielded one per item. ``ordered=False`` yields ``(index, result)`` as completed, for
   consumers that store each result at once (a resumable campaign).
 
 A task that raises re-raises here with the worker's exception; the cluster is closed on exit in every case.
@@ -23,7 +25,7 @@ A task that raises re-raises here with the worker's exception; the cluster is cl
 import contextlib
 import logging
 
-__all__ = ["cluster", "ordered_map", "client_threads"]
+__all__ = ["cluster", "ordered_map", "client_threads", "auto_batch"]
 
 
 @contextlib.contextmanager
@@ -58,13 +60,42 @@ def client_threads(client):
     return 1 if client is None else max(1, sum(client.nthreads().values()))
 
 
-def ordered_map(client, fn, items, *args, max_in_flight=None, ordered=True):
+def _apply_batch(batch, fn, *args):
+    """One task of :func:`ordered_map` with ``batch > 1``: ``fn`` on consecutive items, the results in order."""
+    return [fn(item, *args) for item in batch]
+
+
+def auto_batch(client, n_items, tasks_per_thread=32):
+    """Items per task for ``n_items`` short items: about ``tasks_per_thread`` tasks per worker thread (1 in-process).
+    Each Dask task costs the scheduler in this process a few ms; with 5,000 chunks of a 10^8-sample Monte Carlo
+    that overhead was a quarter of the workers' CPU time."""
+    if client is None:
+        return 1
+    return max(1, n_items // (tasks_per_thread * client_threads(client)))
+
+
+def ordered_map(client, fn, items, *args, max_in_flight=None, ordered=True, batch=1):
     """Yield ``fn(item, *args)`` for every item, in item order (``ordered=False``: ``(index, result)`` as they
-    complete), computed on ``client`` (or here when it is ``None``) with at most ``max_in_flight`` tasks pending."""
+    complete), computed on ``client`` (or here when it is ``None``) with at most ``max_in_flight`` tasks pending.
+
+    ``batch > 1`` sends ``batch`` consecutive items per task (fewer, longer tasks); the results are yielded one by
+    one exactly as without it."""
     items = list(items)
     if client is None:
         for i, item in enumerate(items):
             yield fn(item, *args) if ordered else (i, fn(item, *args))
+        return
+    if isinstance(batch, bool) or not isinstance(batch, int) or batch < 1:
+        raise ValueError(f"batch must be a positive integer, got {batch!r}")
+    if batch > 1:
+        groups = [items[i:i + batch] for i in range(0, len(items), batch)]
+        for res in ordered_map(client, _apply_batch, groups, fn, *args, max_in_flight=max_in_flight,
+                               ordered=ordered):
+            if ordered:
+                yield from res
+            else:
+                g, results = res
+                yield from ((g * batch + j, r) for j, r in enumerate(results))
         return
     from distributed import as_completed
 

@@ -423,3 +423,51 @@ def estimate(stats: CollisionStats, cfg: CollisionConfig, method: str) -> dict:
         "p_reduction": cfg.p,
         "departure_distance": cfg.departure_distance,
     }
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# design point: the most probable collision (FORM), and the bound it gives
+
+
+def closest_approach(design, mc, cfg: CollisionConfig, z):
+    """Certified closest approach [m] of one point ``z`` (9,) of the standard-normal dispersion space (``1e4`` for
+    a sample that never comes back: finite, for an optimizer)."""
+    v = float(min_distance(design, mc, draws_from_normal(design, mc, np.atleast_2d(z)), cfg)[0])
+    return v if math.isfinite(v) else 1e4
+
+
+def design_point(design, mc, cfg: CollisionConfig, starts, maxiter=60):
+    """The design point of reliability analysis (Hasofer-Lind): the point of the failure set {d(z) <= R} nearest
+    to the origin of the standard-normal space, i.e. the most probable collision, by SLSQP (min |z|^2 subject to
+    d(z) <= R, forward-difference constraint gradient) from each start (e.g. the closest samples of a stalled
+    cross-entropy proposal). Returns ``(z*, rho*, runs)`` with ``rho* = |z*|`` over the runs that end in the
+    failure set (``None`` if none does) and per run (start radius, start distance, end radius, end distance).
+
+    Meaning: every z with |z| < rho_true (the true minimum) is collision-free, so P(d <= R) <=
+    P(chi2_9 >= rho_true^2). A local optimizer from several starts finds a feasible z with |z| >= rho_true, so
+    the bound computed from the rho* found is as good as the search: it is exact if the runs found the global
+    minimum (they are independent starts; their spread is reported), not a certificate."""
+    from scipy.optimize import minimize  # only here: scipy.optimize is not needed by the sampling
+
+    r = cfg.hard_body_radius
+    runs, best = [], None
+    for z0 in np.atleast_2d(starts):
+        res = minimize(lambda z: z @ z, z0, jac=lambda z: 2.0 * z, method="SLSQP",
+                       constraints=[{"type": "ineq", "fun": lambda z: r - closest_approach(design, mc, cfg, z)}],
+                       options={"maxiter": maxiter, "ftol": 1e-10, "eps": 1e-5})
+        dz = closest_approach(design, mc, cfg, res.x)
+        rho = float(np.linalg.norm(res.x))
+        runs.append({"start_radius": float(np.linalg.norm(z0)), "start_distance": closest_approach(design, mc, cfg, z0),
+                     "radius": rho, "distance": dz})
+        if dz <= r * (1.0 + 1e-6) and (best is None or rho < best[1]):
+            best = (res.x, rho)
+    if best is None:
+        return None, None, runs
+    return best[0], best[1], runs
+
+
+def ball_bound(rho, dim=N_DIM):
+    """P(|z| >= rho) for z ~ N(0, I_dim): the Gaussian mass outside the ball of radius ``rho`` (chi-square tail)."""
+    from scipy.stats import chi2
+
+    return float(chi2.sf(rho * rho, dim))

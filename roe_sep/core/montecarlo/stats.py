@@ -6,7 +6,6 @@ Pure numpy/scipy; used by the Monte Carlo (open loop) and the closed-loop campai
 import math
 
 import numpy as np
-from scipy.stats import chi2
 
 Z95 = 1.959964  # two-sided 95 % standard-normal quantile
 PERCENTILES = (5, 50, 95)
@@ -69,6 +68,8 @@ def nees_bounds(dof, runs=1, confidence=0.95):
     """Two-sided acceptance region of the average NEES over ``runs`` independent runs of a consistent estimator of
     dimension ``dof`` (Bar-Shalom, Li & Kirubarajan 2001, Sec. 5.4.2): runs * mean(NEES) ~ chi-square(runs * dof), so
     mean(NEES) lies in [chi2.ppf(a/2, runs dof), chi2.ppf(1 - a/2, runs dof)] / runs with probability 1 - a."""
+    from scipy.stats import chi2  # here, not at import: scipy.stats costs ~1.7 s and ~70 MB in every Dask worker
+
     if dof < 1 or runs < 1:
         raise ValueError(f"nees_bounds: need dof >= 1 and runs >= 1, got dof = {dof}, runs = {runs}")
     a = 1.0 - confidence

@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .allocator import keep_freed_memory
 from .stats import wilson_interval
 from .sweep import Draws, SweepResult, after_stop, draw, pre_stop, summarize
 
@@ -217,6 +218,7 @@ def _slice(obj, sl):
 def evaluate_chunk(chunk, design, mc, p_values, block=BLOCK_SIZE) -> SweepStats:
     """Statistics of one chunk ``(first block, number of blocks)``: the sweep's physics on the chunk's draws, one
     :func:`.sweep.summarize` per block."""
+    keep_freed_memory()
     first, count = chunk
     d, sizes = chunk_draws(design, mc, first, count, block)
     f1_3s = 1.0 - 3.0 * design.config.spl_sigma

@@ -79,9 +79,17 @@ def propagate(roe, dt, a, inc, j2=True, da_dot=0.0):
     are the chief's. Keplerian alone is ``j2=False, da_dot=0``.
     """
     r = np.asarray(roe, dtype=float)
+    return np.stack(propagate_elements(np.moveaxis(r, -1, 0), dt, a, inc, j2, da_dot), axis=-1)
+
+
+def propagate_elements(elements, dt, a, inc, j2=True, da_dot=0.0):
+    """:func:`propagate` on the six ROE given apart, ``(da, dl, dex, dey, dix, diy)`` (arrays that broadcast with
+    ``dt`` and ``da_dot``); returns the six propagated elements apart. The same arithmetic as :func:`propagate`
+    (which is this function plus a stack), for vectorized callers that need only some elements: contiguous
+    element arrays avoid the strided ``(..., 6)`` views and the stack."""
     dt = np.asarray(dt, dtype=float)
     da_dot = np.asarray(da_dot, dtype=float)
-    da, dl, dex, dey, dix, diy = np.moveaxis(r, -1, 0)
+    da, dl, dex, dey, dix, diy = elements
     n = mean_motion(a)
     da_int = da * dt + 0.5 * da_dot * dt**2
     if j2:
@@ -98,9 +106,7 @@ def propagate(roe, dt, a, inc, j2=True, da_dot=0.0):
         dl_new = dl - 1.5 * n * da_int
         diy_new = diy + 0.0 * dt
         dex_new, dey_new = dex + 0.0 * dt, dey + 0.0 * dt
-    return np.stack(
-        [da + da_dot * dt, dl_new, dex_new, dey_new, dix + 0.0 * dt, diy_new], axis=-1
-    )
+    return da + da_dot * dt, dl_new, dex_new, dey_new, dix + 0.0 * dt, diy_new
 
 
 def propagate_chief(kep, dt, j2=True):

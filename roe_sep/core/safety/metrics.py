@@ -2,9 +2,9 @@
 
 import numpy as np
 
-from ..relmotion.dynamics import arg_latitude_rate, propagate
+from ..relmotion.dynamics import arg_latitude_rate, propagate, propagate_elements
 from ..relmotion.orbit import mean_motion
-from ..relmotion.roe import e_vector_polar, roe_to_rtn, wrap_angle
+from ..relmotion.roe import roe_to_rtn, wrap_angle
 
 
 def min_rn_distance(roe):
@@ -14,11 +14,12 @@ def min_rn_distance(roe):
     e/i vectors give min(de, di), perpendicular ones give 0. Multiply by a for meters.
     """
     r = np.asarray(roe, dtype=float)
-    de, di = r[..., 2:4], r[..., 4:6]
-    dot = np.sum(de * di, axis=-1)
-    de2, di2 = np.sum(de * de, axis=-1), np.sum(di * di, axis=-1)
-    plus = np.linalg.norm(de + di, axis=-1)
-    minus = np.linalg.norm(de - di, axis=-1)
+    dex, dey, dix, diy = r[..., 2], r[..., 3], r[..., 4], r[..., 5]
+    dot = dex * dix + dey * diy
+    de2, di2 = dex * dex + dey * dey, dix * dix + diy * diy
+    px, py, mx, my = dex + dix, dey + diy, dex - dix, dey - diy
+    plus = np.sqrt(px * px + py * py)
+    minus = np.sqrt(mx * mx + my * my)
     denom = np.sqrt(de2 + di2 + plus * minus)
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.where(denom > 0.0, np.sqrt(2.0) * np.abs(dot) / denom, 0.0)
@@ -57,40 +58,50 @@ def nearest_crossing(roe0, u0, duration, a, inc, j2=True, da_dot=0.0, t_min=None
     """
     r0 = np.asarray(roe0, dtype=float)
     batch = r0.shape[:-1]
-    u0 = np.broadcast_to(np.asarray(u0, dtype=float), batch)[..., None]
-    dad = np.broadcast_to(np.asarray(da_dot, dtype=float), batch)[..., None]
+    u0 = np.broadcast_to(np.asarray(u0, dtype=float), batch)
+    dad = np.broadcast_to(np.asarray(da_dot, dtype=float), batch)
     u_dot = arg_latitude_rate(a, inc, j2)
     n = mean_motion(a)
     period = 2.0 * np.pi / u_dot
     if t_min is None:
         t_min = 0.1 * period
+    # Layout: candidates on the leading axis, samples last (long, contiguous inner loops), the six elements apart
+    # (no strided (..., 6) views, no stack); only the R and T components of roe_to_rtn are formed, with its
+    # expressions, so the values are those of propagate + roe_to_rtn to the bit.
+    el = tuple(np.ascontiguousarray(r0[..., k]) for k in range(6))
+    lead = (-1,) + (1,) * len(batch)
     with np.errstate(invalid="ignore", divide="ignore"):  # circular (de = 0) samples give NaN: masked below
-        t_rev = period * np.arange(int(np.ceil(duration / period)) + 1)
-        start = propagate(r0[..., None, :], t_rev, a, inc, j2, dad)
-        de, phi = e_vector_polar(start)
-        psi = np.arccos(np.clip(start[..., 0] / de, -1.0, 1.0))
+        t_rev = (period * np.arange(int(np.ceil(duration / period)) + 1)).reshape(lead)
+        da_s, _, dex_s, dey_s, _, _ = propagate_elements(el, t_rev, a, inc, j2, dad)
+        de, phi = np.hypot(dex_s, dey_s), np.arctan2(dey_s, dex_s)
+        psi = np.arccos(np.clip(da_s / de, -1.0, 1.0))
         u_start = u0 + u_dot * t_rev
-        cand = np.concatenate([phi + psi, phi - psi], axis=-1)
-        u_start2 = np.concatenate([u_start, u_start], axis=-1)
+        cand = np.concatenate([phi + psi, phi - psi], axis=0)
+        u_start2 = np.concatenate([u_start, u_start], axis=0)
         # one candidate of each kind per revolution, within half a revolution of that revolution's start
         t = np.concatenate([t_rev, t_rev]) + wrap_angle(cand - u_start2) / u_dot
-        r_b = r0[..., None, :]
         for _ in range(iterations):
-            state = propagate(r_b, t, a, inc, j2, dad)
-            pos, vel = roe_to_rtn(state, u0 + u_dot * t)
-            t = t - pos[..., 0] / (vel[..., 0] * n)
-        state = propagate(r_b, t, a, inc, j2, dad)
-        pos, _ = roe_to_rtn(state, u0 + u_dot * t)
-    ok = np.isfinite(t) & (t > t_min) & (t <= duration) & (np.abs(pos[..., 0]) < 1e-9)
-    t_abs = np.where(ok, np.abs(pos[..., 1]), np.inf)
-    idx = np.argmin(t_abs, axis=-1)[..., None]
-    best = np.take_along_axis(t_abs, idx, axis=-1)[..., 0]
-    t_best = np.where(np.isfinite(best), np.take_along_axis(t, idx, axis=-1)[..., 0], np.nan)
+            da, _, dex, dey, _, _ = propagate_elements(el, t, a, inc, j2, dad)
+            u = u0 + u_dot * t
+            s, c = np.sin(u), np.cos(u)
+            pos_r = da - dex * c - dey * s
+            vel_r = dex * s - dey * c
+            t = t - pos_r / (vel_r * n)
+        da, dl, dex, dey, _, _ = propagate_elements(el, t, a, inc, j2, dad)
+        u = u0 + u_dot * t
+        s, c = np.sin(u), np.cos(u)
+        pos_r = da - dex * c - dey * s
+        pos_t = dl + 2.0 * dex * s - 2.0 * dey * c
+    ok = np.isfinite(t) & (t > t_min) & (t <= duration) & (np.abs(pos_r) < 1e-9)
+    t_abs = np.where(ok, np.abs(pos_t), np.inf)
+    idx = np.argmin(t_abs, axis=0)[None]
+    best = np.take_along_axis(t_abs, idx, axis=0)[0]
+    t_best = np.where(np.isfinite(best), np.take_along_axis(t, idx, axis=0)[0], np.nan)
     # an orbit with no radial motion at all (da = 0, de = 0) stays in the R = 0 plane: it "transits" everywhere,
     # at the along-track distance it has at t_min
     flat = (np.abs(r0[..., 0]) < 1e-12) & (np.hypot(r0[..., 2], r0[..., 3]) < 1e-12)
     if np.any(flat):
-        pos_min, _ = roe_to_rtn(propagate(r0, t_min, a, inc, j2, dad[..., 0]), u0[..., 0] + u_dot * t_min)
+        pos_min, _ = roe_to_rtn(propagate(r0, t_min, a, inc, j2, dad), u0 + u_dot * t_min)
         best = np.where(flat, np.abs(pos_min[..., 1]), best)
         t_best = np.where(flat, t_min, t_best)
     return best, t_best
