@@ -19,6 +19,8 @@ import time
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
+from rclpy.clock import Clock as RclpyClock
+from rclpy.clock import ClockType
 from rclpy.node import Node
 from roe_sep_msgs.msg import (
     EjectionEvent,
@@ -169,6 +171,7 @@ class SimNode(Node):
 
         self.t = 0.0
         self.next_truth = 0.0
+        self.final_timer = None  # repeats the final status (see _status)
         self.ejections = {}  # stamp -> epoch of pending ejection events
         self.seen_ejections = set()
         self.pending: list[PendingBurn] = []
@@ -617,6 +620,11 @@ class SimNode(Node):
             "min_distance_time_s": f"{self.min_dist[1]:.1f}",
             "truth_a_da_dot_m_per_day": f"{self.truth.da_dot * self.truth.a * 86400:.3f}",
         })
+        if message.startswith(("scenario complete", "scenario aborted")) and getattr(self, "final_timer", 1) is None:
+            # the end of the run is repeated every wall second, as diagnostics are, until the node stops: a
+            # watcher that joined late (the runner's observer, a launch event handler) still learns it
+            self.final_timer = self.create_timer(1.0, lambda: self._status(level, message),
+                                                 clock=RclpyClock(clock_type=ClockType.STEADY_TIME))
         if level == WARN:
             self.get_logger().warning(message)
         elif level == ERROR:
