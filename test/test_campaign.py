@@ -190,7 +190,8 @@ def test_failed_run_is_a_row_with_its_reason(tmp_path):
     rep = _strict(proc.stdout)
     row = Table(tmp_path / "c" / "runs.csv").read()[3]
     assert row["status"] == "failed" and row["failure"] == "node_exit"
-    assert "sim exited early" in row["reason"] and "parameter 'time_step'" in row["reason"]
+    # the default layout names the process (loop: the sim's) and the node in its last log line
+    assert "exited early" in row["reason"] and "sim" in row["reason"] and "parameter 'time_step'" in row["reason"]
     assert rep["failed"] == 1 and rep["failures"]["by_kind"] == {"node_exit": 1} and rep["p_safe"]["n"] == 0
     assert rep["p_safe_failures_unsafe"] == {"k": 0, "n": 1, "p": 0.0, "ci95": [0.0, pytest.approx(0.7935, abs=1e-4)]}
     assert not math.isnan(rep["p_safe_failures_unsafe"]["ci95"][1])

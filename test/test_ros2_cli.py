@@ -52,7 +52,7 @@ def section(text, title):
 
 def test_package_executables_and_interfaces(checks):
     listed = set(re.findall(r"^roe_sep (\S+)$", checks["static"], re.M))
-    assert listed == {*NODES, "lifecycle_manager", "roe-sep"}, listed
+    assert listed == {*NODES, "lifecycle_manager", "suite", "roe-sep"}, listed
     show = section(checks["static"], "interface show")
     assert "string strategy" in show and "ImpulsiveManeuver[] maneuvers" in show.replace("roe_sep_msgs/", "")
 
