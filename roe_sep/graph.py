@@ -32,6 +32,19 @@ SUBSCRIBERS = {
 }
 
 
+# the default process layout (roe-sep run without --process-per-node): two processes, each its nodes on one executor
+# (roe_sep.nodes.suite). The closed loop (the simulator and the lockstep participants) in one; the nodes that only
+# listen (recorder, ground_bridge, the Foxglove view) in the other, off the loop's critical path.
+LISTENERS = ("recorder", "ground_bridge", "foxglove_view")
+SUITES = ("listeners", "loop")
+EXECUTORS = ("events", "single_threaded")  # rclpy's EventsExecutor (default), SingleThreadedExecutor
+
+
+def suites(nodes):
+    """{suite process name: its nodes, in start order} of a run's ``nodes`` (:data:`SUITES`)."""
+    return {"listeners": [n for n in nodes if n in LISTENERS], "loop": [n for n in nodes if n not in LISTENERS]}
+
+
 RADAR_STREAM = 1  # the radar noise's stream of a run seed (the simulator uses the seed itself)
 
 

@@ -23,11 +23,13 @@ from .graph import (  # noqa: F401 (re-exported)
     PARTICIPANTS,
     RADAR_STREAM,
     SUBSCRIBERS,
+    SUITES,
     graph_nodes,
     load_overrides,
     parameters,
     radar_seed,
     run_overrides,
+    suites,
 )
 
 
@@ -45,11 +47,6 @@ def ros_environment(domain_id=None):
     return env
 
 
-# the composed layout: two processes, each its nodes on one executor (roe_sep.nodes.suite). The closed loop (the
-# simulator and the lockstep participants) in one; the nodes that only listen (recorder, ground_bridge, the
-# Foxglove view) in the other, off the loop's critical path, on the machine's second core.
-LISTENERS = ("recorder", "ground_bridge", "foxglove_view")
-SUITES = ("listeners", "loop")
 
 
 class Deployment:
@@ -190,8 +187,8 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
     reached, reason = False, "not started"
     try:
         if not process_per_node:
-            deployment.start_suite("listeners", [n for n in nodes if n in LISTENERS], executor)
-            deployment.start_suite("loop", [n for n in nodes if n not in LISTENERS], executor)
+            for name, members in suites(nodes).items():  # the listeners first: the recorder is up early
+                deployment.start_suite(name, members, executor)
         for node in nodes if process_per_node else ():
             deployment.start(node)
             if node == "recorder":

@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 from .. import jsonutil
+from ..graph import EXECUTORS
 from .common import emit, finite_float, seed, vec
 from .foxglove import DEFAULT_PORT, port_number
 
@@ -146,7 +147,7 @@ def register_run(subparsers):
     p.add_argument("--process-per-node", action="store_true",
                    help="every node its own process, as a deployment runs them (default: two processes, the closed "
                         "loop and the listeners, each on one executor; same report)")
-    p.add_argument("--executor", choices=("events", "single_threaded"), default="events",
+    p.add_argument("--executor", choices=EXECUTORS, default="events",
                    help="rclpy executor of the two processes (default events: rclpy's EventsExecutor); "
                         "--process-per-node always uses single_threaded")
     p.add_argument("--foxglove", type=port_number, nargs="?", const=DEFAULT_PORT, metavar="PORT",

@@ -74,6 +74,7 @@ class PendingBurn:
 class SimNode(Node):
     def __init__(self):
         super().__init__("sim")
+        self.final_timer = None  # repeats the final status (see _status)
         scenario_file = declare(self, "scenario_file", "", "scenario YAML ('' = embedded default)")
         self.seed = declare(self, "seed", 0, "seed of the ejection/burn/drag dispersions")
         self.disperse = declare(self, "disperse", True, "apply execution errors, the drag uncertainty and the "
@@ -171,7 +172,6 @@ class SimNode(Node):
 
         self.t = 0.0
         self.next_truth = 0.0
-        self.final_timer = None  # repeats the final status (see _status)
         self.ejections = {}  # stamp -> epoch of pending ejection events
         self.seen_ejections = set()
         self.pending: list[PendingBurn] = []
@@ -620,7 +620,7 @@ class SimNode(Node):
             "min_distance_time_s": f"{self.min_dist[1]:.1f}",
             "truth_a_da_dot_m_per_day": f"{self.truth.da_dot * self.truth.a * 86400:.3f}",
         })
-        if message.startswith(("scenario complete", "scenario aborted")) and getattr(self, "final_timer", 1) is None:
+        if message.startswith(("scenario complete", "scenario aborted")) and self.final_timer is None:
             # the end of the run is repeated every wall second, as diagnostics are, until the node stops: a
             # watcher that joined late (the runner's observer, a launch event handler) still learns it
             self.final_timer = self.create_timer(1.0, lambda: self._status(level, message),

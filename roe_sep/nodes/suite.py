@@ -31,6 +31,7 @@ import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.utilities import remove_ros_args
 
+from ..graph import EXECUTORS
 from .params import ParameterError
 
 NODE_CLASSES = {
@@ -45,7 +46,6 @@ NODE_CLASSES = {
     "analysis_server": "analysis_server:AnalysisServer",
     "sim": "sim:SimNode",
 }
-EXECUTORS = ("events", "single_threaded")
 USAGE = (f"usage: suite [--executor {{{','.join(EXECUTORS)}}}] NODE [NODE ...] [--ros-args ...]; "
          f"nodes: {', '.join(NODE_CLASSES)}")
 
