@@ -147,7 +147,11 @@ def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()
 
     sim_status = [s for _, d in data[interfaces.DIAGNOSTICS_TOPIC] for s in d.status if s.name == "roe_sep/sim"]
     late = [s.message for s in sim_status if "executed late" in s.message or "not executed" in s.message]
-    values = {kv.key: kv.value for kv in sim_status[-1].values} if sim_status else {}
+    # the simulator's final status (scenario complete/aborted) holds the run's closest approach; the last one
+    # received when the run did not end
+    final_status = next((s for s in reversed(sim_status) if s.message.startswith("scenario ")),
+                        sim_status[-1] if sim_status else None)
+    values = {kv.key: kv.value for kv in final_status.values} if final_status else {}
     min_distance = float(values.get("min_distance_m", "nan"))
 
     truth_checks = [s for _, s in data[interfaces.SAFETY_TOPIC] if s.source == "truth"]

@@ -194,7 +194,6 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
             if node == "recorder":
                 time.sleep(1.0)  # let the recorder discover the graph before the clock starts
         reached, reason = wait_for_completion(sim_duration, deployment, timeout, progress)
-        time.sleep(0.5)  # last messages reach the recorder
     except KeyboardInterrupt:
         reached, reason = False, "interrupted (Ctrl-C)"
     except Exception as exc:  # noqa: BLE001 -- the runner outlives what goes wrong and says what it was

@@ -432,6 +432,30 @@ def test_bad_message_survived_and_sigterm_closes_the_bag(ros, tmp_path):
     assert data[0].startswith(b"\x00\x01\x00\x00garbage") and len(data) == 2  # (DDS pads to 4 bytes)
 
 
+@pytest.mark.parametrize("layout", ["node", "suite"])
+def test_stop_right_after_a_burst_records_all_of_it(ros, tmp_path, layout):
+    """SIGINT right after a burst: the recorder drains what DDS already delivered before it closes the bag (as the
+    runner stops it right after the simulator's final status), alone or in a suite on the EventsExecutor."""
+    topic, n = "/bag_test/burst", 400
+    bag = tmp_path / "burst"
+    pub = ros.create_publisher(RelativeOrbitalElements, topic, interfaces.BULK)
+    ros_args = ["--ros-args", "-p", f"output:={bag}", "-p", f"topics:=[{topic}]"]
+    if layout == "node":
+        rec = start_node("recorder", *ros_args[1:])
+    else:
+        rec = subprocess.Popen([sys.executable, "-m", "roe_sep.nodes.suite", "recorder", *ros_args], env=ros_env(),
+                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, cwd=ROOT)
+    try:
+        assert spin_until(ros, lambda: pub.get_subscription_count() >= 1, timeout=20)
+        for i in range(n):
+            pub.publish(roe_msg(i))
+        code, out = stop_node(rec, timeout=30)
+    finally:
+        ros.destroy_publisher(pub)
+    assert code == 0, out
+    assert info(bag)["complete"] and info(bag)["message_count"] == n, out
+
+
 # -- errors ----------------------------------------------------------------------------------------------------------
 def test_existing_output_and_bad_parameters_are_refused(tmp_path):
     busy = tmp_path / "busy"

@@ -132,6 +132,12 @@ def test_bag_log_times_tell_the_truth(runs):
             assert abs(log * 1e-9 - stamp) <= STEP, (topic, log * 1e-9, stamp)  # logged within a step
     checks = [m for m, _ in data[interfaces.PLAN_CHECK_TOPIC]]
     assert checks and all(c.plan_stamp.sec > 0 for c in checks)
+    # the simulator's statuses (stamped with its sim time), the start-up one published before the clock started
+    # included, are logged within a step of their stamp: never at the end of the run
+    sim_statuses = [(a.header.stamp.sec + a.header.stamp.nanosec * 1e-9, log * 1e-9)
+                    for a, log in data[interfaces.DIAGNOSTICS_TOPIC] if any(s.name == "roe_sep/sim" for s in a.status)]
+    assert sim_statuses
+    assert all(abs(log - stamp) <= STEP for stamp, log in sim_statuses), sim_statuses
 
 
 def test_report_plan_checks_name_real_plans(runs):

@@ -53,6 +53,7 @@ INPUT_SUFFIXES = (".xml", ".kvn", ".tdm", ".txt")
 class GroundBridgeNode(Node):
     def __init__(self):
         super().__init__("ground_bridge")
+        self.messages_received = 0  # the shutdown drain runs while it rises (roe_sep.nodes.spin)
         out = declare(self, "output_dir", "", "directory of the CCSDS files (the runner sets OUT/ccsds)")
         self.fmt = declare(self, "format", "xml", "xml or kvn")
         epoch = declare(self, "epoch_utc", DEFAULT_EPOCH_UTC, "ISO-8601 UTC epoch of sim time 0 (the sim's)")
@@ -125,6 +126,7 @@ class GroundBridgeNode(Node):
 
     # --- out ------------------------------------------------------------------------------------------------------
     def on_message(self, topic, msg, urgent):
+        self.messages_received += 1
         with self.lock:
             self.run.add(topic, msg)
         self.dirty = True

@@ -18,7 +18,7 @@ import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
 from lifecycle_msgs.msg import Transition
 from lifecycle_msgs.srv import ChangeState, GetState
-from rclpy.executors import ExternalShutdownException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 
 from .. import interfaces
@@ -87,9 +87,10 @@ class LifecycleManager(Node):
 
 def main(args=None):
     from .params import ParameterError
+    from .spin import init, spin
 
-    rclpy.init(args=args)
-    node = None
+    init(args)
+    node = executor = None
     code = 0
     try:
         node = LifecycleManager()
@@ -99,13 +100,17 @@ def main(args=None):
         if not ok:
             code = 1
         else:
-            rclpy.spin(node)
+            executor = SingleThreadedExecutor()
+            executor.add_node(node)
+            code = spin(executor, [node])
     except ParameterError as exc:
         print(f"[ERROR] {exc}", file=sys.stderr)
         code = 2
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
+        if executor is not None:
+            executor.shutdown()
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()

@@ -90,6 +90,7 @@ class RecorderNode(Node):
             raise ParameterError(f"parameter 'output': {exc}") from exc
 
         self.subs = {}
+        self.messages_received = 0  # the shutdown drain runs while it rises (roe_sep.nodes.spin)
         self.skipped = set()
         self.pending = []  # (topic, data, publish_time) received before the first /clock under sim time
         self.errors = 0
@@ -161,6 +162,7 @@ class RecorderNode(Node):
 
     # -- messages ------------------------------------------------------------------------------------------------
     def on_message(self, topic, data):
+        self.messages_received += 1
         try:
             source = None  # publish_time = log_time
             if self.step_time is not None:
@@ -187,6 +189,8 @@ class RecorderNode(Node):
         t = step.header.stamp.sec * 1_000_000_000 + step.header.stamp.nanosec
         lo = int(round(step.period_start * 1e9)) if step.round == 0 else t
         self.steps.append((dict(zip(step.topics, step.counts)), min(lo, t), t))
+        if self.pending:  # received before the clock started (start-up statuses): published before this step
+            self._write_pending(min(lo, t))
         self.step_time = t if self.step_time is None else max(self.step_time, t)
         for topic in list(self.held):
             self._release(topic)
@@ -226,9 +230,10 @@ class RecorderNode(Node):
                 self._write_monotone(topic, data, self.step_time or 0, source)
 
     def _write_pending(self, now):
+        """What arrived before the first clock time, at ``now`` (a /clock message at its own value)."""
         pending, self.pending = self.pending, []
         for topic, data, source in pending:
-            self.writer.write(topic, data, now, source or now)
+            self._write_monotone(topic, data, _stamp_ns(data) if topic == interfaces.CLOCK_TOPIC else now, source)
 
     def flush(self):
         try:

@@ -1,27 +1,101 @@
-"""The Jazzy ``main()`` idiom shared by every node: init, construct, spin, clean shutdown, exit code."""
+"""How every roe_sep process spins: init, construct, spin until SIGINT/SIGTERM, drain, clean shutdown, exit code.
 
+One loop for a node alone (:func:`run`, the ``main()`` of each node) and for several nodes on one executor
+(:mod:`roe_sep.nodes.suite`):
+
+* rclpy's own signal handler is off. SIGINT/SIGTERM only set a flag that the loop checks between short
+  ``spin_once`` calls: a signal never interrupts a callback halfway, and the context is never shut down under an
+  executor that is building its wait set (rclpy's handler does that, and the executor then raises
+  ``RCLError: the given context is not valid`` instead of exiting cleanly). The EventsExecutor's C++ ``spin()``
+  would not let Python's handlers run at all.
+* After the stop request the process **drains**: messages DDS already delivered to it are still handled, so the
+  recorder logs the last status a simulator published just before it was stopped, and the ground_bridge's final
+  CCSDS set includes it. A node that counts what it receives (an int attribute ``messages_received``) keeps the
+  drain going while the count rises, until :data:`DRAIN_IDLE` s pass without a message (at most
+  :data:`DRAIN_MAX` s; a second signal ends it at once).
+"""
+
+import signal
 import sys
+import time
+import traceback
 
 import rclpy
-from rclpy.executors import ExternalShutdownException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.signals import SignalHandlerOptions
 
 from .params import ParameterError
 
+DRAIN_IDLE = 0.3  # s (wall) without a new message that ends the drain
+DRAIN_MAX = 10.0  # s (wall), at most
+
+
+def init(args=None):
+    """``rclpy.init`` without rclpy's signal handler; until :func:`spin` takes over, SIGINT/SIGTERM raise
+    KeyboardInterrupt (start-up stops at once, whatever the parent ignored: a background job's SIGINT)."""
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, signal.default_int_handler)
+
+
+def received(nodes) -> int:
+    """Messages received so far by the nodes that count them (``messages_received``)."""
+    return sum(int(getattr(n, "messages_received", 0)) for n in nodes)
+
+
+def spin(executor, nodes=()) -> int:
+    """Spin ``executor`` until SIGINT/SIGTERM or a context shutdown, then drain (module docstring).
+    Returns 1 if a callback raised (traceback printed), else 0."""
+    stop = []
+
+    def on_signal(signum, frame):  # noqa: ARG001
+        stop.append(signum)
+
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, on_signal)
+    try:
+        while not stop and rclpy.ok():
+            executor.spin_once(timeout_sec=0.1)
+        counted = [n for n in nodes if hasattr(n, "messages_received")]
+        if counted and rclpy.ok():
+            start = last_change = time.monotonic()
+            last = received(counted)
+            while len(stop) < 2 and rclpy.ok():
+                now = time.monotonic()
+                if now - last_change >= DRAIN_IDLE or now - start >= DRAIN_MAX:
+                    break
+                executor.spin_once(timeout_sec=0.05)
+                count = received(counted)
+                if count != last:
+                    last, last_change = count, time.monotonic()
+    except ExternalShutdownException:
+        pass
+    except Exception:  # noqa: BLE001 -- a callback raised: the traceback, and the process stops with code 1
+        traceback.print_exc()
+        return 1
+    return 0
+
 
 def run(node_factory, args=None) -> int:
-    """Spin the node built by ``node_factory()``; a :class:`ParameterError` at start-up exits with code 2."""
-    rclpy.init(args=args)
-    node = None
+    """Spin the node built by ``node_factory()`` on a SingleThreadedExecutor; a :class:`ParameterError` at
+    start-up exits with code 2, an exception escaping a callback with code 1."""
+    init(args)
+    node = executor = None
+    code = 0
     try:
         node = node_factory()
-        rclpy.spin(node)
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        code = spin(executor, [node])
     except ParameterError as exc:
         print(f"[ERROR] {exc}", file=sys.stderr)
-        return 2
+        code = 2
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
+        if executor is not None:
+            executor.shutdown()
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()
-    return 0
+    return code

@@ -17,15 +17,14 @@ Executors (``--executor``, before ``--ros-args``):
   it (the recorder logs ``publish_time`` = ``log_time``).
 * ``single_threaded``: rclpy's ``SingleThreadedExecutor``, the reference.
 
-A node that cannot start (a bad parameter) stops the suite with exit code 2 and names the node; an exception
-escaping a callback stops it with exit code 1 and the traceback in the log. Every node catches what a bad message
-can raise, so neither happens on bad input (test_faults).
+Signals, the drain of messages already delivered at shutdown and exit codes: :mod:`roe_sep.nodes.spin`, shared
+with the nodes' own ``main()``. A node that cannot start (a bad parameter) stops the suite with exit code 2 and
+names the node; an exception escaping a callback stops it with exit code 1 and the traceback in the log. Every
+node catches what a bad message can raise, so neither happens on bad input (test_faults).
 """
 
 import importlib
-import signal
 import sys
-import traceback
 
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
@@ -33,6 +32,7 @@ from rclpy.utilities import remove_ros_args
 
 from ..graph import EXECUTORS
 from .params import ParameterError
+from .spin import init, spin
 
 NODE_CLASSES = {
     "recorder": "recorder:RecorderNode",
@@ -84,29 +84,6 @@ def make_executor(name: str):
     return SingleThreadedExecutor()
 
 
-def spin(executor) -> int:
-    """Spin ``executor`` until SIGINT/SIGTERM or a context shutdown, in short ``spin_once`` calls: the
-    EventsExecutor's ``spin()`` runs in C++ and would not let Python's signal handlers run (and waking it from
-    another thread deadlocks on shutdown). A signal only sets a flag, so it never interrupts a callback halfway.
-    Returns 1 if a callback raised (traceback printed), else 0."""
-    stop = []
-
-    def on_signal(signum, frame):  # noqa: ARG001
-        stop.append(signum)
-
-    for sig in (signal.SIGINT, signal.SIGTERM):  # set here, whatever the parent ignored (a background job's SIGINT)
-        signal.signal(sig, on_signal)
-    try:
-        while not stop and rclpy.ok():
-            executor.spin_once(timeout_sec=0.1)
-    except ExternalShutdownException:
-        pass
-    except Exception:  # noqa: BLE001 -- a callback raised: the traceback, and the suite stops with code 1
-        traceback.print_exc()
-        return 1
-    return 0
-
-
 def main(args=None) -> int:
     argv = sys.argv if args is None else list(args)
     try:
@@ -114,9 +91,7 @@ def main(args=None) -> int:
     except ValueError as exc:
         print(f"[ERROR] {exc}", file=sys.stderr)
         return 2
-    rclpy.init(args=argv, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
-    for sig in (signal.SIGINT, signal.SIGTERM):  # during start-up: stop at once (spin() takes over)
-        signal.signal(sig, signal.default_int_handler)
+    init(argv)
     nodes, executor, code = [], None, 0
     try:
         executor = make_executor(executor_name)
@@ -127,7 +102,7 @@ def main(args=None) -> int:
                 print(f"[ERROR] {name}: {exc}", file=sys.stderr)
                 return 2
             executor.add_node(nodes[-1])
-        code = spin(executor)
+        code = spin(executor, nodes)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
