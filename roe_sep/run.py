@@ -55,6 +55,7 @@ class Deployment:
     def __init__(self, out: Path, params_file: Path, env):
         self.out, self.params_file, self.env = out, params_file, env
         self.procs = {}
+        self.interrupted = set()  # processes sent SIGINT (once: a second one cuts their shutdown drain short)
         (out / "logs").mkdir(parents=True, exist_ok=True)
 
     def start(self, node):
@@ -90,13 +91,33 @@ class Deployment:
             parts.append(f"{n} exited early ({how}); last log line: {self.last_line(n) or '(none)'}")
         return "; ".join(parts)
 
+    def interrupt(self, nodes):
+        """SIGINT to each of ``nodes`` still running that has not had one."""
+        for n in nodes:
+            p, _ = self.procs[n]
+            if p.poll() is None and n not in self.interrupted:
+                p.send_signal(signal.SIGINT)
+                self.interrupted.add(n)
+
+    def wait_for_log(self, node, text, timeout=120.0):
+        """Wait until ``text`` appears in ``node``'s log (True), or the process ends or ``timeout`` s pass."""
+        path = self.out / "logs" / f"{node}.log"
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            try:
+                if text in path.read_text(encoding="utf-8", errors="replace"):
+                    return True
+            except OSError:
+                pass
+            if self.procs[node][0].poll() is not None:
+                return False
+            time.sleep(0.05)
+        return False
+
     def stop(self, nodes, timeout=120.0):
         """SIGINT to each of ``nodes``, then wait; SIGKILL after ``timeout`` s (the ground_bridge writes the final
         CCSDS set of the whole run at shutdown: seconds, many more on a loaded machine)."""
-        for n in nodes:
-            p, _ = self.procs[n]
-            if p.poll() is None:
-                p.send_signal(signal.SIGINT)
+        self.interrupt(nodes)
         codes = {}
         for n in nodes:
             p, log = self.procs[n]
@@ -185,6 +206,7 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
 
     deployment = Deployment(out, params_file, ros_environment(domain_id))
     reached, reason = False, "not started"
+    report = None
     try:
         if not process_per_node:
             for name, members in suites(nodes).items():  # the listeners first: the recorder is up early
@@ -204,8 +226,14 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
             codes.update(deployment.stop(["recorder"]))
         else:
             codes = deployment.stop(["loop"])
-            codes.update(deployment.stop(["listeners"]))  # the recorder last
-    report = report_from_bag(bag_dir, out, sim_duration, codes.get("recorder", codes.get("listeners")))
+            # the listeners' recorder closes the bag first (roe_sep.nodes.suite): the report is built while the
+            # ground_bridge writes the run's final CCSDS set
+            deployment.interrupt(["listeners"])
+            if deployment.wait_for_log("listeners", "bag closed: "):
+                report = report_from_bag(bag_dir, out, sim_duration, 0)
+            codes.update(deployment.stop(["listeners"]))
+    if report is None:
+        report = report_from_bag(bag_dir, out, sim_duration, codes.get("recorder", codes.get("listeners")))
     report["run"].update({"completed": reached, "reason": reason, "exit_codes": codes,
                           "layout": "process_per_node" if process_per_node else f"suites ({executor} executor)",
                           "params_file": str(params_file)})

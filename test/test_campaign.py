@@ -105,6 +105,8 @@ def test_radar_seed_is_derived_and_independent():
     assert radar_seed(5) != 5 and 0 <= radar_seed(5) < 2**32
     over = run_overrides(5, {"radar_od": {"sigma_range": 1.0}, "sim": {"disperse": True}})
     assert over["radar_od"] == {"sigma_range": 1.0, "seed": radar_seed(5)} and over["sim"] == {"disperse": True}
+    assert over["ground_bridge"] == {"write_period": 0.0}
+    assert run_overrides(5, {"ground_bridge": {"write_period": 600.0}})["ground_bridge"] == {"write_period": 600.0}
 
 
 # ------------------------------------------------------------------------------------------ closed-loop runs
@@ -129,8 +131,11 @@ def test_campaign_writes_one_row_and_report_per_run(campaign):
         assert 0.5 < row["dv_total_m_s"] < 3.0 and row["min_distance_m"] > 0
         run_rep = _strict((out / "runs" / str(s) / "report.json").read_text())
         assert _comparable(row) == _comparable(row_from_report(s, run_rep))
-        assert yaml.safe_load((out / "runs" / str(s) / "overrides.yaml").read_text())["radar_od"][
-            "ros__parameters"]["seed"] == radar_seed(s)
+        over = yaml.safe_load((out / "runs" / str(s) / "overrides.yaml").read_text())
+        assert over["radar_od"]["ros__parameters"]["seed"] == radar_seed(s)
+        # the CCSDS set written once, at the end of the run: complete all the same
+        assert over["ground_bridge"]["ros__parameters"]["write_period"] == 0.0
+        assert (out / "runs" / str(s) / "ccsds" / "ephemeris.oem.xml").stat().st_size > 0
     assert len({r["dv_total_m_s"] for r in rows.values()}) == RUNS  # each seed disperses differently
     assert rep["p_safe"]["n"] == rep["completed"] and 0 <= rep["p_safe"]["ci95"][0] <= rep["p_safe"]["ci95"][1] <= 1
     assert set(rep["criteria"]) >= {"keep_out", "passive_safety", "evaporation", "ic_reached"}

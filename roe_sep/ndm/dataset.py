@@ -240,16 +240,18 @@ def closest_approach(run: RunMessages, truth: Truth, opts: Options):
     sample to the next; None without a departure or a later minimum."""
     if len(truth) < 2:
         return None
-    ts, roes, chiefs = [], [], []
-    for k in range(len(truth) - 1):
-        span = truth.t[k + 1] - truth.t[k]
-        if span <= 0.0:
-            continue
-        dt = np.arange(0.0, span, opts.ca_step)
-        ts.append(truth.t[k] + dt)
-        roes.append(propagate(truth.roe[k], dt, truth.chief[k, 0], truth.chief[k, 2], True, 0.0))
-        chiefs.append(propagate_chief(truth.chief[k], dt))
-    t, roe, chief = np.concatenate(ts), np.concatenate(roes), np.concatenate(chiefs)
+    span = np.diff(truth.t)
+    ks = np.nonzero(span > 0.0)[0]
+    if not ks.size:
+        return None
+    # every sample's grid 0, ca_step, ... < span (np.arange's points), all samples in one vectorized pass
+    counts = np.ceil(span[ks] / opts.ca_step).astype(int)
+    k = np.repeat(ks, counts)
+    first = np.repeat(np.cumsum(counts) - counts, counts)
+    dt = (np.arange(k.size) - first) * opts.ca_step
+    t = truth.t[k] + dt
+    roe = propagate(truth.roe[k], dt, truth.chief[k, 0], truth.chief[k, 2], True, 0.0)
+    chief = propagate_chief(truth.chief[k], dt)
     dist = np.linalg.norm(roe_to_rtn(roe, chief[:, 4] + chief[:, 5])[0], axis=-1) * chief[:, 0]
     away = np.nonzero(dist >= opts.departure_distance)[0]
     if not away.size:

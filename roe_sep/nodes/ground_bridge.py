@@ -3,8 +3,8 @@ from a ground segment as radar measurements.
 
 Out (``output_dir``, the runner sets OUT/ccsds): the same set as ``roe-sep export`` (:mod:`roe_sep.ndm.dataset`),
 from the same topics. An OPM pair (RTN and EME2000 maneuvers) as soon as the safety monitor approves a plan, the
-executed-burns OPM after each burn, and the OEM, TDM and CDM every ``write_period`` s of sim time and at shutdown
-(the XML OEM of a whole run takes about 3 s to serialize, so not at every message). Every file is written
+executed-burns OPM after each burn, and the OEM, TDM and CDM every ``write_period`` s of sim time (0: never) and at
+shutdown (the XML OEM of a whole run takes about 2 s to serialize, so not at every message). Every file is written
 atomically (temporary file + rename).
 
 In (``input_dir``, '' = off): every ``*.xml``, ``*.kvn`` or ``*.tdm`` file that appears there is read as a TDM
@@ -59,7 +59,8 @@ class GroundBridgeNode(Node):
         epoch = declare(self, "epoch_utc", DEFAULT_EPOCH_UTC, "ISO-8601 UTC epoch of sim time 0 (the sim's)")
         scenario_file = declare(self, "scenario_file", "", "scenario YAML ('' = embedded default)")
         isp = declare(self, "carrier_isp", 60.0, "s, carrier thruster specific impulse (OPM MAN_DELTA_MASS)")
-        self.write_period = declare(self, "write_period", 86400.0, "s of sim time between OEM/TDM/CDM updates")
+        self.write_period = declare(self, "write_period", 86400.0,
+                                    "s of sim time between OEM/TDM/CDM updates (0: only the final set at shutdown)")
         inp = declare(self, "input_dir", "", "directory watched for TDM files ('' = no input)")
         poll = declare(self, "poll_period", 1.0, "wall s between scans of input_dir")
         sigma_range = declare(self, "default_sigma_range_m", 10.0, "m, range sigma of a TDM without one")
@@ -67,9 +68,11 @@ class GroundBridgeNode(Node):
 
         require("output_dir", isinstance(out, str) and out != "", out, "a directory path")
         require("format", self.fmt in FORMATS, self.fmt, "'xml' or 'kvn'")
-        for name, value in (("carrier_isp", isp), ("write_period", self.write_period), ("poll_period", poll),
+        for name, value in (("carrier_isp", isp), ("poll_period", poll),
                             ("default_sigma_range_m", sigma_range), ("default_sigma_angle_deg", sigma_angle)):
             require(name, finite(value) and value > 0, value, "a positive number")
+        require("write_period", finite(self.write_period) and self.write_period >= 0, self.write_period,
+                "a non-negative number of seconds (0: no periodic update)")
         try:
             frames.parse_epoch(epoch)
         except ValueError as exc:
@@ -135,7 +138,7 @@ class GroundBridgeNode(Node):
 
     def on_clock(self, msg: Clock):
         self.t = time_to_sec(msg.clock)
-        if self.dirty and self.t - self.last_periodic >= self.write_period:
+        if self.dirty and self.write_period > 0 and self.t - self.last_periodic >= self.write_period:
             self.last_periodic = self.t
             self.dirty = False
             self.request(periodic=True)

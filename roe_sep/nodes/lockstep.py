@@ -84,6 +84,8 @@ class Lockstep:
         self.last_counts = {}  # topic -> count of the latest step message
         self.steps_done = 0
         self.on_round_done = None  # called after each round is processed (the coordinator's own bookkeeping)
+        self.on_batch_done = None  # called after a round's messages, before on_step (work a node defers to it)
+        self.in_batch = False  # the callbacks of a round's messages are running
         node.create_subscription(LockstepStep, interfaces.LOCKSTEP_STEP_TOPIC, self.on_step_msg, STEP_QOS)
         self.ack_pub = node.create_publisher(LockstepAck, interfaces.LOCKSTEP_ACK_TOPIC, ACK_QOS) \
             if acknowledge else None
@@ -190,8 +192,17 @@ class Lockstep:
             self.processed[topic] += need
         batch.sort(key=lambda b: b[:3])
         self.time = time_to_sec(step.header.stamp)
-        for _, _, _, callback, msg in batch:
-            callback(msg)
+        self.in_batch = True
+        try:
+            for _, _, _, callback, msg in batch:
+                callback(msg)
+        finally:
+            self.in_batch = False
+        if self.on_batch_done is not None:
+            try:
+                self.on_batch_done()
+            except Exception as exc:  # noqa: BLE001 -- the round is still acknowledged: the loop goes on
+                self._report(f"end-of-round work failed: {type(exc).__name__}: {exc}")
         if step.round == 0 and self.on_step_callback is not None and not step.final:
             self.on_step_callback(self.time)
         self.last = (step.step, step.round)

@@ -134,10 +134,14 @@ class RadarODNode(ManagedNode):
         self.records = []  # (t, station, pass_id, z, chief, theta, truth_t)
         self.estimates = 0
         self.published = 0
+        # track() calls of the current lockstep round, run together when the round's messages are done
+        # (flush_tracks): one vectorized geometry pass per round instead of one per truth sample
+        self.deferred = []
 
     def activate(self):
         """Publishers, subscriptions, services (the ``activate`` transition)."""
         self.lockstep = ls = Lockstep(self)
+        ls.on_batch_done = self.flush_tracks
         self.meas_pub = ls.publisher(RadarMeasurement, interfaces.RADAR_TOPIC, interfaces.STREAM)
         self.od_pub = ls.publisher(OrbitDetermination, interfaces.OD_TOPIC, interfaces.LATCHED)
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
@@ -188,6 +192,7 @@ class RadarODNode(ManagedNode):
         return t, roe, kep
 
     def on_maneuver(self, msg: ImpulsiveManeuver):
+        self.flush_tracks()  # the measurements before the burn see the burn history they saw when simulated
         t = time_to_sec(msg.epoch)
         if t > self.last_burn:
             self.last_burn = t
@@ -214,35 +219,73 @@ class RadarODNode(ManagedNode):
 
     def reset(self):
         """Forget the run (a restarted simulator publishes its truth and burns again)."""
+        self.flush_tracks()
         self.truth, self.t_last, self.last_burn = None, None, -math.inf
         self.open_pass = [False] * len(self.stations)
         self.records.clear()
 
     # --- measurements --------------------------------------------------------------------------------------
     def track(self, epochs):
-        t_tr, roe_tr, kep_tr = self.truth
-        if self.last_burn > t_tr:  # burn executed, post-burn truth not in yet: no valid truth after the burn
-            epochs = epochs[epochs < self.last_burn]
-        if not epochs.size:
+        """Measurements at ``epochs`` [s] from the truth in force and the burns known now. Inside a lockstep round
+        the work waits for the end of the round (:meth:`flush_tracks`), whatever else the round holds: the
+        measurements, passes and estimates are those of tracking at once, in the same order."""
+        self.deferred.append((epochs, self.truth, self.last_burn, self.t_last))
+        if not self.lockstep.in_batch:
+            self.flush_tracks()
+
+    def flush_tracks(self):
+        """Run the deferred :meth:`track` calls: the geometry of all their epochs in one vectorized pass (each epoch
+        propagated from the truth sample it was deferred with), then the passes and measurements call by call.
+        A failure drops these measurements with an ERROR on /diagnostics; the node goes on."""
+        deferred, self.deferred = self.deferred, []
+        try:
+            self._track_all(deferred)
+        except Exception as exc:  # noqa: BLE001 -- a node never dies on its input; it says what it dropped
+            text = f"measurements of {len(deferred)} truth sample(s) dropped: {type(exc).__name__}: {exc}"
+            self.get_logger().error(text)
+            publish_status(self, self.diag_pub, ERROR, text, self._values())
+
+    def _track_all(self, deferred):
+        calls = []
+        for epochs, truth, last_burn, now in deferred:
+            if last_burn > truth[0]:  # burn executed, post-burn truth not in yet: no valid truth after the burn
+                epochs = epochs[epochs < last_burn]
+            if epochs.size:
+                calls.append((epochs, truth, now))
+        if not calls:
             return
+        sizes = [c[0].size for c in calls]
+        epochs = np.concatenate([c[0] for c in calls])
+        t_tr = np.repeat([c[1][0] for c in calls], sizes)
+        roe_tr = np.repeat(np.array([c[1][1] for c in calls]), sizes, axis=0)
+        kep_tr = np.repeat(np.array([c[1][2] for c in calls]), sizes, axis=0)
         chief = propagate_chief(kep_tr, epochs - t_tr)
-        roe = propagate(roe_tr, epochs - t_tr, kep_tr[0], kep_tr[2], True, 0.0)
+        roe = propagate(roe_tr, epochs - t_tr, kep_tr[:, 0], kep_tr[:, 2], True, 0.0)
         theta = gmst(self.jd0 + epochs / SECONDS_PER_DAY)
-        sep = relative_distance(roe, kep_tr[0], chief[:, 4] + chief[:, 5])
+        sep = relative_distance(roe, kep_tr[:, 0], chief[:, 4] + chief[:, 5])
+        z = [observe(roe, chief, theta, self.site_ef[s], self.site_enu[s]) for s in range(len(self.stations))]
+        seen = [visible(zs[:, 2], self.mask) for zs in z]
+        start = 0
+        for (ep, truth, now), n in zip(calls, sizes):
+            rows = slice(start, start + n)
+            start += n
+            self._passes(ep, truth[0], now, chief[rows], theta[rows], sep[rows], [zs[rows] for zs in z],
+                         [vs[rows] for vs in seen])
+
+    def _passes(self, epochs, t_tr, now, chief, theta, sep, z, seen):
+        """Open and close passes, measure, estimate: one :meth:`track` call's epochs, station by station."""
         close_seen = False
-        for s, station in enumerate(self.stations):
-            z = observe(roe, chief, theta, self.site_ef[s], self.site_enu[s])
-            seen = visible(z[:, 2], self.mask)
-            close_seen |= bool(np.any(seen & (sep < self.min_sep)))
+        for s in range(len(self.stations)):
+            close_seen |= bool(np.any(seen[s] & (sep < self.min_sep)))
             for j, t in enumerate(epochs):
-                if seen[j] and sep[j] >= self.min_sep:
+                if seen[s][j] and sep[j] >= self.min_sep:
                     if not self.open_pass[s]:
                         self.open_pass[s] = True
                         self.pass_ids[s] += 1
-                    self.measure(t, s, z[j], chief[j], theta[j], t_tr)
+                    self.measure(t, s, z[s][j], chief[j], theta[j], t_tr)
                 elif self.open_pass[s]:
                     self.open_pass[s] = False
-                    self.pass_closed(s, self.pass_ids[s])
+                    self.pass_closed(s, self.pass_ids[s], now)
         if close_seen and not self.too_close:
             msg = f"waiting for separation: picosatellite visible but closer than {self.min_sep:g} m"
             self.get_logger().warn(msg)
@@ -261,20 +304,21 @@ class RadarODNode(ManagedNode):
         self.meas_pub.publish(m)
         self.published += 1
 
-    def pass_closed(self, s, pass_id):
+    def pass_closed(self, s, pass_id, now):
         count = sum(1 for r in self.records if r[1] == s and r[2] == pass_id)
         name = self.stations[s].name
         self.get_logger().info(f"{name} pass {pass_id} closed: {count} measurements")
         if count < self.min_pass:
             return
         publish_status(self, self.diag_pub, OK, f"{name} pass {pass_id}: {count} measurements", self._values())
-        self.estimate()
+        self.estimate(now)
 
     def on_external(self, msg: RadarMeasurement):
         """A ground segment's measurement: a record of the external pass -(pass_id + 1) of its station (never an
         open pass), the chief and sidereal angle from this node's truth and epoch as for its own; the OD runs one
         wall second after the last one arrived. Rejected with an ERROR on /diagnostics: no truth yet, an unknown
         station, non-finite values, or sigmas other than this node's (the batch weights every record alike)."""
+        self.flush_tracks()
         t = time_to_sec(msg.header.stamp)
         z = np.array([msg.range, msg.azimuth, msg.elevation], dtype=float)
         names = [st.name for st in self.stations]
@@ -302,7 +346,8 @@ class RadarODNode(ManagedNode):
     def _external_batch(self):
         self.external_timer.cancel()
         self.get_logger().info("external measurements received: orbit determination")
-        self.estimate()
+        self.flush_tracks()
+        self.estimate(self.t_last)
 
     # --- orbit determination -------------------------------------------------------------------------------
     def usable(self):
@@ -315,7 +360,9 @@ class RadarODNode(ManagedNode):
         good = {key for key, c in counts.items() if c >= self.min_pass and key not in open_now}
         return [r for r in recs if (r[1], r[2]) in good], good
 
-    def estimate(self):
+    def estimate(self, now):
+        """The batch OD on the usable records, published with header stamp ``now`` [s] (the sim time of the
+        tracking that closed the pass)."""
         recs, passes = self.usable()
         if len(passes) < self.passes_required:
             return
@@ -333,7 +380,7 @@ class RadarODNode(ManagedNode):
             self.get_logger().error(f"orbit determination failed: {exc}")
             publish_status(self, self.diag_pub, ERROR, f"orbit determination failed: {exc}", self._values())
             return
-        self.od_pub.publish(self.od_msg(result, batch.chief[-1], len(passes)))
+        self.od_pub.publish(self.od_msg(result, batch.chief[-1], len(passes), now))
         self.estimates += 1
         a = batch.chief[-1, 0]
         self.get_logger().info(
@@ -342,7 +389,7 @@ class RadarODNode(ManagedNode):
             f"{result.x[6] * a:.3e} m/s, residual RMS {result.residual_rms:.2f}")
         publish_status(self, self.diag_pub, OK, f"estimate {self.estimates} published", self._values())
 
-    def od_msg(self, result, chief_kep, passes):
+    def od_msg(self, result, chief_kep, passes, now):
         kep = np.array(chief_kep, dtype=float)
         kep[3:] = wrap_angle(kep[3:])
         chief = array_to_elements(kep)
@@ -350,7 +397,7 @@ class RadarODNode(ManagedNode):
         msg = OrbitDetermination(passes=passes, measurements=result.measurements,
                                  residual_rms=float(result.residual_rms), a_da_dot=float(result.x[6] * a),
                                  a_da_dot_sigma=float(math.sqrt(result.cov[6, 6]) * a))
-        msg.header.stamp = sec_to_time(self.t_last)
+        msg.header.stamp = sec_to_time(now)
         msg.header.frame_id = interfaces.CARRIER_RTN_FRAME
         msg.estimate = roe_to_msg(result.x[:6], chief, sec_to_time(result.t_est), covariance=result.cov[:6, :6])
         return msg

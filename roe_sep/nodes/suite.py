@@ -108,7 +108,9 @@ def main(args=None) -> int:
     finally:
         if executor is not None:
             executor.shutdown()
-        for node in reversed(nodes):  # the recorder last: it closes the bag
+        # the recorder first: the bag is complete (after the drain) before the ground_bridge spends seconds on the
+        # run's final CCSDS set, and `roe-sep run` builds the report meanwhile; then the others in reverse order
+        for node in sorted(reversed(nodes), key=lambda n: n.get_name() != "recorder"):
             node.destroy_node()
         rclpy.try_shutdown()
     return code
