@@ -19,6 +19,7 @@ from rosutil import rclpy, spin_until, start_node, stop_node, wait_exit  # noqa:
 
 from roe_sep import interfaces
 from roe_sep.bag.reader import messages
+from roe_sep.ndm import frames
 from roe_sep.ndm import messages as ndm
 from roe_sep.ndm.dataset import stamp
 
@@ -68,18 +69,20 @@ def test_ground_bridge_writes_opms_and_feeds_tdm_files_to_radar_od(tmp_path, bag
         node.create_subscription(OrbitDetermination, interfaces.OD_TOPIC, got["od"].append, interfaces.LATCHED)
         node.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, got["diag"].append,
                                  interfaces.DIAGNOSTICS)
-        truth_pub = node.create_publisher(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, interfaces.STREAM)
+        truth_pub = node.create_publisher(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, interfaces.BULK)
         plan_pub = node.create_publisher(ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.LATCHED)
         check_pub = node.create_publisher(SafetyStatus, interfaces.PLAN_CHECK_TOPIC, interfaces.EXECUTED)
         assert spin_until(node, lambda: truth_pub.get_subscription_count() >= 2, 30.0), "nodes did not come up"
         clock_pub = node.create_publisher(Clock, interfaces.CLOCK_TOPIC, 10)
 
-        # out: truth, then the drift-stop plan and its approval -> the OPM pair
-        truth = [m for m in bag[interfaces.TRUTH_ROE_TOPIC] if 9200.0 < stamp(m.header.stamp) < 75600.0]
-        for m in (truth[0], truth[-1]):
+        # out: the truth from the drift-stop to the first OD's epoch (radar_od takes the chief of an external
+        # measurement from the first truth sample at or after it, as its own tracking did), then the drift-stop plan
+        # and its approval -> the OPM pair
+        truth = [m for m in bag[interfaces.TRUTH_ROE_TOPIC] if 9150.0 < stamp(m.header.stamp) < 75600.0 + 300.0]
+        for m in truth:
             truth_pub.publish(m)
         spin_until(node, lambda: False, 0.5)
-        clock_pub.publish(Clock(clock=Time(sec=75640)))  # the run's clock when its first OD came out
+        clock_pub.publish(Clock(clock=Time(sec=76200)))  # the run's clock when its first OD came out
         plan_pub.publish(bag[interfaces.DRIFT_STOP_PLAN_TOPIC][0])
         check_pub.publish(bag[interfaces.PLAN_CHECK_TOPIC][0])
         names = ("plan01_double_impulse.opm.xml", "plan01_double_impulse_eme2000.opm.xml")
@@ -116,7 +119,7 @@ def test_ground_bridge_writes_opms_and_feeds_tdm_files_to_radar_od(tmp_path, bag
         keys = ("a_da", "a_dl", "a_dex", "a_dey", "a_dix", "a_diy")
         a = np.array([getattr(new.estimate, k) for k in keys])
         b = np.array([getattr(od.estimate, k) for k in keys])
-        assert new.measurements == od.measurements == 117 and new.passes == od.passes == 3
+        assert new.measurements == od.measurements == 118 and new.passes == od.passes == 3
         assert stamp(new.estimate.header.stamp) == stamp(od.estimate.header.stamp)
         assert np.max(np.abs(a - b)) < 1e-3  # m; the estimate's 1-sigma is meters
         assert new.a_da_dot == pytest.approx(od.a_da_dot, rel=1e-4, abs=1e-9)
@@ -128,9 +131,12 @@ def test_ground_bridge_writes_opms_and_feeds_tdm_files_to_radar_od(tmp_path, bag
     assert code_b == 0, log_b
     assert code_r == 0, log_r
     assert (out / "plan01_double_impulse.opm.xml").is_file()
-    # the final set at shutdown: the carrier's ephemeris over the two truth samples it got
+    # the final set at shutdown: the carrier's ephemeris over the truth samples it got (its 100-deep truth
+    # subscription may drop the start of the burst), up to the last one
     segs = ndm.read_message(out / "ephemeris.oem.xml").body.segment
-    assert segs[0].metadata.object_id == "CARRIER" and len(segs[0].data.state_vector) == 2
+    states = segs[0].data.state_vector
+    assert segs[0].metadata.object_id == "CARRIER" and len(states) >= 2
+    assert frames.sim_time(EPOCH, states[-1].epoch) == pytest.approx(stamp(truth[-1].header.stamp), abs=1e-3)
 
 
 def test_bad_parameters_exit_2(tmp_path):

@@ -1,8 +1,12 @@
-"""The radar_od node as a real process over DDS, fed with /clock and a truth stream of a drifting relative orbit.
+"""The radar_od node as a real process over DDS, fed with a truth stream of a drifting relative orbit.
 
-A test node plays the simulator: 34 h of sim time in 60 s /clock steps (a truth message each step, one NaN truth,
-one executed burn at 15 h). The node must measure only during TIRA passes and only once the spacecraft are 5 km
-apart, ignore the pre-burn passes, and publish OD solutions consistent with the truth.
+A test node plays the simulator: 34 h of sim time in 60 s steps (a truth message each step, one NaN truth, one
+executed burn at 15 h), as the lockstep coordinator (a ``LockstepStep`` per step, the next one once radar_od has
+acknowledged: what the node computes is independent of timing and load) or as a free-running ``/clock`` (the node
+run alone). The node must measure only during TIRA passes and only once the spacecraft are 5 km apart, ignore the
+pre-burn passes, and publish OD solutions; under lockstep they must be consistent with the truth. Run alone, the
+node simulates each epoch from the truth it holds when the clock tick arrives, so under load its measurements can
+come from a stale truth sample: the statistical checks are for the lockstep mode.
 """
 
 import math
@@ -13,6 +17,8 @@ import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus  # noqa: E402
 from roe_sep_msgs.msg import (  # noqa: E402
     ImpulsiveManeuver,
+    LockstepAck,
+    LockstepStep,
     OrbitDetermination,
     RadarMeasurement,
     RelativeOrbitalElements,  # noqa: E402
@@ -27,6 +33,7 @@ from roe_sep.core.relmotion.orbit import semi_major_axis  # noqa: E402
 from roe_sep.core.relmotion.roe import wrap_angle  # noqa: E402
 from roe_sep.core.relmotion.trajectory import Burn, Chief, trajectory  # noqa: E402
 from roe_sep.nodes.convert import array_to_elements, maneuver_msg, roe_to_msg, sec_to_time, time_to_sec  # noqa
+from roe_sep.nodes.lockstep import ACK_QOS, STEP_QOS  # noqa: E402
 
 EPOCH = "2016-07-01T00:00:00"
 JD0 = julian_date(EPOCH)
@@ -67,6 +74,10 @@ def sim():
     node.truth_pub = node.create_publisher(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, interfaces.STREAM)
     node.clock_pub = node.create_publisher(Clock, interfaces.CLOCK_TOPIC, interfaces.STREAM)
     node.burn_pub = node.create_publisher(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, interfaces.EXECUTED)
+    node.step_pub = node.create_publisher(LockstepStep, interfaces.LOCKSTEP_STEP_TOPIC, STEP_QOS)
+    node.acks = set()
+    node.create_subscription(LockstepAck, interfaces.LOCKSTEP_ACK_TOPIC,
+                             lambda a: node.acks.add((a.node, a.step, a.round)), ACK_QOS)
     yield node
     node.destroy_node()
     rclpy.try_shutdown()
@@ -76,8 +87,9 @@ def statuses(node, level):
     return [s.message for d in node.diags for s in d.status if s.level == level and s.name == "roe_sep/radar_od"]
 
 
-def run_sim(node, proc):
-    """Publish truth + /clock from 0 to SIM_END; spin between steps so that nothing queues up."""
+def run_sim(node, proc, lockstep):
+    """Publish the truth from 0 to SIM_END, each tick closed by a lockstep step message acknowledged by radar_od
+    (``lockstep``) or by /clock (spinning 2 ms between ticks so that nothing queues up)."""
     assert spin_until(node, lambda: node.truth_pub.get_subscription_count() >= 1
                       and node.clock_pub.get_subscription_count() >= 1
                       and node.count_publishers(interfaces.OD_TOPIC) >= 1,
@@ -85,13 +97,26 @@ def run_sim(node, proc):
     time.sleep(0.5)  # let the reliable endpoints finish matching
     ticks = np.arange(0.0, SIM_END + TICK / 2, TICK)
     roe, kep = truth(ticks)
+    counts = {interfaces.EXECUTED_TOPIC: 0, interfaces.TRUTH_ROE_TOPIC: 0}
     for k, t in enumerate(ticks):
         if t == BURN_T:
             node.burn_pub.publish(maneuver_msg(t, CHIEF.u_at(t), [-v for v in BURN_DV], "carrier", "drift_reduction"))
+            counts[interfaces.EXECUTED_TOPIC] += 1
         msg = truth_msg(t, roe[k], kep[k])
         if t == NAN_T:
-            msg.a_dl = math.nan
+            msg.a_dl = math.nan  # rejected before it is counted: the step does not count it either
+        else:
+            counts[interfaces.TRUTH_ROE_TOPIC] += 1
         node.truth_pub.publish(msg)
+        if lockstep:
+            topics = sorted(counts)
+            step = LockstepStep(step=k, round=0, period_start=float(ticks[k - 1] if k else 0.0), topics=topics,
+                                counts=[counts[tp] for tp in topics], final=False)
+            step.header.stamp = sec_to_time(t)
+            node.step_pub.publish(step)
+            assert spin_until(node, lambda: ("radar_od", k, 0) in node.acks, timeout=30), f"no ack of step {k}"
+            assert proc.poll() is None, "radar_od died"
+            continue
         node.clock_pub.publish(Clock(clock=sec_to_time(t)))
         deadline = time.monotonic() + 0.002
         while time.monotonic() < deadline:
@@ -99,10 +124,13 @@ def run_sim(node, proc):
         assert proc.poll() is None, "radar_od died"
 
 
-def test_tracks_passes_after_separation_and_estimates_consistently(sim):
+@pytest.mark.parametrize("lockstep", [True, False], ids=["lockstep", "alone"])
+def test_tracks_passes_after_separation_and_estimates_consistently(sim, lockstep):
     proc = start_node("radar_od", "-p", "use_sim_time:=true", "-p", f"epoch_utc:={EPOCH}", "-p", "seed:=3")
     try:
-        run_sim(sim, proc)
+        if lockstep:  # the step topic must be matched before the first step, or radar_od starts alone
+            assert spin_until(sim, lambda: sim.step_pub.get_subscription_count() >= 1, timeout=30)
+        run_sim(sim, proc, lockstep)
         assert spin_until(sim, lambda: len(sim.ods) >= 2, timeout=20), "no second OD solution"
         spin_until(sim, lambda: False, timeout=0.5)
         assert proc.poll() is None  # survived the NaN truth message
@@ -124,11 +152,12 @@ def test_tracks_passes_after_separation_and_estimates_consistently(sim):
     m0 = sim.meas[0]
     assert (m0.station, m0.header.frame_id, m0.sigma_range) == ("TIRA", "TIRA", pytest.approx(10.0))
     assert m0.sigma_angle == pytest.approx(math.radians(0.01))
-    zm = np.array([[m.range, m.azimuth, m.elevation] for m in sim.meas])
-    zt = z[np.searchsorted(grid, stamps)]
-    dev = zm - zt
-    dev[:, 1] = wrap_angle(dev[:, 1])
-    assert np.all(np.abs(dev / [10.0, math.radians(0.01), math.radians(0.01)]) < 5.0)
+    if lockstep:
+        zm = np.array([[m.range, m.azimuth, m.elevation] for m in sim.meas])
+        zt = z[np.searchsorted(grid, stamps)]
+        dev = zm - zt
+        dev[:, 1] = wrap_angle(dev[:, 1])
+        assert np.all(np.abs(dev / [10.0, math.radians(0.01), math.radians(0.01)]) < 5.0)
     pass_ids = [m.pass_id for m in sim.meas]
     assert pass_ids == sorted(pass_ids) and pass_ids[0] == 1 and pass_ids[-1] == 5  # 8.0 h pass never started
 
@@ -142,6 +171,8 @@ def test_tracks_passes_after_separation_and_estimates_consistently(sim):
     # without the burn the 9.6 h and 21.0 h passes would have given an estimate; after it, 21.0 h to 31.8 h
     assert t1 > 31 * 3600.0 and first.passes == 3 and second.passes == 4
     assert first.measurements == np.count_nonzero((stamps >= BURN_T) & (stamps <= t1))
+    if not lockstep:
+        return
     for od in (first, second):
         t_est = time_to_sec(od.estimate.header.stamp)
         roe_t, kep_t = truth(t_est)

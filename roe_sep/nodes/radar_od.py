@@ -23,6 +23,7 @@ determination needs several passes over about 12 h. This stub simulates those me
 Parameters: see :class:`RadarODNode` and the README's parameter table.
 """
 
+import bisect
 import math
 
 import numpy as np
@@ -126,6 +127,7 @@ class RadarODNode(ManagedNode):
         self.rng = np.random.default_rng(seed)
 
         self.truth = None  # (t [s], dimensionless ROE, chief mean Keplerian elements)
+        self.history_t, self.history_kep = [], []  # every truth sample's t [s] and chief elements, sorted by t
         self.t_last = None  # last processed measurement epoch [s]
         self.last_burn = -math.inf
         self.pass_ids = [0] * n  # passes started per station
@@ -174,6 +176,12 @@ class RadarODNode(ManagedNode):
             publish_status(self, self.diag_pub, OK, "tracking", self._values())
         if self.truth is None or truth[0] >= self.truth[0]:
             self.truth = truth
+        k = bisect.bisect_left(self.history_t, truth[0])
+        if k < len(self.history_t) and self.history_t[k] == truth[0]:  # a burn's post-burn sample replaces its pre
+            self.history_kep[k] = truth[2]
+        else:
+            self.history_t.insert(k, truth[0])
+            self.history_kep.insert(k, truth[2])
         if self.lockstep.active:  # lockstep: the truth stream is the clock (every sample, whatever the step)
             self.advance(truth[0])
 
@@ -223,6 +231,7 @@ class RadarODNode(ManagedNode):
         self.truth, self.t_last, self.last_burn = None, None, -math.inf
         self.open_pass = [False] * len(self.stations)
         self.records.clear()
+        self.history_t, self.history_kep = [], []
 
     # --- measurements --------------------------------------------------------------------------------------
     def track(self, epochs):
@@ -333,7 +342,10 @@ class RadarODNode(ManagedNode):
             self.get_logger().error(f"external measurement at t = {t:.1f} s rejected: {problem}")
             publish_status(self, self.diag_pub, ERROR, f"external measurement rejected: {problem}", self._values())
             return
-        t_tr, _, kep_tr = self.truth
+        # the chief from the first truth sample at or after the epoch (the latest if none): the sample from which
+        # this node's own tracking simulated a measurement at that epoch, so a run's TDM fed back gives its OD
+        k = min(bisect.bisect_left(self.history_t, t), len(self.history_t) - 1)
+        t_tr, kep_tr = self.history_t[k], self.history_kep[k]
         chief = propagate_chief(kep_tr, np.array([t - t_tr]))[0]
         theta = float(gmst(self.jd0 + t / SECONDS_PER_DAY))
         self.records.append((t, names.index(msg.station), -int(msg.pass_id) - 1, z, chief, theta, t_tr))
