@@ -12,13 +12,11 @@ Parameters: ``node_names`` (string list, the managed nodes of :data:`roe_sep.gra
 again, up to 3 times, unless the node's state shows it was done).
 """
 
-import sys
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
 from lifecycle_msgs.msg import Transition
 from lifecycle_msgs.srv import ChangeState, GetState
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 
 from .. import interfaces
@@ -85,36 +83,20 @@ class LifecycleManager(Node):
         return True, f"managed nodes active: {', '.join(self.node_names)}"
 
 
-def main(args=None):
-    from .params import ParameterError
-    from .spin import init, spin
+def start(nodes) -> int:
+    """Bring the managed nodes up (:meth:`LifecycleManager.startup`), say how it went on the log and
+    ``/diagnostics``; exit code 1 if a transition failed, else 0 (the manager keeps running)."""
+    node = nodes[0]
+    ok, message = node.startup()
+    (node.get_logger().info if ok else node.get_logger().error)(message)
+    publish_status(node, node.diag_pub, OK if ok else ERROR, message, {"nodes": len(node.node_names)})
+    return 0 if ok else 1
 
-    init(args)
-    node = executor = None
-    code = 0
-    try:
-        node = LifecycleManager()
-        ok, message = node.startup()
-        (node.get_logger().info if ok else node.get_logger().error)(message)
-        publish_status(node, node.diag_pub, OK if ok else ERROR, message, {"nodes": len(node.node_names)})
-        if not ok:
-            code = 1
-        else:
-            executor = SingleThreadedExecutor()
-            executor.add_node(node)
-            code = spin(executor, [node])
-    except ParameterError as exc:
-        print(f"[ERROR] {exc}", file=sys.stderr)
-        code = 2
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if executor is not None:
-            executor.shutdown()
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return code
+
+def main(args=None):
+    from .spin import serve
+
+    return serve([(None, LifecycleManager)], args, start=start)
 
 
 if __name__ == "__main__":

@@ -1,7 +1,7 @@
 """How every roe_sep process spins: init, construct, spin until SIGINT/SIGTERM, drain, clean shutdown, exit code.
 
-One loop for a node alone (:func:`run`, the ``main()`` of each node) and for several nodes on one executor
-(:mod:`roe_sep.nodes.suite`):
+One life cycle (:func:`serve`) for a node alone (:func:`run`, the ``main()`` of each node), for several nodes on
+one executor (:mod:`roe_sep.nodes.suite`) and for the lifecycle manager (its start-up before spinning):
 
 * rclpy's own signal handler is off. SIGINT/SIGTERM only set a flag that the loop checks between short
   ``spin_once`` calls: a signal never interrupts a callback halfway, and the context is never shut down under an
@@ -76,26 +76,43 @@ def spin(executor, nodes=()) -> int:
     return 0
 
 
-def run(node_factory, args=None) -> int:
-    """Spin the node built by ``node_factory()`` on a SingleThreadedExecutor; a :class:`ParameterError` at
-    start-up exits with code 2, an exception escaping a callback with code 1."""
+def serve(factories, args=None, make_executor=SingleThreadedExecutor, start=None) -> int:
+    """The whole life of a process: :func:`init`; construct the nodes of ``factories`` (``[(label, factory)]``, in
+    order); ``start(nodes)`` (optional: a non-zero exit code it returns ends the process before spinning); the
+    nodes on one executor from ``make_executor()``; :func:`spin` with the drain; then the executor shut down and
+    the nodes destroyed, the recorder first (the bag is complete before another node spends seconds on its own
+    shutdown work, e.g. the ground_bridge's final CCSDS set), the others in reverse order.
+
+    Exit code 2 when a node refuses its parameters (``[ERROR] label: ...``, or without the label when it is None),
+    1 when a callback raised, else 0."""
     init(args)
-    node = executor = None
-    code = 0
+    nodes, executor, code = [], None, 0
     try:
-        node = node_factory()
-        executor = SingleThreadedExecutor()
-        executor.add_node(node)
-        code = spin(executor, [node])
-    except ParameterError as exc:
-        print(f"[ERROR] {exc}", file=sys.stderr)
-        code = 2
+        executor = make_executor()
+        for label, factory in factories:
+            try:
+                nodes.append(factory())
+            except ParameterError as exc:
+                print(f"[ERROR] {label}: {exc}" if label else f"[ERROR] {exc}", file=sys.stderr)
+                return 2
+        # start() before the nodes join the executor: rclpy's spin_until_future_complete (the lifecycle manager's
+        # start-up) moves a node to the global executor and then removes it from any
+        code = start(nodes) if start is not None else 0
+        if not code:
+            for node in nodes:
+                executor.add_node(node)
+            code = spin(executor, nodes)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
         if executor is not None:
             executor.shutdown()
-        if node is not None:
+        for node in sorted(reversed(nodes), key=lambda n: n.get_name() != "recorder"):
             node.destroy_node()
         rclpy.try_shutdown()
     return code
+
+
+def run(node_factory, args=None) -> int:
+    """A node's ``main()``: the node built by ``node_factory()`` alone on a SingleThreadedExecutor (:func:`serve`)."""
+    return serve([(None, node_factory)], args)

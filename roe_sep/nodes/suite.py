@@ -26,13 +26,11 @@ node catches what a bad message can raise, so neither happens on bad input (test
 import importlib
 import sys
 
-import rclpy
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.utilities import remove_ros_args
 
 from ..graph import EXECUTORS
-from .params import ParameterError
-from .spin import init, spin
+from .spin import serve
 
 NODE_CLASSES = {
     "recorder": "recorder:RecorderNode",
@@ -91,29 +89,8 @@ def main(args=None) -> int:
     except ValueError as exc:
         print(f"[ERROR] {exc}", file=sys.stderr)
         return 2
-    init(argv)
-    nodes, executor, code = [], None, 0
-    try:
-        executor = make_executor(executor_name)
-        for name in names:
-            try:
-                nodes.append(node_class(name)())
-            except ParameterError as exc:
-                print(f"[ERROR] {name}: {exc}", file=sys.stderr)
-                return 2
-            executor.add_node(nodes[-1])
-        code = spin(executor, nodes)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if executor is not None:
-            executor.shutdown()
-        # the recorder first: the bag is complete (after the drain) before the ground_bridge spends seconds on the
-        # run's final CCSDS set, and `roe-sep run` builds the report meanwhile; then the others in reverse order
-        for node in sorted(reversed(nodes), key=lambda n: n.get_name() != "recorder"):
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return code
+    return serve([(name, lambda name=name: node_class(name)()) for name in names], argv,
+                 make_executor=lambda: make_executor(executor_name))
 
 
 if __name__ == "__main__":
