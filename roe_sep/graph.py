@@ -57,14 +57,15 @@ def radar_seed(seed: int) -> int:
     return int(np.random.SeedSequence([int(seed), RADAR_STREAM]).generate_state(1, np.uint32)[0])
 
 
-def parameters(config, bag_dir, overrides):
-    """The run's ROS parameter file content: shared values for every node, then per-node values."""
+def parameters(config, bag_dir, overrides, nodes=NODES):
+    """The run's ROS parameter file content: shared values for every node, then per-node values. ``nodes``: the
+    nodes the run starts (:func:`graph_nodes`); the simulator waits for the subscribers among them only."""
     shared = {"use_sim_time": True, "scenario_file": str(Path(config).resolve()) if config else ""}
     per_node = {
         # start the clock once every node is up (the planner after its start-up Monte Carlo) and subscribed to what
         # it reads, the recorder to every topic; then run in lockstep with every reacting node
         "sim": {"use_sim_time": False,
-                "wait_for": [f"{topic}={len(nodes)}" for topic, nodes in SUBSCRIBERS.items()],
+                "wait_for": [f"{topic}={sum(n in nodes for n in subs)}" for topic, subs in SUBSCRIBERS.items()],
                 "lockstep_participants": list(PARTICIPANTS)},
         "recorder": {"output": str(bag_dir)},
         "ground_bridge": {"output_dir": str(Path(bag_dir).parent / "ccsds")},  # CCSDS files of the run (issue 18)
@@ -103,10 +104,11 @@ def run_overrides(params=None, duration=None, seed=None, real_time_factor=None, 
     return overrides
 
 
-def graph_nodes(foxglove=False, managed=False):
+def graph_nodes(foxglove=False, managed=False, ground_bridge=True):
     """The nodes of a run, in start order (the recorder first, the simulator last: it owns ``/clock``); with
-    ``foxglove`` the view before the simulator, ``managed`` the lifecycle manager after the managed nodes."""
-    nodes = list(NODES)
+    ``foxglove`` the view before the simulator, ``managed`` the lifecycle manager after the managed nodes; without
+    ``ground_bridge`` no CCSDS export (a campaign's runs unless asked: it only listens, the loop is the same)."""
+    nodes = [n for n in NODES if ground_bridge or n != "ground_bridge"]
     if foxglove:
         nodes[-1:-1] = list(OPTIONAL_NODES)
     if managed:

@@ -182,13 +182,16 @@ def wait_for_completion(duration, deployment, timeout, progress):
 
 
 def run(config=None, out="out/run", params=None, duration=None, seed=None, timeout=1800.0, domain_id=None,
-        progress=False, real_time_factor=None, foxglove=None, process_per_node=False, executor="events"):
+        progress=False, real_time_factor=None, foxglove=None, process_per_node=False, executor="events",
+        in_process=False, ground_bridge=True):
     """Run the scenario; returns the report dict (``report['safe']``) and writes it to ``out/report.json``.
     ``foxglove``: a port on 127.0.0.1 for the live Foxglove view (the ``foxglove_view`` node), None = none.
     ``process_per_node``: every node its own process, as a deployment runs them (log per node); default: two
     processes (:data:`SUITES`: the closed loop, and the listeners), each its nodes on one executor
-    (:mod:`roe_sep.nodes.suite`, ``executor`` ``events`` or ``single_threaded``). Under lockstep every layout and
-    executor gives the same report."""
+    (:mod:`roe_sep.nodes.suite`, ``executor`` ``events`` or ``single_threaded``); with ``in_process`` every node
+    in this process, on one executor (:func:`run_in_process`: a campaign's runs). Under lockstep every layout and
+    executor gives the same report. ``ground_bridge`` False: no CCSDS export (the loop and the report are the
+    same)."""
     from .nodes.sim import DEFAULT_DURATION
 
     out = Path(out)
@@ -199,11 +202,22 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
     # the same overrides and node order as the launch files (share/roe_sep/launch), from roe_sep.graph
     overrides = run_overrides(params, duration, seed, real_time_factor, foxglove)
     sim = overrides["sim"]
-    nodes = graph_nodes(foxglove=foxglove is not None)  # foxglove_view before the sim: the clock starts with it up
+    # foxglove_view before the sim: the clock starts with it up
+    nodes = graph_nodes(foxglove=foxglove is not None, ground_bridge=ground_bridge)
     params_file = out / "params.yaml"
-    params_file.write_text(yaml.safe_dump(parameters(config, bag_dir.resolve(), overrides), sort_keys=False))
+    params_file.write_text(yaml.safe_dump(parameters(config, bag_dir.resolve(), overrides, nodes), sort_keys=False))
     sim_duration = float(sim.setdefault("duration", DEFAULT_DURATION))
 
+    if in_process:
+        try:
+            reached, reason, code = run_in_process(nodes, params_file, ros_environment(domain_id), out / "logs",
+                                                   sim_duration, timeout, progress, executor)
+        except Exception as exc:  # noqa: BLE001 -- as below: the runner says what went wrong
+            reached, reason, code = False, f"runner error: {type(exc).__name__}: {exc}", 1
+        # the recorder was destroyed in order whatever ended the spin: info() tells whether the bag is complete
+        report = report_from_bag(bag_dir, out, sim_duration, 0)
+        return _finish(out, report, reached, reason, {"in_process": code}, f"one process ({executor} executor)",
+                       params_file)
     deployment = Deployment(out, params_file, ros_environment(domain_id))
     reached, reason = False, "not started"
     report = None
@@ -234,13 +248,111 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
             codes.update(deployment.stop(["listeners"]))
     if report is None:
         report = report_from_bag(bag_dir, out, sim_duration, codes.get("recorder", codes.get("listeners")))
-    report["run"].update({"completed": reached, "reason": reason, "exit_codes": codes,
-                          "layout": "process_per_node" if process_per_node else f"suites ({executor} executor)",
+    return _finish(out, report, reached, reason, codes,
+                   "process_per_node" if process_per_node else f"suites ({executor} executor)", params_file)
+
+
+def _finish(out, report, reached, reason, codes, layout, params_file):
+    """The run's outcome into its report, written to ``out/report.json``; returns the report."""
+    report["run"].update({"completed": reached, "reason": reason, "exit_codes": codes, "layout": layout,
                           "params_file": str(params_file)})
     if not reached and report.get("safe") is not False:
         report["safe"] = None  # not known: the run did not complete (the criteria hold what could be evaluated)
     write_report(out / "report.json", report)
     return report
+
+
+def run_in_process(nodes, params_file, env, log_dir, duration, timeout, progress=False, executor="events"):
+    """Every node of ``nodes`` in this process, on one executor (:func:`roe_sep.nodes.spin.serve`, as a suite), with
+    an observer node that ends the spin once the simulator reports the scenario complete or aborted on
+    ``/diagnostics`` (the drain then still hands the listeners what was delivered); the recorder is destroyed
+    first, so the bag is complete on return. No process start-up and no inter-process transport: a campaign's
+    runs use it (the same report as the other layouts, test_campaign). The nodes' output (rclpy logging and
+    prints, at the file-descriptor level) goes to ``log_dir/run.log``. Returns (reached, reason, exit code).
+    The nodes join ``env``'s DDS domain on loopback (this process's environment, restored on return)."""
+    keys = ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE", "ROS_LOCALHOST_ONLY")
+    before = {key: os.environ.get(key) for key in keys}  # restored on return
+    for key in keys[:2]:
+        os.environ[key] = env[key]
+    os.environ.pop("ROS_LOCALHOST_ONLY", None)
+    try:
+        return _run_in_process(nodes, params_file, log_dir, duration, timeout, progress, executor)
+    finally:
+        for key, value in before.items():
+            if value is None:
+                os.environ.pop(key, None)
+            else:
+                os.environ[key] = value
+
+
+def _run_in_process(nodes, params_file, log_dir, duration, timeout, progress, executor):
+    import rclpy.node
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rosgraph_msgs.msg import Clock
+
+    from . import interfaces
+    from .nodes.spin import serve
+    from .nodes.suite import make_executor, node_class
+
+    state = {"t": 0.0, "end": None, "timeout": False}
+    deadline = time.monotonic() + timeout
+    shown = [-1]
+    tty = os.fdopen(os.dup(2), "w") if progress else None
+
+    def observer():
+        node = rclpy.node.Node("roe_sep_run")
+
+        def on_status(array):
+            for s in array.status:
+                if s.name == "roe_sep/sim" and (s.message == "scenario complete"
+                                                or s.message.startswith("scenario aborted")):
+                    state["end"] = s.message
+
+        node.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, on_status, interfaces.DIAGNOSTICS)
+        if progress:
+            node.create_subscription(Clock, interfaces.CLOCK_TOPIC,
+                                     lambda m: state.update(t=m.clock.sec + m.clock.nanosec * 1e-9), 10)
+        return node
+
+    def until():
+        if progress and int(state["t"] // 21600) != shown[0]:
+            shown[0] = int(state["t"] // 21600)
+            print(f"\r  sim time {state['t'] / 86400:5.2f} d of {duration / 86400:.2f} d", end="", file=tty,
+                  flush=True)
+        if time.monotonic() > deadline:
+            state["timeout"] = True
+        return state["end"] is not None or state["timeout"]
+
+    errors = []
+    log_dir.mkdir(parents=True, exist_ok=True)
+    saved = [os.dup(1), os.dup(2)]
+    with open(log_dir / "run.log", "w", encoding="utf-8") as log:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os.dup2(log.fileno(), 1)
+        os.dup2(log.fileno(), 2)
+        try:
+            code = serve([(name, lambda name=name: node_class(name)()) for name in nodes] + [(None, observer)],
+                         ["roe_sep_run", "--ros-args", "--params-file", str(params_file)],
+                         make_executor=lambda: make_executor(executor), until=until, errors=errors)
+        finally:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+            for fd in saved:
+                os.close(fd)
+            if tty is not None:
+                print(file=tty)
+                tty.close()
+    if state["end"] is not None:
+        return state["end"] == "scenario complete", state["end"], code
+    if state["timeout"]:
+        return False, f"wall-time limit of {timeout:g} s reached at sim time {state['t']:.0f} s", code
+    if code:
+        why = errors[-1] if errors else "see logs/run.log"
+        return False, f"in_process exited early (exit status {code}); last log line: {why}", code
+    return False, "interrupted (signal)", code
 
 
 def report_from_bag(bag_dir, out, duration, recorder_code):

@@ -105,8 +105,10 @@ def test_radar_seed_is_derived_and_independent():
     assert radar_seed(5) != 5 and 0 <= radar_seed(5) < 2**32
     over = run_overrides(5, {"radar_od": {"sigma_range": 1.0}, "sim": {"disperse": True}})
     assert over["radar_od"] == {"sigma_range": 1.0, "seed": radar_seed(5)} and over["sim"] == {"disperse": True}
-    assert over["ground_bridge"] == {"write_period": 0.0}
-    assert run_overrides(5, {"ground_bridge": {"write_period": 600.0}})["ground_bridge"] == {"write_period": 600.0}
+    assert "ground_bridge" not in over  # no ground_bridge in a run without --ccsds
+    assert run_overrides(5, {}, ccsds=True)["ground_bridge"] == {"write_period": 0.0}
+    assert run_overrides(5, {"ground_bridge": {"write_period": 600.0}}, ccsds=True)["ground_bridge"] == {
+        "write_period": 600.0}
 
 
 # ------------------------------------------------------------------------------------------ closed-loop runs
@@ -133,9 +135,11 @@ def test_campaign_writes_one_row_and_report_per_run(campaign):
         assert _comparable(row) == _comparable(row_from_report(s, run_rep))
         over = yaml.safe_load((out / "runs" / str(s) / "overrides.yaml").read_text())
         assert over["radar_od"]["ros__parameters"]["seed"] == radar_seed(s)
-        # the CCSDS set written once, at the end of the run: complete all the same
-        assert over["ground_bridge"]["ros__parameters"]["write_period"] == 0.0
-        assert (out / "runs" / str(s) / "ccsds" / "ephemeris.oem.xml").stat().st_size > 0
+        # every node in the run's process, no ground_bridge (no --ccsds); the nodes' output in logs/run.log
+        assert run_rep["run"]["layout"] == "one process (events executor)"
+        assert run_rep["run"]["exit_codes"] == {"in_process": 0}
+        assert not (out / "runs" / str(s) / "ccsds").exists()
+        assert "bag closed: " in (out / "runs" / str(s) / "logs" / "run.log").read_text()
     assert len({r["dv_total_m_s"] for r in rows.values()}) == RUNS  # each seed disperses differently
     assert rep["p_safe"]["n"] == rep["completed"] and 0 <= rep["p_safe"]["ci95"][0] <= rep["p_safe"]["ci95"][1] <= 1
     assert set(rep["criteria"]) >= {"keep_out", "passive_safety", "evaporation", "ic_reached"}
@@ -154,23 +158,29 @@ def test_rerun_skips_every_done_run(campaign):
 
 
 def test_interrupted_campaign_completes_only_the_missing_run_with_the_same_row(campaign):
-    """A campaign killed before its last row: the rerun (on one worker) runs that seed only, into the leftover run
-    directory, and writes the row the two-worker campaign wrote."""
+    """A campaign killed before its last row: the rerun (on one worker, with the CCSDS export) runs that seed
+    only, into the leftover run directory, and writes the row the two-worker campaign wrote."""
     out, args, _, _ = campaign
     table = out / "runs.csv"
     lines = table.read_text().splitlines(keepends=True)
     last = Table(table).read()
     victim = int(lines[-1].split(",")[0])
     table.write_text("".join(lines[:-1]) + lines[-1][:25])  # the last row torn mid-line, as by a kill
-    args = tuple(a if a != "2" else "1" for a in args)  # --workers 1
+    args = tuple(a if a != "2" else "1" for a in args) + ("--ccsds",)  # --workers 1
     rep = _strict(_cli(*args).stdout)
     assert rep["executed_now"] == 1 and rep["skipped_done"] == RUNS - 1
     again = Table(table).read()
     assert sorted(again) == sorted(last)
     assert _comparable(again[victim]) == _comparable(last[victim])
+    # --ccsds: the run's ground_bridge wrote the CCSDS set once, at the end of the run
+    over = yaml.safe_load((out / "runs" / str(victim) / "overrides.yaml").read_text())
+    assert over["ground_bridge"]["ros__parameters"]["write_period"] == 0.0
+    assert (out / "runs" / str(victim) / "ccsds" / "ephemeris.oem.xml").stat().st_size > 0
 
 
 def test_run_k_alone_gives_the_same_row(campaign):
+    """``roe-sep run --seed S+k`` in its default layout (two processes, with the ground_bridge) gives the row the
+    campaign's one-process run wrote."""
     from roe_sep.run import run
 
     out, _, params, _ = campaign
@@ -181,6 +191,7 @@ def test_run_k_alone_gives_the_same_row(campaign):
     assert yaml.safe_load(overrides.read_text())["planner"]["ros__parameters"]["mc_samples"] == 20000
     rep = run(out=out.parent / "alone", params=str(overrides), duration=DURATION, seed=seed,
               domain_id=int(_domains().split("-")[0]), timeout=600)
+    assert rep["run"]["layout"] == "suites (events executor)"
     assert _comparable(row_from_report(seed, rep)) == _comparable(Table(out / "runs.csv").read()[seed])
 
 
@@ -195,7 +206,7 @@ def test_failed_run_is_a_row_with_its_reason(tmp_path):
     rep = _strict(proc.stdout)
     row = Table(tmp_path / "c" / "runs.csv").read()[3]
     assert row["status"] == "failed" and row["failure"] == "node_exit"
-    # the default layout names the process (loop: the sim's) and the node in its last log line
+    # the run's one process names the node that refused its parameters
     assert "exited early" in row["reason"] and "sim" in row["reason"] and "parameter 'time_step'" in row["reason"]
     assert rep["failed"] == 1 and rep["failures"]["by_kind"] == {"node_exit": 1} and rep["p_safe"]["n"] == 0
     assert rep["p_safe_failures_unsafe"] == {"k": 0, "n": 1, "p": 0.0, "ci95": [0.0, pytest.approx(0.7935, abs=1e-4)]}

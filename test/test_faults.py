@@ -100,6 +100,29 @@ def test_killing_a_node_mid_run(tmp_path, node):
     print(f"[faults] {COUNTS}")
 
 
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_stopping_an_in_process_run(tmp_path, sig):
+    """``roe-sep run --in-process`` (every node in the runner's process, a campaign's layout) stopped by a signal
+    mid-run: the nodes stop in order (the recorder first), the bag is complete, the report says why, no traceback."""
+    out = tmp_path / "run"
+    proc = start_run(out, "--duration", "40000", "--real-time-factor", "4000", "--in-process")
+    try:
+        assert wait_for_text(out / "logs" / "run.log", "executed drift_stop", 120), "the run did not start"
+        proc.send_signal(sig)
+        stdout, stderr = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 1 and "Traceback" not in stderr, (proc.returncode, stderr)
+    rep = loads_strict((out / "report.json").read_text())
+    assert json.loads(stdout) == rep
+    assert rep["run"]["completed"] is False and rep["run"]["reason"] == "interrupted (signal)"
+    assert rep["safe"] is None and rep["run"]["layout"] == "one process (events executor)"
+    assert "bag_recovered" not in rep["run"] and info(out / "bag")["complete"]
+    assert [m["purpose"] for m in rep["maneuvers"]][:2] == ["ejection", "drift_stop"]
+    assert "bag closed: " in (out / "logs" / "run.log").read_text()
+
+
 def bad_messages():
     """One invalid message of each type a node reads (NaN, inf, impossible orbit, unknown spacecraft, bad size)."""
     truth = RelativeOrbitalElements(a_da=math.nan)

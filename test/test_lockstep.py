@@ -68,12 +68,14 @@ def runs(tmp_path_factory):
     out["per_node"] = run(out=base / "per_node", duration=DURATION, seed=SEED, timeout=600, process_per_node=True)
     out["single_threaded"] = run(out=base / "single", duration=DURATION, seed=SEED, timeout=600,
                                  executor="single_threaded")
+    # every node in this process (a campaign's runs), here with the ground_bridge as in the default layout
+    out["in_process"] = run(out=base / "in_process", duration=DURATION, seed=SEED, timeout=600, in_process=True)
     out["dir"] = base
     return out
 
 
 def test_runs_complete(runs):
-    for key in ("fast", "loaded", "paced", "other_seed", "per_node", "single_threaded"):
+    for key in ("fast", "loaded", "paced", "other_seed", "per_node", "single_threaded", "in_process"):
         assert runs[key]["run"]["completed"], (key, runs[key]["run"])
         purposes = [m["purpose"] for m in runs[key]["maneuvers"]]
         assert purposes[:2] == ["ejection", "drift_stop"] and "ic_acquisition" in purposes, (key, purposes)
@@ -87,7 +89,8 @@ def test_same_seed_same_run_whatever_the_pacing_and_the_load(runs):
 
 
 def test_same_run_whatever_the_layout_and_the_executor(runs):
-    """Two processes on EventsExecutors (default), on SingleThreadedExecutors, a process per node: one report."""
+    """Two processes on EventsExecutors (default), on SingleThreadedExecutors, a process per node, every node in
+    the runner's process: one report."""
     assert runs["fast"]["run"]["layout"] == "suites (events executor)"
     assert runs["per_node"]["run"]["layout"] == "process_per_node"
     assert set(runs["per_node"]["run"]["exit_codes"]) == {"recorder", "ground_bridge", "safety_monitor", "planner",
@@ -95,6 +98,10 @@ def test_same_run_whatever_the_layout_and_the_executor(runs):
     fast = essentials(runs["fast"])
     assert essentials(runs["per_node"]) == fast
     assert essentials(runs["single_threaded"]) == fast
+    assert runs["in_process"]["run"]["layout"] == "one process (events executor)"
+    assert runs["in_process"]["run"]["exit_codes"] == {"in_process": 0}
+    assert essentials(runs["in_process"]) == fast
+    assert (runs["dir"] / "in_process" / "ccsds" / "ephemeris.oem.xml").stat().st_size > 0
 
 
 def test_another_seed_other_dispersions(runs):

@@ -8,7 +8,8 @@ Modules: :mod:`.engine` (the Dask client), :mod:`.runner` (one run as a task: ch
 * ``campaign.json``: the settings the runs were made with (scenario content, node overrides, duration); a rerun with
   other settings is refused rather than mixed into one table.
 * ``runs.csv``: one row per finished run (:data:`.table.FIELDS`); ``runs/<seed>/``: its ``report.json`` (strict
-  JSON), ``overrides.yaml`` (the run's node parameters), ``params.yaml``, ``bag/``, ``logs/``.
+  JSON), ``overrides.yaml`` (the run's node parameters), ``params.yaml``, ``bag/``, ``logs/run.log`` (the nodes'
+  output), ``campaign.log`` (the run process's), with ``--ccsds`` also ``ccsds/``.
 * ``report.json``: the aggregate report; ``figures/``: its PNG figures.
 """
 
@@ -51,10 +52,11 @@ def check_settings(out: Path, current: dict):
 
 def run_campaign(runs, seed, out, workers=1, scheduler=None, config=None, overrides=None, duration=None,
                  timeout=1800.0, domains=(1, 100), retry_failed=False, progress=False, open_loop_samples=20000,
-                 figures=True, client_factory=None):
+                 figures=True, client_factory=None, ccsds=False):
     """Run the missing runs of seeds ``seed .. seed + runs - 1`` on Dask, append each row as it finishes, and return
     the aggregate report (also written to ``out/report.json``). ``client_factory(workers, scheduler)`` is the
-    context manager giving the Dask client (default :func:`.engine.dask_client`)."""
+    context manager giving the Dask client (default :func:`.engine.dask_client`). ``ccsds``: each run also runs
+    the ground_bridge (its CCSDS set in ``runs/<seed>/ccsds/``)."""
     out = Path(out)
     check_settings(out, settings(config, overrides, duration))
     table = Table(out / "runs.csv")
@@ -64,7 +66,7 @@ def run_campaign(runs, seed, out, workers=1, scheduler=None, config=None, overri
     executed = 0
     if todo:
         executed = _execute(todo, out, table, workers, scheduler, config, overrides, duration, timeout, domains,
-                            progress, runs - len(todo), runs, client_factory)
+                            progress, runs - len(todo), runs, client_factory, ccsds)
     rows_by_seed = table.read()
     rows = [rows_by_seed[s] for s in seeds if s in rows_by_seed]
     rep = {"seeds": [seed, seed + runs - 1], "executed_now": executed, "skipped_done": runs - len(todo),
@@ -88,7 +90,7 @@ def _mean(values):
 
 
 def _execute(todo, out, table, workers, scheduler, config, overrides, duration, timeout, domains, progress,
-             initial, total, client_factory):
+             initial, total, client_factory, ccsds=False):
     from distributed import as_completed
 
     from .engine import dask_client
@@ -96,7 +98,8 @@ def _execute(todo, out, table, workers, scheduler, config, overrides, duration, 
 
     specs = [{"seed": s, "run_dir": str((out / "runs" / str(s)).resolve()),
               "config": str(Path(config).resolve()) if config else None, "overrides": overrides or {},
-              "duration": duration, "timeout": float(timeout), "domains": list(domains)} for s in todo]
+              "duration": duration, "timeout": float(timeout), "domains": list(domains), "ccsds": bool(ccsds)}
+             for s in todo]
     bar = None
     if progress:
         from tqdm import tqdm

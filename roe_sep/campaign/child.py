@@ -1,6 +1,6 @@
 """``python -m roe_sep.campaign.child SPEC_JSON``: one campaign run, :func:`roe_sep.run.run` with the given keyword
-arguments (started by :func:`roe_sep.campaign.runner.execute` in a session of its own). Exit 0 once ``report.json``
-is written; 1 with a one-line reason on stderr otherwise."""
+arguments, every node in this process (started by :func:`roe_sep.campaign.runner.execute` in a session of its own).
+Exit 0 once ``report.json`` is written; 1 with a one-line reason on stderr otherwise."""
 
 import json
 import sys
@@ -17,7 +17,8 @@ def main(argv=None):
 
     try:
         run(config=spec.get("config"), out=spec["out"], params=spec["params"], duration=spec.get("duration"),
-            seed=spec["seed"], timeout=float(spec["timeout"]), domain_id=spec["domain_id"])
+            seed=spec["seed"], timeout=float(spec["timeout"]), domain_id=spec["domain_id"], in_process=True,
+            ground_bridge=bool(spec.get("ccsds")))
     except Exception as exc:  # noqa: BLE001  (one line for the campaign table)
         print(f"{type(exc).__name__}: {one_line(exc)}", file=sys.stderr)
         return 1

@@ -1,6 +1,11 @@
 """One run of a campaign as a Dask task: :func:`roe_sep.run.run` in a child process of its own, in a DDS domain of
 its own, with the seed's dispersions; returns the run's table row (never raises: a failure is a row with its reason).
 
+Layout. The child runs every node of the run in itself, on one EventsExecutor (``run(in_process=True)``): the same
+nodes, parameters and lockstep as ``roe-sep run``, hence the same row as ``roe-sep run --seed S+k`` in its default
+two processes (test_campaign), for about 13 instead of 21 CPU-s per run (no process start-ups, no inter-process
+transport; bench/bench_campaign.py). The ground_bridge (CCSDS export) only listens; a run has it with ``ccsds``.
+
 Isolation. The run's nodes and its observer live in a child process started in a new session (process group): the
 worker's own signals (Ctrl-C on the terminal) never reach them, the worker kills the whole group when the run
 exceeds its wall-time limit, and the child's watchdog kills its group when the worker dies (parent changed), so an
@@ -37,14 +42,15 @@ from .table import failed_row, row_from_report
 KILL_MARGIN = 120.0  # wall s beyond the run's own time limit before the worker kills the run's process group
 
 
-def run_overrides(seed: int, base: dict) -> dict:
-    """The node parameter overrides of one run: the campaign's ``--params`` plus the run's radar-noise seed, and
-    the ground_bridge's OEM/TDM/CDM written once, at the end of the run (``write_period`` 0, unless ``--params``
-    sets it): nobody follows a campaign run live, and the periodic updates of a whole run's XML OEM cost about 4
-    of a run's CPU seconds. The run's CCSDS set is the same."""
+def run_overrides(seed: int, base: dict, ccsds: bool = False) -> dict:
+    """The node parameter overrides of one run: the campaign's ``--params`` plus the run's radar-noise seed; with
+    ``ccsds`` (the run has a ground_bridge) its OEM/TDM/CDM written once, at the end of the run (``write_period``
+    0, unless ``--params`` sets it): nobody follows a campaign run live, and the periodic updates of a whole run's
+    XML OEM cost about 4 of a run's CPU seconds. The run's CCSDS set is the same."""
     out = {node: dict(values) for node, values in (base or {}).items()}
     out.setdefault("radar_od", {})["seed"] = radar_seed(seed)
-    out.setdefault("ground_bridge", {}).setdefault("write_period", 0.0)
+    if ccsds:
+        out.setdefault("ground_bridge", {}).setdefault("write_period", 0.0)
     return out
 
 
@@ -97,10 +103,12 @@ def execute(spec: dict) -> dict:
         if run_dir.exists():
             shutil.rmtree(run_dir)
         run_dir.mkdir(parents=True)
-        write_overrides(run_dir / "overrides.yaml", run_overrides(seed, spec.get("overrides")))
+        ccsds = bool(spec.get("ccsds"))
+        write_overrides(run_dir / "overrides.yaml", run_overrides(seed, spec.get("overrides"), ccsds))
         with domain_lock(*spec["domains"]) as domain:
             child = {k: spec.get(k) for k in ("config", "duration", "timeout")}
-            child.update(seed=seed, out=str(run_dir), params=str(run_dir / "overrides.yaml"), domain_id=domain)
+            child.update(seed=seed, out=str(run_dir), params=str(run_dir / "overrides.yaml"), domain_id=domain,
+                         ccsds=ccsds)
             with open(run_dir / "campaign.log", "w", encoding="utf-8") as log:
                 proc = subprocess.Popen([sys.executable, "-m", "roe_sep.campaign.child", json.dumps(child)],
                                         stdout=log, stderr=subprocess.STDOUT, start_new_session=True)

@@ -87,7 +87,7 @@ def cmd_run(args):
     rep = run(config=args.config, out=args.out, params=args.params, duration=args.duration, seed=args.seed,
               timeout=args.timeout, progress=not args.json and sys.stderr.isatty(),
               real_time_factor=args.real_time_factor, foxglove=args.foxglove,
-              process_per_node=args.process_per_node, executor=args.executor)
+              process_per_node=args.process_per_node, executor=args.executor, in_process=args.in_process)
 
     def human(r):
         print_run(r)
@@ -144,11 +144,15 @@ def register_run(subparsers):
                    help="pace the lockstep clock at X sim seconds per wall second at most (default 0: as fast as "
                         "the machine allows; the results are the same either way)")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
-    p.add_argument("--process-per-node", action="store_true",
-                   help="every node its own process, as a deployment runs them (default: two processes, the closed "
-                        "loop and the listeners, each on one executor; same report)")
+    layout = p.add_mutually_exclusive_group()
+    layout.add_argument("--process-per-node", action="store_true",
+                        help="every node its own process, as a deployment runs them (default: two processes, the "
+                             "closed loop and the listeners, each on one executor; same report)")
+    layout.add_argument("--in-process", action="store_true",
+                        help="every node in this process on one executor, node output in OUT/logs/run.log (a "
+                             "campaign's runs; the least CPU per run; same report)")
     p.add_argument("--executor", choices=EXECUTORS, default="events",
-                   help="rclpy executor of the two processes (default events: rclpy's EventsExecutor); "
+                   help="rclpy executor of the suite process(es) (default events: rclpy's EventsExecutor); "
                         "--process-per-node always uses single_threaded")
     p.add_argument("--foxglove", type=port_number, nargs="?", const=DEFAULT_PORT, metavar="PORT",
                    help=f"serve a live Foxglove view on ws://127.0.0.1:PORT (default {DEFAULT_PORT})")

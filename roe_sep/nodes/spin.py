@@ -43,9 +43,11 @@ def received(nodes) -> int:
     return sum(int(getattr(n, "messages_received", 0)) for n in nodes)
 
 
-def spin(executor, nodes=()) -> int:
-    """Spin ``executor`` until SIGINT/SIGTERM or a context shutdown, then drain (module docstring).
-    Returns 1 if a callback raised (traceback printed), else 0."""
+def spin(executor, nodes=(), until=None, errors=None) -> int:
+    """Spin ``executor`` until SIGINT/SIGTERM, a context shutdown or ``until()`` (optional, checked between
+    callbacks) is true, then drain (module docstring; with ``until``, only when it ended the spin: the nodes
+    that publish are then in this process and would keep the drain going). Returns 1 if a callback raised (traceback printed, and its
+    last line appended to ``errors`` if given), else 0."""
     stop = []
 
     def on_signal(signum, frame):  # noqa: ARG001
@@ -54,10 +56,11 @@ def spin(executor, nodes=()) -> int:
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, on_signal)
     try:
-        while not stop and rclpy.ok():
+        while not stop and rclpy.ok() and not (until is not None and until()):
             executor.spin_once(timeout_sec=0.1)
         counted = [n for n in nodes if hasattr(n, "messages_received")]
-        if counted and rclpy.ok():
+        # with ``until`` the closed loop runs in this process and keeps stepping: a signal ends the run at once
+        if counted and rclpy.ok() and not (stop and until is not None):
             start = last_change = time.monotonic()
             last = received(counted)
             while len(stop) < 2 and rclpy.ok():
@@ -72,19 +75,24 @@ def spin(executor, nodes=()) -> int:
         pass
     except Exception:  # noqa: BLE001 -- a callback raised: the traceback, and the process stops with code 1
         traceback.print_exc()
+        if errors is not None:
+            errors.append(traceback.format_exc().strip().splitlines()[-1])
         return 1
     return 0
 
 
-def serve(factories, args=None, make_executor=SingleThreadedExecutor, start=None) -> int:
+def serve(factories, args=None, make_executor=SingleThreadedExecutor, start=None, until=None, errors=None) -> int:
     """The whole life of a process: :func:`init`; construct the nodes of ``factories`` (``[(label, factory)]``, in
     order); ``start(nodes)`` (optional: a non-zero exit code it returns ends the process before spinning); the
-    nodes on one executor from ``make_executor()``; :func:`spin` with the drain; then the executor shut down and
+    nodes on one executor from ``make_executor()``; :func:`spin` with the drain (until a signal, or ``until()``
+    is true: :func:`roe_sep.run.run` in one process); then the executor shut down and
     the nodes destroyed, the recorder first (the bag is complete before another node spends seconds on its own
     shutdown work, e.g. the ground_bridge's final CCSDS set), the others in reverse order.
 
     Exit code 2 when a node refuses its parameters (``[ERROR] label: ...``, or without the label when it is None),
-    1 when a callback raised, else 0."""
+    1 when a callback raised, else 0; the reason of a non-zero code is appended to ``errors`` (a list) if given.
+    The signal handlers in place before are restored on return."""
+    handlers = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
     init(args)
     nodes, executor, code = [], None, 0
     try:
@@ -94,6 +102,8 @@ def serve(factories, args=None, make_executor=SingleThreadedExecutor, start=None
                 nodes.append(factory())
             except ParameterError as exc:
                 print(f"[ERROR] {label}: {exc}" if label else f"[ERROR] {exc}", file=sys.stderr)
+                if errors is not None:
+                    errors.append(f"{label}: {exc}" if label else str(exc))
                 return 2
         # start() before the nodes join the executor: rclpy's spin_until_future_complete (the lifecycle manager's
         # start-up) moves a node to the global executor and then removes it from any
@@ -101,7 +111,7 @@ def serve(factories, args=None, make_executor=SingleThreadedExecutor, start=None
         if not code:
             for node in nodes:
                 executor.add_node(node)
-            code = spin(executor, nodes)
+            code = spin(executor, nodes, until, errors)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
@@ -110,6 +120,8 @@ def serve(factories, args=None, make_executor=SingleThreadedExecutor, start=None
         for node in sorted(reversed(nodes), key=lambda n: n.get_name() != "recorder"):
             node.destroy_node()
         rclpy.try_shutdown()
+        for sig, handler in handlers.items():
+            signal.signal(sig, handler)
     return code
 
 
