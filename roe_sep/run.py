@@ -130,6 +130,13 @@ class Deployment:
         return codes
 
 
+def final_status(array):
+    """The simulator's final status in a ``DiagnosticArray`` ("scenario complete" or "scenario aborted: ..."), or
+    None."""
+    return next((s.message for s in array.status if s.name == "roe_sep/sim" and (
+        s.message == "scenario complete" or s.message.startswith("scenario aborted"))), None)
+
+
 def wait_for_completion(duration, deployment, timeout, progress):
     """Spin a small observer node until the simulator reports the scenario complete (or aborted) on
     ``/diagnostics``; returns (reached, reason). ``/clock`` only feeds the progress line.
@@ -150,10 +157,7 @@ def wait_for_completion(duration, deployment, timeout, progress):
     now = {"t": 0.0, "end": None}
 
     def on_status(array):
-        for s in array.status:
-            if s.name == "roe_sep/sim" and (s.message == "scenario complete" or s.message.startswith("scenario "
-                                                                                                     "aborted")):
-                now["end"] = s.message
+        now["end"] = final_status(array) or now["end"]
 
     node.create_subscription(Clock, interfaces.CLOCK_TOPIC,
                              lambda m: now.update(t=m.clock.sec + m.clock.nanosec * 1e-9), 10)
@@ -303,10 +307,7 @@ def _run_in_process(nodes, params_file, log_dir, duration, timeout, progress, ex
         node = rclpy.node.Node("roe_sep_run")
 
         def on_status(array):
-            for s in array.status:
-                if s.name == "roe_sep/sim" and (s.message == "scenario complete"
-                                                or s.message.startswith("scenario aborted")):
-                    state["end"] = s.message
+            state["end"] = final_status(array) or state["end"]
 
         node.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, on_status, interfaces.DIAGNOSTICS)
         if progress:

@@ -8,8 +8,10 @@ default: the session's own domain only, so concurrent runs queue for it).
 import json
 import math
 import os
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -176,6 +178,48 @@ def test_interrupted_campaign_completes_only_the_missing_run_with_the_same_row(c
     over = yaml.safe_load((out / "runs" / str(victim) / "overrides.yaml").read_text())
     assert over["ground_bridge"]["ros__parameters"]["write_period"] == 0.0
     assert (out / "runs" / str(victim) / "ccsds" / "ephemeris.oem.xml").stat().st_size > 0
+
+
+@pytest.mark.fault
+def test_ctrl_c_mid_campaign_then_rerun_completes_only_the_missing_runs(campaign, tmp_path):
+    """A real interruption: SIGINT (Ctrl-C) to ``roe-sep campaign`` once its first row is written. It exits with
+    130, leaves complete rows only and no process of its runs behind; the rerun runs only the seeds without a row,
+    and every row (also those written before the interruption) is the row of the uninterrupted campaign."""
+    done, _, params, _ = campaign
+    out = tmp_path / "c"
+    runs = RUNS + 1  # seeds SEED .. SEED + RUNS: the fixture's, and one more
+    cmd = [sys.executable, "-m", "roe_sep.cli", "campaign", "--runs", str(runs), "--seed", str(SEED), "--duration",
+           str(DURATION), "--workers", "2", "--params", str(params), "--out", str(out), "--domains", _domains(),
+           "--open-loop-samples", "1000", "--no-figures", "--json"]
+    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    proc = subprocess.Popen(cmd, env=env, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    table = Table(out / "runs.csv")
+    try:
+        deadline = time.monotonic() + 600
+        while time.monotonic() < deadline and proc.poll() is None:
+            if table.path.exists() and table.read():
+                break
+            time.sleep(0.2)
+        assert proc.poll() is None, "the campaign ended before it could be interrupted"
+        proc.send_signal(signal.SIGINT)
+        _, stderr = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 130, stderr[-2000:]
+    before = table.read()
+    assert 1 <= len(before) < runs
+    time.sleep(1.0)  # the run processes' watchdogs act within 0.5 s of their worker's end
+    left = subprocess.run(["pgrep", "-f", f"roe_sep.campaign.child .*{out}"], capture_output=True, text=True)
+    assert left.stdout.strip() == "", "a run process outlived its campaign"
+    rerun = subprocess.run(cmd, env=env, cwd=ROOT, capture_output=True, text=True, timeout=900)
+    rep = _strict(rerun.stdout)
+    assert rep["executed_now"] == runs - len(before) and rep["skipped_done"] == len(before)
+    rows = table.read()
+    assert sorted(rows) == list(range(SEED, SEED + runs)) and all(r["status"] == "ok" for r in rows.values())
+    assert {s: _comparable(rows[s]) for s in before} == {s: _comparable(r) for s, r in before.items()}
+    reference = Table(done / "runs.csv").read()
+    assert {s: _comparable(rows[s]) for s in reference} == {s: _comparable(r) for s, r in reference.items()}
 
 
 def test_run_k_alone_gives_the_same_row(campaign):
