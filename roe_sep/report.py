@@ -2,10 +2,11 @@
 
 Keys: ``maneuvers`` (each executed burn: purpose, spacecraft, epoch, u, dv RTN and |dv|), ``dv_total`` and
 ``dv_by_purpose`` (carrier burns, m/s), ``final_roe`` (truth a*ROE at the end, m), ``min_distance`` (closest
-approach after the initial departure, m, with its epoch), ``time_to_ic`` (ejection to the IC epoch, s),
-``od`` (first solution: epoch, passes, 1-sigma and error against truth), ``ic`` (truth at the IC epoch and each
-initial condition), ``criteria`` (each pass/fail) and ``safe`` (the safety criteria only: keep-out, passive safety,
-evaporation, closest approach, every plan approved by the monitor).
+approach after the initial departure, m, with its epoch), ``time_to_ic`` (ejection to the IC epoch, s, when the
+truth meets the initial conditions there; None when it does not), ``od`` (first solution: epoch, passes, 1-sigma
+and error against truth), ``ic`` (truth at the IC epoch and each initial condition), ``criteria`` (each pass/fail)
+and ``safe`` (the safety criteria only: keep-out, passive safety, evaporation, closest approach, every plan
+approved by the monitor).
 """
 
 import math
@@ -96,6 +97,9 @@ def planner_model_error(plans, truth, truth_da_dot):
             "error": (predicted - true).tolist()}
 
 
+IC_CHECKS = ("within_run", "along_track", "drift", "ei_parallel", "min_rn_distance", "fov")  # initial_conditions
+
+
 def initial_conditions(truth, plans, ic_burns, truth_da_dot, limits, drift_tolerance=5.0, ei_tolerance_deg=10.0,
                        run_end=None):
     """The experiment's initial conditions checked on truth at the IC epoch of the last acquisition plan: mean
@@ -110,14 +114,14 @@ def initial_conditions(truth, plans, ic_burns, truth_da_dot, limits, drift_toler
     ei = math.degrees(math.atan2(roe[2] * roe[5] - roe[3] * roe[4], roe[2] * roe[4] + roe[3] * roe[5]))
     ei_off = min(abs(ei), 180.0 - abs(ei))  # deviation from parallel or anti-parallel
     rn = float(min_rn_distance(roe))
-    checks = {
-        "within_run": run_end is None or t_ic <= run_end,  # an IC epoch after the run's end is not reached yet
-        "along_track": bool(limits.a_dl_min <= abs(roe[1]) <= limits.a_dl_max),
-        "drift": bool(abs(roe[0]) <= drift_tolerance),
-        "ei_parallel": bool(ei_off <= ei_tolerance_deg),
-        "min_rn_distance": bool(rn >= limits.min_rn_distance),
-        "fov": bool(in_fov(roe, limits)),
-    }
+    checks = dict(zip(IC_CHECKS, (
+        run_end is None or t_ic <= run_end,  # within_run: an IC epoch after the run's end is not reached yet
+        bool(limits.a_dl_min <= abs(roe[1]) <= limits.a_dl_max),
+        bool(abs(roe[0]) <= drift_tolerance),
+        bool(ei_off <= ei_tolerance_deg),
+        bool(rn >= limits.min_rn_distance),
+        bool(in_fov(roe, limits)),
+    ), strict=True))
     return {"epoch": t_ic, "roe": roe.tolist(), "ei_angle_deg": ei, "min_rn_distance": rn, "checks": checks,
             "reached": all(checks.values())}
 
@@ -196,7 +200,8 @@ def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()
         "dv_total": float(sum(m["dv"] for m in carrier)),
         "dv_by_purpose": by_purpose,
         "ejection_epoch": ejection["epoch"] if ejection else None,
-        "time_to_ic": (ic["epoch"] - ejection["epoch"]) if (ic and ejection) else None,  # to the IC epoch
+        # ejection to the IC epoch, when the truth meets the ICs there (None: not reached, or no plan or ejection)
+        "time_to_ic": (ic["epoch"] - ejection["epoch"]) if (ic and ic["reached"] and ejection) else None,
         "final_roe": final_roe,
         "final_epoch": _stamp(final.header.stamp) if final else None,
         "min_distance": min_distance if math.isfinite(min_distance) else None,  # None: no approach after departure

@@ -3,7 +3,8 @@
 Starts the recorder, ground_bridge (CCSDS files in OUT/ccsds), safety_monitor, planner, radar_od, ic_planner,
 ejector (and foxglove_view with ``--foxglove``) and sim (last: it owns ``/clock``) with one generated parameter
 file (:mod:`roe_sep.graph`): by default in two processes, the closed loop and the listeners, each on one executor
-(:mod:`roe_sep.nodes.suite`); with ``process_per_node`` every node its own process as a deployment runs them.
+(:mod:`roe_sep.nodes.suite`); with ``process_per_node`` every node its own process as a deployment runs them; with
+``in_process`` every node in this process (:func:`run_in_process`, a campaign's runs).
 Waits until the simulator reports the scenario complete, stops the nodes with SIGINT (the recorder last, so the
 bag closes cleanly) and writes ``report.json`` from the recorded bag.
 """

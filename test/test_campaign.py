@@ -86,6 +86,36 @@ def test_distribution_skips_missing_values():
     assert distribution([None])["p50"] is None
 
 
+def test_ic_checks_and_time_to_ic_of_the_runs_that_reached_them(tmp_path):
+    """Each initial condition is a column and a proportion over the runs whose IC epoch was evaluated; the time to
+    the ICs and |a da| at the IC epoch are distributions (the time over the runs that reached the ICs)."""
+    from roe_sep.campaign.aggregate import aggregate
+    from roe_sep.report import IC_CHECKS
+
+    def rep(drift_m, reached):
+        checks = dict.fromkeys(IC_CHECKS, True)
+        checks["drift"] = reached
+        return {"run": {"completed": True, "reason": "scenario complete"}, "safe": True,
+                "criteria": {"ic_reached": reached}, "time_to_ic": 2.0e5 if reached else None,
+                "ic": {"epoch": 2.5e5, "roe": [drift_m, 7500.0, 0.0, -400.0, 0.0, 400.0], "min_rn_distance": 400.0,
+                       "checks": checks, "reached": reached}}
+
+    table = Table(tmp_path / "runs.csv")
+    for seed, r in ((1, rep(-1.5, True)), (2, rep(7.0, False)), (3, rep(2.0, True)),
+                    (4, {"run": {"completed": True}})):  # 4: no IC plan flown (a short run)
+        table.append(row_from_report(seed, r))
+    rows = list(table.read().values())  # as the campaign aggregates them: read back from runs.csv
+    assert rows[1]["ic_drift"] is False and rows[1]["ic_a_da_m"] == 7.0 and rows[1]["time_to_ic_s"] is None
+    assert rows[3]["ic_drift"] is None and rows[3]["ic_a_da_m"] is None
+    agg = aggregate(rows)
+    assert agg["ic_checks"]["drift"] == {"k": 2, "n": 3, "p": pytest.approx(2 / 3), "ci95": pytest.approx(
+        wilson_interval(2, 3))}
+    assert agg["ic_checks"]["along_track"]["k"] == agg["ic_checks"]["along_track"]["n"] == 3
+    assert agg["criteria"]["ic_reached"]["k"] == 2 and agg["criteria"]["ic_reached"]["n"] == 4
+    assert agg["distributions"]["abs_a_da_ic"]["max"] == 7.0 and agg["distributions"]["abs_a_da_ic"]["min"] == 1.5
+    assert agg["distributions"]["time_to_ic"]["n"] == 2 and agg["distributions"]["time_to_ic"]["missing"] == 2
+
+
 # ------------------------------------------------------------------------------------------------- the table
 @pytest.mark.fault
 def test_table_round_trip_and_torn_line(tmp_path):
@@ -237,6 +267,51 @@ def test_run_k_alone_gives_the_same_row(campaign):
               domain_id=int(_domains().split("-")[0]), timeout=600)
     assert rep["run"]["layout"] == "suites (events executor)"
     assert _comparable(row_from_report(seed, rep)) == _comparable(Table(out / "runs.csv").read()[seed])
+
+
+@pytest.fixture
+def dask_cluster(tmp_path):
+    """An existing Dask cluster as an operator starts one: ``dask scheduler`` and ``dask worker`` processes (one
+    worker, one thread), every port on 127.0.0.1; yields the scheduler's address."""
+    dask = Path(sys.executable).with_name("dask")
+    sched_file = tmp_path / "scheduler.json"
+    procs = [subprocess.Popen([str(dask), "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+                               "--dashboard-address", "127.0.0.1:0", "--scheduler-file", str(sched_file)],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, cwd=tmp_path)]
+    try:
+        deadline = time.monotonic() + 60
+        while not sched_file.exists() and time.monotonic() < deadline:
+            time.sleep(0.2)
+        address = json.loads(sched_file.read_text())["address"]
+        assert address.startswith("tcp://127.0.0.1:")
+        procs.append(subprocess.Popen([str(dask), "worker", address, "--nthreads", "1", "--nworkers", "1",
+                                       "--host", "127.0.0.1", "--no-dashboard", "--local-directory",
+                                       str(tmp_path / "worker")], stdout=subprocess.DEVNULL,
+                                      stderr=subprocess.DEVNULL, cwd=tmp_path))
+        yield address
+    finally:
+        for proc in reversed(procs):
+            proc.terminate()
+            try:
+                proc.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+
+
+def test_campaign_on_an_existing_cluster_gives_the_rows_of_the_embedded_one(campaign, dask_cluster, tmp_path):
+    """``--scheduler tcp://...``: the runs go to the workers of a cluster started apart (waiting for its worker to
+    join), and write the rows the embedded two-worker cluster wrote for the same seeds."""
+    done, _, params, _ = campaign
+    out = tmp_path / "c"
+    seeds = (SEED + 1, 2)  # the fixture's last two seeds
+    proc = _cli("--runs", str(seeds[1]), "--seed", str(seeds[0]), "--duration", str(DURATION), "--scheduler",
+                dask_cluster, "--params", str(params), "--out", str(out), "--no-figures")
+    rep = _strict(proc.stdout)
+    assert proc.returncode == 0 and rep["scheduler"] == dask_cluster and rep["workers"] is None
+    assert rep["executed_now"] == seeds[1] and rep["completed"] == seeds[1]
+    rows, reference = Table(out / "runs.csv").read(), Table(done / "runs.csv").read()
+    assert sorted(rows) == [seeds[0], seeds[0] + 1]
+    assert {s: _comparable(r) for s, r in rows.items()} == {s: _comparable(reference[s]) for s in rows}
 
 
 @pytest.mark.fault

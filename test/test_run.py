@@ -50,6 +50,29 @@ def test_default_run_is_safe_and_reaches_the_initial_conditions(scenario):
     assert "Run SAFE" in text.getvalue() and "pass  ic_reached" in text.getvalue()
 
 
+def test_time_to_ic_only_when_the_ics_are_reached():
+    """The reference bag's report: the ICs reached at their epoch give the time to them; the same run judged with an
+    along-track band it misses has no time to the ICs, and the summary names the failed check."""
+    import dataclasses
+
+    from roe_sep.core.safety.monitor import MonitorLimits
+    from roe_sep.report import IC_CHECKS, build_report
+
+    bag = ROOT / "bags" / "default_run"
+    rep = build_report(bag)
+    assert rep["ic"]["reached"] and rep["time_to_ic"] == pytest.approx(rep["ic"]["epoch"] - rep["ejection_epoch"])
+    assert tuple(rep["ic"]["checks"]) == IC_CHECKS
+    narrow = dataclasses.replace(MonitorLimits(), a_dl_min=9000.0)  # the run's 7583 m at the IC epoch: outside
+    missed = build_report(bag, limits=narrow)
+    assert not missed["ic"]["reached"] and missed["time_to_ic"] is None
+    assert [c for c, ok in missed["ic"]["checks"].items() if not ok] == ["along_track"]
+    text = io.StringIO()
+    print_run(missed, text)
+    assert "time to initial conditions" not in text.getvalue()
+    assert f"initial conditions NOT reached at the IC epoch t = {missed['ic']['epoch']:.0f} s (along_track)" in \
+        text.getvalue()
+
+
 def test_recorded_acquisition_plans_respect_burn_limits_and_quantization(scenario):
     out, _ = scenario
     plans = [m for m, _, _ in read_mcap_ros2(mcap_file(out / "bag"))[interfaces.ACQUISITION_PLAN_TOPIC]]

@@ -2,27 +2,33 @@
 
 Keys of :func:`aggregate`: ``runs`` / ``completed`` / ``failed``; ``p_safe`` and ``criteria`` (each a proportion
 over the completed runs with its Wilson 95 % interval, :func:`roe_sep.core.montecarlo.stats.proportion`);
-``p_safe_failures_unsafe`` (the conservative reading: a failed run counts as unsafe); ``distributions`` (min
-distance, min R-N distance at the IC epoch and at the end, total dv, drift-stop and IC dv, time to IC: n, missing,
-min, p5, p50, p95, max, mean); ``od_nees`` (NEES against its chi-square(6) bounds); ``failures`` (count per kind
-and per reason).
+``p_safe_failures_unsafe`` (the conservative reading: a failed run counts as unsafe); ``ic_checks`` (each initial
+condition of :func:`roe_sep.report.initial_conditions` over the runs whose IC epoch was evaluated: which one keeps
+``ic_reached`` down); ``distributions`` (min distance, min R-N distance at the IC epoch and at the end, |a da| at the
+IC epoch, total dv, drift-stop and IC dv, time to IC of the runs that reached the ICs: n, missing, min, p5, p50,
+p95, max, mean); ``od_nees`` (NEES against its chi-square(6) bounds); ``failures`` (count per kind and per reason).
 """
 
 import collections
 import dataclasses
 
 from ..core.montecarlo.stats import distribution, nees_consistency, proportion
-from .table import CRITERIA
+from .table import CRITERIA, IC_CHECKS
 
-DISTRIBUTIONS = {  # report key -> (row field, unit)
-    "min_distance": ("min_distance_m", "m"),
-    "min_rn_distance_ic": ("min_rn_ic_m", "m"),
-    "min_rn_distance_final": ("min_rn_final_m", "m"),
-    "dv_total": ("dv_total_m_s", "m/s"),
-    "dv_drift_stop": ("dv_drift_stop_m_s", "m/s"),
-    "dv_ic": ("dv_ic_m_s", "m/s"),
-    "time_to_ic": ("time_to_ic_s", "s"),
+DISTRIBUTIONS = {  # report key -> (row field, unit, of its absolute value)
+    "min_distance": ("min_distance_m", "m", False),
+    "min_rn_distance_ic": ("min_rn_ic_m", "m", False),
+    "min_rn_distance_final": ("min_rn_final_m", "m", False),
+    "abs_a_da_ic": ("ic_a_da_m", "m", True),
+    "dv_total": ("dv_total_m_s", "m/s", False),
+    "dv_drift_stop": ("dv_drift_stop_m_s", "m/s", False),
+    "dv_ic": ("dv_ic_m_s", "m/s", False),
+    "time_to_ic": ("time_to_ic_s", "s", False),
 }
+
+
+def _column(rows, field, absolute=False):
+    return [None if r.get(field) is None else (abs(r[field]) if absolute else r[field]) for r in rows]
 
 
 def aggregate(rows):
@@ -35,13 +41,18 @@ def aggregate(rows):
         "p_safe": proportion(sum(r["safe"] for r in done), n),
         "p_safe_failures_unsafe": proportion(sum(r["safe"] for r in done), len(rows)),
         "criteria": {c: proportion(sum(r[f"crit_{c}"] for r in done), n) for c in CRITERIA},
-        "distributions": {k: {"unit": unit, **distribution([r.get(f) for r in done])}
-                          for k, (f, unit) in DISTRIBUTIONS.items()},
+        # each initial condition over the completed runs in which the IC epoch was evaluated (an IC plan flown)
+        "ic_checks": {c: proportion(sum(v for v in col if v), sum(v is not None for v in col))
+                      for c in IC_CHECKS for col in [_column(done, f"ic_{c}")]},
+        "distributions": {k: {"unit": unit, **distribution(_column(done, f, absolute))}
+                          for k, (f, unit, absolute) in DISTRIBUTIONS.items()},
         "od_nees": nees_consistency([r.get("od_nees") for r in done], dof=6),
         "failures": {"by_kind": dict(collections.Counter(r["failure"] for r in failed)),
                      "by_reason": dict(collections.Counter(r["reason"] for r in failed).most_common())},
     }
     out["distributions"]["min_distance"]["note"] = "missing: no approach after the departure (or no value)"
+    out["distributions"]["abs_a_da_ic"]["note"] = "truth |a da| at the IC epoch (the drift initial condition)"
+    out["distributions"]["time_to_ic"]["note"] = "ejection to the IC epoch, runs that reached the ICs there"
     return out
 
 

@@ -14,18 +14,20 @@ from pathlib import Path
 
 from ..core.safety.metrics import min_rn_distance
 from ..core.safety.monitor import ERROR_CRITERIA
+from ..report import IC_CHECKS
 
 CRITERIA = (*ERROR_CRITERIA, "min_distance", "plans_approved", "ic_reached")
 ROE_KEYS = ("a_da", "a_dl", "a_dex", "a_dey", "a_dix", "a_diy")
 FIELDS = (
     "seed", "status", "failure", "reason", "safe", *(f"crit_{c}" for c in CRITERIA),
+    *(f"ic_{c}" for c in IC_CHECKS), "ic_a_da_m",
     "min_distance_m", "min_rn_ic_m", "min_rn_final_m", "final_de_m", "final_di_m",
     *(f"final_{k}_m" for k in ROE_KEYS),
     "dv_total_m_s", "dv_drift_stop_m_s", "dv_ic_m_s", "time_to_ic_s", "ejection_epoch_s",
     "od_epoch_s", "od_passes", "od_nees", *(f"od_err_{k}_m" for k in ROE_KEYS),
     "truth_drag_m_per_day", "wall_s", "domain_id",
 )
-BOOL_FIELDS = {"safe", *(f"crit_{c}" for c in CRITERIA)}
+BOOL_FIELDS = {"safe", *(f"crit_{c}" for c in CRITERIA), *(f"ic_{c}" for c in IC_CHECKS)}
 INT_FIELDS = {"seed", "od_passes", "domain_id"}
 STR_FIELDS = {"status", "failure", "reason"}
 RUN_FIELDS = ("wall_s", "domain_id")  # how the run went on this machine, not what it computed
@@ -55,6 +57,8 @@ def row_from_report(seed: int, rep: dict) -> dict:
     row["min_distance_m"] = rep.get("min_distance")
     ic = rep.get("ic") or {}
     row["min_rn_ic_m"] = ic.get("min_rn_distance")
+    row.update({f"ic_{c}": v for c, v in (ic.get("checks") or {}).items()})  # empty: no IC epoch evaluated
+    row["ic_a_da_m"] = ic["roe"][0] if ic.get("roe") else None  # truth drift at the IC epoch
     final = rep.get("final_roe")
     if final:
         row["min_rn_final_m"] = float(min_rn_distance(final))  # Eq. 25 is homogeneous: a*ROE in, meters out

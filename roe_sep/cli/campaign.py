@@ -49,6 +49,10 @@ def print_campaign(rep):
     for name, prop in rep["criteria"].items():
         print(f"  {name:28s}{_p(prop)}")
     print(f"  {'safe (failed = unsafe)':28s}{_p(rep['p_safe_failures_unsafe'])}")
+    if any(prop["n"] for prop in rep["ic_checks"].values()):
+        print("  initial conditions at the IC epoch:")
+        for name, prop in rep["ic_checks"].items():
+            print(f"    {name:26s}{_p(prop)}")
     print(f"\n  {'distribution':24s}{'unit':>6s}{'n':>5s}{'min':>11s}{'p5':>11s}{'p50':>11s}{'p95':>11s}{'max':>11s}")
     for name, d in rep["distributions"].items():
         scale, unit = (1 / 3600, "h") if d["unit"] == "s" else (1.0, d["unit"])

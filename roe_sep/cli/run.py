@@ -33,6 +33,9 @@ def print_run(rep: dict, out=None):
           f"({', '.join(f'{k} {v:.4f}' for k, v in rep['dv_by_purpose'].items())})\n")
     if rep.get("time_to_ic") is not None:
         w(f"  time to initial conditions = {rep['time_to_ic'] / 3600:.1f} h after the ejection\n")
+    elif rep.get("ic"):
+        failed = ", ".join(k for k, ok in rep["ic"]["checks"].items() if not ok)
+        w(f"  initial conditions NOT reached at the IC epoch t = {rep['ic']['epoch']:.0f} s ({failed})\n")
     if rep.get("final_roe"):
         w("  final truth a*ROE [da dl dex dey dix diy] = [" + " ".join(f"{x:.1f}" for x in rep["final_roe"]) + "] m\n")
     if "min_distance" in rep:

@@ -45,9 +45,9 @@ def received(nodes) -> int:
 
 def spin(executor, nodes=(), until=None, errors=None) -> int:
     """Spin ``executor`` until SIGINT/SIGTERM, a context shutdown or ``until()`` (optional, checked between
-    callbacks) is true, then drain (module docstring; with ``until``, only when it ended the spin: the nodes
-    that publish are then in this process and would keep the drain going). Returns 1 if a callback raised (traceback printed, and its
-    last line appended to ``errors`` if given), else 0."""
+    callbacks) is true, then drain (module docstring; with ``until``, only when it ended the spin: the nodes that
+    publish are then in this process and would keep the drain going). Returns 1 if a callback raised (traceback
+    printed, and its last line appended to ``errors`` if given), else 0."""
     stop = []
 
     def on_signal(signum, frame):  # noqa: ARG001

@@ -1,7 +1,7 @@
 """Figures of a closed-loop campaign (``roe-sep campaign``): the review set of a separation campaign.
 
 * ``dv_hist.png``: carrier total dv per run (drift-stop + IC acquisition), with the 5/50/95 % percentiles;
-* ``time_to_ic_hist.png``: ejection to the IC epoch [h];
+* ``time_to_ic_hist.png``: ejection to the IC epoch [h], runs that reached the ICs there;
 * ``ei_vs_along_track.png``: at the end of each run, the e/i separation (minimum R-N distance, seed 002 Eq. 25)
   against the mean along-track separation |a dl|, safe runs and unsafe runs in their own colours, with the IC
   limits (minimum R-N distance, along-track band).
@@ -65,7 +65,7 @@ def write_campaign_figures(rows, out_dir, min_rn=None, dl_range=None):
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = [out_dir / "dv_hist.png", out_dir / "time_to_ic_hist.png", out_dir / "ei_vs_along_track.png"]
     _hist(_values(rows, "dv_total_m_s"), "carrier total dv [m/s]", "Carrier dv per run", paths[0])
-    _hist(_values(rows, "time_to_ic_s", 1 / 3600), "ejection to IC epoch [h]", "Time to initial conditions",
-          paths[1])
+    _hist(_values(rows, "time_to_ic_s", 1 / 3600), "ejection to IC epoch [h]",
+          "Time to the ICs, runs that reached them", paths[1])
     fig_ei_vs_along_track(rows, paths[2], min_rn, dl_range)
     return paths
