@@ -271,24 +271,27 @@ def test_run_k_alone_gives_the_same_row(campaign):
 
 @pytest.fixture
 def dask_cluster(tmp_path):
-    """An existing Dask cluster as an operator starts one: ``dask scheduler`` and ``dask worker`` processes (one
-    worker, one thread), every port on 127.0.0.1; yields the scheduler's address."""
+    """An existing Dask cluster as an operator starts one: a ``dask scheduler`` process, every port on 127.0.0.1;
+    yields its address and ``add_worker()``, which starts a ``dask worker`` process (one thread) joining it."""
     dask = Path(sys.executable).with_name("dask")
     sched_file = tmp_path / "scheduler.json"
     procs = [subprocess.Popen([str(dask), "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
                                "--dashboard-address", "127.0.0.1:0", "--scheduler-file", str(sched_file)],
                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, cwd=tmp_path)]
+
+    def add_worker():
+        procs.append(subprocess.Popen([str(dask), "worker", address, "--nthreads", "1", "--nworkers", "1",
+                                       "--host", "127.0.0.1", "--no-dashboard", "--local-directory",
+                                       str(tmp_path / "worker")], stdout=subprocess.DEVNULL,
+                                      stderr=subprocess.DEVNULL, cwd=tmp_path))
+
     try:
         deadline = time.monotonic() + 60
         while not sched_file.exists() and time.monotonic() < deadline:
             time.sleep(0.2)
         address = json.loads(sched_file.read_text())["address"]
         assert address.startswith("tcp://127.0.0.1:")
-        procs.append(subprocess.Popen([str(dask), "worker", address, "--nthreads", "1", "--nworkers", "1",
-                                       "--host", "127.0.0.1", "--no-dashboard", "--local-directory",
-                                       str(tmp_path / "worker")], stdout=subprocess.DEVNULL,
-                                      stderr=subprocess.DEVNULL, cwd=tmp_path))
-        yield address
+        yield address, add_worker
     finally:
         for proc in reversed(procs):
             proc.terminate()
@@ -299,15 +302,41 @@ def dask_cluster(tmp_path):
 
 
 def test_campaign_on_an_existing_cluster_gives_the_rows_of_the_embedded_one(campaign, dask_cluster, tmp_path):
-    """``--scheduler tcp://...``: the runs go to the workers of a cluster started apart (waiting for its worker to
-    join), and write the rows the embedded two-worker cluster wrote for the same seeds."""
+    """``--scheduler tcp://...``: joined while the cluster has no worker, the campaign says so and waits; once a
+    worker joins, the runs go to it and write the rows the embedded two-worker cluster wrote for the same seeds."""
+    import threading
+
     done, _, params, _ = campaign
+    address, add_worker = dask_cluster
     out = tmp_path / "c"
     seeds = (SEED + 1, 2)  # the fixture's last two seeds
-    proc = _cli("--runs", str(seeds[1]), "--seed", str(seeds[0]), "--duration", str(DURATION), "--scheduler",
-                dask_cluster, "--params", str(params), "--out", str(out), "--no-figures")
-    rep = _strict(proc.stdout)
-    assert proc.returncode == 0 and rep["scheduler"] == dask_cluster and rep["workers"] is None
+    cmd = [sys.executable, "-m", "roe_sep.cli", "campaign", "--runs", str(seeds[1]), "--seed", str(seeds[0]),
+           "--duration", str(DURATION), "--scheduler", address, "--params", str(params), "--out", str(out),
+           "--domains", _domains(), "--open-loop-samples", "1000", "--no-figures", "--json"]
+    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    proc = subprocess.Popen(cmd, env=env, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    stderr, waiting = [], threading.Event()
+
+    def read_stderr():
+        for line in proc.stderr:
+            stderr.append(line)
+            if "has no worker yet" in line:
+                waiting.set()
+
+    reader = threading.Thread(target=read_stderr, daemon=True)
+    reader.start()
+    try:
+        assert waiting.wait(120), "".join(stderr)[-2000:]
+        assert not (out / "runs.csv").exists()  # nothing runs without a worker
+        add_worker()
+        proc.wait(timeout=600)  # the JSON report (a few kB) fits the pipe
+        stdout = proc.stdout.read()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    reader.join(10)
+    rep = _strict(stdout)
+    assert proc.returncode == 0 and rep["scheduler"] == address and rep["workers"] is None, "".join(stderr)[-2000:]
     assert rep["executed_now"] == seeds[1] and rep["completed"] == seeds[1]
     rows, reference = Table(out / "runs.csv").read(), Table(done / "runs.csv").read()
     assert sorted(rows) == [seeds[0], seeds[0] + 1]

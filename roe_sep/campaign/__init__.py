@@ -109,6 +109,9 @@ def _execute(todo, out, table, workers, scheduler, config, overrides, duration, 
     executed = 0
     try:
         with (client_factory or dask_client)(workers, scheduler) as client:
+            if scheduler and not client.nthreads():  # the tasks queue on the scheduler until a worker joins
+                print(f"roe-sep campaign: the cluster at {scheduler} has no worker yet; the runs start when one "
+                      "joins", file=sys.stderr, flush=True)
             futures = {client.submit(execute, spec, key=f"roe-sep-run-{spec['seed']}-{out.resolve()}", pure=False,
                                      retries=0): spec["seed"] for spec in specs}
             for fut in as_completed(futures):
