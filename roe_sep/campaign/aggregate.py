@@ -36,14 +36,15 @@ def aggregate(rows):
     done = [r for r in rows if r["status"] == "ok"]
     failed = [r for r in rows if r["status"] != "ok"]
     n = len(done)
+    ic_columns = {c: _column(done, f"ic_{c}") for c in IC_CHECKS}  # None: no IC epoch evaluated in that run
     out = {
         "runs": len(rows), "completed": n, "failed": len(failed),
         "p_safe": proportion(sum(r["safe"] for r in done), n),
         "p_safe_failures_unsafe": proportion(sum(r["safe"] for r in done), len(rows)),
         "criteria": {c: proportion(sum(r[f"crit_{c}"] for r in done), n) for c in CRITERIA},
         # each initial condition over the completed runs in which the IC epoch was evaluated (an IC plan flown)
-        "ic_checks": {c: proportion(sum(v for v in col if v), sum(v is not None for v in col))
-                      for c in IC_CHECKS for col in [_column(done, f"ic_{c}")]},
+        "ic_checks": {c: proportion(sum(v is True for v in col), sum(v is not None for v in col))
+                      for c, col in ic_columns.items()},
         "distributions": {k: {"unit": unit, **distribution(_column(done, f, absolute))}
                           for k, (f, unit, absolute) in DISTRIBUTIONS.items()},
         "od_nees": nees_consistency([r.get("od_nees") for r in done], dof=6),
