@@ -3,10 +3,10 @@
 Keys: ``maneuvers`` (each executed burn: purpose, spacecraft, epoch, u, dv RTN and |dv|), ``dv_total`` and
 ``dv_by_purpose`` (carrier burns, m/s), ``final_roe`` (truth a*ROE at the end, m), ``min_distance`` (closest
 approach after the initial departure, m, with its epoch), ``time_to_ic`` (ejection to the IC epoch, s, when the
-truth meets the initial conditions there; None when it does not), ``od`` (first solution: epoch, passes, 1-sigma
-and error against truth), ``ic`` (truth at the IC epoch and each initial condition), ``criteria`` (each pass/fail)
-and ``safe`` (the safety criteria only: keep-out, passive safety, evaporation, closest approach, every plan
-approved by the monitor).
+truth meets the initial conditions there; None when it does not), ``od`` (first solution, :func:`od_solution`:
+epoch, passes, 1-sigma, error against truth, NEES, drift rate; ``last``: the same of the last solution), ``ic``
+(truth at the IC epoch and each initial condition), ``criteria`` (each pass/fail) and ``safe`` (the safety criteria
+only: keep-out, passive safety, evaporation, closest approach, every plan approved by the monitor).
 """
 
 import math
@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from . import interfaces
+from .core.od.batch import nees
 from .core.relmotion.dynamics import propagate
 from .core.safety.metrics import min_rn_distance
 from .core.safety.monitor import ERROR_CRITERIA, MonitorLimits, in_fov
@@ -126,6 +127,27 @@ def initial_conditions(truth, plans, ic_burns, truth_da_dot, limits, drift_toler
             "reached": all(checks.values())}
 
 
+def od_solution(msg, truth, truth_da_dot):
+    """One OD solution against the truth at its epoch: ``estimate``, ``sigma`` and ``error`` (a*ROE, m), ``nees``
+    (6 dof: the message carries the ROE block of the covariance), the drift rate ``a_da_dot`` with its
+    ``a_da_dot_sigma`` and ``a_da_dot_error`` against the simulator's drag (m/s), and ``a_da_dot_z``, the error in
+    sigmas (standard normal for an honest covariance). No error without truth at the epoch."""
+    est = msg.estimate
+    cov = np.asarray(est.covariance, dtype=float).reshape(6, 6)
+    t_od = _stamp(est.header.stamp)
+    out = {"epoch": t_od, "passes": int(msg.passes), "measurements": int(msg.measurements),
+           "residual_rms": float(msg.residual_rms), "estimate": [getattr(est, k) for k in ROE_KEYS],
+           "sigma": np.sqrt(np.clip(np.diag(cov), 0, None)).tolist(), "a_da_dot": float(msg.a_da_dot),
+           "a_da_dot_sigma": float(msg.a_da_dot_sigma)}
+    at_od = truth_at(truth, t_od, truth_da_dot)
+    if at_od is not None:
+        out["error"] = (np.array(out["estimate"]) - at_od).tolist()
+        out["nees"] = nees(out["estimate"], at_od, cov) if np.any(cov) else None
+        out["a_da_dot_error"] = float(msg.a_da_dot - truth_da_dot / 86400.0)
+        out["a_da_dot_z"] = out["a_da_dot_error"] / msg.a_da_dot_sigma if msg.a_da_dot_sigma > 0 else None
+    return out
+
+
 def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()):
     topics = (interfaces.EXECUTED_TOPIC, interfaces.TRUTH_ROE_TOPIC, interfaces.DIAGNOSTICS_TOPIC,
               interfaces.SAFETY_TOPIC, interfaces.PLAN_CHECK_TOPIC, interfaces.OD_TOPIC,
@@ -178,20 +200,8 @@ def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()
     od = data[interfaces.OD_TOPIC]
     od_report = None
     if od:
-        first = od[0][1]
-        est = first.estimate
-        cov = np.asarray(est.covariance, dtype=float).reshape(6, 6)
-        t_od = _stamp(est.header.stamp)
-        od_report = {"epoch": t_od, "passes": int(first.passes), "measurements": int(first.measurements),
-                     "residual_rms": float(first.residual_rms),
-                     "estimate": [getattr(est, k) for k in ROE_KEYS],
-                     "sigma": np.sqrt(np.clip(np.diag(cov), 0, None)).tolist(),
-                     "solutions": len(od)}
-        at_od = truth_at(truth, t_od, truth_da_dot)
-        if at_od is not None:
-            err = np.array(od_report["estimate"]) - at_od
-            od_report["error"] = err.tolist()
-            od_report["nees"] = float(err @ np.linalg.solve(cov, err)) if np.any(cov) else None
+        od_report = {**od_solution(od[0][1], truth, truth_da_dot), "solutions": len(od),
+                     "last": od_solution(od[-1][1], truth, truth_da_dot)}
 
     return {
         "safe": bool(safe),

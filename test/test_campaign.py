@@ -116,6 +116,32 @@ def test_ic_checks_and_time_to_ic_of_the_runs_that_reached_them(tmp_path):
     assert agg["distributions"]["time_to_ic"]["n"] == 2 and agg["distributions"]["time_to_ic"]["missing"] == 2
 
 
+def test_od_drift_rate_and_last_solution_columns_and_consistency(tmp_path):
+    """The drift rate's error (m/day) and z of the first OD solution, and the last solution's NEES and z, are columns;
+    the aggregate tests each against its chi-square band: honest sigmas pass, sigmas half the errors fail."""
+    import numpy as np
+
+    from roe_sep.campaign.aggregate import aggregate
+
+    rng = np.random.default_rng(3)
+    table = Table(tmp_path / "runs.csv")
+    for seed in range(200):
+        z_first, z_last = rng.standard_normal(2)
+        sol = {"epoch": 75600.0, "passes": 3, "nees": float((rng.standard_normal(6) ** 2).sum()),
+               "a_da_dot_error": 2.0 * z_first / 86400.0, "a_da_dot_z": float(z_first)}
+        last = {"epoch": 250000.0, "nees": 4.0 * float((rng.standard_normal(6) ** 2).sum()),
+                "a_da_dot_z": 2.0 * float(z_last)}  # optimistic: errors twice the sigmas
+        table.append(row_from_report(seed, {"run": {"completed": True}, "od": {**sol, "solutions": 5, "last": last}}))
+    rows = list(table.read().values())
+    assert rows[0]["od_solutions"] == 5 and rows[0]["od_last_epoch_s"] == 250000.0
+    assert rows[0]["od_err_a_da_dot_m_per_day"] == pytest.approx(2.0 * rows[0]["od_z_a_da_dot"])
+    agg = aggregate(rows)
+    assert agg["od_nees"]["consistent"] and agg["od_drift_rate"]["consistent"]
+    assert agg["od_drift_rate"]["dof"] == 1 and agg["od_drift_rate"]["n"] == 200
+    assert not agg["od_last_nees"]["consistent"] and not agg["od_last_drift_rate"]["consistent"]
+    assert agg["od_last_drift_rate"]["mean"] > agg["od_last_drift_rate"]["mean_bounds"][1]
+
+
 # ------------------------------------------------------------------------------------------------- the table
 @pytest.mark.fault
 def test_table_round_trip_and_torn_line(tmp_path):
@@ -129,6 +155,12 @@ def test_table_round_trip_and_torn_line(tmp_path):
     assert list(rows) == [7] and rows[7]["reason"] == row["reason"] and rows[7]["min_distance_m"] is None
     t.append(failed_row(9, "timeout", "x"))
     assert list(t.read()) == [7, 9]
+    import numpy as np  # a report built in memory holds NumPy scalars: the same cells as Python's
+
+    t.append({**failed_row(10, "timeout", "x"), "safe": np.bool_(True), "od_passes": np.int64(3),
+              "dv_total_m_s": np.float64(1.25), "od_nees": np.float32(np.nan)})
+    assert {k: t.read()[10][k] for k in ("safe", "od_passes", "dv_total_m_s", "od_nees")} == {
+        "safe": True, "od_passes": 3, "dv_total_m_s": 1.25, "od_nees": None}
     assert t.path.read_text().splitlines()[0].split(",") == list(FIELDS)
 
 

@@ -73,6 +73,27 @@ def test_time_to_ic_only_when_the_ics_are_reached():
         text.getvalue()
 
 
+def test_first_and_last_od_solution_against_the_truth():
+    """The reference bag's OD solutions in the report: the first and the last, each with its ROE NEES (the core's
+    formula) and its drift rate's error in its own sigma against the simulator's drag."""
+    from roe_sep.core.od.batch import nees
+    from roe_sep.report import build_report, read_topics
+
+    bag = ROOT / "bags" / "default_run"
+    rep = build_report(bag)
+    msgs = [m for _, m in read_topics(bag, (interfaces.OD_TOPIC,))[interfaces.OD_TOPIC]]
+    od, last = rep["od"], rep["od"]["last"]
+    assert od["solutions"] == len(msgs) >= 2 and last["epoch"] > od["epoch"]
+    for sol, msg in ((od, msgs[0]), (last, msgs[-1])):
+        cov = np.reshape(msg.estimate.covariance, (6, 6))
+        assert sol["nees"] == pytest.approx(nees(sol["error"], np.zeros(6), cov))
+        assert sol["a_da_dot"] == msg.a_da_dot and sol["a_da_dot_sigma"] == msg.a_da_dot_sigma
+        assert sol["a_da_dot_error"] == pytest.approx(sol["a_da_dot"] - rep["truth_drag_a_da_dot_m_per_day"] / 86400)
+        assert sol["a_da_dot_z"] == pytest.approx(sol["a_da_dot_error"] / sol["a_da_dot_sigma"])
+        assert abs(sol["a_da_dot_z"]) < 4.0 and sol["nees"] < CHI2_6_999
+    assert json.loads(json.dumps(rep, allow_nan=False))["od"]["last"] == last
+
+
 def test_recorded_acquisition_plans_respect_burn_limits_and_quantization(scenario):
     out, _ = scenario
     plans = [m for m, _, _ in read_mcap_ros2(mcap_file(out / "bag"))[interfaces.ACQUISITION_PLAN_TOPIC]]

@@ -6,7 +6,9 @@ over the completed runs with its Wilson 95 % interval, :func:`roe_sep.core.monte
 condition of :func:`roe_sep.report.initial_conditions` over the runs whose IC epoch was evaluated: which one keeps
 ``ic_reached`` down); ``distributions`` (min distance, min R-N distance at the IC epoch and at the end, |a da| at the
 IC epoch, total dv, drift-stop and IC dv, time to IC of the runs that reached the ICs: n, missing, min, p5, p50,
-p95, max, mean); ``od_nees`` (NEES against its chi-square(6) bounds); ``failures`` (count per kind and per reason).
+p95, max, mean); ``od_nees`` / ``od_last_nees`` (the first / last OD solution's NEES against its chi-square(6)
+bounds), ``od_drift_rate`` / ``od_last_drift_rate`` (their drift rate's squared normalized error against
+chi-square(1)); ``failures`` (count per kind and per reason).
 """
 
 import collections
@@ -31,6 +33,10 @@ def _column(rows, field, absolute=False):
     return [None if r.get(field) is None else (abs(r[field]) if absolute else r[field]) for r in rows]
 
 
+def _squares(values):
+    return [None if v is None else v * v for v in values]
+
+
 def aggregate(rows):
     """The statistics of a list of rows (one per seed)."""
     done = [r for r in rows if r["status"] == "ok"]
@@ -47,7 +53,12 @@ def aggregate(rows):
                       for c, col in ic_columns.items()},
         "distributions": {k: {"unit": unit, **distribution(_column(done, f, absolute))}
                           for k, (f, unit, absolute) in DISTRIBUTIONS.items()},
+        # the OD covariance against the truth: NEES of the ROE (6 dof) and the drift rate's squared z (1 dof), of the
+        # first solution (before any acquisition burn) and of the last one (after them)
         "od_nees": nees_consistency([r.get("od_nees") for r in done], dof=6),
+        "od_drift_rate": nees_consistency(_squares(r.get("od_z_a_da_dot") for r in done), dof=1),
+        "od_last_nees": nees_consistency([r.get("od_last_nees") for r in done], dof=6),
+        "od_last_drift_rate": nees_consistency(_squares(r.get("od_last_z_a_da_dot") for r in done), dof=1),
         "failures": {"by_kind": dict(collections.Counter(r["failure"] for r in failed)),
                      "by_reason": dict(collections.Counter(r["reason"] for r in failed).most_common())},
     }

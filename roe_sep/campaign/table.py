@@ -12,6 +12,8 @@ import math
 import os
 from pathlib import Path
 
+import numpy as np
+
 from ..core.safety.metrics import min_rn_distance
 from ..core.safety.monitor import ERROR_CRITERIA
 from ..report import IC_CHECKS
@@ -24,11 +26,12 @@ FIELDS = (
     "min_distance_m", "min_rn_ic_m", "min_rn_final_m", "final_de_m", "final_di_m",
     *(f"final_{k}_m" for k in ROE_KEYS),
     "dv_total_m_s", "dv_drift_stop_m_s", "dv_ic_m_s", "time_to_ic_s", "ejection_epoch_s",
-    "od_epoch_s", "od_passes", "od_nees", *(f"od_err_{k}_m" for k in ROE_KEYS),
+    "od_epoch_s", "od_passes", "od_nees", *(f"od_err_{k}_m" for k in ROE_KEYS), "od_err_a_da_dot_m_per_day",
+    "od_z_a_da_dot", "od_solutions", "od_last_epoch_s", "od_last_nees", "od_last_z_a_da_dot",
     "truth_drag_m_per_day", "wall_s", "domain_id",
 )
 BOOL_FIELDS = {"safe", *(f"crit_{c}" for c in CRITERIA), *(f"ic_{c}" for c in IC_CHECKS)}
-INT_FIELDS = {"seed", "od_passes", "domain_id"}
+INT_FIELDS = {"seed", "od_passes", "od_solutions", "domain_id"}
 STR_FIELDS = {"status", "failure", "reason"}
 RUN_FIELDS = ("wall_s", "domain_id")  # how the run went on this machine, not what it computed
 FAILURES = ("node_exit", "timeout", "aborted", "exception", "worker_lost")
@@ -72,8 +75,14 @@ def row_from_report(seed: int, rep: dict) -> dict:
                truth_drag_m_per_day=rep.get("truth_drag_a_da_dot_m_per_day"))
     od = rep.get("od")
     if od:
-        row.update(od_epoch_s=od.get("epoch"), od_passes=od.get("passes"), od_nees=od.get("nees"))
+        rate_err = od.get("a_da_dot_error")
+        row.update(od_epoch_s=od.get("epoch"), od_passes=od.get("passes"), od_nees=od.get("nees"),
+                   od_err_a_da_dot_m_per_day=None if rate_err is None else rate_err * 86400.0,
+                   od_z_a_da_dot=od.get("a_da_dot_z"), od_solutions=od.get("solutions"))
         row.update({f"od_err_{k}_m": v for k, v in zip(ROE_KEYS, od.get("error") or ())})
+        last = od.get("last") or {}
+        row.update(od_last_epoch_s=last.get("epoch"), od_last_nees=last.get("nees"),
+                   od_last_z_a_da_dot=last.get("a_da_dot_z"))
     return row
 
 
@@ -84,12 +93,16 @@ def failed_row(seed: int, failure: str, reason: str) -> dict:
 
 
 def _cell(value):
+    """One cell: "" for no value (None, NaN, inf), true/false, the shortest round-trip repr of a float; NumPy
+    scalars as their Python values (a report built in memory holds them)."""
     if value is None:
         return ""
-    if isinstance(value, bool):
+    if isinstance(value, (bool, np.bool_)):
         return "true" if value else "false"
-    if isinstance(value, float):
-        return repr(value) if math.isfinite(value) else ""  # a non-finite number is "no value"
+    if isinstance(value, (float, np.floating)):
+        return repr(float(value)) if math.isfinite(value) else ""
+    if isinstance(value, np.integer):
+        return str(int(value))
     return str(value)
 
 

@@ -59,15 +59,20 @@ def print_campaign(rep):
         cells = "".join(f"{_num(None if d[k] is None else d[k] * scale):>11s}" for k in ("min", "p5", "p50", "p95",
                                                                                            "max"))
         print(f"  {name:24s}{unit:>6s}{d['n']:5d}{cells}")
-    nees = rep["od_nees"]
-    if nees["mean"] is not None:
-        lo, hi = nees["mean_bounds"]
-        inside = nees["within_single_run_bounds"]
-        print(f"\n  OD NEES (first solution, 6 dof, {nees['n']} runs): mean {nees['mean']:.2f} in [{lo:.2f}, {hi:.2f}]"
-              f" -> {'consistent' if nees['consistent'] else 'INCONSISTENT'}; single runs within chi2(6) "
-              f"[{nees['single_run_bounds'][0]:.2f}, {nees['single_run_bounds'][1]:.2f}]: {_p(inside)}")
-    else:
-        print("\n  OD NEES: no OD solution in any completed run")
+    print("\n  OD covariance against the truth (mean of the normalized squared errors in its chi-square 95 % band)")
+    for key, label in (("od_nees", "first solution, ROE NEES"),
+                       ("od_drift_rate", "first solution, drift rate z^2"),
+                       ("od_last_nees", "last solution, ROE NEES"),
+                       ("od_last_drift_rate", "last solution, drift rate z^2")):
+        c = rep[key]
+        if c["mean"] is None:
+            print(f"    {label:32s}no OD solution in any completed run")
+            continue
+        lo, hi = c["mean_bounds"]
+        slo, shi = c["single_run_bounds"]
+        print(f"    {label:32s}mean {c['mean']:5.2f} in [{lo:.2f}, {hi:.2f}] "
+              f"{'consistent  ' if c['consistent'] else 'INCONSISTENT'}  runs in chi2({c['dof']}) "
+              f"[{slo:.2f}, {shi:.2f}]: {_p(c['within_single_run_bounds'])}")
     ol = rep["open_loop"]
     if ol.get("p") is not None:
         print(f"\n  open loop (roe-sep mc, {ol['samples']} samples, p = {ol['p']:g} m/s: {ol['p_source']}):")
