@@ -28,6 +28,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from roe_sep import interfaces, jsonutil  # noqa: E402
 from roe_sep.campaign.table import Table  # noqa: E402
+from roe_sep.core.montecarlo.stats import nees_bounds  # noqa: E402
 from roe_sep.core.relmotion.maneuvers import delta_roe  # noqa: E402
 from roe_sep.core.relmotion.orbit import mean_motion  # noqa: E402
 from roe_sep.ndm.dataset import stamp  # noqa: E402
@@ -55,7 +56,7 @@ def run_budget(run_dir: Path):
         err = np.array([m.dv_rtn.x, m.dv_rtn.y, m.dv_rtn.z]) - planned[round(stamp(m.epoch))]
         execution += float(delta_roe(-err, m.mean_arg_latitude, a, n)[0]) * a
     ods = [od for _, od in data[interfaces.OD_TOPIC] if stamp(od.estimate.header.stamp) <= t_plan]
-    estimate = estimate_a_da = None
+    estimate = estimate_a_da = rate_z = None
     if ods:
         od = ods[-1]
         t_od = stamp(od.estimate.header.stamp)
@@ -64,10 +65,12 @@ def run_budget(run_dir: Path):
         if truth is not None:
             estimate_a_da = od.estimate.a_da - float(truth[0])
             estimate = estimate_a_da + (od.a_da_dot - true_rate / 86400.0) * (rep["ic"]["epoch"] - t_od)
+            rate_z = (od.a_da_dot - true_rate / 86400.0) / od.a_da_dot_sigma if od.a_da_dot_sigma > 0 else None
     truth_da = rep["ic"]["roe"][0]
     prediction_error = -rep["model_error"]["ic"]["error"][0]  # truth - predicted
     return {"truth_a_da": truth_da, "truth_minus_predicted": prediction_error, "execution": execution,
-            "estimate": estimate, "estimate_a_da_at_od": estimate_a_da, "burns_after_last_plan": len(flown),
+            "estimate": estimate, "estimate_a_da_at_od": estimate_a_da, "estimate_rate_z": rate_z,
+            "burns_after_last_plan": len(flown),
             "reached": rep["ic"]["reached"]}
 
 
@@ -87,6 +90,9 @@ def summary(budgets):
     tp = np.array([x["truth_minus_predicted"] for x in both])
     out["corr_minus_estimate_vs_truth_minus_predicted"] = float(np.corrcoef(-np.array([x["estimate"] for x in both]),
                                                                             tp)[0, 1])
+    z = np.array([x["estimate_rate_z"] for x in b if x["estimate_rate_z"] is not None])
+    out["estimate_rate_mean_z2"] = {"n": int(z.size), "mean": float(np.mean(z * z)),
+                                    "band95": list(nees_bounds(1, int(z.size)))}
     m, s = out["truth_a_da"]["mean"], out["truth_a_da"]["std"]
     out["gaussian_p_miss_5m"] = 1 - 0.5 * (math.erf((5 - m) / (s * math.sqrt(2))) - math.erf((-5 - m) /
                                                                                            (s * math.sqrt(2))))
@@ -100,6 +106,9 @@ def main(argv=None):
     args = ap.parse_args(argv)
     rows = Table(args.dir / "runs.csv").read()
     budgets = {s: run_budget(args.dir / "runs" / str(s)) for s, r in sorted(rows.items()) if r["status"] == "ok"}
+    if sum(b is not None for b in budgets.values()) < 2:
+        print(f"{args.dir}: fewer than 2 completed runs with an acquisition plan (runs too short?)", file=sys.stderr)
+        return 2
     out = summary(budgets)
     if args.json:
         print(jsonutil.dumps({"summary": out, "runs": {str(s): b for s, b in budgets.items()}}, indent=2))
@@ -115,6 +124,9 @@ def main(argv=None):
     print(f"  correlation with truth - predicted: execution {out['corr_execution_vs_truth_minus_predicted']:.2f}, "
           f"-estimate {out['corr_minus_estimate_vs_truth_minus_predicted']:.2f}")
     print(f"  Gaussian P(|a da| > 5 m) with the truth's mean and std: {out['gaussian_p_miss_5m']:.3f}")
+    z2 = out["estimate_rate_mean_z2"]
+    print(f"  that OD's drift rate against its sigma: mean z^2 {z2['mean']:.2f} over {z2['n']} runs (95 % band of an "
+          f"honest sigma [{z2['band95'][0]:.2f}, {z2['band95'][1]:.2f}])")
     return 0
 
 

@@ -174,3 +174,25 @@ def test_multi_impulse_scenario_runs_end_to_end(tmp_path):
     burns = [m for m in rep["maneuvers"] if m["spacecraft"] == "carrier"]
     assert all(m["dv"] <= 0.3 * 1.25 for m in burns)  # commanded <= 0.3 m/s, executed with the 5 % thruster error
     assert rep["dv_total"] < 1.0  # purely tangential: far below the double impulse's radial drift-stop
+
+
+def test_ic_drift_budget_of_the_reference_run_closes(tmp_path):
+    """``bench/campaign_ic_drift.py`` on the reference run: truth - predicted a da at the IC epoch is the execution
+    error of the burns after the last plan minus the estimate's error carried there, up to a small remainder (the
+    100-run campaign: -0.74 +- 0.19 m); a sign or mapping error would leave meters."""
+    import shutil
+    import sys
+
+    sys.path.insert(0, str(ROOT / "bench"))
+    from campaign_ic_drift import run_budget
+
+    from roe_sep.report import build_report
+
+    run_dir = tmp_path / "runs" / "0"  # a campaign run's directory: its bag and report.json
+    shutil.copytree(ROOT / "bags" / "default_run", run_dir / "bag")
+    (run_dir / "report.json").write_text(json.dumps(build_report(run_dir / "bag")))
+    b = run_budget(run_dir)
+    assert b["reached"] and b["burns_after_last_plan"] >= 1 and b["estimate"] is not None
+    remainder = b["truth_minus_predicted"] - b["execution"] + b["estimate"]
+    assert abs(remainder) < 1.5, b
+    assert abs(b["truth_a_da"]) <= 5.0
