@@ -29,6 +29,7 @@ def _hist(values, xlabel, title, path):
         ax.legend(fontsize=8)
     else:
         ax.text(0.5, 0.5, "no completed run with a value", ha="center", transform=ax.transAxes)
+    ax.ticklabel_format(axis="x", useOffset=False)  # a narrow spread reads in the quantity's own values
     ax.set_xlabel(xlabel)
     ax.set_ylabel("runs")
     ax.set_title(f"{title} ({values.size} runs)")
