@@ -104,7 +104,15 @@ def main(argv=None):
     ap.add_argument("dir", type=Path, help="a finished roe-sep campaign directory")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)
+    if not (args.dir / "runs.csv").is_file():
+        print(f"{args.dir}: no runs.csv (not a roe-sep campaign directory)", file=sys.stderr)
+        return 2
     rows = Table(args.dir / "runs.csv").read()
+    no_bag = [s for s, r in rows.items() if r["status"] == "ok" and not (args.dir / "runs" / str(s) / "bag").is_dir()]
+    if no_bag:
+        print(f"{args.dir}: {len(no_bag)} completed runs without a bag (a campaign with --no-bags?): this study reads "
+              "the bags", file=sys.stderr)
+        return 2
     budgets = {s: run_budget(args.dir / "runs" / str(s)) for s, r in sorted(rows.items()) if r["status"] == "ok"}
     if sum(b is not None for b in budgets.values()) < 2:
         print(f"{args.dir}: fewer than 2 completed runs with an acquisition plan (runs too short?)", file=sys.stderr)

@@ -335,7 +335,8 @@ def dask_cluster(tmp_path):
 
 def test_campaign_on_an_existing_cluster_gives_the_rows_of_the_embedded_one(campaign, dask_cluster, tmp_path):
     """``--scheduler tcp://...``: joined while the cluster has no worker, the campaign says so and waits; once a
-    worker joins, the runs go to it and write the rows the embedded two-worker cluster wrote for the same seeds."""
+    worker joins, the runs go to it and write the rows the embedded two-worker cluster wrote for the same seeds
+    (with ``--no-bags``: without keeping the runs' bags)."""
     import threading
 
     done, _, params, _ = campaign
@@ -344,7 +345,7 @@ def test_campaign_on_an_existing_cluster_gives_the_rows_of_the_embedded_one(camp
     seeds = (SEED + 1, 2)  # the fixture's last two seeds
     cmd = [sys.executable, "-m", "roe_sep.cli", "campaign", "--runs", str(seeds[1]), "--seed", str(seeds[0]),
            "--duration", str(DURATION), "--scheduler", address, "--params", str(params), "--out", str(out),
-           "--domains", _domains(), "--open-loop-samples", "1000", "--no-figures", "--json"]
+           "--domains", _domains(), "--open-loop-samples", "1000", "--no-figures", "--no-bags", "--json"]
     env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
     proc = subprocess.Popen(cmd, env=env, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     stderr, waiting = [], threading.Event()
@@ -373,6 +374,10 @@ def test_campaign_on_an_existing_cluster_gives_the_rows_of_the_embedded_one(camp
     rows, reference = Table(out / "runs.csv").read(), Table(done / "runs.csv").read()
     assert sorted(rows) == [seeds[0], seeds[0] + 1]
     assert {s: _comparable(r) for s, r in rows.items()} == {s: _comparable(reference[s]) for s in rows}
+    # --no-bags: the runs' bags removed once their rows were written, their reports kept
+    assert all(not (out / "runs" / str(s) / "bag").exists() and (out / "runs" / str(s) / "report.json").exists()
+               for s in rows)
+    assert all((done / "runs" / str(s) / "bag").is_dir() for s in rows)  # kept by default
 
 
 @pytest.mark.fault

@@ -9,7 +9,8 @@ Modules: :mod:`.engine` (the Dask client), :mod:`.runner` (one run as a task: ch
   other settings is refused rather than mixed into one table.
 * ``runs.csv``: one row per finished run (:data:`.table.FIELDS`); ``runs/<seed>/``: its ``report.json`` (strict
   JSON), ``overrides.yaml`` (the run's node parameters), ``params.yaml``, ``bag/``, ``logs/run.log`` (the nodes'
-  output), ``campaign.log`` (the run process's), with ``--ccsds`` also ``ccsds/``.
+  output), ``campaign.log`` (the run process's), with ``--ccsds`` also ``ccsds/``; with ``--no-bags`` the bag is
+  removed once the row is written (the row and report.json are the same).
 * ``report.json``: the aggregate report; ``figures/``: its PNG figures.
 """
 
@@ -52,11 +53,12 @@ def check_settings(out: Path, current: dict):
 
 def run_campaign(runs, seed, out, workers=1, scheduler=None, config=None, overrides=None, duration=None,
                  timeout=1800.0, domains=(1, 100), retry_failed=False, progress=False, open_loop_samples=20000,
-                 figures=True, client_factory=None, ccsds=False):
+                 figures=True, client_factory=None, ccsds=False, bags=True):
     """Run the missing runs of seeds ``seed .. seed + runs - 1`` on Dask, append each row as it finishes, and return
     the aggregate report (also written to ``out/report.json``). ``client_factory(workers, scheduler)`` is the
     context manager giving the Dask client (default :func:`.engine.dask_client`). ``ccsds``: each run also runs
-    the ground_bridge (its CCSDS set in ``runs/<seed>/ccsds/``)."""
+    the ground_bridge (its CCSDS set in ``runs/<seed>/ccsds/``); ``bags`` False: each run's bag is removed once its
+    row is written."""
     out = Path(out)
     check_settings(out, settings(config, overrides, duration))
     table = Table(out / "runs.csv")
@@ -66,7 +68,7 @@ def run_campaign(runs, seed, out, workers=1, scheduler=None, config=None, overri
     executed = 0
     if todo:
         executed = _execute(todo, out, table, workers, scheduler, config, overrides, duration, timeout, domains,
-                            progress, runs - len(todo), runs, client_factory, ccsds)
+                            progress, runs - len(todo), runs, client_factory, ccsds, bags)
     rows_by_seed = table.read()
     rows = [rows_by_seed[s] for s in seeds if s in rows_by_seed]
     rep = {"seeds": [seed, seed + runs - 1], "executed_now": executed, "skipped_done": runs - len(todo),
@@ -90,7 +92,7 @@ def _mean(values):
 
 
 def _execute(todo, out, table, workers, scheduler, config, overrides, duration, timeout, domains, progress,
-             initial, total, client_factory, ccsds=False):
+             initial, total, client_factory, ccsds=False, bags=True):
     from distributed import as_completed
 
     from .engine import dask_client
@@ -98,7 +100,8 @@ def _execute(todo, out, table, workers, scheduler, config, overrides, duration, 
 
     specs = [{"seed": s, "run_dir": str((out / "runs" / str(s)).resolve()),
               "config": str(Path(config).resolve()) if config else None, "overrides": overrides or {},
-              "duration": duration, "timeout": float(timeout), "domains": list(domains), "ccsds": bool(ccsds)}
+              "duration": duration, "timeout": float(timeout), "domains": list(domains), "ccsds": bool(ccsds),
+              "bags": bool(bags)}
              for s in todo]
     bar = None
     if progress:

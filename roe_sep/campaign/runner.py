@@ -94,7 +94,8 @@ def _last_line(path: Path) -> str:
 
 def execute(spec: dict) -> dict:
     """The Dask task: run seed ``spec['seed']`` into ``spec['run_dir']`` (an unfinished earlier attempt there is
-    removed first) and return its row. ``spec``: seed, run_dir, config, overrides, duration, timeout, domains."""
+    removed first) and return its row. ``spec``: seed, run_dir, config, overrides, duration, timeout, domains,
+    ccsds, bags (False: the bag of a completed run is removed once its report is read)."""
     seed = int(spec["seed"])
     run_dir = Path(spec["run_dir"])
     t0 = time.monotonic()
@@ -130,6 +131,8 @@ def execute(spec: dict) -> dict:
         report_path.write_text(jsonutil.dumps(rep, indent=2) + "\n", encoding="utf-8")
         row = row_from_report(seed, rep)
         row["reason"] = row["reason"][:300]  # a node's death: the runner names it with its last log line
+        if not spec.get("bags", True) and row["status"] == "ok":  # a failed run keeps its bag for the diagnosis
+            shutil.rmtree(run_dir / "bag", ignore_errors=True)
         return _finish(row, t0, domain)
     except Exception as exc:  # noqa: BLE001  (a run's failure is a row, never a lost campaign)
         return _finish(failed_row(seed, "exception", f"{type(exc).__name__}: {exc}"[:300]), t0, domain)

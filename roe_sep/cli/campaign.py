@@ -108,7 +108,7 @@ def cmd_campaign(args):
                        config=args.config, overrides=overrides, duration=args.duration, timeout=args.timeout,
                        domains=args.domains, retry_failed=args.retry_failed,
                        progress=not args.json and sys.stderr.isatty(), open_loop_samples=args.open_loop_samples,
-                       figures=not args.no_figures, ccsds=args.ccsds)
+                       figures=not args.no_figures, ccsds=args.ccsds, bags=not args.no_bags)
     emit(rep, args.json, print_campaign)
     return 0 if rep["failed"] == 0 else 1
 
@@ -140,6 +140,9 @@ def register(subparsers):
     p.add_argument("--ccsds", action="store_true",
                    help="run the ground_bridge in every run: its CCSDS set in runs/<seed>/ccsds/ (default: not, "
                         "the rows are the same; about 3 CPU-s per run)")
+    p.add_argument("--no-bags", action="store_true",
+                   help="remove each completed run's bag once its row is written (about 1.2 MB per run; the row and "
+                        "report.json are the same; a failed run keeps its bag)")
     p.add_argument("--no-figures", action="store_true", help="do not write figures/")
     p.add_argument("--json", action="store_true", help="print the aggregate report as JSON")
     p.set_defaults(func=cmd_campaign)
