@@ -56,7 +56,7 @@ def run_budget(run_dir: Path):
         err = np.array([m.dv_rtn.x, m.dv_rtn.y, m.dv_rtn.z]) - planned[round(stamp(m.epoch))]
         execution += float(delta_roe(-err, m.mean_arg_latitude, a, n)[0]) * a
     ods = [od for _, od in data[interfaces.OD_TOPIC] if stamp(od.estimate.header.stamp) <= t_plan]
-    estimate = estimate_a_da = rate_z = None
+    estimate = estimate_a_da = rate_z = lead_days = None
     if ods:
         od = ods[-1]
         t_od = stamp(od.estimate.header.stamp)
@@ -66,12 +66,12 @@ def run_budget(run_dir: Path):
             estimate_a_da = od.estimate.a_da - float(truth[0])
             estimate = estimate_a_da + (od.a_da_dot - true_rate / 86400.0) * (rep["ic"]["epoch"] - t_od)
             rate_z = (od.a_da_dot - true_rate / 86400.0) / od.a_da_dot_sigma if od.a_da_dot_sigma > 0 else None
+            lead_days = (rep["ic"]["epoch"] - t_od) / 86400.0
     truth_da = rep["ic"]["roe"][0]
     prediction_error = -rep["model_error"]["ic"]["error"][0]  # truth - predicted
     return {"truth_a_da": truth_da, "truth_minus_predicted": prediction_error, "execution": execution,
             "estimate": estimate, "estimate_a_da_at_od": estimate_a_da, "estimate_rate_z": rate_z,
-            "burns_after_last_plan": len(flown),
-            "reached": rep["ic"]["reached"]}
+            "estimate_lead_days": lead_days, "burns_after_last_plan": len(flown), "reached": rep["ic"]["reached"]}
 
 
 def summary(budgets):
@@ -93,6 +93,9 @@ def summary(budgets):
     z = np.array([x["estimate_rate_z"] for x in b if x["estimate_rate_z"] is not None])
     out["estimate_rate_mean_z2"] = {"n": int(z.size), "mean": float(np.mean(z * z)),
                                     "band95": list(nees_bounds(1, int(z.size)))}
+    lead = np.array([x["estimate_lead_days"] for x in b if x["estimate_lead_days"] is not None])
+    out["estimate_lead_days"] = {"n": int(lead.size), "mean": float(lead.mean()), "min": float(lead.min()),
+                                 "max": float(lead.max())}
     m, s = out["truth_a_da"]["mean"], out["truth_a_da"]["std"]
     out["gaussian_p_miss_5m"] = 1 - 0.5 * (math.erf((5 - m) / (s * math.sqrt(2))) - math.erf((-5 - m) /
                                                                                            (s * math.sqrt(2))))
@@ -132,6 +135,8 @@ def main(argv=None):
     print(f"  correlation with truth - predicted: execution {out['corr_execution_vs_truth_minus_predicted']:.2f}, "
           f"-estimate {out['corr_minus_estimate_vs_truth_minus_predicted']:.2f}")
     print(f"  Gaussian P(|a da| > 5 m) with the truth's mean and std: {out['gaussian_p_miss_5m']:.3f}")
+    lead = out["estimate_lead_days"]
+    print(f"  that OD's epoch before the IC epoch: mean {lead['mean']:.2f} days ({lead['min']:.2f}-{lead['max']:.2f})")
     z2 = out["estimate_rate_mean_z2"]
     print(f"  that OD's drift rate against its sigma: mean z^2 {z2['mean']:.2f} over {z2['n']} runs (95 % band of an "
           f"honest sigma [{z2['band95'][0]:.2f}, {z2['band95'][1]:.2f}])")
