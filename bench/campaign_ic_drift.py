@@ -9,10 +9,11 @@ a da there is the acquisition planner's prediction error (its last plan's aimed 
   of the relative impulse ``-(executed - planned)``: a carrier burn moves the relative state the other way);
 * **estimate**: the error of the last OD solution before that plan (the estimate it was made from) carried to the
   IC epoch: its a da error against the truth at the solution's epoch plus its drift-rate error (estimated
-  differential drag ``a_da_dot`` against the simulator's) times the time to the IC epoch.
+  differential drag ``a_da_dot`` against the simulator's) times the time to the IC epoch
+  (:func:`roe_sep.report.od_solution`).
 
-What neither explains (drag rate estimated against true, quantization of the burns to 1 mm/s, the planners'
-secular model against the nonlinear truth) is the remainder. Strict JSON on stdout (``--json``) or a table.
+What neither explains (the planners' secular model against the nonlinear truth) is the remainder. Strict JSON on
+stdout (``--json``) or a table.
 
     python bench/campaign_ic_drift.py DIR [--json]
 """
@@ -32,7 +33,7 @@ from roe_sep.core.montecarlo.stats import nees_bounds  # noqa: E402
 from roe_sep.core.relmotion.maneuvers import delta_roe  # noqa: E402
 from roe_sep.core.relmotion.orbit import mean_motion  # noqa: E402
 from roe_sep.ndm.dataset import stamp  # noqa: E402
-from roe_sep.report import read_topics, truth_at  # noqa: E402
+from roe_sep.report import od_solution, read_topics  # noqa: E402
 
 TOPICS = (interfaces.ACQUISITION_PLAN_TOPIC, interfaces.EXECUTED_TOPIC, interfaces.OD_TOPIC,
           interfaces.TRUTH_ROE_TOPIC)
@@ -57,16 +58,13 @@ def run_budget(run_dir: Path):
         execution += float(delta_roe(-err, m.mean_arg_latitude, a, n)[0]) * a
     ods = [od for _, od in data[interfaces.OD_TOPIC] if stamp(od.estimate.header.stamp) <= t_plan]
     estimate = estimate_a_da = rate_z = lead_days = None
-    if ods:
-        od = ods[-1]
-        t_od = stamp(od.estimate.header.stamp)
-        true_rate = rep["truth_drag_a_da_dot_m_per_day"]  # m/day
-        truth = truth_at(data[interfaces.TRUTH_ROE_TOPIC], t_od, true_rate)
-        if truth is not None:
-            estimate_a_da = od.estimate.a_da - float(truth[0])
-            estimate = estimate_a_da + (od.a_da_dot - true_rate / 86400.0) * (rep["ic"]["epoch"] - t_od)
-            rate_z = (od.a_da_dot - true_rate / 86400.0) / od.a_da_dot_sigma if od.a_da_dot_sigma > 0 else None
-            lead_days = (rep["ic"]["epoch"] - t_od) / 86400.0
+    if ods:  # the report's own comparison of a solution with the truth at its epoch
+        sol = od_solution(ods[-1], data[interfaces.TRUTH_ROE_TOPIC], rep["truth_drag_a_da_dot_m_per_day"])
+        if "error" in sol:
+            lead = rep["ic"]["epoch"] - sol["epoch"]
+            estimate_a_da = sol["error"][0]
+            estimate = estimate_a_da + sol["a_da_dot_error"] * lead
+            rate_z, lead_days = sol["a_da_dot_z"], lead / 86400.0
     truth_da = rep["ic"]["roe"][0]
     prediction_error = -rep["model_error"]["ic"]["error"][0]  # truth - predicted
     return {"truth_a_da": truth_da, "truth_minus_predicted": prediction_error, "execution": execution,
