@@ -5,7 +5,7 @@ import yaml
 
 from roe_sep.core.config import ConfigError, Scenario, load_scenario, scenario_from_dict
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_shipped_default_yaml_equals_the_embedded_defaults():

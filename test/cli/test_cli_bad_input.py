@@ -31,7 +31,7 @@ from roe_sep.cli import main
 
 pytestmark = pytest.mark.fault
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 TIMEOUT_S = 20  # per case; a correct refusal takes milliseconds
 N = ["nan", "inf", "-inf", "abc", "1e308"]  # bad for every numeric option
 NEG = ["0", "-1"]

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SCRIPT = ROOT / "scripts" / "ros2_cli.sh"
 CHECKS = ROOT / "build" / "ros2cli" / "checks"
 DURATION = 20000.0  # s of sim time: the ejection, the drift-stop, the first radar passes

@@ -15,7 +15,7 @@ a da there is the acquisition planner's prediction error (its last plan's aimed 
 What neither explains (the planners' secular model against the nonlinear truth) is the remainder. Strict JSON on
 stdout (``--json``) or a table.
 
-    python bench/campaign_ic_drift.py DIR [--json]
+    python studies/campaign_ic_drift.py DIR [--json]
 """
 
 import argparse

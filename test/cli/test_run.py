@@ -177,13 +177,13 @@ def test_multi_impulse_scenario_runs_end_to_end(tmp_path):
 
 
 def test_ic_drift_budget_of_the_reference_run_closes(tmp_path):
-    """``bench/campaign_ic_drift.py`` on the reference run: truth - predicted a da at the IC epoch is the execution
+    """``studies/campaign_ic_drift.py`` on the reference run: truth - predicted a da at the IC epoch is the execution
     error of the burns after the last plan minus the estimate's error carried there, up to a small remainder (the
     100-run campaign: -0.74 +- 0.19 m); a sign or mapping error would leave meters."""
     import shutil
     import sys
 
-    sys.path.insert(0, str(ROOT / "bench"))
+    sys.path.insert(0, str(ROOT / "studies"))
     from campaign_ic_drift import run_budget
 
     from roe_sep.report import build_report

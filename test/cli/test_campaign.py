@@ -21,7 +21,7 @@ from roe_sep.campaign.runner import radar_seed, run_overrides
 from roe_sep.campaign.table import FIELDS, RUN_FIELDS, Table, failed_row, format_row, row_from_report
 from roe_sep.core.montecarlo.stats import distribution, nees_bounds, nees_consistency, wilson_interval
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 DURATION = 20000.0
 SEED = 100
 RUNS = 3

@@ -20,7 +20,7 @@ from roe_sep.bag import definitions
 from roe_sep.bag.reader import topics as bag_topics
 
 websocket = pytest.importorskip("websocket", reason="the test client is websocket-client")
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 BAG = ROOT / "bags" / "default_run"
 SUBPROTOCOL = "foxglove.sdk.v1"  # foxglove-sdk 0.30 (the Foxglove app speaks it; ws-protocol v1 framing)
 

@@ -25,7 +25,7 @@ from roe_sep.ndm import frames
 from roe_sep.ndm import messages as ndm
 from roe_sep.ndm.dataset import Options, Truth, approved, stamp, vec
 
-BAG = Path(__file__).resolve().parents[1] / "bags" / "default_run"
+BAG = Path(__file__).resolve().parents[2] / "bags" / "default_run"
 EPOCH = "2016-07-01T00:00:00"
 A = 6893137.0
 INC = math.radians(97.46)
@@ -404,7 +404,7 @@ def test_export_bad_input_exits_2(tmp_path, capsys):
 
 
 # --- an independent reader: Orekit's NDM parsers (scripts/orekit_check.py) ---------------------------------------
-ORE_CHECK = Path(__file__).resolve().parents[1] / "scripts" / "orekit_check.py"
+ORE_CHECK = Path(__file__).resolve().parents[2] / "scripts" / "orekit_check.py"
 
 
 def _orekit_missing():

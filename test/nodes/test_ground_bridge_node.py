@@ -23,7 +23,7 @@ from roe_sep.ndm import frames
 from roe_sep.ndm import messages as ndm
 from roe_sep.ndm.dataset import stamp
 
-BAG = Path(__file__).resolve().parents[1] / "bags" / "default_run"
+BAG = Path(__file__).resolve().parents[2] / "bags" / "default_run"
 EPOCH = "2016-07-01T00:00:00"
 TYPES = {interfaces.TRUTH_ROE_TOPIC: RelativeOrbitalElements, interfaces.DRIFT_STOP_PLAN_TOPIC: ManeuverPlan,
          interfaces.PLAN_CHECK_TOPIC: SafetyStatus, interfaces.OD_TOPIC: OrbitDetermination}

@@ -4,7 +4,7 @@ among fresh samples of the stalled proposal (distance, radius |z| in the standar
 factor f1), a design-point search (SLSQP: min |z| s.t. d(z) <= R) from the closest sample, and the Gaussian mass
 outside the ball of the radius reached (chi-square, 9 degrees of freedom). Strict JSON on stdout, one line per p.
 
-    python bench/collision_study.py --p 0,0.06 > collision_study.json
+    python studies/collision_study.py --p 0,0.06 > collision_study.json
 """
 
 import argparse
