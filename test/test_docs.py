@@ -6,6 +6,10 @@
   DDS nodes: they run in a test marked ``dds``, from a temporary directory.
 - The generated blocks (``python -m roe_sep.docgen``) are current, and the scan behind the topic table sees the
   subscribers the simulator waits for (:data:`roe_sep.graph.SUBSCRIBERS`).
+- A fenced block preceded by ``<!-- excerpt: FILE -->`` is an excerpt of a recorded result (``bench/results/...``):
+  its lines appear in FILE in the same order, a ``...`` line standing for lines left out. With
+  ``<!-- excerpt: {out}/NAME from: roe-sep ... {out} ... -->`` the command first writes FILE into a temporary
+  ``{out}``. The wall-clock ``CREATION_DATE`` of a CCSDS file is the only value normalised.
 - Every relative link and image points to an existing file, every ``#anchor`` to a heading of its page.
 """
 
@@ -22,6 +26,9 @@ ROOT = Path(__file__).resolve().parents[1]
 PAGES = [ROOT / "README.md"] + sorted((ROOT / "docs").glob("*.md"))
 CHECKED = re.compile(r"^<!-- checked(?:: (?P<kind>\w+))? -->\n```console\n(?P<body>.*?)^```$", re.M | re.S)
 COMMAND_TIMEOUT = 600  # s: a DDS run on a loaded machine takes minutes; the others a few seconds
+EXCERPT = re.compile(r"^<!-- excerpt: (?P<file>\S+)(?: from: (?P<cmd>.+?))? -->\n```[^\n]*\n(?P<body>.*?)^```$",
+                     re.M | re.S)
+VARIABLE = re.compile(r"^(CREATION_DATE\s*=).*$", re.M)  # wall-clock time of writing a CCSDS file
 FENCE = re.compile(r"^```.*?^```$", re.M | re.S)
 LINK = re.compile(r"!?\[[^\]]*\]\((?P<target>[^)\s]+)\)")
 
@@ -100,6 +107,57 @@ def test_a_wrong_documented_output_is_caught():
     (cmd, expected), = pairs
     report = mismatch(cmd, expected, run_documented(cmd, ROOT))
     assert "line 1 differs" in report and "expected a finite number" in report
+
+
+# ------------------------------------------------------------------------------------------- excerpts
+def excerpts():
+    """[(page, file, command or None, body)] of the excerpt blocks."""
+    return [(page.relative_to(ROOT).as_posix(), m["file"], m["cmd"], m["body"]) for page in PAGES
+            for m in EXCERPT.finditer(page.read_text(encoding="utf-8"))]
+
+
+def excerpt_problem(body, text):
+    """'' when every segment of ``body`` (split at ``...`` lines) occurs in ``text`` as consecutive lines, in order;
+    else the first segment line that does not."""
+    lines = VARIABLE.sub(r"\1", text).splitlines()
+    pos = 0
+    segments = [[]]
+    for line in VARIABLE.sub(r"\1", body).splitlines():
+        if line.strip() == "...":
+            segments.append([])
+        else:
+            segments[-1].append(line)
+    for segment in filter(None, segments):
+        n = len(segment)
+        found = next((i for i in range(pos, len(lines) - n + 1) if lines[i:i + n] == segment), None)
+        if found is None:
+            return f"not in the file (in this order): {segment[0]!r} ... ({n} lines)"
+        pos = found + n
+    return ""
+
+
+EXCERPTS = excerpts()
+
+
+def test_the_pages_have_excerpts():
+    assert {page for page, *_ in EXCERPTS} >= {"docs/campaigns.md", "docs/ground_segment.md"}
+
+
+@pytest.mark.parametrize("page, file, command, body", EXCERPTS, ids=[f"{e[0]}:{e[1]}" for e in EXCERPTS])
+def test_documented_excerpt_is_in_the_recorded_file(page, file, command, body, tmp_path):
+    if command:
+        out = tmp_path / "out"
+        assert run_documented(command.replace("{out}", str(out)), ROOT) is not None
+    path = Path(file.replace("{out}", str(tmp_path / "out")))
+    text = (path if path.is_absolute() else ROOT / path).read_text(encoding="utf-8")
+    assert excerpt_problem(body, text) == ""
+
+
+def test_an_excerpt_not_in_the_file_is_caught():
+    text = "a\nb\nc\nCREATION_DATE = 2026-11-25T00:00:00\nd\n"
+    assert excerpt_problem("a\nb\n...\nCREATION_DATE = 2020-01-01\nd\n", text) == ""
+    assert excerpt_problem("a\nc\n", text) != ""  # not consecutive
+    assert excerpt_problem("d\n...\na\n", text) != ""  # not in order
 
 
 # ------------------------------------------------------------------------------------------ generated
