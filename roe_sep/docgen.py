@@ -136,6 +136,13 @@ def qos_text(qos):
     return f"{qos.reliability.name}, {qos.durability.name}, {depth}"
 
 
+def _policies(qos):
+    """'RELIABILITY, DURABILITY' of a profile (a bare depth: rclpy's RELIABLE, VOLATILE); None if unknown."""
+    if qos is None:
+        return None
+    return "RELIABLE, VOLATILE" if isinstance(qos, int) else f"{qos.reliability.name}, {qos.durability.name}"
+
+
 def graph_table():
     """{topic: {'type', 'pub': {node: qos}, 'sub': {node: qos}, 'srv': {node}}} over every node."""
     table = {}
@@ -167,8 +174,12 @@ def topics_block():
     for topic in sorted((t for t in table if not table[t]["srv"]), key=_order):
         row = table[topic]
         offered = {qos_text(q) for q in row["pub"].values()}
-        lines.append(f"| `{topic}` | `{row['type']}` | {'; '.join(sorted(offered)) or '–'} | {_nodes(row['pub'])} | "
-                     f"{_nodes(row['sub'])} |")
+        policies = {_policies(q) for q in row["pub"].values()}
+        requested = sorted({_policies(q) for q in row["sub"].values()} - policies - {None})
+        qos = "; ".join(sorted(offered)) or "–"
+        if requested:
+            qos += f" (subscribers: {'; '.join(requested)})"
+        lines.append(f"| `{topic}` | `{row['type']}` | {qos} | {_nodes(row['pub'])} | {_nodes(row['sub'])} |")
     lines += ["", "| service | type | server |", "|---|---|---|"]
     for topic in sorted((t for t in table if table[t]["srv"]), key=_order):
         lines.append(f"| `{topic}` | `{table[topic]['type']}` | {_nodes(table[topic]['srv'])} |")
