@@ -6,7 +6,7 @@ The two nodes are started managed: unconfigured, then ``lifecycle_manager`` conf
 parameter's name in the node's log and the manager exits with status 1. Their parameters come from the same
 :func:`roe_sep.graph.parameters` as the full run (``OUTPUT/params.yaml``). Publish a
 ``roe_sep_msgs/EjectionEvent`` on ``/separation/ejection`` (RELIABLE, TRANSIENT_LOCAL) and read the drift-stop
-plan on ``/separation/drift_stop_plan`` and its check on ``/safety/plan_check``; the ``/plan_separation`` service
+plan on ``/separation/drift_stop_plan`` and its check on ``/safety/plan_check``; the ``/separation/plan`` service
 designs a separation on request.
 
 Arguments: ``scenario``, ``params`` (as separation.launch.py), ``use_sim_time`` (default false: wall-clock time),

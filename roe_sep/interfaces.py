@@ -1,5 +1,6 @@
 """The ROS interface of roe_sep in one place: topic and service names, QoS profiles and frame ids, shared by the
-nodes, the run report, the bag tools and the tests (documented in the README's topic table).
+nodes, the run report, the bag tools and the tests (docs/ros_interface.md: its topic table is generated from the
+nodes by :mod:`roe_sep.docgen`).
 
 Below the nodes in the layering (core <- interfaces, bag <- nodes <- run/report <- cli): offline tools read topic
 names from here without importing any node.
@@ -57,7 +58,7 @@ ACQUISITION_PLAN_TOPIC = "/acquisition/plan"  # ManeuverPlan, LATCHED, ic_planne
 SAFETY_TOPIC = "/safety/status"  # SafetyStatus, STREAM, safety_monitor (truth and estimate)
 PLAN_CHECK_TOPIC = "/safety/plan_check"  # SafetyStatus, EXECUTED (keeps the last 50 checks), safety_monitor
 DIAGNOSTICS_TOPIC = "/diagnostics"
-LOCKSTEP_STEP_TOPIC = "/lockstep/step"  # LockstepStep, sim: the lockstep clock (README: roe-sep run)
+LOCKSTEP_STEP_TOPIC = "/lockstep/step"  # LockstepStep, sim: the lockstep clock (docs/run.md)
 LOCKSTEP_ACK_TOPIC = "/lockstep/ack"  # LockstepAck, every participant
 PLAN_SERVICE = "/separation/plan"  # roe_sep_msgs/srv/PlanSeparation, planner
 

@@ -1,6 +1,6 @@
 """Study: where the drift at the IC epoch comes from, over the runs of a finished ``roe-sep campaign`` directory.
 
-The initial condition that fails most is the drift, |a da| <= 5 m at the IC epoch (README, campaigns). The truth's
+The initial condition that fails most is the drift, |a da| <= 5 m at the IC epoch (docs/campaigns.md). The truth's
 a da there is the acquisition planner's prediction error (its last plan's aimed a*ROE minus the truth; the report's
 ``model_error.ic``). Two parts of it are measured here, run by run, from each run's bag:
 

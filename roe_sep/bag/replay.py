@@ -25,7 +25,7 @@ _TOPIC = re.compile(r"^(/[A-Za-z_][A-Za-z0-9_]*)+$")
 
 
 def _project_depths() -> dict:
-    """Depths of the transient-local topics of :mod:`roe_sep.interfaces` (the table in the README)."""
+    """Depths of the transient-local topics of :mod:`roe_sep.interfaces` (docs/ros_interface.md)."""
     try:
         from .. import interfaces as q
     except Exception:  # noqa: BLE001  (rclpy missing: nothing to play anyway)

@@ -76,7 +76,7 @@ def cmd_deploy_sweep(args):
 
 
 def cluster_report(prog, stat=None):
-    """The machine-readable program (README keys)."""
+    """The machine-readable program (the documented keys)."""
     cfg = prog.config
     names = [s.name for s in cfg.sats]
     rep = {

@@ -14,7 +14,7 @@ from .common import SAMPLES_MAX, emit, finite_float, integer, p_list, positive_i
 
 
 def design_report(d: DoubleImpulseDesign) -> dict:
-    """The machine-readable design: every key the README documents (SI units, angles in deg where named)."""
+    """The machine-readable design: every key docs/cli.md documents (SI units, angles in deg where named)."""
     b = d.bounds
     aimed = d.final_roe() * d.a
     return {

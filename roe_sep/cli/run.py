@@ -1,5 +1,5 @@
-"""``roe-sep run``, ``roe-sep replay`` and ``roe-sep bag``: the scenario end to end over ROS 2 (the README's main
-command), and the tools for its bags."""
+"""``roe-sep run``, ``roe-sep replay`` and ``roe-sep bag``: the scenario end to end over ROS 2
+(docs/run.md), and the tools for its bags."""
 
 import math
 import sys

@@ -178,7 +178,7 @@ class RecorderNode(Node):
             self._error(f"message on {topic} not recorded: {exc}")
 
     # -- lockstep log times --------------------------------------------------------------------------------------
-    # Under the lockstep clock (README "roe-sep run") every message is logged at the sim time at which it was
+    # Under the lockstep clock (docs/run.md) every message is logged at the sim time at which it was
     # published, whatever order DDS delivers the topics in. A step message (j, r) counts the messages published on
     # each topic so far, so the n-th message of a topic was published just before the first step message whose
     # count reaches n: before round 0 of step j, by the simulator advancing over (t_{j-1}, t_j] or by a participant

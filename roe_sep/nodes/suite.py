@@ -3,7 +3,7 @@
 ``ros2 run roe_sep suite recorder ground_bridge ... sim --ros-args --params-file F`` constructs the named nodes, in
 the order given, in one process and spins them on one executor. They still talk over DDS (Fast DDS delivers
 within the process), so the graph, the topics, ``ros2 node list`` and the bag are those of one process per node.
-``roe-sep run`` starts the default scenario this way unless ``--process-per-node`` (README "roe-sep run"); under
+``roe-sep run`` starts the default scenario this way unless ``--process-per-node`` (docs/run.md); under
 lockstep both give the same plans, maneuvers and report (test_lockstep checks it).
 
 Why: a run wakes each node about 6,000 times (the truth every 60 s of sim time, the lockstep steps). With a process

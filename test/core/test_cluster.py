@@ -175,8 +175,8 @@ def test_analytical_pair_region_is_more_conservative_when_the_lighter_drag_goes_
 
 
 def test_envelope_pair_regions_lie_inside_the_statistical_ones():
-    """The regions the seed's Gaussian model gets wrong (README): with the heavier-drag NS first the envelope never
-    calls the pair safe (a drag-driven crossing exists in S*), where the statistical P stays below or near P*; the
+    """The regions the seed's Gaussian model gets wrong (docs/seeds.md): with the heavier-drag NS first the envelope
+    never calls the pair safe (a drag-driven crossing exists in S*), where the statistical P stays below or near P*; the
     largest delay difference within r** is at most the statistical one (measured 22/15/10 s vs 23/15/10 s from
     5/20/40 s)."""
     cfg = dataclasses.replace(ClusterConfig(), max_delay=70.0)

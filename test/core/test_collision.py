@@ -76,7 +76,7 @@ def test_importance_sampling_agrees_with_brute_force():
 
 def test_rare_event_precision_with_importance_sampling(capsys):
     """R = 90 m at p = 0: P ~ 3e-8 (brute force would need ~1e10 samples); 20,000 importance samples give a
-    relative 95 % half-width <= 30 % (README: the same with 1e5 samples)."""
+    relative 95 % half-width <= 30 % (docs/collision.md: the same with 1e5 samples)."""
     assert main(["collision", "--hard-body-radius", "90", "--p", "0", "--samples", "20000", "--json"]) == 0
     rep = json.loads(capsys.readouterr().out)
     assert rep["method"] == "is" and rep["samples"] == 20000

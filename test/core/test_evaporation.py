@@ -49,7 +49,7 @@ def test_wilson_interval_hand_values():
 
 
 def test_published_evaporation_is_sixteen_revolutions_after_the_stop():
-    """The README's finding: under the stated set-up (24 h) the evaporation fraction at p = 0.07 / 0.08 is 3-5x
+    """The finding of docs/seeds.md: under the stated set-up (24 h) the evaporation fraction at p = 0.07 / 0.08 is 3-5x
     below the journal's 0.36 % / 1.31 %; 16 orbital periods after the drift-stop (25.3 h) it falls inside their
     95 % intervals at the journal's 100,000 samples."""
     mc = MonteCarloConfig(samples=200_000, seed=0)

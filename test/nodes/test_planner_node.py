@@ -60,7 +60,7 @@ def test_plan_bad_event_and_restart(ground):
         assert (burn.spacecraft, burn.purpose) == ("carrier", "drift_stop")
         # the carrier burns the opposite of the relative drift-stop (-1.329250, 0.162718 - 0.06, 0)
         assert [burn.dv_rtn.x, burn.dv_rtn.y, burn.dv_rtn.z] == pytest.approx([1.329250, -0.102718, 0.0], abs=1e-6)
-        # every angle in our messages is wrapped to [-pi, pi) (README topic table)
+        # every angle in our messages is wrapped to [-pi, pi) (docs/ros_interface.md)
         assert burn.mean_arg_latitude == pytest.approx(float(wrap_angle(D.u1 + 3 * math.pi)))
         assert time_to_sec(burn.epoch) - 1000.0 == pytest.approx(3 * math.pi / D.n, rel=2e-3)  # ~1.5 orbits
         assert time_to_sec(plan.ejection_epoch) == pytest.approx(1000.0)

@@ -42,7 +42,7 @@ Expected values and variances of the coordinates (seed 004 Eqs. 1-2) follow by t
   (:func:`deterministic_pair_bound`). Within r** (4, upper part) and the minimax criterion (5): the farthest corner
   of the P* box.
 
-Measured against the statistical simulation (README, tests): every region of the envelope lies inside the
+Measured against the statistical simulation (docs/seeds.md, tests): every region of the envelope lies inside the
 statistical one (seed 004 Sec. 4: the analytical algorithm is the more stringent). The gaussian regions do for the
 OS and for the pair with the lighter-drag NS first, but *not* for the pair with the heavier-drag NS first nor for
 r**: the along-track spread is V cos(Omega dt) with Omega Rayleigh-distributed, whose lower tail is exponential, and

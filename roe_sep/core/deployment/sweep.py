@@ -251,7 +251,7 @@ class DeploymentSweep:
         return self.distance[..., -1]
 
     def to_dict(self, curves=False):
-        """The machine-readable sweep (README keys): cases, per-(inclination, dv) summary, config."""
+        """The machine-readable sweep (the documented keys): cases, per-(inclination, dv) summary, config."""
         cfg = self.config
         cases, summary = [], []
         d_end, d_max = self.distance_end, np.max(self.distance, axis=-1)
