@@ -2,7 +2,6 @@
 (mcap + mcap_ros2, rosbags) decode to exactly what was published; a SIGKILLed recording is recovered; the replay
 re-publishes the same messages in order and re-latches the latched plan for late joiners."""
 
-import dataclasses
 import os
 import signal
 import subprocess
@@ -12,10 +11,10 @@ from types import SimpleNamespace
 
 import pytest
 import yaml
+from bagutil import bag_replay_process, mcap_file, norm, read_mcap_ros2, read_rosbags  # noqa: E402
 from builtin_interfaces.msg import Time  # noqa: E402
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue  # noqa: E402
 from mcap.reader import make_reader  # noqa: E402
-from mcap_ros2.decoder import DecoderFactory  # noqa: E402
 from roe_sep_msgs.msg import ImpulsiveManeuver, ManeuverPlan, RelativeOrbitalElements  # noqa: E402
 from rosgraph_msgs.msg import Clock  # noqa: E402
 from rosutil import ROOT, rclpy, ros_env, spin_until, start_node, stop_node, wait_exit  # noqa: I001,E402
@@ -27,35 +26,12 @@ from roe_sep.bag import recover as bag_recover  # noqa: E402
 from roe_sep.bag import replay as bag_replay  # noqa: E402
 from roe_sep.nodes.convert import array_to_vector, sec_to_time  # noqa: E402
 
-rosbags_rosbag2 = pytest.importorskip("rosbags.rosbag2")
-rosbags_typesys = pytest.importorskip("rosbags.typesys")
-
 CLOCK_QOS = rclpy.qos.QoSProfile(depth=10)
 SOURCE_STATUS = "bag_test/source"
 N_ROE, N_DIAG, N_CLOCK = 20, 5, 5
 
 
 # -- helpers ---------------------------------------------------------------------------------------------------------
-def norm(v):
-    """A message from rclpy, mcap_ros2 or rosbags as plain dicts/lists/numbers, so the three compare equal."""
-    if hasattr(v, "get_fields_and_field_types"):
-        return {k: norm(getattr(v, k)) for k in v.get_fields_and_field_types()}
-    if isinstance(v, SimpleNamespace):
-        return {k: norm(getattr(v, k)) for k in v.__slots__}
-    if dataclasses.is_dataclass(v) and not isinstance(v, type):
-        return {f.name: norm(getattr(v, f.name)) for f in dataclasses.fields(v)
-                if not f.name.startswith("__") and not f.name.isupper()}  # rosbags: no type name, no constants
-    if isinstance(v, bytes) and len(v) == 1:  # rclpy 'byte' fields
-        return v[0]
-    if isinstance(v, (str, bytes, bool, int, float)):
-        return v
-    if hasattr(v, "tolist"):
-        return norm(v.tolist())
-    if hasattr(v, "__iter__"):
-        return [norm(x) for x in v]
-    return v
-
-
 def plan_msg():
     plan = ManeuverPlan(strategy="double_impulse", ejection_epoch=sec_to_time(1000.0), p_reduction=0.06)
     plan.header.stamp = sec_to_time(1000.5)
@@ -95,37 +71,6 @@ def recorder_values(diags):
             if s.name == "roe_sep/recorder":
                 values = {kv.key: kv.value for kv in s.values}
     return values
-
-
-def mcap_file(bag):
-    (f,) = [p for p in os.listdir(bag) if p.endswith(".mcap")]
-    return os.path.join(bag, f)
-
-
-def read_mcap_ros2(path):
-    """Independent reader #1: mcap + mcap_ros2's decoder -> {topic: [(msg, log_time, sequence)]}."""
-    out = {}
-    with open(path, "rb") as fh:
-        reader = make_reader(fh, decoder_factories=[DecoderFactory()])
-        for _schema, channel, message, decoded in reader.iter_decoded_messages(log_time_order=True):
-            out.setdefault(channel.topic, []).append((decoded, message.log_time, message.sequence))
-    return out
-
-
-def read_rosbags(bag):
-    """Independent reader #2: rosbags, with the roe_sep_msgs types registered from the bag's schema text."""
-    store = rosbags_typesys.get_typestore(rosbags_typesys.Stores.ROS2_JAZZY)
-    out, conns = {}, {}
-    with rosbags_rosbag2.Reader(bag) as reader:
-        types = {}
-        for conn in reader.connections:
-            conns[conn.topic] = conn
-            if conn.msgtype.startswith("roe_sep_msgs/"):
-                types.update(rosbags_typesys.get_types_from_msg(conn.msgdef.data, conn.msgtype))
-        store.register(types)
-        for conn, _t, raw in reader.messages():
-            out.setdefault(conn.topic, []).append(store.deserialize_cdr(raw, conn.msgtype))
-    return out, conns
 
 
 def published_diags(msgs):
@@ -338,11 +283,6 @@ def test_replay_publishes_clock_from_log_times(ros, tmp_path):
     stamps = [c.clock.sec * 10**9 + c.clock.nanosec for c in clocks]
     assert stamps and stamps == sorted(stamps) and t0 <= stamps[0] and stamps[-1] == t0 + 300_000_000
     assert {t0 + i * 100_000_000 for i in range(4)} <= set(stamps)
-
-
-def bag_replay_process(*args):
-    return subprocess.Popen([sys.executable, "-m", "roe_sep.bag.replay", *args], env=ros_env(), cwd=ROOT,
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
 
 
 def test_sim_time_log_times(ros, tmp_path):

@@ -7,9 +7,9 @@ import math
 
 import numpy as np
 import pytest
+from bagutil import bag_replay_process, mcap_file, norm, read_mcap_ros2, read_rosbags  # noqa: E402
 from roe_sep_msgs.msg import ManeuverPlan, RelativeOrbitalElements  # noqa: E402
 from rosutil import ROOT, rclpy, spin_until  # noqa: I001  (skips without rclpy)
-from test_bag import bag_replay_process, mcap_file, norm, read_mcap_ros2, read_rosbags  # noqa: E402
 
 from roe_sep import interfaces  # noqa: E402
 from roe_sep.cli import main  # noqa: E402

@@ -12,10 +12,10 @@ import sys
 import time
 
 import pytest
+from bagutil import mcap_file  # noqa: E402
 from mcap.reader import make_reader  # noqa: E402
 from mcap_ros2.decoder import DecoderFactory  # noqa: E402
 from rosutil import rclpy  # noqa: F401,I001  (skips without rclpy)
-from test_bag import mcap_file  # noqa: E402
 
 from roe_sep import interfaces  # noqa: E402
 from roe_sep.run import run  # noqa: E402
