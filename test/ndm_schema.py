@@ -1,9 +1,8 @@
 """XML Schema validation of NDM/XML files for the tests (lxml), against one of two schema sets:
 
-* **official**: the CCSDS NDM/XML 2.0.0 schema set (SANA registry, ``ndmxml-2.0.0-master-2.0.xsd`` and the files it
-  includes), when it is found in ``$ROE_SEP_NDM_XSD_DIR`` or ``test/data/ndmxml-2.0.0/``. No package on the registries
-  this project installs from ships it (checked: every ccsds-ndm sdist 1.3-3.1.1, ccsds-ndm-py 0.0.9, orekit-jpype
-  13.1.9), so it is not in the repository yet: the tests that need it skip and say so.
+* **official**: the CCSDS NDM/XML 2.0.0 schema set of the SANA registry (``ndmxml-2.0.0-master-2.0.xsd`` and the
+  files it includes), unqualified variant, copied unchanged into ``test/data/ndmxml-2.0.0/`` (provenance in its
+  README.md; ``$ROE_SEP_NDM_XSD_DIR`` points elsewhere, e.g. at the qualified variant's directory for a check).
 * **models**: an XML Schema written here from ccsds-ndm's models of that same schema set (``ccsds_ndm.models.ndmxml2``,
   generated from the official XSDs with xsdata). Every complex type with its elements in schema order, their
   ``minOccurs``/``maxOccurs`` (required, lists, explicit bounds), attributes (units, ``id``/``version`` fixed),
@@ -35,11 +34,22 @@ BUILTIN = {str: "xs:string", float: "xs:double", int: "xs:integer", bool: "xs:bo
 
 
 def official_schema():
-    """lxml XMLSchema of the official NDM/XML 2.0.0 set, or None when it is not available here."""
-    for d in OFFICIAL_DIRS:
-        if (d / OFFICIAL_MASTER).is_file():
-            return etree.XMLSchema(etree.parse(str(d / OFFICIAL_MASTER)))
-    return None
+    """lxml XMLSchema of the official NDM/XML 2.0.0 set (parsed once)."""
+    global _OFFICIAL
+    if _OFFICIAL is None:
+        found = [d / OFFICIAL_MASTER for d in OFFICIAL_DIRS if (d / OFFICIAL_MASTER).is_file()]
+        if not found:
+            raise FileNotFoundError(f"no {OFFICIAL_MASTER} in {' or '.join(map(str, OFFICIAL_DIRS))}")
+        _OFFICIAL = etree.XMLSchema(etree.parse(str(found[0])))
+    return _OFFICIAL
+
+
+_OFFICIAL = None
+
+
+def schema_location(path):
+    """``xsi:noNamespaceSchemaLocation`` of the root element of an XML file (None when absent)."""
+    return etree.parse(str(path)).getroot().get("{http://www.w3.org/2001/XMLSchema-instance}noNamespaceSchemaLocation")
 
 
 def _strip_optional(tp):

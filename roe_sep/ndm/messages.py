@@ -26,6 +26,9 @@ from . import frames
 from .options import FORMATS
 
 ORIGINATOR = "ROE_SEP"
+SCHEMA_LOCATION = "https://sanaregistry.org/r/ndmxml_unqualified/ndmxml-2.0.0-master-2.0.xsd"
+"""``xsi:noNamespaceSchemaLocation`` of every XML message: the SANA registry's master schema of NDM/XML 2.0.0 in its
+unqualified variant (the elements carry no namespace), as CCSDS 505.0-B-2 prescribes for an NDM/XML instance."""
 G0 = 9.80665
 """Standard gravity [m/s^2] of the rocket equation (Isp in seconds)."""
 
@@ -285,11 +288,11 @@ def build_cdm(epoch_utc, tca, objects, message_id, comments=()):
 
 # --- text and files -----------------------------------------------------------------------------------------------
 def to_text(message, fmt="xml") -> str:
-    """XML or KVN text of a message (the library's writers)."""
+    """XML or KVN text of a message (the library's writers); XML names its schema (:data:`SCHEMA_LOCATION`)."""
     if fmt not in FORMATS:
         raise ValueError(f"format must be one of {', '.join(FORMATS)}, got {fmt!r}")
     if fmt == "xml":
-        return NdmIo().to_string(message, NDMFileFormats.XML)
+        return NdmIo().to_string(message, NDMFileFormats.XML, no_namespace_schema_location=SCHEMA_LOCATION)
     # The library's TDM KVN has a blank line between META_STOP and DATA_START; 503.0-B-2 allows blank lines, but
     # stricter readers (ccsds-ndm-py 0.0.9) refuse it there, so the keywords are kept adjacent.
     return NdmIo().to_string(message, NDMFileFormats.KVN).replace("META_STOP\n\nDATA_START", "META_STOP\nDATA_START")

@@ -91,13 +91,14 @@ def test_ground_bridge_writes_opms_and_feeds_tdm_files_to_radar_od(tmp_path, bag
         dv = bag[interfaces.DRIFT_STOP_PLAN_TOPIC][0].maneuvers[0].dv_rtn
         assert opm.man_ref_frame == "RTN"
         assert abs(opm.man_dv_1.value * 1e3 - dv.x) < 1e-9 and abs(opm.man_dv_2.value * 1e3 - dv.y) < 1e-9
-        # the files the live node writes are valid against the schema of the NDM/XML 2.0.0 models (test_ndm.py
-        # validates the whole set of a run, written by the same builders)
+        # the files the live node writes are valid against the official NDM/XML 2.0.0 schemas and against the
+        # schema of ccsds-ndm's models (test_ndm.py validates the whole set of a run, written by the same builders)
         from ccsds_ndm.models import ndmxml2 as nd
-        from ndm_schema import errors, model_schema
+        from ndm_schema import errors, model_schema, official_schema
 
         schema = model_schema(nd.Opm)
         assert [errors(schema, out / n) for n in names] == [[], []]
+        assert [errors(official_schema(), out / n) for n in names] == [[], []]
 
         # in: a malformed file is moved aside with an ERROR, the node keeps running
         (inp / "garbage.tdm").write_text("CCSDS_TDM_VERS = 2.0\nthis is not a TDM\n")

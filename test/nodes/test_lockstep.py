@@ -104,6 +104,20 @@ def test_same_run_whatever_the_layout_and_the_executor(runs):
     assert (runs["dir"] / "in_process" / "ccsds" / "ephemeris.oem.xml").stat().st_size > 0
 
 
+def test_every_xml_file_a_run_writes_is_valid_against_the_official_schemas(runs):
+    """The CCSDS set the ground_bridge of a closed-loop run wrote (OPM, OEM, TDM, CDM in XML) is valid against the
+    official NDM/XML 2.0.0 schemas of the SANA registry and names their master schema (CCSDS 505.0-B-2)."""
+    from ndm_schema import errors, official_schema, schema_location
+
+    from roe_sep.ndm.messages import SCHEMA_LOCATION
+
+    files = sorted((runs["dir"] / "in_process" / "ccsds").glob("*.xml"))
+    assert {p.name.split(".")[-2] for p in files} == {"opm", "oem", "tdm", "cdm"}, [p.name for p in files]
+    for p in files:
+        assert errors(official_schema(), p) == [], p.name
+        assert schema_location(p) == SCHEMA_LOCATION, p.name
+
+
 def test_another_seed_other_dispersions(runs):
     a, b = runs["fast"]["maneuvers"], runs["other_seed"]["maneuvers"]
     assert a[0]["dv_rtn"] != b[0]["dv_rtn"]  # the SPL's magnitude and direction errors
