@@ -30,6 +30,8 @@ from roe_sep.nodes.convert import array_to_vector, sec_to_time  # noqa: E402
 rosbags_rosbag2 = pytest.importorskip("rosbags.rosbag2")
 rosbags_typesys = pytest.importorskip("rosbags.typesys")
 
+pytestmark = pytest.mark.dds  # every test here starts a node or an rclpy context
+
 CLOCK_QOS = rclpy.qos.QoSProfile(depth=10)
 SOURCE_STATUS = "bag_test/source"
 N_ROE, N_DIAG, N_CLOCK = 20, 5, 5

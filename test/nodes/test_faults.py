@@ -33,7 +33,7 @@ from roe_sep.jsonutil import loads_strict  # noqa: E402
 from roe_sep.nodes.convert import maneuver_msg, sec_to_time  # noqa: E402
 from roe_sep.run import NODES, SUITES, run  # noqa: E402
 
-pytestmark = pytest.mark.fault
+pytestmark = [pytest.mark.fault, pytest.mark.dds]
 COUNTS = {"killed": 0, "reason_named": 0, "reports_strict": 0, "bags_readable": 0, "tracebacks": 0}
 
 

@@ -20,6 +20,8 @@ from test_bag import mcap_file  # noqa: E402
 from roe_sep import interfaces  # noqa: E402
 from roe_sep.run import run  # noqa: E402
 
+pytestmark = pytest.mark.dds  # every test here starts a node or an rclpy context
+
 DURATION = 100000.0  # s: ejection, drift-stop, the first OD solutions and the first acquisition plan
 SEED = 7
 STEP = 600.0  # s, the simulator's default lockstep step

@@ -14,6 +14,8 @@ from roe_sep.nodes.params import ParameterError  # noqa: E402
 from roe_sep.nodes.planner import PlannerNode  # noqa: E402
 from roe_sep.nodes.safety_monitor import SafetyMonitorNode  # noqa: E402
 
+pytestmark = pytest.mark.dds  # every test here starts a node or an rclpy context
+
 FAST_PLANNER = ("-p", "p_mode:=fixed", "-p", "p_reduction:=0.06")
 
 
