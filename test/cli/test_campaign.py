@@ -421,7 +421,7 @@ def test_campaign_refuses_other_settings_in_the_same_directory(campaign):
     (("--runs", "2", "--workers", "2", "--scheduler", "tcp://127.0.0.1:1"), "not allowed with"),
 ])
 def test_bad_options_are_one_line_errors(tmp_path, args, message):
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))  # the dds guard too
     proc = subprocess.run([sys.executable, "-m", "roe_sep.cli", "campaign", "--out", str(tmp_path / "c"), *args],
                           capture_output=True, text=True, env=env, cwd=ROOT, timeout=120)
     assert proc.returncode == 2 and message in proc.stderr and proc.stderr.strip().count("\n") == 0
