@@ -170,7 +170,7 @@ def test_run_observes_its_own_domain(tmp_path, monkeypatch):
 
 @pytest.mark.dds
 def test_multi_impulse_scenario_runs_end_to_end(tmp_path):
-    """Issue 4: the node suite takes the strategy as a parameter; the default scenario runs either."""
+    """The node suite takes the strategy as a parameter; the default scenario runs either."""
     rep = run(out=tmp_path / "multi", params=ROOT / "config" / "multi_impulse_params.yaml", duration=388800.0,
               timeout=900)
     assert rep["run"]["completed"] and rep["safe"] and all(rep["criteria"].values()), rep["criteria"]

@@ -1,4 +1,4 @@
-"""Fault injection (issue 15): every node of a running `roe-sep run` killed in turn, and every subscribed topic
+"""Fault injection: every node of a running `roe-sep run` killed in turn, and every subscribed topic
 fuzzed while the closed loop runs. Marked ``fault`` (``pytest -m fault`` runs them apart, ``make chaos`` runs them
 with more cases); they are part of ``make test``.
 

@@ -1,4 +1,4 @@
-"""The closed loop as an instrument (issue 14): lockstep sim time makes a run a function of its seed alone.
+"""The closed loop as an instrument: lockstep sim time makes a run a function of its seed alone.
 
 The same seed run three times -- as fast as possible, beside CPU hogs started by the test, and paced by a real-time
 factor -- gives identical reports (plans, executed maneuvers, dv, time to the ICs, criteria, OD, model error: every
