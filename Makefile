@@ -8,7 +8,7 @@ PY    := $(VENV)/bin/python
 # extra arguments, e.g.  make test ARGS='-k planner -x'
 ARGS ?=
 
-.PHONY: setup demo test bench smoke chaos clean distclean
+.PHONY: setup demo test test-unit golden bench smoke chaos clean distclean
 
 setup:
 	@bash scripts/bootstrap.sh
@@ -19,7 +19,19 @@ demo: setup
 test: setup
 	bash scripts/test.sh $(ARGS)
 
-# fault injection alone: every node killed in turn, every topic fuzzed, 378 bad command-line inputs
+# the fast loop: no DDS (no node, no rclpy.init, no run or campaign) and no slow test (pytest.ini's markers)
+test-unit: setup
+	bash scripts/test.sh -m "not dds and not slow" $(ARGS)
+
+# re-record the reference run bags/default_run and its report from the current code, with the command it was
+# recorded with (seed 0, the scenario's default); test/cli/test_golden.py compares a fresh run with it
+golden: setup
+	rm -rf out/golden
+	$(VENV)/bin/roe-sep run --params config/bag_params.yaml --out out/golden --json > /dev/null
+	rm -rf bags/default_run && cp -r out/golden/bag bags/default_run
+	cp out/golden/report.json bags/default_run.report.json
+
+# fault injection alone: every node killed in turn, every topic fuzzed, 541 bad command-line inputs
 chaos: setup
 	bash scripts/test.sh -m fault -s $(ARGS)
 

@@ -2,7 +2,6 @@
 within a hard-body radius of the carrier before the horizon (:mod:`roe_sep.core.montecarlo.collision`), brute force
 (``mc``, the draws of ``roe-sep mc``) or by cross-entropy importance sampling (``is``)."""
 
-import argparse
 import dataclasses
 import math
 import sys
@@ -10,33 +9,19 @@ import sys
 from ..core.config import load_scenario
 from ..core.montecarlo import streaming
 from ..core.separation.double_impulse import design
-from .common import emit, positive_int
+from .common import SAMPLES_MAX, emit, finite_float, integer, samples, seed
 from .design import engine_args, mc_config, streamed
 
 IS_SAMPLES = 20_000  # default final importance-sampling samples
 
 
-def _positive_float(name):
-    def parse(text):
-        try:
-            v = float(text)
-        except ValueError:
-            v = math.nan
-        if not (math.isfinite(v) and v > 0):
-            raise argparse.ArgumentTypeError(f"{name} expects a positive number, got {text!r}")
-        return v
-
-    return parse
-
-
-def _nonneg_float(text):
-    try:
-        v = float(text)
-    except ValueError:
-        v = math.nan
-    if not (math.isfinite(v) and v >= 0):
-        raise argparse.ArgumentTypeError(f"--p expects a non-negative number [m/s], got {text!r}")
-    return v
+# The options' ranges. --p: as ``roe-sep mc --p``, beyond 1 m/s a reduction exceeds any drift-stop burn of the
+# design. --departure-distance: two spacecraft of one low orbit are never farther apart than its diameter (< 2e7 m);
+# --hard-body-radius: below half the departure distance (checked with it). --ce-samples: the elite set (the rho = 0.1
+# quantile) must hold at least 10 points, one more than the 9 dimensions of the Gaussian proposal fitted to it.
+P_MAX = 1.0  # m/s
+DEPARTURE_MAX = 1e7  # m
+CE_SAMPLES_MIN = 100
 
 
 def run(args) -> dict:
@@ -131,19 +116,22 @@ def cmd_collision(args):
 def register(subparsers):
     """Add ``collision`` to the ``roe-sep`` subparsers."""
     p = subparsers.add_parser("collision", help="probability of coming back within a hard-body radius")
-    p.add_argument("--hard-body-radius", type=_positive_float("--hard-body-radius"), required=True, metavar="R",
+    p.add_argument("--hard-body-radius", type=finite_float(0.0, DEPARTURE_MAX / 2, lo_open=True, unit="m"),
+                   required=True, metavar="R",
                    help="hard-body radius [m] (below half the departure distance)")
     p.add_argument("--method", choices=("mc", "is"), default="is",
                    help="mc: brute force on the draws of roe-sep mc; is: cross-entropy importance sampling "
                         "(default)")
-    p.add_argument("--samples", type=positive_int,
+    p.add_argument("--samples", type=samples,
                    help=f"samples of the estimator (default: mc the scenario's 100000, is {IS_SAMPLES})")
-    p.add_argument("--p", type=_nonneg_float, help="drift-stop reduction [m/s] (default: p_best of the sweep)")
-    p.add_argument("--seed", type=int, help="random seed (default from the scenario: 0)")
-    p.add_argument("--departure-distance", type=_positive_float("--departure-distance"), default=1000.0,
+    p.add_argument("--p", type=finite_float(0.0, P_MAX, unit="m/s"),
+                   help=f"drift-stop reduction in [0, {P_MAX:g}] m/s (default: p_best of the sweep)")
+    p.add_argument("--seed", type=seed(), help="random seed in [0, 2**32 - 1] (default from the scenario: 0)")
+    p.add_argument("--departure-distance", type=finite_float(0.0, DEPARTURE_MAX, lo_open=True, unit="m"),
+                   default=1000.0,
                    help="m, approaches count once the picosatellite was this far (default 1000, as the sim)")
-    p.add_argument("--ce-samples", type=positive_int, default=2000,
-                   help="is: samples per cross-entropy level (default 2000)")
+    p.add_argument("--ce-samples", type=integer(CE_SAMPLES_MIN, SAMPLES_MAX), default=2000,
+                   help=f"is: samples per cross-entropy level, at least {CE_SAMPLES_MIN} (default 2000)")
     p.add_argument("--config", help="scenario YAML")
     p.add_argument("--no-drag", action="store_true", help="switch differential drag off")
     p.add_argument("--j2", action="store_true", help="include secular J2 in the propagation")

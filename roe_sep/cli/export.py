@@ -1,7 +1,6 @@
 """``roe-sep export BAG --out DIR [--format xml|kvn]``: the CCSDS navigation data messages of a recorded run
 (OPM per approved plan and of the executed carrier burns, OEM, TDM, CDM; :mod:`roe_sep.ndm.dataset`)."""
 
-import math
 from pathlib import Path
 
 import yaml
@@ -11,7 +10,9 @@ from ..bag.reader import resolve
 from ..core.config import load_scenario
 from ..ndm import frames
 from ..ndm.options import FORMATS, TOPICS, Options, RunMessages  # light: the NDM library loads when a set is written
-from .common import emit
+from .common import emit, finite_float
+
+ISP_MAX = 1e5  # s: beyond any thruster flown (ion engines reach ~1e4 s); a larger one makes the OPM's mass change 0
 
 
 def read_run(bag) -> RunMessages:
@@ -54,14 +55,12 @@ def cmd_export(args):
         epoch, scenario_file, source = run_parameters(args.bag)
     except BagError as exc:
         raise ValueError(str(exc)) from None
-    if args.epoch_utc:
+    if args.epoch_utc is not None:  # given, even empty: checked, never silently the run's
         epoch, source = args.epoch_utc, "--epoch-utc"
     try:
         frames.parse_epoch(epoch)
     except ValueError as exc:
         raise ValueError(f"--epoch-utc: {exc}") from None
-    if not (args.carrier_isp > 0 and math.isfinite(args.carrier_isp)):
-        raise ValueError(f"--carrier-isp must be a positive number of seconds, got {args.carrier_isp}")
     carrier = load_scenario(args.config or scenario_file).monte_carlo.carrier
     opts = Options(epoch_utc=epoch, carrier_mass=carrier.mass, carrier_drag_area=carrier.area,
                    carrier_drag_coeff=carrier.cd, carrier_isp=args.carrier_isp)
@@ -94,7 +93,8 @@ def register(subparsers):
                    help="ISO-8601 UTC epoch of sim time 0 (default: the run's params.yaml, else 2016-07-01T00:00:00)")
     p.add_argument("--config", default=None, help="scenario YAML for the carrier's mass and drag parameters "
                    "(default: the run's, else the embedded default)")
-    p.add_argument("--carrier-isp", type=float, default=Options.carrier_isp,
-                   help="s, carrier thruster specific impulse for MAN_DELTA_MASS (default 60)")
+    p.add_argument("--carrier-isp", type=finite_float(0.0, ISP_MAX, lo_open=True, unit="s"),
+                   default=Options.carrier_isp,
+                   help=f"s, carrier thruster specific impulse for MAN_DELTA_MASS, at most {ISP_MAX:g} (default 60)")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=cmd_export)

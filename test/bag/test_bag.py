@@ -26,6 +26,8 @@ from roe_sep.bag import recover as bag_recover  # noqa: E402
 from roe_sep.bag import replay as bag_replay  # noqa: E402
 from roe_sep.nodes.convert import array_to_vector, sec_to_time  # noqa: E402
 
+pytestmark = pytest.mark.dds  # every test here starts a node or an rclpy context
+
 CLOCK_QOS = rclpy.qos.QoSProfile(depth=10)
 SOURCE_STATUS = "bag_test/source"
 N_ROE, N_DIAG, N_CLOCK = 20, 5, 5

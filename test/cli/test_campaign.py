@@ -187,6 +187,7 @@ def campaign(tmp_path_factory):
     return out, args, params, _strict(proc.stdout)
 
 
+@pytest.mark.dds
 def test_campaign_writes_one_row_and_report_per_run(campaign):
     out, _, _, rep = campaign
     rows = Table(out / "runs.csv").read()
@@ -213,6 +214,7 @@ def test_campaign_writes_one_row_and_report_per_run(campaign):
     assert _strict((out / "report.json").read_text())["runs"] == RUNS
 
 
+@pytest.mark.dds
 def test_rerun_skips_every_done_run(campaign):
     out, args, _, _ = campaign
     before = (out / "runs.csv").read_text()
@@ -221,6 +223,7 @@ def test_rerun_skips_every_done_run(campaign):
     assert (out / "runs.csv").read_text() == before
 
 
+@pytest.mark.dds
 def test_interrupted_campaign_completes_only_the_missing_run_with_the_same_row(campaign):
     """A campaign killed before its last row: the rerun (on one worker, with the CCSDS export) runs that seed
     only, into the leftover run directory, and writes the row the two-worker campaign wrote."""
@@ -242,6 +245,7 @@ def test_interrupted_campaign_completes_only_the_missing_run_with_the_same_row(c
     assert (out / "runs" / str(victim) / "ccsds" / "ephemeris.oem.xml").stat().st_size > 0
 
 
+@pytest.mark.dds
 @pytest.mark.fault
 def test_ctrl_c_mid_campaign_then_rerun_completes_only_the_missing_runs(campaign, tmp_path):
     """A real interruption: SIGINT (Ctrl-C) to ``roe-sep campaign`` once its first row is written. It exits with
@@ -284,6 +288,7 @@ def test_ctrl_c_mid_campaign_then_rerun_completes_only_the_missing_runs(campaign
     assert {s: _comparable(rows[s]) for s in reference} == {s: _comparable(r) for s, r in reference.items()}
 
 
+@pytest.mark.dds
 def test_run_k_alone_gives_the_same_row(campaign):
     """``roe-sep run --seed S+k`` in its default layout (two processes, with the ground_bridge) gives the row the
     campaign's one-process run wrote."""
@@ -333,6 +338,7 @@ def dask_cluster(tmp_path):
                 proc.kill()
 
 
+@pytest.mark.dds
 def test_campaign_on_an_existing_cluster_gives_the_rows_of_the_embedded_one(campaign, dask_cluster, tmp_path):
     """``--scheduler tcp://...``: joined while the cluster has no worker, the campaign says so and waits; once a
     worker joins, the runs go to it and write the rows the embedded two-worker cluster wrote for the same seeds
@@ -380,6 +386,7 @@ def test_campaign_on_an_existing_cluster_gives_the_rows_of_the_embedded_one(camp
     assert all((done / "runs" / str(s) / "bag").is_dir() for s in rows)  # kept by default
 
 
+@pytest.mark.dds
 @pytest.mark.fault
 def test_failed_run_is_a_row_with_its_reason(tmp_path):
     params = tmp_path / "bad.yaml"
@@ -398,6 +405,7 @@ def test_failed_run_is_a_row_with_its_reason(tmp_path):
     assert not math.isnan(rep["p_safe_failures_unsafe"]["ci95"][1])
 
 
+@pytest.mark.dds
 def test_campaign_refuses_other_settings_in_the_same_directory(campaign):
     out, args, _, _ = campaign
     proc = _cli(*[a if a != str(DURATION) else "30000.0" for a in args], check=False)
@@ -413,7 +421,7 @@ def test_campaign_refuses_other_settings_in_the_same_directory(campaign):
     (("--runs", "2", "--workers", "2", "--scheduler", "tcp://127.0.0.1:1"), "not allowed with"),
 ])
 def test_bad_options_are_one_line_errors(tmp_path, args, message):
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))  # the dds guard too
     proc = subprocess.run([sys.executable, "-m", "roe_sep.cli", "campaign", "--out", str(tmp_path / "c"), *args],
                           capture_output=True, text=True, env=env, cwd=ROOT, timeout=120)
     assert proc.returncode == 2 and message in proc.stderr and proc.stderr.strip().count("\n") == 0

@@ -43,6 +43,7 @@ def test_mc_json(capsys):
     assert rep["samples"] == 3000
 
 
+@pytest.mark.slow
 def test_mc_plots(capsys, tmp_path):
     pytest.importorskip("matplotlib")
     code, out, _ = run_cli(capsys, "mc", "--samples", "2000", "--p", "0,0.05", "--plots", str(tmp_path), "--json")

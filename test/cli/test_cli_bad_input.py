@@ -1,5 +1,5 @@
-"""Fault injection on the command line (issue 15): a table of bad inputs over every ``roe-sep`` subcommand and
-numeric option, the configuration files they read and damaged bags.
+"""Fault injection on the command line: a table of bad inputs over every ``roe-sep`` subcommand and numeric option,
+the configuration files they read and damaged bags.
 
 Each case runs in-process (``roe_sep.cli.main``, output captured) under a wall-time alarm and is classified:
 
@@ -90,6 +90,9 @@ def cases():
     c += opt_cases(["ops"], ["--days", "0.2"], "--date", ["2024-13-01", "yesterday", "2060-01-01", "1800-01-01", ""])
     c += opt_cases(["ops"], ["--date", "2024-06-01"], "--days", N + NEG + ["8"])
     c += file_cases(["ops"], ops, "--tle", ["missing", "directory", "binary", "bad_tle", "decayed_tle"], ["--tle"])
+    for line in (1, 2):  # a TLE line whose column 69 is not the modulo-10 checksum of the line
+        c += file_cases(["ops"], ops, "--tle", [f"tle_line{line}_checksum"], ["--tle", f"line {line}", "checksum"])
+    c += file_cases(["ops"], ops, "--tle", ["tle_short_line"], ["--tle", "line 2", "69"])
     c.append(("ops --tle 34 years before --date", ["ops", "--date", "2050-01-01", "--days", "0.2", "--tle", "{tle}"],
               2, ["--tle", "2050-01-01"]))
     c += file_cases(["ops"], ops, "--ops-config", CONFIG_FILES + ["ops_lat", "ops_step0", "ops_unknown", "ops_ltan",
@@ -148,6 +151,49 @@ def cases():
     c += opt_cases(["cluster"], cl, "--method", ["bogus"])
     c += file_cases(["cluster"], cl, "--config", CONFIG_FILES + ["cluster_nan", "cluster_unknown", "cluster_negv",
                                                                  "cluster_nosats", "cluster_fast", "cluster_density"])
+    # collision (a case accepted by mistake estimates from 10 brute-force samples)
+    col = ["--hard-body-radius", "1", "--method", "mc", "--samples", "10", "--p", "0.05"]
+    c += opt_cases(["collision"], col[2:], "--hard-body-radius", N + NEG + ["500"])
+    c += opt_cases(["collision"], col, "--samples", N + NEG + ["2.5", "20000000000"])
+    c += opt_cases(["collision"], col, "--seed", N + ["-1", "4294967296", "1.5"])
+    c += opt_cases(["collision"], col, "--p", ["nan", "inf", "-0.1", "x", "", "2", "1e300"])
+    c += opt_cases(["collision"], col, "--departure-distance", N + NEG + ["1e308"])
+    c += opt_cases(["collision"], ["--hard-body-radius", "1", "--samples", "10", "--p", "0.05"], "--ce-samples",
+                   N + NEG + ["99", "2.5", "20000000000"])
+    c.append(("collision is: no sample back from the departure distance",
+              ["collision", "--hard-body-radius", "1", "--samples", "100", "--ce-samples", "100", "--p", "0.05",
+               "--departure-distance", "1e7"], 2, ["departure distance", "1e+07"]))
+    c += opt_cases(["collision"], col, "--method", ["bogus"])
+    c += opt_cases(["collision"], col, "--chunk-size", N + NEG + ["100"])
+    c += opt_cases(["collision"], col, "--workers", ["0", "257", "x"])
+    c += file_cases(["collision"], col, "--config", CONFIG_FILES + ["scenario_nan"])
+    # export (the reference bag; a case accepted by mistake writes a set into a temporary directory)
+    exp = ["{reference_bag}", "--out", "{out}"]
+    for name in ("missing", "empty_dir", "garbage_bag", "magic_only", "truncated_bag"):
+        c.append((f"export <{name}>", ["export", "{" + name + "}", "--out", "{out}"], 2, ["{" + name + "}"]))
+    c += opt_cases(["export"], exp, "--format", ["json"])
+    c += opt_cases(["export"], exp, "--epoch-utc", ["July", "", "2016-13-01T00:00:00", "nan"])
+    c += opt_cases(["export"], exp, "--carrier-isp", N + NEG)
+    c += file_cases(["export"], exp, "--config", CONFIG_FILES + ["scenario_nan"])
+    c.append(("export --out <a file>", ["export", "{reference_bag}", "--out", "{binary}"], 2, ["{binary}"]))
+    c.append(("export --out <under a file>", ["export", "{reference_bag}", "--out", "{binary}/x"], 2, ["{binary}"]))
+    # campaign (--out holds a campaign of other settings: a case accepted by mistake is refused before any run)
+    camp = ["--runs", "2", "--out", "{campaign_other}"]
+    c += opt_cases(["campaign"], camp, "--runs", N + NEG + ["2.5", "100001"])
+    c += opt_cases(["campaign"], camp, "--seed", N + ["-1", "4294967296", "1.5"])
+    c.append(("campaign last seed beyond 2**32 - 1", ["campaign", *camp, "--seed", "4294967295"], 2,
+              ["--seed", "4294967295", "last seed"]))
+    c += opt_cases(["campaign"], camp, "--workers", ["0", "257", "x"])
+    c += opt_cases(["campaign"], camp, "--scheduler", ["localhost:8786", ""])
+    c.append(("campaign --workers with --scheduler", ["campaign", *camp, "--workers", "2", "--scheduler",
+                                                      "tcp://127.0.0.1:1"], 2, ["--scheduler", "not allowed with"]))
+    c += opt_cases(["campaign"], camp, "--duration", N + NEG + ["3e6"])
+    c += opt_cases(["campaign"], camp, "--timeout", N + NEG + ["1e6"])
+    c += opt_cases(["campaign"], camp, "--domains", ["5-3", "x", "0-200", "7"])
+    c += opt_cases(["campaign"], camp, "--open-loop-samples", N + ["99", "20000000", "2.5"])
+    c += file_cases(["campaign"], camp, "--config", CONFIG_FILES + ["scenario_nan"])
+    c += file_cases(["campaign"], camp, "--params", CONFIG_FILES + ["params_nan", "params_shape"])
+    c.append(("campaign --out <under a file>", ["campaign", "--runs", "1", "--out", "{binary}/c"], 2, ["{binary}"]))
     # bag info: unreadable -> 2, damaged -> 1 with the damage named
     for name in ("missing", "empty_dir", "garbage_bag", "empty_file"):
         c.append((f"bag info <{name}>", ["bag", "info", "{" + name + "}"], 2, ["{" + name + "}"]))
@@ -226,12 +272,18 @@ def files(tmp_path_factory):
     text("ops_boresight", ops.replace("boresight_rtn: ejection", "boresight_rtn: [0, 0, 0]"))
     f["bad_tle"] = d / "bad.tle"
     f["bad_tle"].write_text("1 garbage line that is no element set\n2 and neither is this one\n")
-    elements = ("1 41604U 16040F   16183.50000000  .00000500  00000-0  25000-4 0  9990\n"
-                "2 41604  97.4500 250.0000 0010000  90.0000 270.0000 {} 1000\n")
+    line1 = "1 41604U 16040F   16183.50000000  .00000500  00000-0  25000-4 0  9996"  # 6: its checksum
+    line2 = "2 41604  97.4500 250.0000 0010000  90.0000 270.0000 15.18000000  1004"
     f["tle"] = d / "biros.tle"
-    f["tle"].write_text(elements.format("15.18000000"))
-    f["decayed_tle"] = d / "decayed.tle"
-    f["decayed_tle"].write_text(elements.format("17.90000000"))  # a period of 80 min: perigee below the surface
+    f["tle"].write_text(f"{line1}\n{line2}\n")
+    f["decayed_tle"] = d / "decayed.tle"  # a period of 80 min: perigee below the surface
+    f["decayed_tle"].write_text(f"{line1}\n{line2.replace('15.18000000  1004', '17.90000000  1006')}\n")
+    f["tle_line1_checksum"] = d / "line1_checksum.tle"
+    f["tle_line1_checksum"].write_text(f"{line1[:-1]}7\n{line2}\n")
+    f["tle_line2_checksum"] = d / "line2_checksum.tle"
+    f["tle_line2_checksum"].write_text(f"BIROS\n{line1}\n{line2[:-1]}5\n")
+    f["tle_short_line"] = d / "short_line.tle"
+    f["tle_short_line"].write_text(f"{line1}\n{line2[:-1]}\n")
     cluster = (ROOT / "config" / "cluster.yaml").read_text()
     text("cluster_nan", cluster + "\nsigma_deg_s: .nan\n" if "sigma_deg_s" not in cluster else
          cluster.replace("sigma_deg_s:", "sigma_deg_s: .nan #"))
@@ -241,6 +293,11 @@ def files(tmp_path_factory):
     text("cluster_fast", "sats: [{name: a, velocity: 1.0e+300, delta_q: 0.006}]\n")
     text("cluster_density", "density: 1.0\n")
     text("cluster_small", "max_delay: 15.0\ndelay_step: 5.0\nturns: 0.5\ntime_step: 60.0\n")
+    f["reference_bag"] = ROOT / "bags" / "default_run"
+    f["campaign_other"] = d / "campaign_other"
+    f["campaign_other"].mkdir()
+    (f["campaign_other"] / "campaign.json").write_text(json.dumps({"scenario_sha256": "0" * 64, "overrides": {},
+                                                                   "duration": 1.0}))
     text("params_unknown_node", "no_such_node: {ros__parameters: {x: 1}}\n")
     text("params_nan", "sim: {ros__parameters: {tick_period: .nan}}\n")
     text("params_shape", "sim: [1, 2]\n")

@@ -19,7 +19,7 @@ NODES = ("planner", "radar_od", "ic_planner", "safety_monitor", "ejector", "grou
          "analysis_server", "foxglove_view", "sim")
 MANAGED = ("planner", "radar_od", "ic_planner", "safety_monitor")
 
-pytestmark = pytest.mark.ros2cli
+pytestmark = [pytest.mark.ros2cli, pytest.mark.dds]
 
 
 def sources():

@@ -51,6 +51,7 @@ def test_every_node_resolves_like_ros2_run(install_prefix):
     assert (install_prefix / "share" / "roe_sep" / "config" / "default.yaml").is_file()
 
 
+@pytest.mark.dds
 def test_installed_executables_run_the_installed_code(install_prefix):
     site = next((install_prefix / "lib").glob("python3*/site-packages"))
     env = dict(os.environ, PYTHONPATH=str(site), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")

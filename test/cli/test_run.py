@@ -26,6 +26,7 @@ def scenario(tmp_path_factory):
     return out, report
 
 
+@pytest.mark.dds
 def test_default_run_is_safe_and_reaches_the_initial_conditions(scenario):
     out, rep = scenario
     assert json.loads((out / "report.json").read_text()) == json.loads(json.dumps(rep))
@@ -94,6 +95,7 @@ def test_first_and_last_od_solution_against_the_truth():
     assert json.loads(json.dumps(rep, allow_nan=False))["od"]["last"] == last
 
 
+@pytest.mark.dds
 def test_recorded_acquisition_plans_respect_burn_limits_and_quantization(scenario):
     out, _ = scenario
     plans = [m for m, _, _ in read_mcap_ros2(mcap_file(out / "bag"))[interfaces.ACQUISITION_PLAN_TOPIC]]
@@ -106,6 +108,7 @@ def test_recorded_acquisition_plans_respect_burn_limits_and_quantization(scenari
         assert (b.spacecraft, b.purpose) == ("carrier", "ic_acquisition")
 
 
+@pytest.mark.dds
 def test_run_bag_reads_the_same_with_two_independent_readers(scenario):
     out, _ = scenario
     bag = out / "bag"
@@ -119,6 +122,7 @@ def test_run_bag_reads_the_same_with_two_independent_readers(scenario):
     assert main(["bag", "info", str(bag)]) == 0
 
 
+@pytest.mark.dds
 def test_replay_of_the_run(scenario):
     out, _ = scenario
     bag = out / "bag"
@@ -143,12 +147,14 @@ def test_replay_of_the_run(scenario):
     assert proc.returncode == 0
 
 
+@pytest.mark.dds
 def test_run_refuses_to_overwrite_a_bag(scenario, capsys):
     out, _ = scenario
     assert main(["run", "--out", str(out)]) == 2
     assert "exists already" in capsys.readouterr().err
 
 
+@pytest.mark.dds
 def test_run_observes_its_own_domain(tmp_path, monkeypatch):
     """`roe-sep run` from a shell with another (or no) ROS_DOMAIN_ID: the run's completion observer must join the
     nodes' domain, else it never sees /clock reach the end (the run then stops at its wall-time limit)."""
@@ -162,8 +168,9 @@ def test_run_observes_its_own_domain(tmp_path, monkeypatch):
     assert os.environ["ROS_DOMAIN_ID"] == str(mine) and os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST"
 
 
+@pytest.mark.dds
 def test_multi_impulse_scenario_runs_end_to_end(tmp_path):
-    """Issue 4: the node suite takes the strategy as a parameter; the default scenario runs either."""
+    """The node suite takes the strategy as a parameter; the default scenario runs either."""
     rep = run(out=tmp_path / "multi", params=ROOT / "config" / "multi_impulse_params.yaml", duration=388800.0,
               timeout=900)
     assert rep["run"]["completed"] and rep["safe"] and all(rep["criteria"].values()), rep["criteria"]

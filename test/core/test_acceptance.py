@@ -28,7 +28,9 @@ def test_ac_fractions():
     assert np.all(combined[~RES.ac1] > 0.40)
     assert np.all(RES.ac1[combined < 0.40])
     assert rep["ac2"] >= 0.999
-    assert 0.0 <= rep["ac3"] <= 1.0
+    # AC3 (seed 001 Sec. 4): min R-N > 150 m in each of the 15 nearly drift-free samples of these 20,000
+    assert (rep["n_drift_free"], rep["n_ac3_fail"], rep["ac3"]) == (15, 0, 1.0)
+    assert np.min(RES.min_rn[RES.drift_free]) > D.config.min_rn_distance == 150.0
     assert rep["drift_free_a_da"] == pytest.approx(34.97, abs=0.01)
 
 
@@ -54,3 +56,31 @@ def test_no_reduction_breaks_ac1():
     frac = np.mean(RES.draws.f1 * abs(D.dv1_rtn[1]) < RES.draws.f2 * abs(D.dv1_rtn[1]))
     assert 0.4 < frac < 0.6
     assert math.isfinite(RES.to_dict()["crossing_min"])
+
+
+def test_ac3_against_seed_001():
+    """AC3 of seed 001 Sec. 4: "the minimum distance in the RN plane must be larger than 150 m for a final orbit with
+    almost no drift remaining"; the seed reports it satisfied by its Monte Carlo of at least 100,000 runs (Fig. 6,
+    "Satisfaction of the AC3 criterion", 1000 of the samples plotted): no nearly drift-free sample below 150 m.
+
+    Ours, over 100,000 samples (seed 0, the README's run): 54 of the 55 nearly drift-free samples (|a da| < 35 m
+    after the drift reduction) meet it, 98.18 %. Where and why it differs: the one failure is a 4.5-sigma SPL
+    under-performance (f1 = 0.55) whose minimum R-N distance is 146.6 m, 3.4 m short, at a da = -29.3 m. The seed
+    quantifies neither "almost no drift" (our bound: the residual drift 1.5 n |a da| over one day below the 5 km
+    radar separability) nor how many of its samples were drift-free; and a one-in-100,000 sample would be among
+    the 1000 it plots with a probability of 1 %. The seed's own dispersions (f1 Gaussian, sigma 0.1) reach
+    f1 = 0.55 with a probability of 3.5e-6 per sample, so a run of 100,000 holds such a sample about once in three.
+    """
+    res = acceptance.run(D, MonteCarloConfig(samples=100_000, seed=0))
+    rep = res.to_dict()
+    limit = D.config.min_rn_distance
+    assert limit == 150.0 and rep["drift_free_a_da"] == pytest.approx(34.97, abs=0.01)
+    assert (rep["n_drift_free"], rep["n_ac3_fail"]) == (55, 1)
+    assert rep["ac3"] == pytest.approx(54 / 55, abs=1e-12)
+    failed = np.flatnonzero(~res.ac3)
+    assert res.drift_free[failed].all()
+    assert res.min_rn[failed][0] == pytest.approx(146.57, abs=0.01)
+    assert res.roe_after_reduction[failed[0], 0] * D.a == pytest.approx(-29.28, abs=0.01)
+    assert res.draws.f1[failed][0] == pytest.approx(0.5506, abs=1e-4)  # (f1 - 1) / 0.1 = -4.5 sigma
+    passing = res.drift_free & res.ac3
+    assert np.count_nonzero(passing) == 54 and np.min(res.min_rn[passing]) > limit + 10.0

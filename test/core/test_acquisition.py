@@ -113,6 +113,7 @@ def test_prediction_is_the_shared_trajectory(typical):
 
 # post-drift-stop states of the brief: pico leading by 20-35 km, drifting away (a da -100..-250 m), e/i roughly
 # anti-parallel, a de 450-600 m, a di ~ 400 m at the ejection's pole phase; differential drag 0..-1 mm/s
+@pytest.mark.slow
 @given(a_da=st.floats(-250, -100), a_dl=st.floats(20e3, 35e3), de=st.floats(450, 600), dphi=st.floats(-0.6, 0.6),
        di=st.floats(350, 450), theta=st.floats(math.radians(75), math.radians(105)), a_dad=st.floats(-1e-3, 0.0),
        u0=st.floats(0, 2 * math.pi))

@@ -127,6 +127,7 @@ def _dense_states(cfg, n_omega=241, n_psi=121):
     return Draws(o.ravel(), p.ravel())
 
 
+@pytest.mark.slow
 def test_envelope_decides_like_the_states_it_covers():
     """Sound both ways on the stage condition: where the envelope says clear, no state of S* comes within r* (dense
     sweep); where it says not clear, a state of S* does (ns1 from 75 s: a tilt of ~76 deg towards -R brings it
@@ -159,6 +160,7 @@ def test_analytical_platform_region_is_more_conservative_than_the_statistical_on
         assert ana[0] and not np.all(ana) and np.all(stat)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ["envelope", "gaussian"])
 def test_analytical_pair_region_is_more_conservative_when_the_lighter_drag_goes_first(method):
     """Pair safety (4), NS with the smaller ballistic coefficient separated first (ns1 then ns2, ns1 then ns3):
@@ -174,6 +176,7 @@ def test_analytical_pair_region_is_more_conservative_when_the_lighter_drag_goes_
         assert stat_min is not None and stat_min <= ana_min
 
 
+@pytest.mark.slow
 def test_envelope_pair_regions_lie_inside_the_statistical_ones():
     """The regions the seed's Gaussian model gets wrong (docs/seeds.md): with the heavier-drag NS first the envelope
     never calls the pair safe (a drag-driven crossing exists in S*), where the statistical P stays below or near P*; the
@@ -201,6 +204,7 @@ def program():
     return select_program(ClusterConfig())
 
 
+@pytest.mark.slow
 def test_default_program(program):
     """The Soyuz-stage example: a feasible program, the cluster within r** and separated by the minimum delays."""
     assert program.feasible
@@ -213,6 +217,7 @@ def test_default_program(program):
         assert abs(d[i] - d[j]) >= r["min_delay_difference_s"]
 
 
+@pytest.mark.slow
 def test_program_statistics(program):
     """The envelope program holds jointly with P >= P*: every sampled state of S* meets every condition, and the
     simulated P* quantile of the largest cluster distance is below the analytical bound (measured 5587 vs 5623 m)."""
@@ -224,6 +229,7 @@ def test_program_statistics(program):
     assert simulate_program(CFG, program.delays, Draws(dr.omega[inside], dr.psi[inside]))["p_safe"] == 1.0
 
 
+@pytest.mark.slow
 def test_gaussian_program():
     """The seed's model gives a program too (heavier-drag NS first, measured 5/22/37/43 s), which the statistical
     check finds below P* jointly (measured 0.983): the reason the envelope is the default."""
@@ -257,6 +263,7 @@ def small_config(tmp_path):
     return path
 
 
+@pytest.mark.slow
 def test_cli_json(capsys, small_config):
     import argparse
 
@@ -275,6 +282,7 @@ def test_cli_json(capsys, small_config):
     assert "--p" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_cli_plots(capsys, small_config, tmp_path):
     """--plots writes the regions figure (seed 004 Figs. 3-4) and the program figure (Fig. 5)."""
     import argparse

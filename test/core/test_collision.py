@@ -74,6 +74,7 @@ def test_importance_sampling_agrees_with_brute_force():
     assert est_is["ess"] > 50
 
 
+@pytest.mark.slow
 def test_rare_event_precision_with_importance_sampling(capsys):
     """R = 90 m at p = 0: P ~ 3e-8 (brute force would need ~1e10 samples); 20,000 importance samples give a
     relative 95 % half-width <= 30 % (docs/collision.md: the same with 1e5 samples)."""

@@ -89,12 +89,32 @@ def test_cli_ops_bad_date(capsys):
     assert "--date" in err and "YYYY-MM-DD" in err and "2016-13-01" in err and len(err.strip().splitlines()) == 1
 
 
+# a BIROS-like element set; column 69 of each line is its checksum (sgp4.io.compute_checksum: 6 and 4)
+LINE1 = "1 41604U 16040F   16183.50000000  .00000500  00000-0  25000-4 0  9996"
+LINE2 = "2 41604  97.4500 250.0000 0010000  90.0000 270.0000 15.18000000  1004"
+
+
 def test_tle_file(tmp_path, capsys):
     tle = tmp_path / "c.tle"
-    tle.write_text("BIROS\n1 41604U 16040F   16183.50000000  .00000500  00000-0  25000-4 0  9990\n"
-                   "2 41604  97.4500 250.0000 0010000  90.0000 270.0000 15.18000000  1000\n")
+    tle.write_text(f"BIROS\n{LINE1}\n{LINE2}\n")
     assert main(["ops", "--date", "2016-07-01", "--days", "0.5", "--tle", str(tle), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["orbit"] == "tle"
     bad = tmp_path / "bad.tle"
     bad.write_text("nothing\n")
     assert main(["ops", "--date", "2016-07-01", "--tle", str(bad)]) == 2
+
+
+@pytest.mark.parametrize("line1, line2, line", [(LINE1[:-1] + "7", LINE2, 1), (LINE1, LINE2[:-1] + "5", 2),
+                                               (LINE1, LINE2[:-1], 2), (LINE1[:-1] + "0", LINE2[:-1] + "0", 1)])
+def test_tle_checksum_refused_naming_the_line(tmp_path, capsys, line1, line2, line):
+    """A TLE line whose column 69 is not the modulo-10 sum of its columns 1-68 (or missing) is refused on one line
+    naming that line; sgp4's own parser reads such a line without complaint."""
+    from sgp4.api import Satrec
+
+    Satrec.twoline2rv(line1, line2)  # what was accepted without the check
+    tle = tmp_path / "c.tle"
+    tle.write_text(f"{line1}\n{line2}\n")
+    assert main(["ops", "--date", "2016-07-01", "--days", "0.5", "--tle", str(tle)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and str(tle) in err and f"line {line} " in err, err
+    assert ("checksum" in err) if len((line1, line2)[line - 1]) == 69 else ("not 69" in err)

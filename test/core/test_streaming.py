@@ -43,6 +43,7 @@ def _report(chunk, block, mapper=streaming.serial_map, samples=6000, seed=3):
     return json.dumps(rep, sort_keys=True)
 
 
+@pytest.mark.slow
 def test_result_identical_for_every_chunk_size_and_worker_count():
     """Same seed, chunks of 1, 3 and 6 blocks (the last block short), in process and on 2 Dask workers: the same
     report to the last digit (counts exact, sums exact)."""
@@ -55,6 +56,7 @@ def test_result_identical_for_every_chunk_size_and_worker_count():
     assert _report(1000, 1000, samples=5500, seed=4) != ref
 
 
+@pytest.mark.slow
 def test_cli_counts_identical_for_chunks_1e4_and_1e6_and_1_or_2_workers(capsys):
     """The issue's check with the real 10^4-sample block: ``roe-sep mc`` with the same seed, chunks of 10^4 and
     10^6 samples, in process and on 1 and 2 Dask workers: the same counts (and the same report to the last digit).
@@ -120,6 +122,7 @@ def _fail(x):
     return x
 
 
+@pytest.mark.slow
 def test_ordered_map_in_process_and_errors():
     assert list(ordered_map(None, _square, range(5), 1)) == [1, 2, 5, 10, 17]
     assert sorted(ordered_map(None, _square, range(3), 0, ordered=False)) == [(0, 0), (1, 1), (2, 4)]

@@ -156,7 +156,7 @@ def run():
     return read_run(BAG)
 
 
-@pytest.fixture(scope="module", params=["xml", "kvn"])
+@pytest.fixture(scope="module", params=["xml", pytest.param("kvn", marks=pytest.mark.slow)])  # kvn: make test
 def exported(request, tmp_path_factory):
     out = tmp_path_factory.mktemp(f"ndm_{request.param}")
     assert main(["export", str(BAG), "--out", str(out), "--format", request.param]) == 0
@@ -441,6 +441,7 @@ def _broken_copies(out, fmt, dest):
     return dest
 
 
+@pytest.mark.slow
 def test_orekit_reads_the_set_as_written_and_refuses_broken_files(exported, run, tmp_path):
     """Orekit's parsers (ParserBuilder) read all ten files of the reference bag in XML and KVN, with the frame and
     time system names of the standard, and give in SI the values the library reads: the OPM Delta-v equals the

@@ -8,6 +8,8 @@ from rosutil import rclpy, spin_until, start_node, stop_node, wait_exit  # noqa:
 
 from roe_sep.nodes.analysis_server import CLUSTER_SERVICE, DEPLOYMENT_SERVICE  # noqa: E402
 
+pytestmark = pytest.mark.dds  # every test here starts a node or an rclpy context
+
 
 @pytest.fixture()
 def ground():

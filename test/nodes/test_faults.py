@@ -1,4 +1,4 @@
-"""Fault injection (issue 15): every node of a running `roe-sep run` killed in turn, and every subscribed topic
+"""Fault injection: every node of a running `roe-sep run` killed in turn, and every subscribed topic
 fuzzed while the closed loop runs. Marked ``fault`` (``pytest -m fault`` runs them apart, ``make chaos`` runs them
 with more cases); they are part of ``make test``.
 
@@ -33,7 +33,7 @@ from roe_sep.jsonutil import loads_strict  # noqa: E402
 from roe_sep.nodes.convert import maneuver_msg, sec_to_time  # noqa: E402
 from roe_sep.run import NODES, SUITES, run  # noqa: E402
 
-pytestmark = pytest.mark.fault
+pytestmark = [pytest.mark.fault, pytest.mark.dds]
 COUNTS = {"killed": 0, "reason_named": 0, "reports_strict": 0, "bags_readable": 0, "tracebacks": 0}
 
 

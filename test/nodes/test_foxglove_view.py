@@ -31,6 +31,7 @@ def free_port():
         return s.getsockname()[1]
 
 
+@pytest.mark.dds
 def test_websocket_client_receives_clock_plan_and_scene():
     port = free_port()
     view = start_node("foxglove_view", "-p", f"port:={port}")
@@ -109,6 +110,7 @@ def test_websocket_client_receives_clock_plan_and_scene():
     assert code == 0, log
 
 
+@pytest.mark.dds
 def test_port_in_use_exits_2():
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))

@@ -23,6 +23,8 @@ from roe_sep.ndm import frames
 from roe_sep.ndm import messages as ndm
 from roe_sep.ndm.dataset import stamp
 
+pytestmark = pytest.mark.dds  # every test here starts a node or an rclpy context
+
 BAG = Path(__file__).resolve().parents[2] / "bags" / "default_run"
 EPOCH = "2016-07-01T00:00:00"
 TYPES = {interfaces.TRUTH_ROE_TOPIC: RelativeOrbitalElements, interfaces.DRIFT_STOP_PLAN_TOPIC: ManeuverPlan,

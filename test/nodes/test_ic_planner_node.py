@@ -17,6 +17,8 @@ from roe_sep.core.relmotion.trajectory import Chief, state_at  # noqa: E402
 from roe_sep.core.separation.double_impulse import design  # noqa: E402
 from roe_sep.nodes.convert import msg_to_roe, roe_to_msg, sec_to_time, time_to_sec  # noqa: E402
 
+pytestmark = pytest.mark.dds  # every test here starts a node or an rclpy context
+
 D = design()
 A = D.a
 DA_DOT = float(drag_da_dot(0.0151, 1e-12, A))  # 1/s

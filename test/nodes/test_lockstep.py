@@ -1,4 +1,4 @@
-"""The closed loop as an instrument (issue 14): lockstep sim time makes a run a function of its seed alone.
+"""The closed loop as an instrument: lockstep sim time makes a run a function of its seed alone.
 
 The same seed run three times -- as fast as possible, beside CPU hogs started by the test, and paced by a real-time
 factor -- gives identical reports (plans, executed maneuvers, dv, time to the ICs, criteria, OD, model error: every
@@ -19,6 +19,8 @@ from rosutil import rclpy  # noqa: F401,I001  (skips without rclpy)
 
 from roe_sep import interfaces  # noqa: E402
 from roe_sep.run import run  # noqa: E402
+
+pytestmark = pytest.mark.dds  # every test here starts a node or an rclpy context
 
 DURATION = 100000.0  # s: ejection, drift-stop, the first OD solutions and the first acquisition plan
 SEED = 7

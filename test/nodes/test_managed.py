@@ -1,5 +1,5 @@
-"""Managed (lifecycle) nodes: autostart as before, or configure -> activate driven from outside (lifecycle_manager,
-``ros2 lifecycle set``); parameter errors surface at ``configure``."""
+"""Managed (lifecycle) nodes: autostart (active once constructed), or configure -> activate driven from outside
+(lifecycle_manager, ``ros2 lifecycle set``); parameter errors surface at ``configure``."""
 
 import time
 
@@ -13,6 +13,8 @@ from roe_sep import interfaces  # noqa: E402
 from roe_sep.nodes.params import ParameterError  # noqa: E402
 from roe_sep.nodes.planner import PlannerNode  # noqa: E402
 from roe_sep.nodes.safety_monitor import SafetyMonitorNode  # noqa: E402
+
+pytestmark = pytest.mark.dds  # every test here starts a node or an rclpy context
 
 FAST_PLANNER = ("-p", "p_mode:=fixed", "-p", "p_reduction:=0.06")
 
@@ -82,7 +84,7 @@ def test_parameter_error_fails_configure_or_construction(context):
         assert "parameter 'k' must be an odd natural number, got 2" in str(node.transition_error)
     finally:
         node.destroy_node()
-    context("k:=2", "p_mode:=fixed")  # autostart: the constructor raises, as before (main exits 2)
+    context("k:=2", "p_mode:=fixed")  # autostart: the constructor raises (main exits 2)
     with pytest.raises(ParameterError, match="parameter 'k'"):
         PlannerNode()
 

@@ -11,6 +11,8 @@ from rosutil import rclpy, spin_until, start_node, stop_node, wait_exit  # noqa:
 from roe_sep import interfaces  # noqa: E402
 from roe_sep.nodes.convert import maneuver_msg, sec_to_time  # noqa: E402
 
+pytestmark = pytest.mark.dds  # every test here starts a node or an rclpy context
+
 
 @pytest.fixture()
 def tester():

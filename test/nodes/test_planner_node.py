@@ -13,6 +13,8 @@ from roe_sep.core.relmotion.roe import wrap_angle  # noqa: E402
 from roe_sep.core.separation.double_impulse import design  # noqa: E402
 from roe_sep.nodes.convert import array_to_vector, sec_to_time, time_to_sec  # noqa: E402
 
+pytestmark = pytest.mark.dds  # every test here starts a node or an rclpy context
+
 D = design()
 
 

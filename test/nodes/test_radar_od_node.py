@@ -35,6 +35,8 @@ from roe_sep.core.relmotion.trajectory import Burn, Chief, trajectory  # noqa: E
 from roe_sep.nodes.convert import array_to_elements, maneuver_msg, roe_to_msg, sec_to_time, time_to_sec  # noqa
 from roe_sep.nodes.lockstep import ACK_QOS, STEP_QOS  # noqa: E402
 
+pytestmark = pytest.mark.dds  # every test here starts a node or an rclpy context
+
 EPOCH = "2016-07-01T00:00:00"
 JD0 = julian_date(EPOCH)
 A = float(semi_major_axis(515e3))

@@ -11,6 +11,8 @@ from roe_sep import interfaces  # noqa: E402
 from roe_sep.core.separation.double_impulse import design  # noqa: E402
 from roe_sep.nodes.convert import time_to_sec  # noqa: E402
 
+pytestmark = pytest.mark.dds  # every test here starts a node or an rclpy context
+
 D = design()
 SIM_ARGS = ["-p", "duration:=30000.0", "-p", "time_step:=30.0", "-p", "seed:=3", "-p", "truth_period:=300.0"]
 

@@ -361,7 +361,8 @@ def cross_entropy(design, mc, cfg: CollisionConfig, samples_per_level=2000, rho=
     kept >= ``min_std``: a proposal never narrower than the nominal density keeps the weights phi/q bounded.
     Returns ``(proposal, levels, reached)``: ``levels`` the list of {gamma [m], elites}; ``reached`` False when
     gamma stopped decreasing for ``patience`` levels or ``max_levels`` ran out before R (a failure set too thin for
-    one Gaussian; the caller then bounds P(d <= R) by P(d <= the smallest gamma)).
+    one Gaussian; the caller then bounds P(d <= R) by P(d <= the smallest gamma)). ValueError when fewer than
+    max(10, rho n) samples of a level come back after the departure: nothing to steer by.
     """
     dim = N_DIM
     prop = Proposal(np.zeros(dim), np.eye(dim))
@@ -371,8 +372,11 @@ def cross_entropy(design, mc, cfg: CollisionConfig, samples_per_level=2000, rho=
         z = prop.sample(rng, samples_per_level)
         dist = min_distance(design, mc, draws_from_normal(design, mc, z), cfg)
         finite = np.isfinite(dist)
-        if np.count_nonzero(finite) < max(10, rho * samples_per_level):
-            raise RuntimeError(f"cross-entropy level {level}: too few samples come back after the departure")
+        need = max(10, math.ceil(rho * samples_per_level))
+        if np.count_nonzero(finite) < need:  # the input, not a fault: a departure too far for these samples
+            raise ValueError(f"cross-entropy level {level}: {np.count_nonzero(finite)} of {samples_per_level} samples "
+                             f"come back after leaving the departure distance {cfg.departure_distance:g} m, at least "
+                             f"{need} needed (a smaller departure distance or more samples per level)")
         gamma = max(cfg.hard_body_radius, float(np.quantile(dist[finite], rho)))
         elite = dist <= gamma
         # steering levels: the plain elite mean and covariance; the last level (gamma = R) and the bound level use

@@ -136,8 +136,23 @@ def load_ops_config(path=None) -> OpsConfig:
     return load_yaml_config(Path(path) if path else DEFAULT_OPS_CONFIG, ops_config_from_dict, "ops configuration")
 
 
+def check_tle_checksum(path, number, line):
+    """ValueError naming ``line`` ``number`` (1 or 2) of the TLE in ``path`` unless its column 69 holds the
+    modulo-10 checksum of columns 1-68 (digits count their value, each minus sign 1; sgp4's ``compute_checksum``)."""
+    from sgp4.io import compute_checksum
+
+    given = line[68:69]
+    if len(line) != 69 or not given.isdigit():
+        raise ValueError(f"--tle {path}: line {number} is {len(line)} characters long, not 69 ending in its checksum "
+                         "digit")
+    if int(given) != compute_checksum(line):
+        raise ValueError(f"--tle {path}: line {number} fails its checksum (column 69 says {given}, the line sums to "
+                         f"{compute_checksum(line)} modulo 10)")
+
+
 def read_tle(path):
-    """The two element lines of a TLE file (an optional name line is skipped); checked by SGP4's parser."""
+    """The two element lines of a TLE file (an optional name line is skipped); each line's checksum checked, then
+    the elements by SGP4's parser."""
     from sgp4.api import Satrec
 
     try:
@@ -151,6 +166,8 @@ def read_tle(path):
     l2 = [ln for ln in lines if ln.startswith("2 ")]
     if len(l1) != 1 or len(l2) != 1:
         raise ValueError(f"--tle {path}: expected one TLE (lines starting with '1 ' and '2 ')")
+    for number, line in ((1, l1[0]), (2, l2[0])):
+        check_tle_checksum(path, number, line)
     try:
         sat = Satrec.twoline2rv(l1[0], l2[0])
     except Exception as exc:  # noqa: BLE001  (sgp4 raises ValueError or IndexError on malformed lines)
