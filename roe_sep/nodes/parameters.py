@@ -57,7 +57,7 @@ class Param:
 
 
 def _number(x):
-    return str(x) if isinstance(x, int) else f"{x:g}"
+    return str(x) if isinstance(x, int) else f"{x:g}".replace("e+0", "e").replace("e+", "e").replace("e-0", "e-")
 
 
 def rule_text(p: Param) -> str:
@@ -98,9 +98,10 @@ def _type_ok(p: Param, value) -> bool:
 
 
 def type_text(p: Param) -> str:
-    return {"bool": "a boolean (true or false)", "int": "an integer", "double": "a floating-point number "
-            "(write 600.0, not 600)", "string": "a string", "string[]": "a list of strings",
-            "double[]": "a list of floating-point numbers (write [300.0], not [300])"}[p.type]
+    """The rule of a parameter with how its type is written (a value of another type is refused)."""
+    hint = {"double": ", written with a decimal point (600.0, not 600)",
+            "double[]": ", written with decimal points ([300.0], not [300])"}.get(p.type, "")
+    return rule_text(p) + hint
 
 
 def problem(p: Param, value):
@@ -167,7 +168,8 @@ def _distinct_names(values) -> bool:
 
 
 # ------------------------------------------------------------------------------------------------ the tables
-SCENARIO_FILE = Param("scenario_file", "string", "", "scenario YAML ('' = the embedded default, config/scenario.yaml)")
+SCENARIO_FILE = Param("scenario_file", "string", "", "scenario YAML ('' = the embedded default, config/scenario.yaml)",
+                      rule="'' or the path of a scenario YAML (read at start-up)")
 AUTOSTART = Param("autostart", "bool", True, "configure and activate in the constructor (false: stay unconfigured "
                   "for a lifecycle manager or `ros2 lifecycle set`)")
 J2 = "secular J2 in the {}"
@@ -359,7 +361,8 @@ GROUND_BRIDGE = (
 )
 
 ANALYSIS_SERVER = (
-    Param("cluster_file", "string", "", "cluster YAML ('' = the embedded Soyuz-stage example, config/cluster.yaml)"),
+    Param("cluster_file", "string", "", "cluster YAML ('' = the embedded Soyuz-stage example, config/cluster.yaml)",
+          rule="'' or the path of a cluster YAML (read at start-up)"),
     Param("deploy_density", "double", USSA76_DENSITY_400KM, "density of a deployment assessment whose request gives "
           "0 (USSA76 at 400 km)", "kg/m^3", range=(0.0, 1.0e-6), read_only=False),
     Param("deploy_step", "double", 600.0, "sampling of the returned distance curve", "s", range=(1.0, 86400.0),

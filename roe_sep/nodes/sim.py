@@ -57,6 +57,7 @@ from .convert import (
 )
 from .diagnostics import ERROR, OK, WARN, publish_status
 from .lockstep import ACK_QOS, STEP_QOS, Lockstep
+from .parameters import DEFAULT_DURATION  # noqa: F401  (re-exported: the launch files read it here)
 from .params import ParameterError, declare
 
 PLAN_TOPICS = (interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.ACQUISITION_PLAN_TOPIC)
