@@ -197,15 +197,16 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
     in this process, on one executor (:func:`run_in_process`: a campaign's runs). Under lockstep every layout and
     executor gives the same report. ``ground_bridge`` False: no CCSDS export (the loop and the report are the
     same)."""
-    from .nodes.sim import DEFAULT_DURATION
+    from .nodes.parameters import DEFAULT_DURATION, check_overrides
 
     out = Path(out)
     bag_dir = out / "bag"
     if bag_dir.exists():
         raise ValueError(f"output bag {bag_dir} exists already: choose another --out or remove it")
-    out.mkdir(parents=True, exist_ok=True)
     # the same overrides and node order as the launch files (share/roe_sep/launch), from roe_sep.graph
     overrides = run_overrides(params, duration, seed, real_time_factor, foxglove)
+    check_overrides(overrides, f"--params {params}" if params else "parameters")  # before any node starts
+    out.mkdir(parents=True, exist_ok=True)
     sim = overrides["sim"]
     # foxglove_view before the sim: the clock starts with it up
     nodes = graph_nodes(foxglove=foxglove is not None, ground_bridge=ground_bridge)

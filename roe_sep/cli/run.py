@@ -54,9 +54,11 @@ def print_run(rep: dict, out=None):
 
 
 def check_params_file(path):
-    """``--params``: readable YAML in the ROS layout ``{node: {ros__parameters: {...}}}`` with finite numbers only
-    (the nodes check their own ranges at start-up); ValueError/ConfigError naming the file and the key."""
+    """``--params``: readable YAML in the ROS layout ``{node: {ros__parameters: {...}}}`` with finite numbers only,
+    every value within its node's parameter table (:func:`roe_sep.nodes.parameters.check_overrides`: a bad value is
+    refused before any node starts); ValueError/ConfigError naming the file, the node, the key and the rule."""
     from ..core.config import read_yaml
+    from ..nodes.parameters import check_overrides
 
     data = read_yaml(path)
     if data is None:
@@ -77,6 +79,7 @@ def check_params_file(path):
 
     for node, v in data.items():
         walk(v["ros__parameters"], str(node))
+    check_overrides({node: v["ros__parameters"] for node, v in data.items()}, f"--params {path}")
 
 
 def cmd_run(args):

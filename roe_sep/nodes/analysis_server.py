@@ -10,12 +10,9 @@ Services:
   tumbling platform, minimax over the feasible regions, optional statistical check. Physics:
   :mod:`roe_sep.core.deployment.cluster`.
 
-Parameters:
-
-* ``cluster_file`` (string, ''): cluster YAML ('' = the embedded Soyuz-stage example, config/cluster.yaml).
-* ``deploy_density`` (double, 2.803e-12 kg/m^3): density of the deployment assessment when a request gives 0.
-* ``deploy_step`` (double, 600.0 s): sampling of the returned distance curve.
-* ``deploy_model`` (string, 'nonlinear'): 'nonlinear' (heyoka, J2-J4 + drag) or 'linear' (secular ROE model).
+Parameters: :data:`roe_sep.nodes.parameters.ANALYSIS_SERVER` (``analysis_server --help``, docs/parameters.md);
+``deploy_density``, ``deploy_step`` and ``deploy_model`` can be changed while it runs (``ros2 param set``), within
+their range and choices, and the next request uses them.
 
 A bad request is answered with ``success = false`` and the reason; the node keeps serving.
 """
@@ -28,8 +25,8 @@ from roe_sep_msgs.srv import ClusterProgram, DeploymentAssessment
 
 from ..core.config import ConfigError
 from ..core.deployment.cluster import Nanosatellite, draw, load_cluster_config, select_program, simulate_program
-from ..core.deployment.sweep import MODELS, USSA76_DENSITY_400KM, DeploymentConfig, sweep
-from .params import ParameterError, declare, finite, require
+from ..core.deployment.sweep import DeploymentConfig, sweep
+from .params import ParameterError, declare, finite
 
 DEPLOYMENT_SERVICE = "/analysis/deployment"
 CLUSTER_SERVICE = "/analysis/cluster_program"
@@ -39,14 +36,10 @@ MAX_SAMPLES = 200_000
 class AnalysisServer(Node):
     def __init__(self):
         super().__init__("analysis_server")
-        cluster_file = declare(self, "cluster_file", "", "cluster YAML ('' = embedded Soyuz-stage example)")
-        self.density = declare(self, "deploy_density", USSA76_DENSITY_400KM, "kg/m^3, default deployment density")
-        self.step = declare(self, "deploy_step", 600.0, "s, sampling of the returned distance curve")
-        require("deploy_density", finite(self.density) and self.density >= 0, self.density,
-                "a finite non-negative number [kg/m^3]")
-        require("deploy_step", finite(self.step) and self.step >= 1.0, self.step, "a number >= 1 [s]")
-        self.model = declare(self, "deploy_model", "nonlinear", "relative motion of the deployment assessment")
-        require("deploy_model", self.model in MODELS, self.model, f"one of {MODELS}")
+        cluster_file = declare(self, "cluster_file")
+        self.density = declare(self, "deploy_density", attr="density")
+        self.step = declare(self, "deploy_step", attr="step")
+        self.model = declare(self, "deploy_model", attr="model")
         try:
             self.cluster = load_cluster_config(cluster_file or None)
         except ConfigError as exc:

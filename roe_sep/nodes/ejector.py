@@ -7,10 +7,7 @@ argument of latitude reaches u1 after ``not_before``, read from the carrier stat
 carrier knows its own orbit from GPS). Publishes ``/separation/ejection`` (roe_sep_msgs/EjectionEvent, latched)
 a little ahead of the epoch; the simulator applies it at the epoch with the mechanism's real dispersion.
 
-Parameters: ``scenario_file`` ('' = embedded default), ``ejection_epoch`` (s, sim time; negative: at u1),
-``not_before`` (s), ``lead_time`` (s, how early the time-tagged event may be published, default 1800; it must
-exceed the spacing of the truth samples), ``strategy`` (``double_impulse`` default, or ``multi_impulse``: the SPL
-ejection of :func:`roe_sep.core.separation.multi_impulse.design`, 1.53 m/s at u1 = 90 deg, seed 001 Sec. 3).
+Parameters: :data:`roe_sep.nodes.parameters.EJECTOR` (``ejector --help``, docs/parameters.md).
 """
 
 import math
@@ -27,22 +24,17 @@ from ..core.truth.secular import time_to_arg_latitude
 from .convert import array_to_elements, elements_to_array, maneuver_msg, sec_to_time, time_to_sec
 from .diagnostics import ERROR, OK, publish_status
 from .lockstep import Lockstep
-from .params import ParameterError, declare, finite, require
+from .params import ParameterError, declare
 
 
 class EjectorNode(Node):
     def __init__(self):
         super().__init__("ejector")
-        scenario_file = declare(self, "scenario_file", "", "scenario YAML ('' = embedded default)")
-        self.epoch = declare(self, "ejection_epoch", -1.0, "s, sim-time epoch of the ejection; negative: at u1")
-        self.not_before = declare(self, "not_before", 0.0, "s, earliest sim time of an ejection at u1")
-        self.lead = declare(self, "lead_time", 1800.0, "s, the time-tagged event is published up to this long ahead")
-        for name, value in (("ejection_epoch", self.epoch), ("not_before", self.not_before)):
-            require(name, finite(value), value, "a finite time [s]")
-        require("lead_time", finite(self.lead) and self.lead >= 0, self.lead, "a non-negative time [s]")
-        strategy = declare(self, "strategy", "double_impulse", "separation strategy: double_impulse|multi_impulse")
-        require("strategy", strategy in ("double_impulse", "multi_impulse"), strategy,
-                "one of ('double_impulse', 'multi_impulse')")
+        scenario_file = declare(self, "scenario_file")
+        self.epoch = declare(self, "ejection_epoch")
+        self.not_before = declare(self, "not_before")
+        self.lead = declare(self, "lead_time")
+        strategy = declare(self, "strategy")
         try:
             scenario = load_scenario(scenario_file or None)
             if strategy == "multi_impulse":

@@ -10,6 +10,9 @@ with ``use_sim_time``). The last message of each latched topic (plans, the eject
 that subscribes later. The server listens on 127.0.0.1 only (``port``, 0 = any free port; the port taken is
 logged and reported on ``/diagnostics``). The layout ``config/foxglove_layout.json`` shows ROE over time,
 distance, safety state and the plan timeline.
+
+Parameters: :data:`roe_sep.nodes.parameters.FOXGLOVE_VIEW` (``foxglove_view --help``, docs/parameters.md);
+``keep_out_radius`` can be changed while it runs.
 """
 
 import math
@@ -27,7 +30,7 @@ from ..bag import qos as bag_qos
 from ..core.relmotion.roe import roe_to_rtn
 from .convert import msg_to_roe, time_to_sec
 from .diagnostics import ERROR, OK, publish_status
-from .params import declare, require
+from .params import declare
 
 SCENE_TOPIC = "/foxglove/scene"
 HOST = "127.0.0.1"
@@ -50,10 +53,8 @@ class FoxgloveViewNode(Node):
         import foxglove  # lazily: only this node needs the SDK
 
         self.fg = foxglove
-        port = declare(self, "port", 8765, "TCP port on 127.0.0.1 (0 = any free port)")
-        self.keep_out = declare(self, "keep_out_radius", 1000.0, "m, radius of the keep-out sphere drawn")
-        require("port", isinstance(port, int) and 0 <= port < 65536, port, "a TCP port number in [0, 65535]")
-        require("keep_out_radius", self.keep_out > 0, self.keep_out, "a positive radius [m]")
+        port = declare(self, "port")
+        self.keep_out = declare(self, "keep_out_radius", attr="keep_out")
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
         self.latched, self.resend, self.lock = {}, set(), threading.Lock()
         view = self

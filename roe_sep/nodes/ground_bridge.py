@@ -1,17 +1,19 @@
 """``ground_bridge``: the run's CCSDS navigation data messages for a ground segment, as the run goes, and TDM files
 from a ground segment as radar measurements.
 
-Out (``output_dir``, the runner sets OUT/ccsds): the same set as ``roe-sep export`` (:mod:`roe_sep.ndm.dataset`),
-from the same topics. An OPM pair (RTN and EME2000 maneuvers) as soon as the safety monitor approves a plan, the
-executed-burns OPM after each burn, and the OEM, TDM and CDM every ``write_period`` s of sim time (0: never) and at
-shutdown (the XML OEM of a whole run takes about 2 s to serialize, so not at every message). Every file is written
-atomically (temporary file + rename).
+Out (``output_dir``, the runner sets OUT/ccsds; '' = ``ccsds_YYYY_MM_DD-HH_MM_SS`` in the working directory): the
+same set as ``roe-sep export`` (:mod:`roe_sep.ndm.dataset`), from the same topics. An OPM pair (RTN and EME2000
+maneuvers) as soon as the safety monitor approves a plan, the executed-burns OPM after each burn, and the OEM, TDM
+and CDM every ``write_period`` s of sim time (0: never) and at shutdown (the XML OEM of a whole run takes about 2 s
+to serialize, so not at every message). Every file is written atomically (temporary file + rename).
 
 In (``input_dir``, '' = off): every ``*.xml``, ``*.kvn`` or ``*.tdm`` file that appears there is read as a TDM
 (:func:`roe_sep.ndm.messages.read_tdm`, sim time from ``epoch_utc``) and its measurements are published on
 ``/ground/radar_measurements`` (RadarMeasurement, the ``/radar/measurements`` layout; ``radar_od`` takes them in
 alongside its own); the file then moves to ``input_dir/processed/``. A file that is not a valid TDM moves to
 ``input_dir/rejected/`` with an ERROR on ``/diagnostics`` naming the file and the reason; the node keeps running.
+
+Parameters: :data:`roe_sep.nodes.parameters.GROUND_BRIDGE` (``ground_bridge --help``, docs/parameters.md).
 """
 
 import math
@@ -19,6 +21,7 @@ import queue
 import shutil
 import threading
 import time
+from datetime import datetime
 from pathlib import Path
 
 import rclpy
@@ -39,12 +42,11 @@ from rosgraph_msgs.msg import Clock
 
 from .. import interfaces
 from ..core.config import ConfigError, load_scenario
-from ..core.od.radar import DEFAULT_EPOCH_UTC
 from ..ndm import frames
-from ..ndm.options import FORMATS, Options, RunMessages
+from ..ndm.options import Options, RunMessages
 from .convert import sec_to_time, time_to_sec
 from .diagnostics import ERROR, OK, publish_status
-from .params import ParameterError, declare, finite, require
+from .params import ParameterError, declare
 
 EXTERNAL_RADAR_TOPIC = interfaces.EXTERNAL_RADAR_TOPIC
 INPUT_SUFFIXES = (".xml", ".kvn", ".tdm", ".txt")
@@ -54,25 +56,16 @@ class GroundBridgeNode(Node):
     def __init__(self):
         super().__init__("ground_bridge")
         self.messages_received = 0  # the shutdown drain runs while it rises (roe_sep.nodes.spin)
-        out = declare(self, "output_dir", "", "directory of the CCSDS files (the runner sets OUT/ccsds)")
-        self.fmt = declare(self, "format", "xml", "xml or kvn")
-        epoch = declare(self, "epoch_utc", DEFAULT_EPOCH_UTC, "ISO-8601 UTC epoch of sim time 0 (the sim's)")
-        scenario_file = declare(self, "scenario_file", "", "scenario YAML ('' = embedded default)")
-        isp = declare(self, "carrier_isp", 60.0, "s, carrier thruster specific impulse (OPM MAN_DELTA_MASS)")
-        self.write_period = declare(self, "write_period", 86400.0,
-                                    "s of sim time between OEM/TDM/CDM updates (0: only the final set at shutdown)")
-        inp = declare(self, "input_dir", "", "directory watched for TDM files ('' = no input)")
-        poll = declare(self, "poll_period", 1.0, "wall s between scans of input_dir")
-        sigma_range = declare(self, "default_sigma_range_m", 10.0, "m, range sigma of a TDM without one")
-        sigma_angle = declare(self, "default_sigma_angle_deg", 0.01, "deg, angle sigma of a TDM without one")
-
-        require("output_dir", isinstance(out, str) and out != "", out, "a directory path")
-        require("format", self.fmt in FORMATS, self.fmt, "'xml' or 'kvn'")
-        for name, value in (("carrier_isp", isp), ("poll_period", poll),
-                            ("default_sigma_range_m", sigma_range), ("default_sigma_angle_deg", sigma_angle)):
-            require(name, finite(value) and value > 0, value, "a positive number")
-        require("write_period", finite(self.write_period) and self.write_period >= 0, self.write_period,
-                "a non-negative number of seconds (0: no periodic update)")
+        out = declare(self, "output_dir") or datetime.now().strftime("ccsds_%Y_%m_%d-%H_%M_%S")
+        self.fmt = declare(self, "format")
+        epoch = declare(self, "epoch_utc")
+        scenario_file = declare(self, "scenario_file")
+        isp = declare(self, "carrier_isp")
+        self.write_period = declare(self, "write_period")
+        inp = declare(self, "input_dir")
+        poll = declare(self, "poll_period")
+        sigma_range = declare(self, "default_sigma_range_m")
+        sigma_angle = declare(self, "default_sigma_angle_deg")
         try:
             frames.parse_epoch(epoch)
         except ValueError as exc:

@@ -26,7 +26,9 @@ When a plan is (re)computed -- what a flight-dynamics team wants from a stream o
 A restarted ic_planner recovers the IC epoch from its own latched plan and the flown burns from the latched
 executed-maneuver topic, so it continues the acquisition in progress.
 
-Parameters (YAML via ``--ros-args --params-file``): see :class:`IcPlannerNode` and the README's table.
+Parameters (YAML via ``--ros-args --params-file``): :data:`roe_sep.nodes.parameters.IC_PLANNER` (``ic_planner
+--help``, docs/parameters.md); the rules between them (a_dl_min < a_dl_max, a_dl_target within them, dv_quantum <=
+max_burn_dv, planning_margin < window) are :func:`roe_sep.core.acquisition.planner.validate_config`'s.
 """
 
 import dataclasses
@@ -64,52 +66,15 @@ from .params import ParameterError, declare
 
 
 class IcPlannerNode(ManagedNode):
-    """Parameters (name, default, unit):
-
-    * ``a_dl_min`` 5000.0 m, ``a_dl_max`` 10000.0 m: mean along-track separation at the ICs (and >= a_dl_min
-      throughout the acquisition).
-    * ``a_dl_target`` 7500.0 m: aimed |a dl_F| (mid-range: room for drag and OD errors either way); 0 = free in
-      [a_dl_min, a_dl_max], where the program picks the cheapest; ``a_dl_target_tol`` 200.0 m after quantization.
-    * ``min_ei`` 150.0 m: minimum |a de|, |a di| and R-N distance (seed 002 Eq. 25).
-    * ``fov_half_r_deg`` 6.8, ``fov_half_n_deg`` 9.15 deg: camera half field of view (seed 002 Eq. 11).
-    * ``max_burn_dv`` 0.3 m/s per burn, ``dv_quantum`` 0.001 m/s (seed 001 Sec. 2.1).
-    * ``axes`` "TN": candidate burn axes (letters of R, T, N).
-    * ``planning_margin`` 11400.0 s (two orbits: the uplink, at the next ground contact): first burn >=
-      max(OD epoch, now) + margin.
-    * ``window`` 172800.0 s: ICs reached at the last grid epoch within OD epoch + window.
-    * ``grid_per_orbit`` 16: candidate burn epochs per orbit (at round values of u).
-    * ``drift_tolerance`` 1.0 m: |a da| at the ICs (>= dv_quantum / n, about 0.9 m, to be always reachable).
-    * ``ei_angle_tol_deg`` 1.0 deg: e/i deviation from (anti-)parallel allowed after quantization.
-    * ``j2`` true: secular J2 in the prediction.
-    """
-
     def __init__(self):
         super().__init__("ic_planner")
 
     def configure(self):
         """Parameters and start-up work (the managed node's ``configure`` transition)."""
-        d = AcquisitionConfig()
-        values = {
-            "a_dl_min": declare(self, "a_dl_min", d.a_dl_min, "m, minimum mean along-track separation"),
-            "a_dl_max": declare(self, "a_dl_max", d.a_dl_max, "m, maximum mean along-track separation at the ICs"),
-            "a_dl_target": declare(self, "a_dl_target", d.a_dl_target, "m, aimed |a dl| at the ICs; 0 = free"),
-            "a_dl_target_tol": declare(self, "a_dl_target_tol", d.a_dl_target_tol,
-                                             "m, |a dl - a_dl_target| allowed after quantization"),
-            "min_ei": declare(self, "min_ei", d.min_ei, "m, minimum |a de|, |a di| and R-N distance"),
-            "fov_half_r_deg": declare(self, "fov_half_r_deg", d.fov_half_r_deg, "deg, camera half FOV, radial"),
-            "fov_half_n_deg": declare(self, "fov_half_n_deg", d.fov_half_n_deg, "deg, camera half FOV, normal"),
-            "max_burn_dv": declare(self, "max_burn_dv", d.max_burn_dv, "m/s, largest carrier burn"),
-            "dv_quantum": declare(self, "dv_quantum", d.dv_quantum, "m/s, burn quantization"),
-            "axes": declare(self, "axes", d.axes, "candidate burn axes, letters of R, T, N"),
-            "planning_margin": declare(self, "planning_margin", 11400.0,
-                                             "s, first burn >= max(OD epoch, now) + margin"),
-            "window": declare(self, "window", d.window, "s, ICs reached within OD epoch + window"),
-            "grid_per_orbit": declare(self, "grid_per_orbit", d.grid_per_orbit, "candidate burn epochs per orbit"),
-            "drift_tolerance": declare(self, "drift_tolerance", d.drift_tolerance, "m, |a da| allowed at the ICs"),
-            "ei_angle_tol_deg": declare(self, "ei_angle_tol_deg", d.ei_angle_tol_deg,
-                                              "deg, e/i deviation from (anti-)parallel allowed"),
-            "j2": declare(self, "j2", d.j2, "secular J2 in the prediction"),
-        }
+        names = ("a_dl_min", "a_dl_max", "a_dl_target", "a_dl_target_tol", "min_ei", "fov_half_r_deg",
+                 "fov_half_n_deg", "max_burn_dv", "dv_quantum", "axes", "planning_margin", "window", "grid_per_orbit",
+                 "drift_tolerance", "ei_angle_tol_deg", "j2")
+        values = {name: declare(self, name) for name in names}
         try:
             self.cfg = AcquisitionConfig(**values)
             validate_config(self.cfg)

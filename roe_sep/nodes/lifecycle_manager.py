@@ -7,9 +7,10 @@ logs which node and transition failed (the node's own log says why, e.g. the par
 publishes OK "managed nodes active" and keeps running (so that a launch does not see it exit); on SIGINT it leaves
 the nodes as they are.
 
-Parameters: ``node_names`` (string list, the managed nodes of :data:`roe_sep.graph.MANAGED`), ``timeout`` (double,
-30.0 s): how long to wait for each node's service, and for each transition (a call without an answer is made
-again, up to 3 times, unless the node's state shows it was done).
+Parameters: :data:`roe_sep.nodes.parameters.LIFECYCLE_MANAGER` (``lifecycle_manager --help``, docs/parameters.md):
+``node_names`` (the managed nodes of :data:`roe_sep.graph.MANAGED`) and ``timeout``, how long to wait for each
+node's service, and for each transition (a call without an answer is made again, up to 3 times, unless the node's
+state shows it was done).
 """
 
 
@@ -20,9 +21,8 @@ from lifecycle_msgs.srv import ChangeState, GetState
 from rclpy.node import Node
 
 from .. import interfaces
-from ..graph import MANAGED
 from .diagnostics import ERROR, OK, publish_status
-from .params import declare, finite, require
+from .params import declare
 
 GOAL = {"configure": "inactive", "activate": "active"}
 ATTEMPTS = 3  # calls of a transition that got no answer
@@ -33,11 +33,8 @@ STEPS = (("configure", Transition.TRANSITION_CONFIGURE), ("activate", Transition
 class LifecycleManager(Node):
     def __init__(self):
         super().__init__("lifecycle_manager")
-        self.node_names = declare(self, "node_names", list(MANAGED), "managed nodes, in start-up order")
-        self.timeout = declare(self, "timeout", 30.0, "s, wait for each node's service and each transition")
-        require("node_names", len(self.node_names) >= 1 and all(self.node_names), self.node_names,
-                "a non-empty list of node names")
-        require("timeout", finite(self.timeout) and self.timeout > 0, self.timeout, "a positive number [s]")
+        self.node_names = declare(self, "node_names")
+        self.timeout = declare(self, "timeout")
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
 
     def _call(self, client, request):
@@ -94,9 +91,12 @@ def start(nodes) -> int:
 
 
 def main(args=None):
+    from .params import help_requested, print_usage
     from .spin import serve
 
-    return serve([(None, LifecycleManager)], args, start=start)
+    if help_requested(args):
+        return print_usage("lifecycle_manager", __doc__)
+    return serve([("lifecycle_manager", LifecycleManager)], args, start=start)
 
 
 if __name__ == "__main__":

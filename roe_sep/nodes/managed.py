@@ -8,17 +8,18 @@ unconfigured -> configure -> inactive -> activate -> active, the ROS 2 managed-n
   participant), and publishes its first status. ``deactivate`` destroys exactly what ``activate`` created (the
   node's state is kept: a re-activated node goes on); ``cleanup`` forgets the configured state.
 
-Parameter ``autostart`` (bool, true): the node configures and activates itself in its constructor, so that
-``PlannerNode()`` is fully active right after construction, as before these were managed nodes (``roe-sep run``,
-``ros2 run roe_sep planner``, a test or a composed process adding the node to an executor); a parameter error then
-raises :class:`~.params.ParameterError` from the constructor (``main`` exits with status 2). ``autostart:=false``
-leaves the node unconfigured for a lifecycle manager (:mod:`.lifecycle_manager`, ``ros2 lifecycle set``).
+Parameter ``autostart`` (in each managed node's table, :mod:`.parameters`): the node configures and activates itself
+in its constructor, so that ``PlannerNode()`` is fully active right after construction, as before these were managed
+nodes (``roe-sep run``, ``ros2 run roe_sep planner``, a test or a composed process adding the node to an executor);
+a parameter error then raises :class:`~.params.ParameterError` from the constructor (``main`` exits with status 2).
+``autostart:=false`` leaves the node unconfigured for a lifecycle manager (:mod:`.lifecycle_manager`, ``ros2
+lifecycle set``).
 """
 
 from rclpy.lifecycle import Node as LifecycleNode
 from rclpy.lifecycle import TransitionCallbackReturn
 
-from .params import ParameterError, declare, require
+from .params import ParameterError, declare
 
 
 class ManagedNode(LifecycleNode):
@@ -27,14 +28,17 @@ class ManagedNode(LifecycleNode):
     def __init__(self, node_name, **kwargs):
         super().__init__(node_name, **kwargs)
         self.transition_error = None  # why the last transition failed (an exception), None if it did not
+        self._quiet = False  # no log of a failed transition (autostart: the constructor raises it)
         self._activated = []  # (destroy function, entity) created by activate()
-        self.autostart = declare(self, "autostart", True,
-                                 "configure and activate at start-up (false: wait for a lifecycle manager)")
-        require("autostart", isinstance(self.autostart, bool), self.autostart, "true or false")
+        self.autostart = declare(self, "autostart")
         if self.autostart:
-            for trigger in (self.trigger_configure, self.trigger_activate):
-                if trigger() != TransitionCallbackReturn.SUCCESS:
-                    raise self.transition_error or RuntimeError(f"{node_name}: {trigger.__name__} failed")
+            self._quiet = True  # a failure raises from the constructor: its one report is the caller's (spin.serve)
+            try:
+                for trigger in (self.trigger_configure, self.trigger_activate):
+                    if trigger() != TransitionCallbackReturn.SUCCESS:
+                        raise self.transition_error or RuntimeError(f"{node_name}: {trigger.__name__} failed")
+            finally:
+                self._quiet = False
 
     # ---------------------------------------------------------------- subclass hooks
     def configure(self):
@@ -55,13 +59,11 @@ class ManagedNode(LifecycleNode):
         self.transition_error = None
         try:
             hook()
-        except ParameterError as exc:
-            self.transition_error = exc
-            self.get_logger().error(f"{what} failed: {exc}")
-            return TransitionCallbackReturn.FAILURE
         except Exception as exc:  # noqa: BLE001 -- the lifecycle reports it; autostart re-raises it
             self.transition_error = exc
-            self.get_logger().error(f"{what} failed: {type(exc).__name__}: {exc}")
+            if not self._quiet:
+                why = exc if isinstance(exc, ParameterError) else f"{type(exc).__name__}: {exc}"
+                self.get_logger().error(f"{what} failed: {why}")
             return TransitionCallbackReturn.FAILURE
         return TransitionCallbackReturn.SUCCESS
 

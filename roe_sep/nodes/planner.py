@@ -4,22 +4,11 @@ Subscribes ``/separation/ejection`` (roe_sep_msgs/EjectionEvent, latched) and pu
 ``/separation/drift_stop_plan`` (roe_sep_msgs/ManeuverPlan, RELIABLE + TRANSIENT_LOCAL, depth 1) as soon as an
 event arrives. Physics: :func:`roe_sep.core.separation.double_impulse.plan_drift_stop` (seed 002 Eqs. 9, 18).
 
-Parameters (YAML via ``--ros-args --params-file``):
-
-* ``k`` (int, 3): odd number of half revolutions from the ejection to the drift-stop.
-* ``p_mode`` (string, ``monte_carlo``): how the tangential reduction |p| is chosen: ``monte_carlo`` (p_best of the
-  Monte Carlo sweep of the scenario, computed at start-up), ``three_sigma`` (e1 + e2 of Eq. 21 for the commanded
-  ejection) or ``fixed`` (``p_reduction``).
-* ``p_reduction`` (double, m/s, 0.0): |p| when ``p_mode`` is ``fixed``.
-* ``scenario_file`` (string, ''): scenario YAML for the Monte Carlo and the Eq. 21 sigmas; '' = embedded default.
-* ``mc_samples`` (int, 100000), ``mc_seed`` (int, 0): the start-up Monte Carlo.
-* ``j2`` (bool, true): secular J2 in the drift-stop epoch and the predicted ROE.
-* ``strategy`` (string, ``double_impulse``): ``double_impulse`` (the drift-stop above) or ``multi_impulse``
-  (seed 001 Sec. 3, :func:`roe_sep.core.separation.multi_impulse.plan_carrier_burns`): every carrier burn of the
-  multi-impulse
-  plan (blind drift reduction with |p| of Eq. 21, then the tangential e-vector pair), each <= 0.3 m/s and quantized
-  to 1 mm/s, published as one ManeuverPlan with strategy "multi_impulse" on the same topic; ``k`` and ``p_mode``
-  do not apply to it.
+Parameters (YAML via ``--ros-args --params-file``): :data:`roe_sep.nodes.parameters.PLANNER` (``planner --help``,
+docs/parameters.md). ``strategy`` ``multi_impulse`` (seed 001 Sec. 3,
+:func:`roe_sep.core.separation.multi_impulse.plan_carrier_burns`) publishes every carrier burn of the multi-impulse
+plan (blind drift reduction with |p| of Eq. 21, then the tangential e-vector pair) as one ManeuverPlan with strategy
+"multi_impulse" on the same topic.
 """
 
 import dataclasses
@@ -41,10 +30,7 @@ from .convert import maneuver_msg, roe_to_msg, sec_to_time, time_to_sec, vector_
 from .diagnostics import ERROR, OK, publish_status
 from .lockstep import Lockstep
 from .managed import ManagedNode
-from .params import ParameterError, declare, finite, require
-
-P_MODES = ("monte_carlo", "three_sigma", "fixed")
-STRATEGIES = ("double_impulse", "multi_impulse")
+from .params import ParameterError, declare, finite
 
 
 class PlannerNode(ManagedNode):
@@ -53,22 +39,14 @@ class PlannerNode(ManagedNode):
 
     def configure(self):
         """Parameters and start-up work (the managed node's ``configure`` transition)."""
-        self.k = declare(self, "k", 3, "odd number of half revolutions from ejection to drift-stop")
-        self.p_mode = declare(self, "p_mode", "monte_carlo", f"choice of the reduction |p|: one of {P_MODES}")
-        p_fixed = declare(self, "p_reduction", 0.0, "m/s, |p| used when p_mode is 'fixed'")
-        scenario_file = declare(self, "scenario_file", "", "scenario YAML ('' = embedded default)")
-        samples = declare(self, "mc_samples", 100000, "Monte Carlo samples for p_mode 'monte_carlo'")
-        seed = declare(self, "mc_seed", 0, "Monte Carlo seed for p_mode 'monte_carlo'")
-        self.j2 = declare(self, "j2", True, "secular J2 in the drift-stop epoch and predicted ROE")
-        self.strategy = declare(self, "strategy", "double_impulse", f"separation strategy: one of {STRATEGIES}")
-        require("strategy", self.strategy in STRATEGIES, self.strategy, f"one of {STRATEGIES}")
-
-        require("k", isinstance(self.k, int) and self.k >= 1 and self.k % 2 == 1, self.k, "an odd natural number")
-        require("p_mode", self.p_mode in P_MODES, self.p_mode, f"one of {P_MODES}")
-        require("p_reduction", finite(p_fixed) and p_fixed >= 0, p_fixed, "a finite non-negative number [m/s]")
-        require("mc_samples", isinstance(samples, int) and samples >= 1, samples, "a positive integer")
-        require("mc_seed", isinstance(seed, int), seed, "an integer")
-        require("j2", isinstance(self.j2, bool), self.j2, "true or false")
+        self.k = declare(self, "k")
+        self.p_mode = declare(self, "p_mode")
+        p_fixed = declare(self, "p_reduction")
+        scenario_file = declare(self, "scenario_file")
+        samples = declare(self, "mc_samples")
+        seed = declare(self, "mc_seed")
+        self.j2 = declare(self, "j2")
+        self.strategy = declare(self, "strategy")
         try:
             self.scenario = load_scenario(scenario_file or None)
         except ConfigError as exc:

@@ -20,7 +20,7 @@ determination needs several passes over about 12 h. This stub simulates those me
   join the records as passes of their own (:meth:`RadarODNode.on_external`); one wall second after the last of a
   batch the OD runs on all usable records.
 
-Parameters: see :class:`RadarODNode` and the README's parameter table.
+Parameters: :data:`roe_sep.nodes.parameters.RADAR_OD` (``radar_od --help``, docs/parameters.md).
 """
 
 import bisect
@@ -37,7 +37,6 @@ from .. import interfaces
 from ..core.constants import R_EARTH, SECONDS_PER_DAY
 from ..core.od.batch import RadarBatch, batch_least_squares
 from ..core.od.radar import (
-    DEFAULT_EPOCH_UTC,
     Station,
     add_noise,
     gmst,
@@ -52,66 +51,36 @@ from .convert import array_to_elements, elements_to_array, msg_to_roe, roe_to_ms
 from .diagnostics import ERROR, OK, WARN, publish_status
 from .lockstep import Lockstep
 from .managed import ManagedNode
-from .params import ParameterError, declare, finite, require
+from .params import ParameterError, declare, require
 
-MAX_SAMPLE_INTERVAL = 600.0  # s: a pass above 10 deg lasts a few minutes
 CHUNK = 10000  # measurement epochs propagated at once
 
 
 class RadarODNode(ManagedNode):
-    """Parameters (name, default, unit):
-
-    * ``stations`` ["TIRA"], ``station_latitudes_deg`` [50.6166], ``station_longitudes_deg`` [7.1296],
-      ``station_altitudes_m`` [300.0]: geodetic WGS-84 coordinates, one entry per station.
-    * ``elevation_mask_deg`` 10.0; ``sigma_range_m`` 10.0; ``sigma_angle_deg`` 0.01 (azimuth and elevation).
-    * ``sample_interval`` 10.0 s; ``min_separation`` 5000.0 m; ``passes_required`` 2; ``min_arc`` 36000.0 s;
-      ``min_pass_measurements`` 5; ``seed`` 0 (measurement noise); ``epoch_utc`` "2016-07-01T00:00:00" (UTC
-      calendar epoch of sim time 0, as the simulator's).
-    """
-
     def __init__(self):
         super().__init__("radar_od")
 
     def configure(self):
         """Parameters and start-up work (the managed node's ``configure`` transition)."""
-        names = declare(self, "stations", ["TIRA"], "radar station names")
-        lats = declare(self, "station_latitudes_deg", [50.6166], "deg, geodetic latitude of each station (WGS-84)")
-        lons = declare(self, "station_longitudes_deg", [7.1296], "deg, east longitude of each station")
-        alts = declare(self, "station_altitudes_m", [300.0], "m, height of each station above the WGS-84 ellipsoid")
-        mask = declare(self, "elevation_mask_deg", 10.0, "deg, elevation mask of every station")
-        sigma_range = declare(self, "sigma_range_m", 10.0, "m, 1-sigma range noise")
-        # TIRA's L-band tracking beam is 0.45 deg wide. Monopulse angle noise is about
-        # theta_B / (1.6 sqrt(2 SNR)): 0.01 deg (theta_B / 45) needs an SNR of about 26 dB after pulse integration,
-        # which a 10 cm picosatellite at ~1000 km gives (TIRA detects 2 cm objects at 1000 km). Mount, refraction
-        # and other systematic errors of the same order are not modeled in this stub.
-        sigma_angle = declare(self, "sigma_angle_deg", 0.01, "deg, 1-sigma azimuth and elevation noise")
-        self.dt = declare(self, "sample_interval", 10.0, "s, measurement interval during a pass")
-        self.min_sep = declare(self, "min_separation", 5000.0, "m, smallest separation the radar resolves")
-        self.passes_required = declare(self, "passes_required", 2, "counted passes needed for an estimate")
-        self.min_arc = declare(self, "min_arc", 36000.0, "s, smallest span of the passes of an estimate")
-        self.min_pass = declare(self, "min_pass_measurements", 5, "measurements for a pass to count")
-        seed = declare(self, "seed", 0, "seed of the measurement noise")
-        epoch = declare(self, "epoch_utc", DEFAULT_EPOCH_UTC, "ISO-8601 UTC calendar epoch of sim time 0")
+        names = declare(self, "stations")
+        lats = declare(self, "station_latitudes_deg")
+        lons = declare(self, "station_longitudes_deg")
+        alts = declare(self, "station_altitudes_m")
+        mask = declare(self, "elevation_mask_deg")
+        sigma_range = declare(self, "sigma_range_m")
+        sigma_angle = declare(self, "sigma_angle_deg")
+        self.dt = declare(self, "sample_interval")
+        self.min_sep = declare(self, "min_separation")
+        self.passes_required = declare(self, "passes_required")
+        self.min_arc = declare(self, "min_arc")
+        self.min_pass = declare(self, "min_pass_measurements")
+        seed = declare(self, "seed")
+        epoch = declare(self, "epoch_utc")
 
         n = len(names)
-        require("stations", n >= 1 and all(isinstance(s, str) and s for s in names) and len(set(names)) == n,
-                list(names), "a non-empty list of distinct station names")
-        for name, values, lo, hi in (("station_latitudes_deg", lats, -90.0, 90.0),
-                                     ("station_longitudes_deg", lons, -180.0, 360.0),
-                                     ("station_altitudes_m", alts, -500.0, 9000.0)):
-            require(name, len(values) == n and all(finite(v) and lo <= v <= hi for v in values), list(values),
-                    f"{n} value(s), one per station, each in [{lo:g}, {hi:g}]")
-        require("elevation_mask_deg", finite(mask) and 0.0 <= mask < 90.0, mask, "in [0, 90) deg")
-        require("sigma_range_m", finite(sigma_range) and sigma_range > 0.0, sigma_range, "a positive number [m]")
-        require("sigma_angle_deg", finite(sigma_angle) and 0.0 < sigma_angle < 1.0, sigma_angle, "in (0, 1) deg")
-        require("sample_interval", finite(self.dt) and 0.0 < self.dt <= MAX_SAMPLE_INTERVAL, self.dt,
-                f"in (0, {MAX_SAMPLE_INTERVAL:g}] s")
-        require("min_separation", finite(self.min_sep) and self.min_sep >= 0.0, self.min_sep,
-                "a non-negative number [m]")
-        require("passes_required", self.passes_required >= 1, self.passes_required, "a positive integer")
-        require("min_arc", finite(self.min_arc) and self.min_arc >= 0.0, self.min_arc, "a non-negative number [s]")
-        require("min_pass_measurements", self.min_pass >= 1, self.min_pass, "a positive integer")
-        require("seed", seed >= 0, seed, "a non-negative integer")
+        for name, values in (("station_latitudes_deg", lats), ("station_longitudes_deg", lons),
+                             ("station_altitudes_m", alts)):
+            require(name, len(values) == n, values, f"{n} value(s), one per station of 'stations'")
         try:
             self.jd0 = julian_date(epoch)
         except (ValueError, TypeError) as exc:

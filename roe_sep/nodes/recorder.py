@@ -11,13 +11,8 @@ File format and crash safety: :mod:`roe_sep.bag.writer` (flushed and fsync'ed ev
 SIGINT/SIGTERM close the file (summary, footer, ``metadata.yaml``); after a SIGKILL run
 ``roe-sep bag recover``.
 
-Parameters:
-
-* ``output`` (string, ''): bag directory to create; '' = ``rosbag2_YYYY_MM_DD-HH_MM_SS`` in the working directory.
-  An existing non-empty directory is refused (exit code 2).
-* ``topics`` (string array, empty): topics to record; empty = every topic (hidden ``_``-topics excluded).
-* ``exclude`` (string array, empty): topics never recorded.
-* ``flush_period`` (double, s, 1.0): wall-time period of forced chunk completion + ``fsync``.
+Parameters: :data:`roe_sep.nodes.parameters.RECORDER` (``recorder --help``, docs/parameters.md). ``topics`` and
+``exclude`` are string arrays whose default ``[]`` is set (``ros2 param get /recorder topics`` shows it).
 
 Publishes ``/diagnostics`` (1 Hz wall time) with the message counts per topic.
 """
@@ -29,10 +24,8 @@ import time
 from datetime import datetime
 
 from diagnostic_msgs.msg import DiagnosticArray
-from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
-from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from roe_sep_msgs.msg import LockstepStep
 
@@ -42,7 +35,7 @@ from ..bag import qos as bag_qos
 from ..bag.writer import BagWriter
 from .diagnostics import ERROR, OK, WARN, publish_status
 from .lockstep import STEP_QOS
-from .params import ParameterError, finite, require
+from .params import ParameterError, declare
 
 DISCOVERY_PERIOD = 0.5  # s, wall time
 DIAGNOSTICS_PERIOD = 1.0  # s, wall time
@@ -62,23 +55,10 @@ class RecorderNode(Node):
     def __init__(self):
         super().__init__("recorder")
 
-        def declare(name, default, description):
-            return self.declare_parameter(name, default, ParameterDescriptor(description=description,
-                                                                             dynamic_typing=True)).value
-
-        output = declare("output", "", "bag directory to create ('' = rosbag2_YYYY_MM_DD-HH_MM_SS)")
-        topics = self.declare_parameter("topics", Parameter.Type.STRING_ARRAY, ParameterDescriptor(
-            description="topics to record (empty = all)")).value
-        exclude = self.declare_parameter("exclude", Parameter.Type.STRING_ARRAY, ParameterDescriptor(
-            description="topics not to record")).value
-        self.flush_period = declare("flush_period", 1.0, "s (wall time) between forced flushes to the disk")
-
-        require("output", isinstance(output, str), output, "a directory path (string)")
-        for name, value in (("topics", topics), ("exclude", exclude)):
-            require(name, value is None or all(isinstance(t, str) and t.strip() for t in value), value,
-                    "a list of topic names")
-        require("flush_period", finite(self.flush_period) and self.flush_period > 0, self.flush_period,
-                "a finite positive number of seconds")
+        output = declare(self, "output")
+        topics = declare(self, "topics")
+        exclude = declare(self, "exclude")
+        self.flush_period = declare(self, "flush_period")
         self.topics = {absolute(t.strip()) for t in topics or []}
         self.exclude = {absolute(t.strip()) for t in exclude or []}
         # the lockstep protocol's own traffic is not scenario data (record it by naming it in 'topics')

@@ -5,6 +5,8 @@ since its epoch) every ``period`` seconds of sim time, and every plan before its
 trajectory under it from the best knowledge the ground has (the OD estimate, else the commanded ejection; never
 truth). Criteria and thresholds: :mod:`roe_sep.core.safety.monitor`. Publishes ``/safety/status`` (truth and estimate),
 ``/safety/plan_check`` (one verdict per plan; the simulator executes only approved plans) and ``/diagnostics``.
+
+Parameters: :data:`roe_sep.nodes.parameters.SAFETY_MONITOR` (``safety_monitor --help``, docs/parameters.md).
 """
 
 import math
@@ -31,7 +33,7 @@ from .convert import msg_to_roe, plan_burns, sec_to_time, time_to_sec, vector_to
 from .diagnostics import publish_status
 from .lockstep import Lockstep
 from .managed import ManagedNode
-from .params import ParameterError, declare, finite, require
+from .params import ParameterError, declare
 
 PLAN_TOPICS = (interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.ACQUISITION_PLAN_TOPIC)
 
@@ -54,26 +56,14 @@ class SafetyMonitorNode(ManagedNode):
 
     def configure(self):
         """Parameters and start-up work (the managed node's ``configure`` transition)."""
-        scenario_file = declare(self, "scenario_file", "", "scenario YAML ('' = embedded default)")
-        self.period = declare(self, "period", 600.0, "s of sim time between state assessments")
-        lim = MonitorLimits()
-        values = {
-            "keep_out": declare(self, "keep_out", lim.keep_out, "m, keep-out sphere radius"),
-            "min_rn_distance": declare(self, "min_rn_distance", lim.min_rn_distance, "m, e/i separation minimum"),
-            "crossing_min": declare(self, "crossing_min", lim.crossing_min, "m, minimum |T| at an R = 0 transit"),
-            "evaporation": declare(self, "evaporation", lim.evaporation, "m, formation evaporation distance"),
-            "a_dl_min": declare(self, "a_dl_min", lim.a_dl_min, "m, radar separability"),
-            "a_dl_max": declare(self, "a_dl_max", lim.a_dl_max, "m, camera detection range"),
-            "window": declare(self, "window", lim.window, "s, prediction window of a state assessment"),
-            "plan_horizon": declare(self, "plan_horizon", lim.plan_horizon, "s, prediction after a plan's last burn"),
-        }
-        fov_r = declare(self, "fov_half_r_deg", math.degrees(lim.fov_half_r), "deg, camera half FOV, radial")
-        fov_n = declare(self, "fov_half_n_deg", math.degrees(lim.fov_half_n), "deg, camera half FOV, normal")
-        self.j2 = declare(self, "j2", True, "secular J2 in the predictions")
-        for name, value in list(values.items()) + [("period", self.period), ("fov_half_r_deg", fov_r),
-                                                   ("fov_half_n_deg", fov_n)]:
-            require(name, finite(value) and value > 0, value, "a positive number")
-        require("j2", isinstance(self.j2, bool), self.j2, "true or false")
+        scenario_file = declare(self, "scenario_file")
+        self.period = declare(self, "period")
+        names = ("keep_out", "min_rn_distance", "crossing_min", "evaporation", "a_dl_min", "a_dl_max", "window",
+                 "plan_horizon")
+        values = {name: declare(self, name) for name in names}
+        fov_r = declare(self, "fov_half_r_deg")
+        fov_n = declare(self, "fov_half_n_deg")
+        self.j2 = declare(self, "j2")
         self.limits = MonitorLimits(fov_half_r=math.radians(fov_r), fov_half_n=math.radians(fov_n),
                                     **{k: float(v) for k, v in values.items()})
         try:

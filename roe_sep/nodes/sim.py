@@ -1,16 +1,19 @@
 """sim: the dynamics simulator that closes the loop on sim time.
 
-Publishes ``/clock`` faster than real time, propagates the truth relative orbit (``dynamics: secular``, the
-default: :class:`roe_sep.core.truth.secular.TruthModel`, J2 + true differential drag; ``dynamics: nonlinear``:
-:class:`roe_sep.core.truth.nonlinear.NonlinearTruth`, both spacecraft integrated numerically with J2-J4 and drag, ROE
-published as mean ROE of the numerical states), applies the commanded ejection with its real dispersion and executes
-every planned carrier burn at its epoch with execution and attitude errors (seed 002 Eq. 22, seeded). A plan's
-burns are executed only once the safety monitor has approved that plan (``require_plan_approval``); while a burn
-waits for its approval the clock holds, up to ``approval_timeout`` wall seconds, after which the burn is dropped.
+Publishes ``/clock`` faster than real time, propagates the truth relative orbit (``dynamics: nonlinear``, the
+default: :class:`roe_sep.core.truth.nonlinear.NonlinearTruth`, both spacecraft integrated numerically with J2-J4 and
+drag, ROE published as mean ROE of the numerical states; ``dynamics: secular``:
+:class:`roe_sep.core.truth.secular.TruthModel`, J2 + true differential drag), applies the commanded ejection with
+its real dispersion and executes every planned carrier burn at its epoch with execution and attitude errors (seed
+002 Eq. 22, seeded). A plan's burns are executed only once the safety monitor has approved that plan
+(``require_plan_approval``); while a burn waits for its approval the clock holds, up to ``approval_timeout`` wall
+seconds, after which the burn is dropped.
 
 Publishes the truth ROE (``/sim/truth/roe``) and RTN state (``/sim/truth/rtn``) every ``truth_period`` and right after
 each burn, every executed burn on ``/sim/executed_maneuvers`` (as executed, errors included) and ``/diagnostics``
 with the running minimum distance.
+
+Parameters: :data:`roe_sep.nodes.parameters.SIM` (``sim --help``, docs/parameters.md).
 """
 
 import dataclasses
@@ -38,7 +41,7 @@ from rosgraph_msgs.msg import Clock
 from .. import interfaces
 from ..core.config import ConfigError, load_scenario
 from ..core.constants import ARCSEC
-from ..core.od.radar import DEFAULT_EPOCH_UTC, julian_date, raan_from_ltan
+from ..core.od.radar import julian_date, raan_from_ltan
 from ..core.relmotion.dynamics import drag_da_dot
 from ..core.separation.double_impulse import InfeasibleDesignError, design
 from ..core.truth.secular import ExecutionErrors, TruthModel, chief_from_u, error_references
@@ -54,12 +57,12 @@ from .convert import (
 )
 from .diagnostics import ERROR, OK, WARN, publish_status
 from .lockstep import ACK_QOS, STEP_QOS, Lockstep
-from .params import ParameterError, declare, finite, require
+from .parameters import DEFAULT_DURATION  # noqa: F401  (re-exported: the launch files read it here)
+from .params import ParameterError, declare
 
 PLAN_TOPICS = (interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.ACQUISITION_PLAN_TOPIC)
 ACQUISITION_PLANNER = "roe_sep/ic_planner"  # its /diagnostics status name
 EJECTION_TIMING_STREAM = 2  # the ejection delay's stream of a run seed (graph.RADAR_STREAM = 1: the radar noise)
-DEFAULT_DURATION = 280800.0  # s: 3.25 days, through OD and the initial-condition acquisition and half a day on
 
 
 @dataclasses.dataclass
@@ -75,71 +78,38 @@ class SimNode(Node):
     def __init__(self):
         super().__init__("sim")
         self.final_timer = None  # repeats the final status (see _status)
-        scenario_file = declare(self, "scenario_file", "", "scenario YAML ('' = embedded default)")
-        self.seed = declare(self, "seed", 0, "seed of the ejection/burn/drag dispersions")
-        self.disperse = declare(self, "disperse", True, "apply execution errors, the drag uncertainty and the "
-                                                        "ejection delay")
-        self.ejection_delay_max = declare(
-            self, "ejection_delay_max", 10.0, "s, the release mechanism fires uniformly within this delay after "
-            "the commanded ejection epoch (an assumption: no seed gives a value; 0: on time)")
-        self.duration = declare(self, "duration", DEFAULT_DURATION, "s, sim time at which the run ends")
-        self.time_step = declare(self, "time_step", 600.0, "s of sim time per clock tick (lockstep: per step)")
-        tick_period = declare(self, "tick_period", 0.01, "wall s between clock ticks")
-        self.truth_period = declare(self, "truth_period", 60.0, "s, sim-time period of the truth topics")
-        u0_deg = declare(self, "u0_deg", 50.0, "deg, carrier mean argument of latitude at sim time 0")
-        ltan = declare(self, "ltan_hours", 9.5, "h, local time of the carrier's ascending node (BIROS: 09:30)")
-        epoch = declare(self, "epoch_utc", DEFAULT_EPOCH_UTC, "ISO-8601 UTC calendar epoch of sim time 0")
-        self.require_approval = declare(self, "require_plan_approval", True,
-                                        "execute a plan only after the safety monitor approved it")
-        self.approval_timeout = declare(self, "approval_timeout", 10.0, "wall s a burn may wait for its approval")
-        self.distance_step = declare(self, "distance_step", 10.0, "s, sampling of the minimum-distance tracking")
-        self.departure = declare(self, "departure_distance", 1000.0,
-                                 "m, closest approaches are tracked once the picosatellite is this far away")
-        self.j2 = declare(self, "j2", True, "secular J2 in the truth dynamics (secular dynamics only)")
-        self.dynamics = declare(self, "dynamics", "nonlinear",
-                                "truth: 'secular' (ROE model) or 'nonlinear' (both spacecraft integrated numerically)")
-        wait_for = declare(self, "wait_for", [""], "'topic=count' items: hold the clock at 0 until each topic has "
-                                                  "that many subscribers (every node up)")
-        self.start_timeout = declare(self, "start_timeout", 60.0, "wall s to wait for those subscribers at most")
-        participants = declare(self, "lockstep_participants", [""],
-                               "node names of the lockstep participants ([] or ['']: free-running clock)")
-        self.real_time_factor = declare(self, "real_time_factor", 0.0,
-                                        "lockstep: sim s per wall s at most (0: as fast as the machine allows)")
-        self.step_timeout = declare(self, "step_timeout", 120.0,
-                                    "lockstep: wall s a step may wait for a participant before the run fails")
-
-        for name, value in (("duration", self.duration), ("time_step", self.time_step),
-                            ("tick_period", tick_period), ("truth_period", self.truth_period),
-                            ("approval_timeout", self.approval_timeout), ("distance_step", self.distance_step),
-                            ("departure_distance", self.departure)):
-            require(name, finite(value) and value > 0, value, "a positive number")
-        require("u0_deg", finite(u0_deg), u0_deg, "a finite angle [deg]")
-        require("ltan_hours", finite(ltan) and 0 <= ltan < 24, ltan, "a local time in [0, 24) h")
+        scenario_file = declare(self, "scenario_file")
+        self.seed = declare(self, "seed")
+        self.disperse = declare(self, "disperse")
+        self.ejection_delay_max = declare(self, "ejection_delay_max")
+        self.duration = declare(self, "duration")
+        self.time_step = declare(self, "time_step")
+        tick_period = declare(self, "tick_period")
+        self.truth_period = declare(self, "truth_period")
+        u0_deg = declare(self, "u0_deg")
+        ltan = declare(self, "ltan_hours")
+        epoch = declare(self, "epoch_utc")
+        self.require_approval = declare(self, "require_plan_approval")
+        self.approval_timeout = declare(self, "approval_timeout")
+        self.distance_step = declare(self, "distance_step")
+        self.departure = declare(self, "departure_distance")
+        self.j2 = declare(self, "j2")
+        self.dynamics = declare(self, "dynamics")
+        wait_for = declare(self, "wait_for")
+        self.start_timeout = declare(self, "start_timeout")
+        participants = declare(self, "lockstep_participants")
+        self.real_time_factor = declare(self, "real_time_factor")
+        self.step_timeout = declare(self, "step_timeout")
         try:
             raan = float(raan_from_ltan(ltan, julian_date(epoch)))
         except ValueError as exc:
             raise ParameterError(f"parameter 'epoch_utc' must be an ISO-8601 UTC date-time, got {epoch!r}: {exc}") \
                 from exc
-        require("seed", isinstance(self.seed, int), self.seed, "an integer")
-        require("dynamics", self.dynamics in ("secular", "nonlinear"), self.dynamics, "'secular' or 'nonlinear'")
         self.wait_for = {}
         for item in (w for w in wait_for if w):
             topic, _, count = item.partition("=")
-            require("wait_for", topic.startswith("/") and count.isdigit(), wait_for,
-                    "a list of 'topic=count' items, e.g. ['/sim/truth/roe=4']")
             self.wait_for[topic] = int(count)
-        require("start_timeout", finite(self.start_timeout) and self.start_timeout >= 0, self.start_timeout,
-                "a non-negative number [s]")
-        require("real_time_factor", finite(self.real_time_factor) and self.real_time_factor >= 0,
-                self.real_time_factor, "a non-negative number (0: as fast as possible)")
-        require("step_timeout", finite(self.step_timeout) and self.step_timeout > 0, self.step_timeout,
-                "a positive number [s]")
         self.participants = sorted({p for p in participants if p})
-        require("lockstep_participants", all(isinstance(p, str) and p != "sim" for p in self.participants),
-                list(participants), "a list of node names other than 'sim'")
-        for name, value in (("disperse", self.disperse), ("require_plan_approval", self.require_approval),
-                            ("j2", self.j2)):
-            require(name, isinstance(value, bool), value, "true or false")
         try:
             scenario = load_scenario(scenario_file or None)
             carrier = design(scenario.separation)
@@ -161,8 +131,6 @@ class SimNode(Node):
                                         da_dot=da_dot)
         else:
             self.truth = TruthModel(chief0, 0.0, da_dot, self.j2)
-        require("ejection_delay_max", finite(self.ejection_delay_max) and 0.0 <= self.ejection_delay_max <= 600.0,
-                self.ejection_delay_max, "a delay in [0, 600] s")
         # its own stream of the run seed, so the other dispersions keep their draws
         timing = np.random.default_rng(np.random.SeedSequence([int(self.seed), EJECTION_TIMING_STREAM]))
         self.ejection_delay = float(timing.uniform(0.0, self.ejection_delay_max)) if self.disperse else 0.0

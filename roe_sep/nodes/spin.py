@@ -15,8 +15,11 @@ one executor (:mod:`roe_sep.nodes.suite`) and for the lifecycle manager (its sta
   :data:`DRAIN_MAX` s; a second signal ends it at once).
 """
 
+import os
+import re
 import signal
 import sys
+import tempfile
 import time
 import traceback
 
@@ -24,16 +27,45 @@ import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.signals import SignalHandlerOptions
 
-from .params import ParameterError
+from .params import ParameterError, help_requested, node_table, print_usage
 
 DRAIN_IDLE = 0.3  # s (wall) without a new message that ends the drain
 DRAIN_MAX = 10.0  # s (wall), at most
 
 
+class RosArgumentsError(ValueError):
+    """The ROS arguments cannot be used: a ``--params-file`` missing or not a ROS parameter YAML, a malformed ``-p``."""
+
+
+def ros_arguments_error(exc, args=None) -> str:
+    """One line for rcl's refusal of the ROS arguments (rclpy raises an RCLError with rcl's source locations)."""
+    argv = list(sys.argv if args is None else args)
+    for k, arg in enumerate(argv[:-1]):
+        if arg == "--params-file" and not os.path.isfile(argv[k + 1]):
+            return f"--params-file {argv[k + 1]}: no such file"
+    text = str(exc).removeprefix("failed to initialize rcl: ")
+    return re.sub(r"(, at [^,]+:\d+)+$", "", text)
+
+
 def init(args=None):
     """``rclpy.init`` without rclpy's signal handler; until :func:`spin` takes over, SIGINT/SIGTERM raise
-    KeyboardInterrupt (start-up stops at once, whatever the parent ignored: a background job's SIGINT)."""
-    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    KeyboardInterrupt (start-up stops at once, whatever the parent ignored: a background job's SIGINT).
+    :class:`RosArgumentsError` (one line) when rcl refuses the ROS arguments; rcl's own log line about it (written
+    to the stderr file descriptor) is then dropped, else passed on."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile() as captured:
+        os.dup2(captured.fileno(), 2)
+        try:
+            rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+        except RuntimeError as exc:  # rclpy's RCLError (a RuntimeError)
+            raise RosArgumentsError(ros_arguments_error(exc, args)) from None
+        else:
+            captured.seek(0)
+            os.write(saved, captured.read())
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, signal.default_int_handler)
 
@@ -89,11 +121,19 @@ def serve(factories, args=None, make_executor=SingleThreadedExecutor, start=None
     the nodes destroyed, the recorder first (the bag is complete before another node spends seconds on its own
     shutdown work, e.g. the ground_bridge's final CCSDS set), the others in reverse order.
 
-    Exit code 2 when a node refuses its parameters (``[ERROR] label: ...``, or without the label when it is None),
+    Exit code 2 when rcl refuses the ROS arguments (a missing or malformed ``--params-file``) or a node refuses its
+    parameters (``[ERROR] label: ...``, or without the label when it is None),
     1 when a callback raised, else 0; the reason of a non-zero code is appended to ``errors`` (a list) if given.
     The signal handlers in place before are restored on return."""
     handlers = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
-    init(args)
+    try:
+        init(args)
+    except RosArgumentsError as exc:
+        label = factories[0][0] if len(factories) == 1 else None
+        print(f"[ERROR] {label}: {exc}" if label else f"[ERROR] {exc}", file=sys.stderr)
+        if errors is not None:
+            errors.append(str(exc))
+        return 2
     nodes, executor, code = [], None, 0
     try:
         executor = make_executor()
@@ -126,5 +166,10 @@ def serve(factories, args=None, make_executor=SingleThreadedExecutor, start=None
 
 
 def run(node_factory, args=None) -> int:
-    """A node's ``main()``: the node built by ``node_factory()`` alone on a SingleThreadedExecutor (:func:`serve`)."""
-    return serve([(None, node_factory)], args)
+    """A node's ``main()``: the node built by ``node_factory()`` alone on a SingleThreadedExecutor (:func:`serve`),
+    its errors labelled with the node's name (its parameter table's); ``-h``/``--help`` prints
+    the usage and the parameter table, exit code 0, before ROS starts."""
+    name = node_table(node_factory)
+    if help_requested(args):
+        return print_usage(name, sys.modules[node_factory.__module__].__doc__ or "")
+    return serve([(name, node_factory)], args)

@@ -30,6 +30,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.utilities import remove_ros_args
 
 from ..graph import EXECUTORS
+from .params import help_requested
 from .spin import serve
 
 NODE_CLASSES = {
@@ -84,6 +85,10 @@ def make_executor(name: str):
 
 def main(args=None) -> int:
     argv = sys.argv if args is None else list(args)
+    if help_requested(argv):
+        print(f"{USAGE}\n\n{__doc__.splitlines()[0]}\n\nEach node takes its own parameters ({{NODE}} --help, "
+              f"docs/parameters.md); a --params-file names them per node.")
+        return 0
     try:
         names, executor_name = parse(remove_ros_args(argv)[1:])
     except ValueError as exc:

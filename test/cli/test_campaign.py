@@ -390,7 +390,8 @@ def test_campaign_on_an_existing_cluster_gives_the_rows_of_the_embedded_one(camp
 @pytest.mark.fault
 def test_failed_run_is_a_row_with_its_reason(tmp_path):
     params = tmp_path / "bad.yaml"
-    params.write_text(yaml.safe_dump({"sim": {"ros__parameters": {"time_step": -1.0}},
+    # a parameter its table accepts (a path) that the node refuses at start-up (no such file)
+    params.write_text(yaml.safe_dump({"sim": {"ros__parameters": {"scenario_file": str(tmp_path / "missing.yaml")}},
                                       "planner": {"ros__parameters": {"mc_samples": 20000}}}))
     proc = _cli("--runs", "1", "--seed", "3", "--duration", str(DURATION), "--workers", "1", "--timeout", "120",
                 "--params", str(params), "--out", str(tmp_path / "c"), "--no-figures")
@@ -399,7 +400,7 @@ def test_failed_run_is_a_row_with_its_reason(tmp_path):
     row = Table(tmp_path / "c" / "runs.csv").read()[3]
     assert row["status"] == "failed" and row["failure"] == "node_exit"
     # the run's one process names the node that refused its parameters
-    assert "exited early" in row["reason"] and "sim" in row["reason"] and "parameter 'time_step'" in row["reason"]
+    assert "exited early" in row["reason"] and "sim" in row["reason"] and "parameter 'scenario_file'" in row["reason"]
     assert rep["failed"] == 1 and rep["failures"]["by_kind"] == {"node_exit": 1} and rep["p_safe"]["n"] == 0
     assert rep["p_safe_failures_unsafe"] == {"k": 0, "n": 1, "p": 0.0, "ci95": [0.0, pytest.approx(0.7935, abs=1e-4)]}
     assert not math.isnan(rep["p_safe_failures_unsafe"]["ci95"][1])

@@ -60,6 +60,14 @@ def file_cases(cmd, base, option, names, needles=None):
 
 
 CONFIG_FILES = ["missing", "directory", "binary", "bad_yaml", "list_yaml"]
+PARAMS_TABLE_CASES = {  # params file: what its one line must name
+    "params_tick": ["sim.tick_period", "-0.01", "[0.0001, 10] s"],
+    "params_k": ["planner.k", "an odd integer in [1, 99]"],
+    "params_period": ["safety_monitor.period", "-600", "[1, 86400] s"],
+    "params_unknown_key": ["safety_monitor.perod", "no such parameter"],
+    "params_samples": ["planner.mc_samples", "[1, 2000000]"],
+    "params_stations": ["radar_od.stations", "a non-empty list of distinct station names"],
+}
 PROPAGATE = ["--roe", "0,100,0,0,0,0", "--model", "keplerian", "--days", "0.1"]
 DEPLOY = ["--model", "linear", "--days", "1", "--inclinations", "97", "--dv", "1", "--angle-step", "90"]
 RUN = ["--out", "{run_out}", "--params", "{params_unknown_node}"]  # a case accepted by mistake still starts nothing
@@ -104,6 +112,10 @@ def cases():
     c += opt_cases(["run"], RUN, "--timeout", N + NEG)
     c += file_cases(["run"], RUN, "--config", CONFIG_FILES + ["scenario_nan"])
     c += file_cases(["run"], ["--out", "{run_out}"], "--params", CONFIG_FILES + ["params_nan", "params_shape"])
+    # a node parameter against its table, before any node starts: the node, the key and the rule
+    for cmd, base in ((["run"], ["--out", "{run_out}"]), (["campaign"], ["--runs", "1", "--out", "{run_out}"])):
+        for name, needles in PARAMS_TABLE_CASES.items():
+            c += file_cases(cmd, base, "--params", [name], needles)
     # propagate
     c += opt_cases(["propagate"], PROPAGATE, "--roe", ["nan,0,0,0,0,0", "1,2,3", "a,b,c,d,e,f", "0,1e308,0,0,0,0",
                                                        ""])
@@ -301,6 +313,12 @@ def files(tmp_path_factory):
     text("params_unknown_node", "no_such_node: {ros__parameters: {x: 1}}\n")
     text("params_nan", "sim: {ros__parameters: {tick_period: .nan}}\n")
     text("params_shape", "sim: [1, 2]\n")
+    text("params_tick", "sim: {ros__parameters: {tick_period: -0.01}}\n")
+    text("params_k", "planner: {ros__parameters: {k: 2}}\n")
+    text("params_period", "safety_monitor: {ros__parameters: {period: -600}}\n")
+    text("params_unknown_key", "safety_monitor: {ros__parameters: {perod: 600.0}}\n")
+    text("params_samples", "planner: {ros__parameters: {mc_samples: 1000000000}}\n")
+    text("params_stations", "radar_od: {ros__parameters: {stations: ['TIRA', 'TIRA']}}\n")
 
     # bags: a good one, then damaged copies of its file
     good = d / "good_bag"

@@ -84,7 +84,7 @@ def test_lifecycle_transitions_with_ros2_lifecycle_set(checks):
     assert section(managed, "lifecycle set").count("Transitioning successful") == 2
     bad = section(managed, "a parameter error at configure")
     assert "Transitioning failed" in bad and "unconfigured [1]" in bad
-    assert "configure failed: parameter 'k' must be an odd natural number, got 2" in bad
+    assert "configure failed: parameter 'k' must be an odd integer in [1, 99], got 2" in bad
 
 
 def test_launch_runs_the_scenario_to_the_report_of_roe_sep_run(checks):

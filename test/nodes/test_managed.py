@@ -81,7 +81,7 @@ def test_parameter_error_fails_configure_or_construction(context):
         assert node.trigger_configure() == TransitionCallbackReturn.FAILURE
         assert label(node) == "unconfigured"
         assert isinstance(node.transition_error, ParameterError)
-        assert "parameter 'k' must be an odd natural number, got 2" in str(node.transition_error)
+        assert "parameter 'k' must be an odd integer in [1, 99], got 2" in str(node.transition_error)
     finally:
         node.destroy_node()
     context("k:=2", "p_mode:=fixed")  # autostart: the constructor raises (main exits 2)
@@ -139,4 +139,4 @@ def test_lifecycle_manager_stops_at_a_failed_configure():
     _, out_p = stop_node(planner)
     assert code == 1, out
     assert "configure of /planner failed (state now 'unconfigured'" in out
-    assert "configure failed: parameter 'k' must be an odd natural number, got 4" in out_p
+    assert "configure failed: parameter 'k' must be an odd integer in [1, 99], got 4" in out_p

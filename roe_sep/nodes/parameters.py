@@ -1,0 +1,484 @@
+"""Every node parameter in one place: one table of :class:`Param` records per executable (:data:`TABLES`).
+
+From the tables come the ``ParameterDescriptor`` of every declared parameter (type, description with the unit and
+the rule, ``floating_point_range``/``integer_range``, ``read_only``: :func:`roe_sep.nodes.params.declare`), every
+check a node makes of a parameter at start-up (:func:`problem`: the range, the choices, a non-empty list, the form of
+a string), the check of ``roe-sep run --params`` / ``roe-sep campaign --params`` before anything starts
+(:func:`check_overrides`), each executable's ``--help`` (:func:`usage`) and ``docs/parameters.md``
+(``python -m roe_sep.nodes.parameters --markdown > docs/parameters.md``; a test fails when the file is stale).
+
+Ranges are inclusive (``FloatingPointRange`` and ``IntegerRange`` are), so "positive" is written as the smallest
+value that still makes sense. A parameter is ``read_only`` when a change after the node started (or configured, for
+a managed node) would have no effect: ``ros2 param set`` then refuses it instead of accepting a value nobody reads.
+The few that a node reads at every use are writable, within their range and rule (rclpy refuses the rest).
+
+This module is pure Python (no rclpy): the command line checks parameter files with it without starting ROS.
+"""
+
+import dataclasses
+import math
+import sys
+from collections.abc import Callable
+
+from ..checks import SEED_MAX
+from ..core.acquisition.planner import AcquisitionConfig, parse_axes
+from ..core.deployment.sweep import MODELS, USSA76_DENSITY_400KM
+from ..core.od.radar import DEFAULT_EPOCH_UTC, julian_date
+from ..core.safety.monitor import MonitorLimits
+from ..graph import MANAGED
+from ..ndm.options import FORMATS
+
+TYPES = ("bool", "int", "double", "string", "string[]", "double[]")
+P_MODES = ("monte_carlo", "three_sigma", "fixed")
+STRATEGIES = ("double_impulse", "multi_impulse")
+DYNAMICS = ("secular", "nonlinear")
+DEFAULT_DURATION = 280800.0  # s: 3.25 days, through OD and the initial-condition acquisition and half a day on
+MC_SAMPLES_MAX = 2_000_000
+ROS_PARAMETERS = ("use_sim_time", "start_type_description_service")  # declared by rclpy in every node
+
+
+@dataclasses.dataclass(frozen=True)
+class Param:
+    """One node parameter. ``range`` (lo, hi) or, for an integer, (lo, hi, step) is inclusive; ``choices`` the
+    allowed strings; ``rule`` the rule in words where the range and choices do not say it all (with ``check``, a
+    predicate on the value); ``nonempty`` for a list that must have an element."""
+
+    name: str
+    type: str
+    default: object
+    description: str
+    unit: str = ""
+    range: tuple | None = None
+    choices: tuple = ()
+    rule: str = ""
+    check: Callable | None = None
+    nonempty: bool = False
+    read_only: bool = True
+
+
+def _number(x):
+    return str(x) if isinstance(x, int) else f"{x:g}".replace("e+0", "e").replace("e+", "e").replace("e-0", "e-")
+
+
+def rule_text(p: Param) -> str:
+    """The rule of a parameter in words: ``an odd integer in [1, 99]``, ``a number in [0, 1] m/s``, ..."""
+    if p.rule:
+        return p.rule
+    unit = f" {p.unit}" if p.unit else ""
+    if p.type == "bool":
+        return "true or false"
+    if p.choices:
+        return "one of " + ", ".join(f"'{c}'" for c in p.choices)
+    if p.type == "int" and p.range:
+        lo, hi, *step = p.range
+        kind = {(2, 1): "an odd integer", (2, 0): "an even integer"}.get((step[0], lo % 2), "an integer") \
+            if step else "an integer"
+        return f"{kind} in [{lo}, {hi}]{unit}"
+    if p.type == "double" and p.range:
+        return f"a number in [{_number(p.range[0])}, {_number(p.range[1])}]{unit}"
+    if p.type == "double[]":
+        each = f", each in [{_number(p.range[0])}, {_number(p.range[1])}]{unit}" if p.range else ""
+        return ("a non-empty list of numbers" if p.nonempty else "a list of numbers") + each
+    if p.type == "string[]":
+        return "a non-empty list of strings" if p.nonempty else "a list of strings"
+    return "a non-empty string" if p.nonempty else "a string"
+
+
+def _type_ok(p: Param, value) -> bool:
+    scalar = {"bool": lambda v: isinstance(v, bool),
+              "int": lambda v: isinstance(v, int) and not isinstance(v, bool),
+              "double": lambda v: isinstance(v, float),
+              "string": lambda v: isinstance(v, str)}
+    if p.type in scalar:
+        return scalar[p.type](value)
+    if isinstance(value, (str, bytes, dict)) or not hasattr(value, "__iter__"):
+        return False
+    item = scalar["string" if p.type == "string[]" else "double"]
+    return all(item(v) for v in value)
+
+
+def type_text(p: Param) -> str:
+    """The rule of a parameter with how its type is written (a value of another type is refused)."""
+    hint = {"double": ", written with a decimal point (600.0, not 600)",
+            "double[]": ", written with decimal points ([300.0], not [300])"}.get(p.type, "")
+    return rule_text(p) + hint
+
+
+def problem(p: Param, value):
+    """What is wrong with ``value`` for ``p`` (``must be ...``), None if nothing."""
+    if not _type_ok(p, value):
+        return f"must be {type_text(p)}"
+    bad = False
+    if p.type in ("int", "double") and p.range:
+        bad = not (isinstance(value, int) or math.isfinite(value)) or not p.range[0] <= value <= p.range[1]
+        if not bad and p.type == "int" and len(p.range) == 3:
+            bad = (value - p.range[0]) % p.range[2] != 0
+    elif p.type == "double[]":
+        values = list(value)
+        bad = (p.nonempty and not values) or not all(math.isfinite(v) for v in values) or \
+            (p.range is not None and not all(p.range[0] <= v <= p.range[1] for v in values))
+    elif p.choices:
+        bad = value not in p.choices
+    elif p.nonempty:
+        bad = not value
+    if not bad and p.check is not None:
+        bad = not p.check(value)
+    return f"must be {rule_text(p)}" if bad else None
+
+
+def show(value) -> str:
+    """A parameter value as the user wrote it (Python's repr of plain lists, never of arrays)."""
+    if isinstance(value, (str, bool, int, float)) or value is None:
+        return repr(value)
+    return repr(list(value))
+
+
+# ------------------------------------------------------------------------------------------------ rules as predicates
+def _iso_epoch(value) -> bool:
+    try:
+        julian_date(value)
+    except (ValueError, TypeError, OverflowError):
+        return False
+    return True
+
+
+def _axes(value) -> bool:
+    try:
+        parse_axes(value)
+    except ValueError:
+        return False
+    return True
+
+
+def _topic_counts(values) -> bool:
+    """'topic=count' items (empty items allowed: a YAML list cannot be empty in a ROS params file)."""
+    return all(not v or (v.startswith("/") and v.partition("=")[2].isdigit()) for v in values)
+
+
+def _node_names(values) -> bool:
+    return all(v != "sim" for v in values)
+
+
+def _topic_names(values) -> bool:
+    return all(v.strip() for v in values)
+
+
+def _distinct_names(values) -> bool:
+    return all(values) and len(set(values)) == len(values)
+
+
+# ------------------------------------------------------------------------------------------------ the tables
+SCENARIO_FILE = Param("scenario_file", "string", "", "scenario YAML ('' = the embedded default, config/scenario.yaml)",
+                      rule="'' or the path of a scenario YAML (read at start-up)")
+AUTOSTART = Param("autostart", "bool", True, "configure and activate in the constructor (false: stay unconfigured "
+                  "for a lifecycle manager or `ros2 lifecycle set`)")
+J2 = "secular J2 in the {}"
+_ACQ = AcquisitionConfig()
+_LIM = MonitorLimits()
+
+PLANNER = (
+    AUTOSTART,
+    Param("k", "int", 3, "half revolutions from the ejection to the drift-stop (odd: the drift-stop is at the "
+          "opposite side of the orbit, seed 002 Eq. 18); 99 is more than 2.5 days", range=(1, 99, 2)),
+    Param("p_mode", "string", "monte_carlo", "choice of the tangential reduction |p|: 'monte_carlo' (p_best of the "
+          "start-up sweep of the scenario), 'three_sigma' (e1 + e2 of seed 002 Eq. 21 for the commanded ejection), "
+          "'fixed' (p_reduction)", choices=P_MODES),
+    Param("p_reduction", "double", 0.0, "|p| when p_mode is 'fixed' (beyond 1 m/s a reduction exceeds any "
+          "drift-stop burn of the design)", "m/s", range=(0.0, 1.0)),
+    SCENARIO_FILE,
+    Param("mc_samples", "int", 100000, "samples of the start-up Monte Carlo sweep (p_mode 'monte_carlo'); at most "
+          "2,000,000: the sweep holds about 1.3 kB per sample (1.3 GB and 12 s per million samples, measured) and "
+          "the simulator's clock waits for it", range=(1, MC_SAMPLES_MAX)),
+    Param("mc_seed", "int", 0, "seed of the start-up Monte Carlo sweep", range=(0, SEED_MAX)),
+    Param("j2", "bool", True, J2.format("drift-stop epoch and the predicted ROE")),
+    Param("strategy", "string", "double_impulse", "'double_impulse' (ejection + drift-stop) or 'multi_impulse' "
+          "(seed 001 Sec. 3: every carrier burn of the multi-impulse plan, each <= 0.3 m/s, quantized to 1 mm/s; k "
+          "and p_mode do not apply)", choices=STRATEGIES),
+)
+
+SIM = (
+    SCENARIO_FILE,
+    Param("seed", "int", 0, "seed of the ejection, burn and drag dispersions", range=(0, SEED_MAX)),
+    Param("disperse", "bool", True, "apply the execution errors, the drag uncertainty and the ejection delay"),
+    Param("ejection_delay_max", "double", 10.0, "the release mechanism fires uniformly within this delay after the "
+          "commanded ejection epoch (an assumption: no seed gives a value; 0: on time)", "s", range=(0.0, 600.0)),
+    Param("duration", "double", DEFAULT_DURATION, "sim time at which the run ends (default 3.25 days: OD, the "
+          "initial-condition acquisition and half a day on)", "s", range=(1.0, 1.0e9)),
+    Param("time_step", "double", 600.0, "sim time per clock tick (lockstep: per step)", "s", range=(1.0e-3, 86400.0)),
+    Param("tick_period", "double", 0.01, "wall time between clock ticks (free-running clock)", "s",
+          range=(1.0e-4, 10.0)),
+    Param("truth_period", "double", 60.0, "sim-time period of the truth topics", "s", range=(0.1, 86400.0)),
+    Param("u0_deg", "double", 50.0, "carrier mean argument of latitude at sim time 0", "deg",
+          range=(-360.0, 360.0)),
+    Param("ltan_hours", "double", 9.5, "local time of the carrier's ascending node (BIROS: 09:30)", "h",
+          range=(0.0, 24.0)),
+    Param("epoch_utc", "string", DEFAULT_EPOCH_UTC, "UTC calendar epoch of sim time 0",
+          rule="an ISO-8601 UTC date-time, e.g. '2016-07-01T00:00:00'", check=_iso_epoch),
+    Param("require_plan_approval", "bool", True, "execute a plan only after the safety monitor approved it"),
+    Param("approval_timeout", "double", 10.0, "wall time a burn may wait for its approval (the clock holds); then "
+          "the burn is dropped", "s", range=(0.01, 86400.0)),
+    Param("distance_step", "double", 10.0, "sampling of the minimum-distance tracking", "s", range=(0.1, 3600.0)),
+    Param("departure_distance", "double", 1000.0, "closest approaches are tracked once the picosatellite is this "
+          "far away", "m", range=(1.0, 1.0e6)),
+    Param("j2", "bool", True, J2.format("truth dynamics (dynamics 'secular' only)")),
+    Param("dynamics", "string", "nonlinear", "truth: 'nonlinear' (both spacecraft integrated numerically with "
+          "J2-J4 and drag, mean ROE published) or 'secular' (the ROE model with J2 and the true differential drag)",
+          choices=DYNAMICS),
+    Param("wait_for", "string[]", [], "hold the clock at 0 until each topic has that many subscribers (every node "
+          "up); [] or ['']: start at once", rule="a list of 'topic=count' items, e.g. ['/sim/truth/roe=4']",
+          check=_topic_counts),
+    Param("start_timeout", "double", 60.0, "wall time to wait for those subscribers at most", "s",
+          range=(0.0, 86400.0)),
+    Param("lockstep_participants", "string[]", [], "node names of the lockstep participants ([] or ['']: "
+          "free-running clock)", rule="a list of node names other than 'sim'", check=_node_names),
+    Param("real_time_factor", "double", 0.0, "lockstep: sim seconds per wall second at most (0: as fast as the "
+          "machine allows)", range=(0.0, 1.0e9)),
+    Param("step_timeout", "double", 120.0, "lockstep: wall time a step may wait for a participant before the run "
+          "fails", "s", range=(0.1, 86400.0)),
+)
+
+RADAR_OD = (
+    AUTOSTART,
+    Param("stations", "string[]", ["TIRA"], "radar station names; the three lists below have one entry per station",
+          rule="a non-empty list of distinct station names", check=_distinct_names, nonempty=True),
+    Param("station_latitudes_deg", "double[]", [50.6166], "geodetic latitude of each station (WGS-84)", "deg",
+          range=(-90.0, 90.0), nonempty=True),
+    Param("station_longitudes_deg", "double[]", [7.1296], "east longitude of each station", "deg",
+          range=(-180.0, 360.0), nonempty=True),
+    Param("station_altitudes_m", "double[]", [300.0], "height of each station above the WGS-84 ellipsoid", "m",
+          range=(-500.0, 9000.0), nonempty=True),
+    Param("elevation_mask_deg", "double", 10.0, "elevation mask of every station", "deg", range=(0.0, 89.0)),
+    Param("sigma_range_m", "double", 10.0, "1-sigma range noise", "m", range=(1.0e-3, 1.0e4)),
+    Param("sigma_angle_deg", "double", 0.01, "1-sigma azimuth and elevation noise (TIRA's 0.45 deg L-band beam: "
+          "0.01 deg needs an SNR of about 26 dB, which a 10 cm picosatellite at ~1000 km gives)", "deg",
+          range=(1.0e-6, 0.9)),
+    Param("sample_interval", "double", 10.0, "measurement interval during a pass (a pass above 10 deg lasts a few "
+          "minutes)", "s", range=(0.1, 600.0)),
+    Param("min_separation", "double", 5000.0, "smallest separation the radar resolves (seed 001: 5 km)", "m",
+          range=(0.0, 1.0e6)),
+    Param("passes_required", "int", 2, "counted passes needed for an estimate", range=(1, 1000)),
+    Param("min_arc", "double", 36000.0, "smallest span of the passes of an estimate (seed 001: about 12 h)", "s",
+          range=(0.0, 2.592e6)),
+    Param("min_pass_measurements", "int", 5, "measurements for a pass to count", range=(1, 100000)),
+    Param("seed", "int", 0, "seed of the measurement noise", range=(0, SEED_MAX)),
+    Param("epoch_utc", "string", DEFAULT_EPOCH_UTC, "UTC calendar epoch of sim time 0 (the simulator's)",
+          rule="an ISO-8601 UTC date-time, e.g. '2016-07-01T00:00:00'", check=_iso_epoch),
+)
+
+IC_PLANNER = (
+    AUTOSTART,
+    Param("a_dl_min", "double", _ACQ.a_dl_min, "minimum mean along-track separation, at the ICs and throughout the "
+          "acquisition (below a_dl_max)", "m", range=(1.0, 1.0e6)),
+    Param("a_dl_max", "double", _ACQ.a_dl_max, "maximum mean along-track separation at the ICs", "m",
+          range=(1.0, 1.0e6)),
+    Param("a_dl_target", "double", _ACQ.a_dl_target, "aimed |a dl| at the ICs (mid-range: room for drag and OD "
+          "errors either way); 0 = free in [a_dl_min, a_dl_max], the cheapest", "m", range=(0.0, 1.0e6)),
+    Param("a_dl_target_tol", "double", _ACQ.a_dl_target_tol, "|a dl - a_dl_target| allowed after quantization", "m",
+          range=(1.0e-3, 1.0e6)),
+    Param("min_ei", "double", _ACQ.min_ei, "minimum |a de|, |a di| and R-N distance (seed 002 Eq. 25)", "m",
+          range=(1.0e-3, 1.0e5)),
+    Param("fov_half_r_deg", "double", _ACQ.fov_half_r_deg, "camera half field of view, radial (seed 002 Eq. 11)",
+          "deg", range=(0.01, 89.0)),
+    Param("fov_half_n_deg", "double", _ACQ.fov_half_n_deg, "camera half field of view, normal (seed 002 Eq. 11)",
+          "deg", range=(0.01, 89.0)),
+    Param("max_burn_dv", "double", _ACQ.max_burn_dv, "largest carrier burn (seed 001 Sec. 2.1)", "m/s",
+          range=(1.0e-4, 10.0)),
+    Param("dv_quantum", "double", _ACQ.dv_quantum, "burn quantization, at most max_burn_dv (seed 001 Sec. 2.1)",
+          "m/s", range=(1.0e-6, 10.0)),
+    Param("axes", "string", _ACQ.axes, "candidate burn axes", rule="distinct letters among R, T, N, e.g. 'TN'",
+          check=_axes),
+    Param("planning_margin", "double", 11400.0, "first burn >= max(OD epoch, now) + margin (two orbits: the "
+          "uplink, at the next ground contact); below window", "s", range=(0.0, 2.592e6)),
+    Param("window", "double", _ACQ.window, "ICs reached at the last grid epoch within OD epoch + window", "s",
+          range=(1.0, 2.592e6)),
+    Param("grid_per_orbit", "int", _ACQ.grid_per_orbit, "candidate burn epochs per orbit (at round values of u)",
+          range=(1, 360)),
+    Param("drift_tolerance", "double", _ACQ.drift_tolerance, "|a da| allowed at the ICs (>= dv_quantum / n, about "
+          "0.9 m, to be always reachable)", "m", range=(1.0e-3, 1.0e5)),
+    Param("ei_angle_tol_deg", "double", _ACQ.ei_angle_tol_deg, "e/i deviation from (anti-)parallel allowed after "
+          "quantization", "deg", range=(1.0e-3, 20.0)),
+    Param("j2", "bool", _ACQ.j2, J2.format("prediction")),
+)
+
+SAFETY_MONITOR = (
+    AUTOSTART,
+    SCENARIO_FILE,
+    Param("period", "double", 600.0, "sim time between state assessments", "s", range=(1.0, 86400.0)),
+    Param("keep_out", "double", _LIM.keep_out, "keep-out sphere radius", "m", range=(1.0, 1.0e6)),
+    Param("min_rn_distance", "double", _LIM.min_rn_distance, "e/i separation minimum (seed 002 Eq. 25)", "m",
+          range=(1.0e-3, 1.0e5)),
+    Param("crossing_min", "double", _LIM.crossing_min, "minimum |T| at an R = 0 transit", "m", range=(1.0e-3, 1.0e6)),
+    Param("evaporation", "double", _LIM.evaporation, "formation evaporation distance", "m", range=(1.0, 1.0e8)),
+    Param("a_dl_min", "double", _LIM.a_dl_min, "radar separability", "m", range=(1.0e-3, 1.0e6)),
+    Param("a_dl_max", "double", _LIM.a_dl_max, "camera detection range", "m", range=(1.0e-3, 1.0e7)),
+    Param("window", "double", _LIM.window, "prediction window of a state assessment (about one orbit)", "s",
+          range=(1.0, 2.592e6)),
+    Param("plan_horizon", "double", _LIM.plan_horizon, "prediction after a plan's last burn", "s",
+          range=(1.0, 2.592e6)),
+    Param("fov_half_r_deg", "double", math.degrees(_LIM.fov_half_r), "camera half field of view, radial",
+          "deg", range=(0.01, 89.0)),
+    Param("fov_half_n_deg", "double", math.degrees(_LIM.fov_half_n), "camera half field of view, normal",
+          "deg", range=(0.01, 89.0)),
+    Param("j2", "bool", True, J2.format("predictions")),
+)
+
+EJECTOR = (
+    SCENARIO_FILE,
+    Param("ejection_epoch", "double", -1.0, "sim-time epoch of the ejection; negative: at the first time the carrier "
+          "reaches u1 after not_before", "s", range=(-1.0e9, 1.0e9)),
+    Param("not_before", "double", 0.0, "earliest sim time of an ejection at u1", "s", range=(-1.0e9, 1.0e9)),
+    Param("lead_time", "double", 1800.0, "the time-tagged event is published up to this long ahead (more than the "
+          "spacing of the truth samples)", "s", range=(0.0, 86400.0)),
+    Param("strategy", "string", "double_impulse", "'double_impulse' (the scenario's design) or 'multi_impulse' (the "
+          "SPL ejection of seed 001 Sec. 3: 1.53 m/s at u1 = 90 deg)", choices=STRATEGIES),
+)
+
+RECORDER = (
+    Param("output", "string", "", "bag directory to create ('' = rosbag2_YYYY_MM_DD-HH_MM_SS in the working "
+          "directory); an existing non-empty directory is refused"),
+    Param("topics", "string[]", [], "topics to record ([] = every topic, hidden _-topics excluded)",
+          rule="a list of topic names", check=_topic_names),
+    Param("exclude", "string[]", [], "topics never recorded", rule="a list of topic names", check=_topic_names),
+    Param("flush_period", "double", 1.0, "wall time between forced chunk completions + fsync", "s",
+          range=(1.0e-3, 3600.0)),
+)
+
+GROUND_BRIDGE = (
+    Param("output_dir", "string", "", "directory of the CCSDS files ('' = ccsds_YYYY_MM_DD-HH_MM_SS in the working "
+          "directory, as the recorder names its bag; roe-sep run sets OUT/ccsds)"),
+    Param("format", "string", "xml", "file format of the CCSDS files", choices=FORMATS),
+    Param("epoch_utc", "string", DEFAULT_EPOCH_UTC, "UTC epoch of sim time 0 (the simulator's)",
+          rule="an ISO-8601 UTC date-time, e.g. '2016-07-01T00:00:00'", check=_iso_epoch),
+    SCENARIO_FILE,
+    Param("carrier_isp", "double", 60.0, "carrier thruster specific impulse (OPM MAN_DELTA_MASS)", "s",
+          range=(1.0, 1.0e4)),
+    Param("write_period", "double", 86400.0, "sim time between OEM/TDM/CDM updates (0: only the final set at "
+          "shutdown)", "s", range=(0.0, 2.592e6)),
+    Param("input_dir", "string", "", "directory watched for TDM files ('' = no input)"),
+    Param("poll_period", "double", 1.0, "wall time between scans of input_dir", "s", range=(0.01, 3600.0)),
+    Param("default_sigma_range_m", "double", 10.0, "range sigma of a TDM without one", "m", range=(1.0e-3, 1.0e4)),
+    Param("default_sigma_angle_deg", "double", 0.01, "angle sigma of a TDM without one", "deg", range=(1.0e-6, 0.9)),
+)
+
+ANALYSIS_SERVER = (
+    Param("cluster_file", "string", "", "cluster YAML ('' = the embedded Soyuz-stage example, config/cluster.yaml)",
+          rule="'' or the path of a cluster YAML (read at start-up)"),
+    Param("deploy_density", "double", USSA76_DENSITY_400KM, "density of a deployment assessment whose request gives "
+          "0 (USSA76 at 400 km)", "kg/m^3", range=(0.0, 1.0e-6), read_only=False),
+    Param("deploy_step", "double", 600.0, "sampling of the returned distance curve", "s", range=(1.0, 86400.0),
+          read_only=False),
+    Param("deploy_model", "string", "nonlinear", "relative motion of a deployment assessment: 'nonlinear' (heyoka, "
+          "J2-J4 + drag) or 'linear' (the secular ROE model)", choices=MODELS, read_only=False),
+)
+
+FOXGLOVE_VIEW = (
+    Param("port", "int", 8765, "TCP port on 127.0.0.1 (0 = any free port)", range=(0, 65535)),
+    Param("keep_out_radius", "double", 1000.0, "radius of the keep-out sphere drawn", "m", range=(1.0, 1.0e6),
+          read_only=False),
+)
+
+LIFECYCLE_MANAGER = (
+    Param("node_names", "string[]", list(MANAGED), "managed nodes, in start-up order", nonempty=True,
+          rule="a non-empty list of node names", check=lambda v: all(v)),
+    Param("timeout", "double", 30.0, "wait for each node's service and each transition (a call without an answer "
+          "is made again, up to 3 times)", "s", range=(0.1, 3600.0)),
+)
+
+TABLES = {"planner": PLANNER, "sim": SIM, "radar_od": RADAR_OD, "ic_planner": IC_PLANNER,
+          "safety_monitor": SAFETY_MONITOR, "ejector": EJECTOR, "recorder": RECORDER, "ground_bridge": GROUND_BRIDGE,
+          "analysis_server": ANALYSIS_SERVER, "foxglove_view": FOXGLOVE_VIEW, "lifecycle_manager": LIFECYCLE_MANAGER}
+"""{executable (= node name): its parameters, in declaration order}."""
+CLASSES = {"PlannerNode": "planner", "SimNode": "sim", "RadarODNode": "radar_od", "IcPlannerNode": "ic_planner",
+           "SafetyMonitorNode": "safety_monitor", "EjectorNode": "ejector", "RecorderNode": "recorder",
+           "GroundBridgeNode": "ground_bridge", "AnalysisServer": "analysis_server",
+           "FoxgloveViewNode": "foxglove_view", "LifecycleManager": "lifecycle_manager"}
+"""{node class name: its table}."""
+
+
+def table(node: str) -> dict:
+    """{name: Param} of a node."""
+    return {p.name: p for p in TABLES[node]}
+
+
+# ------------------------------------------------------------------------------------------------ parameter files
+def check_overrides(overrides: dict, where: str = "--params") -> None:
+    """Every value of a ``{node: {name: value}}`` mapping (``/**``: every node) against the tables; ValueError
+    ``WHERE: NODE.NAME = VALUE: must be RULE`` for the first that breaks its rule or names no parameter."""
+    for node, values in overrides.items():
+        nodes = list(TABLES) if node == "/**" else [node]
+        if node != "/**" and node not in TABLES:
+            raise ValueError(f"{where}: unknown node {node!r}; nodes: {', '.join(TABLES)}")
+        for name, value in (values or {}).items():
+            if name in ROS_PARAMETERS or str(name).startswith("qos_overrides."):
+                continue
+            params = [table(n)[name] for n in nodes if name in table(n)]
+            if not params:
+                known = "every node's" if node == "/**" else f"{node}'s parameters: {', '.join(table(node))}"
+                raise ValueError(f"{where}: {node}.{name}: no such parameter ({known})")
+            for p in params:
+                why = problem(p, value)
+                if why:
+                    raise ValueError(f"{where}: {node}.{name} = {show(value)}: {why}")
+
+
+# ------------------------------------------------------------------------------------------------ text
+def _default(p: Param) -> str:
+    if p.type == "bool":
+        return "true" if p.default else "false"
+    if p.type == "string":
+        return f"'{p.default}'"
+    if p.type in ("string[]", "double[]"):
+        return "[" + ", ".join(f"'{v}'" if isinstance(v, str) else repr(v) for v in p.default) + "]"
+    return repr(p.default)
+
+
+def usage(node: str, summary: str = "") -> str:
+    """The ``--help`` text of a node's executable: usage, what it is, its parameter table."""
+    lines = [f"usage: ros2 run roe_sep {node} [-h] [--ros-args [-p NAME:=VALUE ...] [--params-file FILE]]", ""]
+    if summary:
+        lines += [summary.strip().splitlines()[0], ""]
+    lines.append(f"parameters of /{node} (docs/parameters.md; `ros2 param describe /{node} NAME` while it runs):")
+    for p in TABLES[node]:
+        unit = f" [{p.unit}]" if p.unit else ""
+        access = "read-only" if p.read_only else "settable at run time"
+        lines.append(f"  {p.name} ({p.type}, default {_default(p)}{unit}; {access})")
+        lines.append(f"      {p.description}")
+        lines.append(f"      rule: {rule_text(p)}")
+    return "\n".join(lines) + "\n"
+
+
+def markdown() -> str:
+    """docs/parameters.md: one table per node."""
+    out = ["# Node parameters", "",
+           "Generated from `roe_sep/nodes/parameters.py` by `python -m roe_sep.nodes.parameters --markdown "
+           "> docs/parameters.md`; do not edit by hand (test/nodes/test_parameters.py fails when this file is "
+           "stale). Every executable prints its table with `--help`.", "",
+           "Ranges are inclusive. A read-only parameter is fixed once the node started (a managed node: once it "
+           "is configured); `ros2 param set` refuses it. A settable one is refused outside its range and rule. "
+           "Every node also has rclpy's `use_sim_time` (bool, false).", ""]
+    for node, params in TABLES.items():
+        out += [f"## {node}", "", "| name | type | default | unit | rule | read-only | description |",
+                "|---|---|---|---|---|---|---|"]
+        for p in params:
+            cells = [f"`{p.name}`", p.type, f"`{_default(p)}`", p.unit, rule_text(p),
+                     "yes" if p.read_only else "no", p.description]
+            out.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
+        out.append("")
+    return "\n".join(out)
+
+
+def main(argv=None) -> int:
+    args = sys.argv[1:] if argv is None else list(argv)
+    if args == ["--markdown"]:
+        sys.stdout.write(markdown())
+        return 0
+    if len(args) == 1 and args[0] in TABLES:
+        sys.stdout.write(usage(args[0]))
+        return 0
+    print(f"usage: python -m roe_sep.nodes.parameters --markdown | NODE (one of {', '.join(TABLES)})",
+          file=sys.stderr)
+    return 2
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
