@@ -32,7 +32,7 @@ from roe_sep_msgs.srv import PlanSeparation
 
 from .. import interfaces
 from ..core.config import ConfigError, load_scenario
-from ..core.montecarlo.sweep import sweep
+from ..core.montecarlo.sweep import p_best
 from ..core.relmotion.dynamics import drag_da_dot, raan_rate
 from ..core.relmotion.roe import wrap_angle
 from ..core.separation.double_impulse import design, plan_drift_stop, reduction_bounds
@@ -47,6 +47,16 @@ P_MODES = ("monte_carlo", "three_sigma", "fixed")
 STRATEGIES = ("double_impulse", "multi_impulse")
 
 
+MC_SAMPLES, MC_SEED = 100000, 0  # defaults of the start-up sweep's parameters mc_samples and mc_seed
+
+
+def startup_p(scenario, samples, seed):
+    """The drift-stop reduction |p| [m/s] of p_mode 'monte_carlo': p_best of a ``samples``-sample sweep with
+    ``seed`` (seed 002 Table 3), memoised (:func:`roe_sep.core.montecarlo.sweep.p_best`)."""
+    mc = dataclasses.replace(scenario.monte_carlo, samples=samples, seed=seed)
+    return p_best(scenario.separation, mc, tuple(scenario.p_values))
+
+
 class PlannerNode(ManagedNode):
     def __init__(self):
         super().__init__("planner")
@@ -57,8 +67,8 @@ class PlannerNode(ManagedNode):
         self.p_mode = declare(self, "p_mode", "monte_carlo", f"choice of the reduction |p|: one of {P_MODES}")
         p_fixed = declare(self, "p_reduction", 0.0, "m/s, |p| used when p_mode is 'fixed'")
         scenario_file = declare(self, "scenario_file", "", "scenario YAML ('' = embedded default)")
-        samples = declare(self, "mc_samples", 100000, "Monte Carlo samples for p_mode 'monte_carlo'")
-        seed = declare(self, "mc_seed", 0, "Monte Carlo seed for p_mode 'monte_carlo'")
+        samples = declare(self, "mc_samples", MC_SAMPLES, "Monte Carlo samples for p_mode 'monte_carlo'")
+        seed = declare(self, "mc_seed", MC_SEED, "Monte Carlo seed for p_mode 'monte_carlo'")
         self.j2 = declare(self, "j2", True, "secular J2 in the drift-stop epoch and predicted ROE")
         self.strategy = declare(self, "strategy", "double_impulse", f"separation strategy: one of {STRATEGIES}")
         require("strategy", self.strategy in STRATEGIES, self.strategy, f"one of {STRATEGIES}")
@@ -80,9 +90,7 @@ class PlannerNode(ManagedNode):
         elif self.p_mode == "fixed":
             self.p = float(p_fixed)
         elif self.p_mode == "monte_carlo":
-            mc = dataclasses.replace(self.scenario.monte_carlo, samples=samples, seed=seed)
-            result = sweep(design(self.scenario.separation), mc, self.scenario.p_values)
-            self.p = result.p_best
+            self.p = startup_p(self.scenario, samples, seed)
             self.get_logger().info(f"p = {self.p:g} m/s: p_best of a {samples}-sample Monte Carlo sweep")
         else:
             self.p = None  # computed from each commanded ejection
