@@ -1,5 +1,6 @@
 """``python -m roe_sep.campaign.child SPEC_JSON``: one campaign run, :func:`roe_sep.run.run` with the given keyword
-arguments, every node in this process (started by :func:`roe_sep.campaign.runner.execute` in a session of its own).
+arguments, every node in this process (forked by the worker's fork server, :mod:`roe_sep.campaign.forkserver`, in a
+session of its own; the same as a fresh interpreter running this module).
 Exit 0 once ``report.json`` is written; 1 with a one-line reason on stderr otherwise."""
 
 import json

@@ -1,18 +1,19 @@
-"""One run of a campaign as a Dask task: :func:`roe_sep.run.run` in a child process of its own, in a DDS domain of
-its own, with the seed's dispersions; returns the run's table row (never raises: a failure is a row with its reason).
+"""One run of a campaign as a Dask task: :func:`roe_sep.run.run` in a process of its own, in a DDS domain of its
+own, with the seed's dispersions; returns the run's table row (never raises: a failure is a row with its reason).
 
-Layout. The child runs every node of the run in itself, on one EventsExecutor (``run(in_process=True)``): the same
-nodes, parameters and lockstep as ``roe-sep run``, hence the same row as ``roe-sep run --seed S+k`` in its default
-two processes (test_campaign), for about 13 instead of 21 CPU-s per run (no process start-ups, no inter-process
-transport; bench/bench_campaign.py). The ground_bridge (CCSDS export) only listens; a run has it with ``ccsds``.
+Layout. The run's process runs every node of the run in itself, on one EventsExecutor (``run(in_process=True)``):
+the same nodes, parameters and lockstep as ``roe-sep run``, hence the same row as ``roe-sep run --seed S+k`` in its
+default two processes (test_campaign). It is forked from the worker's fork server (:mod:`.forkserver`), which has
+imported what a run imports and computed the planner's start-up sweep once, so a run pays neither; the ground_bridge
+(CCSDS export) only listens, and a run has it with ``ccsds``.
 
-Isolation. The run's nodes and its observer live in a child process started in a new session (process group): the
-worker's own signals (Ctrl-C on the terminal) never reach them, the worker kills the whole group when the run
-exceeds its wall-time limit, and the child's watchdog kills its group when the worker dies (parent changed), so an
-interrupted campaign leaves no node behind. The DDS domain is taken from a range with an exclusive ``flock`` per
-domain in the temporary directory, so concurrent runs on one host (any number of workers, any number of campaigns)
-never share a domain; discovery stays on loopback (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``), so workers on
-other hosts cannot collide either. The lock is the kernel's: a dead worker releases it.
+Isolation. The run's process is in a session (process group) of its own: the worker's own signals (Ctrl-C on the
+terminal) never reach it, the worker kills the whole group when the run exceeds its wall-time limit, and the run's
+watchdog kills its group when its parent (the fork server, which ends with its worker) is gone, so an interrupted
+campaign leaves no node behind. The DDS domain is taken from a range with an exclusive ``flock`` per domain in the
+temporary directory, so concurrent runs on one host (any number of workers, any number of campaigns) never share a
+domain; discovery stays on loopback (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``), so workers on other hosts cannot
+collide either. The lock is the kernel's: a dead worker releases it.
 
 Seeds. The simulator's ``seed`` is the run seed (SPL magnitude and direction, carrier burn execution and attitude
 errors, differential drag); the radar noise is seeded with :func:`radar_seed` of the run seed, an independent
@@ -27,7 +28,6 @@ import os
 import shutil
 import signal
 import subprocess
-import sys
 import tempfile
 import threading
 import time
@@ -37,6 +37,7 @@ import yaml
 
 from .. import jsonutil
 from ..run import radar_seed
+from . import forkserver
 from .table import failed_row, row_from_report
 
 KILL_MARGIN = 120.0  # wall s beyond the run's own time limit before the worker kills the run's process group
@@ -110,19 +111,19 @@ def execute(spec: dict) -> dict:
             child = {k: spec.get(k) for k in ("config", "duration", "timeout")}
             child.update(seed=seed, out=str(run_dir), params=str(run_dir / "overrides.yaml"), domain_id=domain,
                          ccsds=ccsds)
-            with open(run_dir / "campaign.log", "w", encoding="utf-8") as log:
-                proc = subprocess.Popen([sys.executable, "-m", "roe_sep.campaign.child", json.dumps(child)],
-                                        stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
-                try:
-                    code = proc.wait(timeout=float(spec["timeout"]) + KILL_MARGIN)
-                except subprocess.TimeoutExpired:
+            srv = forkserver.server()  # the run is forked from this worker's warm fork server
+            srv.warm(spec.get("config"), child["params"])
+            proc = srv.spawn([json.dumps(child)], run_dir / "campaign.log")
+            try:
+                code = proc.wait(timeout=float(spec["timeout"]) + KILL_MARGIN)
+            except subprocess.TimeoutExpired:
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.wait()
+                row = failed_row(seed, "timeout", f"run killed after {spec['timeout'] + KILL_MARGIN:g} wall s")
+                return _finish(row, t0, domain)
+            finally:
+                if proc.poll() is None:  # the worker is being torn down (task cancelled): take the run with it
                     os.killpg(proc.pid, signal.SIGKILL)
-                    proc.wait()
-                    row = failed_row(seed, "timeout", f"run killed after {spec['timeout'] + KILL_MARGIN:g} wall s")
-                    return _finish(row, t0, domain)
-                finally:
-                    if proc.poll() is None:  # the worker is being torn down (task cancelled): take the run with it
-                        os.killpg(proc.pid, signal.SIGKILL)
         report_path = run_dir / "report.json"
         if code != 0 or not report_path.exists():
             why = _last_line(run_dir / "campaign.log") or f"exit status {code}"

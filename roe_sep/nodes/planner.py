@@ -21,7 +21,7 @@ from roe_sep_msgs.srv import PlanSeparation
 
 from .. import interfaces
 from ..core.config import ConfigError, load_scenario
-from ..core.montecarlo.sweep import sweep
+from ..core.montecarlo.sweep import p_best
 from ..core.relmotion.dynamics import drag_da_dot, raan_rate
 from ..core.relmotion.roe import wrap_angle
 from ..core.separation.double_impulse import design, plan_drift_stop, reduction_bounds
@@ -31,6 +31,13 @@ from .diagnostics import ERROR, OK, publish_status
 from .lockstep import Lockstep
 from .managed import ManagedNode
 from .params import ParameterError, declare, finite
+
+
+def startup_p(scenario, samples, seed):
+    """The drift-stop reduction |p| [m/s] of p_mode 'monte_carlo': p_best of a ``samples``-sample sweep with
+    ``seed`` (seed 002 Table 3), memoised (:func:`roe_sep.core.montecarlo.sweep.p_best`)."""
+    mc = dataclasses.replace(scenario.monte_carlo, samples=samples, seed=seed)
+    return p_best(scenario.separation, mc, tuple(scenario.p_values))
 
 
 class PlannerNode(ManagedNode):
@@ -58,9 +65,7 @@ class PlannerNode(ManagedNode):
         elif self.p_mode == "fixed":
             self.p = float(p_fixed)
         elif self.p_mode == "monte_carlo":
-            mc = dataclasses.replace(self.scenario.monte_carlo, samples=samples, seed=seed)
-            result = sweep(design(self.scenario.separation), mc, self.scenario.p_values)
-            self.p = result.p_best
+            self.p = startup_p(self.scenario, samples, seed)
             self.get_logger().info(f"p = {self.p:g} m/s: p_best of a {samples}-sample Monte Carlo sweep")
         else:
             self.p = None  # computed from each commanded ejection

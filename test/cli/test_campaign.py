@@ -14,6 +14,7 @@ import sys
 import time
 from pathlib import Path
 
+import psutil
 import pytest
 import yaml
 
@@ -267,6 +268,8 @@ def test_ctrl_c_mid_campaign_then_rerun_completes_only_the_missing_runs(campaign
                 break
             time.sleep(0.2)
         assert proc.poll() is None, "the campaign ended before it could be interrupted"
+        tree = psutil.Process(proc.pid).children(recursive=True)  # workers, fork servers, the runs under way
+        assert any("roe_sep.campaign.forkserver" in " ".join(p.cmdline()) for p in tree), [p.cmdline() for p in tree]
         proc.send_signal(signal.SIGINT)
         _, stderr = proc.communicate(timeout=120)
     finally:
@@ -276,8 +279,8 @@ def test_ctrl_c_mid_campaign_then_rerun_completes_only_the_missing_runs(campaign
     before = table.read()
     assert 1 <= len(before) < runs
     time.sleep(1.0)  # the run processes' watchdogs act within 0.5 s of their worker's end
-    left = subprocess.run(["pgrep", "-f", f"roe_sep.campaign.child .*{out}"], capture_output=True, text=True)
-    assert left.stdout.strip() == "", "a run process outlived its campaign"
+    left = [p for p in tree if p.is_running() and p.status() != psutil.STATUS_ZOMBIE]
+    assert not left, f"processes outlived their campaign: {[p.cmdline() for p in left]}"
     rerun = subprocess.run(cmd, env=env, cwd=ROOT, capture_output=True, text=True, timeout=900)
     rep = _strict(rerun.stdout)
     assert rep["executed_now"] == runs - len(before) and rep["skipped_done"] == len(before)
@@ -426,3 +429,24 @@ def test_bad_options_are_one_line_errors(tmp_path, args, message):
     proc = subprocess.run([sys.executable, "-m", "roe_sep.cli", "campaign", "--out", str(tmp_path / "c"), *args],
                           capture_output=True, text=True, env=env, cwd=ROOT, timeout=120)
     assert proc.returncode == 2 and message in proc.stderr and proc.stderr.strip().count("\n") == 0
+
+
+def test_fork_server_forks_runs_and_ends_with_its_pipe(tmp_path):
+    """The worker's fork server answers with the pid of a forked run, whose output goes to its log and whose exit
+    status comes back (a run that fails: 1, with its reason), run after run; closing the pipe ends the server."""
+    from roe_sep.campaign.forkserver import ForkServer
+
+    srv = ForkServer()
+    try:
+        server = psutil.Process(srv.proc.pid)
+        run = srv.spawn(["{not json"], tmp_path / "run.log")
+        assert run.wait(timeout=60) == 1
+        assert "JSONDecodeError" in (tmp_path / "run.log").read_text()
+        run = srv.spawn([json.dumps({"out": str(tmp_path / "out"), "params": str(tmp_path / "missing.yaml"),
+                                     "seed": 1, "timeout": 60, "domain_id": 0,
+                                     "config": str(tmp_path / "missing_config.yaml")})], tmp_path / "run2.log")
+        assert run.wait(timeout=120) == 1 and run.poll() == 1
+        assert "missing.yaml" in (tmp_path / "run2.log").read_text()
+    finally:
+        srv.close()
+    assert srv.proc.returncode == 0 and not server.is_running()

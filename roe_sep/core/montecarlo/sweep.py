@@ -12,6 +12,7 @@ between p values are not sampling noise):
 No Python loop runs over samples: every quantity is an array over the sample axis.
 """
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -20,7 +21,8 @@ from ..constants import ARCSEC, SECONDS_PER_DAY
 from ..relmotion.dynamics import arg_latitude_rate, ballistic_coefficient, drag_da_dot, propagate
 from ..relmotion.maneuvers import delta_roe, dispersed_dv
 from ..safety.metrics import approaching, fov_limit, min_rn_distance, nearest_crossing
-from ..separation.double_impulse import DoubleImpulseDesign
+from ..separation.double_impulse import DoubleImpulseDesign, SeparationConfig
+from ..separation.double_impulse import design as make_design
 
 DEFAULT_P_VALUES = (0.0, 0.01, 0.02, 0.03, 0.04, 0.05, 0.055, 0.06, 0.07, 0.08)
 
@@ -254,3 +256,12 @@ def sweep(design: DoubleImpulseDesign, mc: MonteCarloConfig, p_values=DEFAULT_P_
     risk = [(r["p_approach"] + r["p_evaporation"], r["p"]) for r in rows]
     p_best = min(risk)[1]
     return SweepResult(design, mc, d, pre, rows, outcomes, p_best)
+
+
+@functools.lru_cache(maxsize=8)
+def p_best(separation: SeparationConfig, mc: MonteCarloConfig, p_values: tuple) -> float:
+    """``p_best`` [m/s] of :func:`sweep` for the design of ``separation`` (seed 002 Table 3), memoised: a pure
+    function of frozen, hashable inputs, so the planner's start-up sweep is computed once per process (and once per
+    campaign worker, whose runs are forked from a process that computed it: :mod:`roe_sep.campaign.forkserver`)."""
+    return float(sweep(make_design(separation), mc, tuple(float(p) for p in p_values)).p_best)
+
