@@ -103,6 +103,7 @@ def context(tmp_path, monkeypatch):
     rclpy.try_shutdown()
 
 
+@pytest.mark.dds
 def test_declared_parameters_and_descriptors_are_the_tables(context):
     """Every node declares exactly its table's parameters (besides rclpy's own), with the table's default and the
     descriptor made from it (type, description, rule, range, read_only)."""
@@ -127,6 +128,7 @@ def test_declared_parameters_and_descriptors_are_the_tables(context):
     assert len(list(context.glob("ccsds_*"))) == 1
 
 
+@pytest.mark.dds
 def test_settable_parameter_follows_and_keeps_its_rule(context):
     from roe_sep.nodes.analysis_server import AnalysisServer
 
@@ -145,6 +147,7 @@ def test_settable_parameter_follows_and_keeps_its_rule(context):
         node.destroy_node()
 
 
+@pytest.mark.dds
 def test_a_type_mismatch_is_refused_in_one_message(context):
     rclpy.try_shutdown()
     rclpy.init(args=["--ros-args", "-p", "topics:=[1,2]", "-p", "exclude:=[]"])
@@ -154,6 +157,7 @@ def test_a_type_mismatch_is_refused_in_one_message(context):
         RecorderNode()
 
 
+@pytest.mark.dds
 def test_declare_refuses_a_parameter_of_no_table(context):
     node = rclpy.create_node("stranger")
     try:
@@ -185,6 +189,7 @@ def test_every_executable_answers_help(script):
         assert "Traceback" not in proc.stderr
 
 
+@pytest.mark.dds  # the node's rclpy.init refuses the parameter (or the --params-file)
 @pytest.mark.parametrize("script,args,needles", [
     ("planner", ["-p", "mc_samples:=1000000000"], ["planner", "'mc_samples'", "an integer in [1, 2000000]"]),
     ("radar_od", ["-p", "stations:=[]"], ["radar_od", "'stations'", "a non-empty list of distinct station names"]),
@@ -215,6 +220,7 @@ def _wait(node, future, timeout=30.0):
     return future.result()
 
 
+@pytest.mark.dds
 def test_running_node_refuses_a_set_outside_the_table(tmp_path):
     """``ros2 param set`` is a SetParameters call: rclpy refuses a value outside the range, a read-only parameter,
     a wrong type; the table's other rules (choices) by the node's callback. ``ros2 param get /recorder topics``
