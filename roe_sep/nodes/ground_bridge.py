@@ -100,14 +100,16 @@ class GroundBridgeNode(Node):
 
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
         self.ext_pub = self.create_publisher(RadarMeasurement, EXTERNAL_RADAR_TOPIC, interfaces.BULK)
-        subs = ((RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, interfaces.STREAM, False),
+        # the streams every sample of which goes into a file (OEM, TDM) with a keep-all reader: a 100-deep one
+        # dropped about half of a 223-sample burst arriving faster than the executor took it
+        subs = ((RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, interfaces.BULK, False),
                 (EjectionEvent, interfaces.EJECTION_TOPIC, interfaces.LATCHED, False),
                 (ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.LATCHED, False),
                 (ManeuverPlan, interfaces.ACQUISITION_PLAN_TOPIC, interfaces.LATCHED, False),
                 (SafetyStatus, interfaces.PLAN_CHECK_TOPIC, interfaces.EXECUTED, True),
                 (ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, interfaces.EXECUTED, True),
                 (OrbitDetermination, interfaces.OD_TOPIC, interfaces.LATCHED, False),
-                (RadarMeasurement, interfaces.RADAR_TOPIC, interfaces.STREAM, False))
+                (RadarMeasurement, interfaces.RADAR_TOPIC, interfaces.BULK, False))
         for cls, topic, qos, urgent in subs:
             self.create_subscription(cls, topic, lambda m, t=topic, u=urgent: self.on_message(t, m, u), qos)
         self.create_subscription(Clock, interfaces.CLOCK_TOPIC, self.on_clock, interfaces.CLOCK_SUB)
