@@ -95,6 +95,32 @@ class RadarODNode(ManagedNode):
         seed = declare(self, "seed", 0, "seed of the measurement noise")
         epoch = declare(self, "epoch_utc", DEFAULT_EPOCH_UTC, "ISO-8601 UTC calendar epoch of sim time 0")
 
+        self._check(names, lats, lons, alts, mask, sigma_range, sigma_angle, seed)
+        try:
+            self.jd0 = julian_date(epoch)
+        except (ValueError, TypeError) as exc:
+            raise ParameterError(f"parameter 'epoch_utc' must be an ISO-8601 UTC date-time, got {epoch!r}: {exc}") \
+                from exc
+        self.stations = [Station(s, math.radians(la), math.radians(lo), float(h))
+                         for s, la, lo, h in zip(names, lats, lons, alts)]
+        self.site_ef = [s.ecef for s in self.stations]
+        self.site_enu = [s.enu for s in self.stations]
+        self.mask = math.radians(mask)
+        self.sigma = np.array([sigma_range, math.radians(sigma_angle), math.radians(sigma_angle)])
+        self.rng = np.random.default_rng(seed)
+
+        self._forget()
+        self.pass_ids = [0] * len(self.stations)  # passes started per station
+        self.too_close = False  # a station sees the picosatellite, but closer than min_separation
+        self.estimates = 0
+        self.published = 0
+        # track() calls of the current lockstep round, run together when the round's messages are done
+        # (flush_tracks): one vectorized geometry pass per round instead of one per truth sample
+        self.deferred = []
+        self.clock = None  # latest /clock [s] (run alone)
+
+    def _check(self, names, lats, lons, alts, mask, sigma_range, sigma_angle, seed):
+        """ParameterError naming the first bad parameter."""
         n = len(names)
         require("stations", n >= 1 and all(isinstance(s, str) and s for s in names) and len(set(names)) == n,
                 list(names), "a non-empty list of distinct station names")
@@ -114,35 +140,16 @@ class RadarODNode(ManagedNode):
         require("min_arc", finite(self.min_arc) and self.min_arc >= 0.0, self.min_arc, "a non-negative number [s]")
         require("min_pass_measurements", self.min_pass >= 1, self.min_pass, "a positive integer")
         require("seed", seed >= 0, seed, "a non-negative integer")
-        try:
-            self.jd0 = julian_date(epoch)
-        except (ValueError, TypeError) as exc:
-            raise ParameterError(f"parameter 'epoch_utc' must be an ISO-8601 UTC date-time, got {epoch!r}: {exc}") \
-                from exc
 
-        self.stations = [Station(s, math.radians(la), math.radians(lo), float(h))
-                         for s, la, lo, h in zip(names, lats, lons, alts)]
-        self.site_ef = [s.ecef for s in self.stations]
-        self.site_enu = [s.enu for s in self.stations]
-        self.mask = math.radians(mask)
-        self.sigma = np.array([sigma_range, math.radians(sigma_angle), math.radians(sigma_angle)])
-        self.rng = np.random.default_rng(seed)
-
+    def _forget(self):
+        """No truth, no tracking, no records: the state of a run not started."""
         self.truth = None  # (t [s], dimensionless ROE, chief mean Keplerian elements)
         # every truth sample's t [s], dimensionless ROE and chief elements, sorted by t
         self.history_t, self.history_roe, self.history_kep = [], [], []
         self.t_last = None  # last processed measurement epoch [s]
-        self.clock = None  # latest /clock [s] (run alone)
         self.last_burn = -math.inf
-        self.pass_ids = [0] * n  # passes started per station
-        self.open_pass = [False] * n
-        self.too_close = False  # a station sees the picosatellite, but closer than min_separation
+        self.open_pass = [False] * len(self.stations)
         self.records = []  # (t, station, pass_id, z, chief, theta, truth_t)
-        self.estimates = 0
-        self.published = 0
-        # track() calls of the current lockstep round, run together when the round's messages are done
-        # (flush_tracks): one vectorized geometry pass per round instead of one per truth sample
-        self.deferred = []
 
     def activate(self):
         """Publishers, subscriptions, services (the ``activate`` transition)."""
@@ -251,10 +258,7 @@ class RadarODNode(ManagedNode):
     def reset(self):
         """Forget the run (a restarted simulator publishes its truth and burns again)."""
         self.flush_tracks()
-        self.truth, self.t_last, self.last_burn = None, None, -math.inf
-        self.open_pass = [False] * len(self.stations)
-        self.records.clear()
-        self.history_t, self.history_roe, self.history_kep = [], [], []
+        self._forget()
 
     # --- measurements --------------------------------------------------------------------------------------
     def track(self, epochs, truth=None):
