@@ -196,7 +196,7 @@ class RadarODNode(ManagedNode):
             self.history_kep.insert(k, truth[2])
         if self.lockstep.active:  # lockstep: the truth stream is the clock (every sample, whatever the step)
             self.advance(truth[0])
-        elif self.clock is not None:
+        elif self.t_last is not None:  # run alone, the clock has started the tracking
             self.advance_alone()
 
     @staticmethod
@@ -222,16 +222,25 @@ class RadarODNode(ManagedNode):
                                    "are no longer used")
 
     def on_clock(self, msg: Clock):
-        if not self.lockstep.active:
-            self.clock = time_to_sec(msg.clock)
-            if self.history_t:
-                self.advance_alone()
+        if self.lockstep.active:
+            return
+        now = time_to_sec(msg.clock)
+        if self.clock is not None and now < self.clock - self.dt:
+            self.get_logger().warn(f"sim time jumped back from {self.clock:.1f} s to {now:.1f} s: restarting")
+            self.reset()
+        self.clock = now
+        if self.truth is None or self.t_last is None:
+            self.t_last = now  # start: no back-fill
+            return
+        self.advance_alone()
 
     def advance_alone(self):
         """Run alone: measure up to the clock, but only the epochs that a truth sample at or after them has arrived
         for, each from the first such sample (what lockstep does, whichever of the clock and the truth comes
         first)."""
-        self.advance(min(self.clock, self.history_t[-1]), from_history=True)
+        frontier = min(self.clock, self.history_t[-1])
+        if frontier > self.t_last:
+            self.advance(frontier, from_history=True)
 
     def advance(self, now, from_history=False):
         """Measurements for every epoch k * ``sample_interval`` in (last, now]: from the truth in force, or
