@@ -105,7 +105,7 @@ class GroundBridgeNode(Node):
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
         self.ext_pub = self.create_publisher(RadarMeasurement, EXTERNAL_RADAR_TOPIC, interfaces.BULK)
         # the streams every sample of which goes into a file (OEM, TDM) with a keep-all reader: a 100-deep one
-        # dropped about half of a 223-sample burst arriving faster than the executor took it
+        # drops about half of a 223-sample burst arriving faster than the executor takes it
         subs = ((RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, interfaces.BULK, False),
                 (EjectionEvent, interfaces.EJECTION_TOPIC, interfaces.LATCHED, False),
                 (ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.LATCHED, False),

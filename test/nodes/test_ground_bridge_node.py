@@ -133,7 +133,7 @@ def test_ground_bridge_writes_opms_and_feeds_tdm_files_to_radar_od(tmp_path, bag
     assert code_r == 0, log_r
     assert (out / "plan01_double_impulse.opm.xml").is_file()
     # the final set at shutdown: the carrier's ephemeris at every truth sample of the burst (thinned to the OEM
-    # step as export's), none lost: 222 of the 223 samples published at once (a 100-deep reader kept about half)
+    # step as export's), none lost: 222 of the 223 samples published at once (a 100-deep reader keeps about half)
     segs = ndm.read_message(out / "ephemeris.oem.xml").body.segment
     states = segs[0].data.state_vector
     assert segs[0].metadata.object_id == "CARRIER"
