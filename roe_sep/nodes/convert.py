@@ -9,6 +9,7 @@ from roe_sep_msgs.msg import ImpulsiveManeuver, OrbitalElements, RelativeOrbital
 
 from .. import interfaces
 from ..core.relmotion.roe import wrap_angle
+from ..core.truth.execution import relative_impulse
 
 ROE_FIELDS = ("a_da", "a_dl", "a_dex", "a_dey", "a_dix", "a_diy")
 KEPLER_FIELDS = ("semi_major_axis", "eccentricity", "inclination", "raan", "arg_perigee", "mean_arg_latitude")
@@ -76,14 +77,8 @@ def maneuver_msg(epoch: float, u: float, dv_rtn, spacecraft: str, purpose: str) 
 
 
 def relative_dv(m: ImpulsiveManeuver) -> np.ndarray:
-    """The impulse's effect on the relative motion (picosatellite w.r.t. carrier): +dv for the picosatellite's
-    own velocity change (the ejection), -dv for a carrier burn."""
-    dv = vector_to_array(m.dv_rtn)
-    if m.spacecraft == "carrier":
-        return -dv
-    if m.spacecraft == "picosatellite":
-        return dv
-    raise ValueError(f"unknown spacecraft {m.spacecraft!r} (expected 'carrier' or 'picosatellite')")
+    """The impulse's effect on the relative motion (:func:`roe_sep.core.truth.execution.relative_impulse`)."""
+    return relative_impulse(vector_to_array(m.dv_rtn), m.spacecraft)
 
 
 def plan_burns(maneuvers):

@@ -17,9 +17,7 @@ Parameters: :data:`roe_sep.nodes.parameters.GROUND_BRIDGE` (``ground_bridge --he
 """
 
 import math
-import queue
 import shutil
-import threading
 import time
 from datetime import datetime
 from pathlib import Path
@@ -43,7 +41,8 @@ from rosgraph_msgs.msg import Clock
 from .. import interfaces
 from ..core.config import ConfigError, load_scenario
 from ..ndm import frames
-from ..ndm.options import Options, RunMessages
+from ..ndm.live import LiveSet
+from ..ndm.options import Options
 from .convert import sec_to_time, time_to_sec
 from .diagnostics import ERROR, OK, publish_status
 from .params import ParameterError, declare
@@ -66,6 +65,24 @@ class GroundBridgeNode(Node):
         poll = declare(self, "poll_period")
         sigma_range = declare(self, "default_sigma_range_m")
         sigma_angle = declare(self, "default_sigma_angle_deg")
+
+        self.opts = self._check(out, epoch, scenario_file, isp, poll, sigma_range, sigma_angle)
+        self.out = Path(out)
+        self.out.mkdir(parents=True, exist_ok=True)
+        self.sigma = (float(sigma_range), math.radians(sigma_angle))
+        self.t = 0.0
+        self.live = LiveSet(self.out, self.fmt, self.opts, lambda: self.t, self._not_written)
+        self.dirty = False  # something the periodic files depend on arrived
+        self.last_periodic = 0.0
+        self.files_in = 0
+        self.files_rejected = 0
+        self.input = Path(inp) if inp else None
+        self._interface(float(poll))
+        self._status(OK, f"writing {self.fmt} files to {self.out}" +
+                     (f", watching {self.input} for TDM files" if self.input else ""))
+
+    def _check(self, out, epoch, scenario_file, isp, poll, sigma_range, sigma_angle):
+        """Check the parameters (ParameterError naming the first bad one); the set's options."""
         try:
             frames.parse_epoch(epoch)
         except ValueError as exc:
@@ -74,47 +91,34 @@ class GroundBridgeNode(Node):
             carrier = load_scenario(scenario_file or None).monte_carlo.carrier
         except ConfigError as exc:
             raise ParameterError(f"parameter 'scenario_file': {exc}") from exc
-        self.opts = Options(epoch_utc=str(epoch), carrier_mass=carrier.mass, carrier_drag_area=carrier.area,
-                            carrier_drag_coeff=carrier.cd, carrier_isp=float(isp))
-        self.out = Path(out)
-        self.out.mkdir(parents=True, exist_ok=True)
-        self.sigma = (float(sigma_range), math.radians(sigma_angle))
-        self.run = RunMessages()
-        self.lock = threading.Lock()
-        self.requests = queue.Queue()
-        self.writer = threading.Thread(target=self._writer, name="ccsds_writer", daemon=True)
-        self.writer.start()
-        self.written = {}  # file stem -> sim time of the last write
-        self.dirty = False  # something the periodic files depend on arrived
-        self.t = 0.0
-        self.last_periodic = 0.0
-        self.files_in = 0
-        self.files_rejected = 0
+        return Options(epoch_utc=str(epoch), carrier_mass=carrier.mass, carrier_drag_area=carrier.area,
+                       carrier_drag_coeff=carrier.cd, carrier_isp=float(isp))
 
+    def _interface(self, poll):
+        """Publishers, subscriptions and the input directory's poll timer."""
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
         self.ext_pub = self.create_publisher(RadarMeasurement, EXTERNAL_RADAR_TOPIC, interfaces.BULK)
-        subs = ((RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, interfaces.STREAM, False),
+        # the streams every sample of which goes into a file (OEM, TDM) with a keep-all reader: a 100-deep one
+        # drops about half of a 223-sample burst arriving faster than the executor takes it
+        subs = ((RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, interfaces.BULK, False),
                 (EjectionEvent, interfaces.EJECTION_TOPIC, interfaces.LATCHED, False),
                 (ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.LATCHED, False),
                 (ManeuverPlan, interfaces.ACQUISITION_PLAN_TOPIC, interfaces.LATCHED, False),
                 (SafetyStatus, interfaces.PLAN_CHECK_TOPIC, interfaces.EXECUTED, True),
                 (ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, interfaces.EXECUTED, True),
                 (OrbitDetermination, interfaces.OD_TOPIC, interfaces.LATCHED, False),
-                (RadarMeasurement, interfaces.RADAR_TOPIC, interfaces.STREAM, False))
+                (RadarMeasurement, interfaces.RADAR_TOPIC, interfaces.BULK, False))
         for cls, topic, qos, urgent in subs:
             self.create_subscription(cls, topic, lambda m, t=topic, u=urgent: self.on_message(t, m, u), qos)
         self.create_subscription(Clock, interfaces.CLOCK_TOPIC, self.on_clock, interfaces.CLOCK_SUB)
-        self.input = Path(inp) if inp else None
         if self.input is not None:
             for sub in ("", "processed", "rejected"):
                 (self.input / sub).mkdir(parents=True, exist_ok=True)
             # wall clock: the directory is polled also while the sim clock holds or has stopped
-            self.create_timer(float(poll), self.scan_input, clock=RclpyClock(clock_type=ClockType.STEADY_TIME))
-        self._status(OK, f"writing {self.fmt} files to {self.out}" +
-                     (f", watching {self.input} for TDM files" if self.input else ""))
+            self.create_timer(poll, self.scan_input, clock=RclpyClock(clock_type=ClockType.STEADY_TIME))
 
     def _values(self):
-        return {"output_dir": str(self.out), "files_written": len(self.written), "tdm_files_in": self.files_in,
+        return {"output_dir": str(self.out), "files_written": len(self.live.written), "tdm_files_in": self.files_in,
                 "tdm_files_rejected": self.files_rejected, "sim_time_s": f"{self.t:.1f}"}
 
     def _status(self, level, message):
@@ -123,60 +127,29 @@ class GroundBridgeNode(Node):
     # --- out ------------------------------------------------------------------------------------------------------
     def on_message(self, topic, msg, urgent):
         self.messages_received += 1
-        with self.lock:
-            self.run.add(topic, msg)
+        self.live.add(topic, msg)
         self.dirty = True
         if urgent:  # plan approved or burn executed: the OPMs change now
-            self.request(periodic=False)
+            self.live.request(periodic=False)
 
     def on_clock(self, msg: Clock):
         self.t = time_to_sec(msg.clock)
         if self.dirty and self.write_period > 0 and self.t - self.last_periodic >= self.write_period:
             self.last_periodic = self.t
             self.dirty = False
-            self.request(periodic=True)
+            self.live.request(periodic=True)
 
-    def request(self, periodic):
-        """Queue a write for the writer thread: serializing the OEM of a whole run takes seconds, during which the
-        executor must keep taking messages (a 100-deep truth stream at 4000x real time would overflow)."""
-        self.requests.put(periodic)
-
-    def _writer(self):
-        from ..ndm import dataset  # noqa: F401  (load the NDM library here, while the executor already spins)
-
-        while True:
-            batch = [self.requests.get()]
-            while not self.requests.empty():  # coalesce what queued up meanwhile
-                batch.append(self.requests.get())
-            if None in batch:  # shutdown: the final, complete set
-                self.write(True)
-                return
-            self.write(any(batch))
-
-    def write(self, periodic):
-        """Write the OPMs (always: small) and, if ``periodic``, the OEM, TDM and CDM, from a snapshot of the
-        messages received so far."""
-        with self.lock:
-            snapshot = RunMessages({t: list(ms) for t, ms in self.run.by_topic.items()})
-        try:
-            from ..ndm.dataset import messages_of  # the NDM library loads in this thread, not at start-up
-            from ..ndm.messages import write_message
-
-            msgs = messages_of(snapshot, self.opts, periodic)
-            for stem, message in msgs.items():
-                write_message(self.out / f"{stem}.{self.fmt}", message, self.fmt)
-                self.written[stem] = self.t
-        except Exception as exc:  # noqa: BLE001  (the writer thread must survive any bad input)
-            self.get_logger().error(f"CCSDS set not written: {exc.__class__.__name__}: {exc}")
-            if rclpy.ok():
-                self._status(ERROR, f"CCSDS set not written: {exc}")
+    def _not_written(self, exc):
+        """A write of the writer thread failed."""
+        self.get_logger().error(f"CCSDS set not written: {exc.__class__.__name__}: {exc}")
+        if rclpy.ok():
+            self._status(ERROR, f"CCSDS set not written: {exc}")
 
     def destroy_node(self):
-        """The final, complete set: the writer thread finishes its queue, then writes everything once more."""
-        self.requests.put(None)
-        self.writer.join()
-        if self.run[interfaces.TRUTH_ROE_TOPIC]:
-            text = f"final CCSDS set: {len(self.written)} files in {self.out}"
+        """The final, complete set (:meth:`~roe_sep.ndm.live.LiveSet.close`)."""
+        self.live.close()
+        if self.live.run[interfaces.TRUTH_ROE_TOPIC]:
+            text = f"final CCSDS set: {len(self.live.written)} files in {self.out}"
             if rclpy.ok():
                 self.get_logger().info(text)
             else:  # after SIGINT the context is gone and /rosout with it

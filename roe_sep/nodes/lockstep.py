@@ -1,4 +1,5 @@
-"""Lockstep sim time: the participant side of the protocol (the coordinator is :mod:`roe_sep.nodes.sim`).
+"""Lockstep sim time: the participant side of the protocol (:class:`Lockstep`) and the simulator's side
+(:class:`Coordinator`).
 
 The idea of PX4 SITL lockstep and of steppable simulator clocks, over plain DDS topics:
 
@@ -20,13 +21,14 @@ before. Topics outside the step's counts (e.g. a ground segment's own publisher)
 """
 
 import collections
+import time
 
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from roe_sep_msgs.msg import LockstepAck, LockstepStep
 
 from .. import interfaces
 from .convert import sec_to_time, time_to_sec
-from .diagnostics import ERROR, publish_status
+from .diagnostics import ERROR, OK, publish_status
 from .validate import BadMessage, validator_for
 
 STEP_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10, reliability=ReliabilityPolicy.RELIABLE,
@@ -223,3 +225,154 @@ class Lockstep:
     def now(self, fallback):
         """Sim time of the current step in lockstep mode, else ``fallback`` (the node clock)."""
         return self.time if self.active and self.time is not None else fallback
+
+
+class Coordinator:
+    """The simulator's side of the protocol: publishes the step messages, collects the acknowledgements, opens the
+    reaction rounds of a step and advances sim time once a step is over.
+
+    ``sim`` (the simulator node) provides: ``lockstep`` (its own :class:`Lockstep`, ``acknowledge=False``: it reads
+    its inputs through the buffer too), ``t`` (sim time [s]), ``done``, ``duration``, ``time_step``, ``wait_for``
+    ({topic: subscribers}), ``start_timeout``, ``waiting_since`` (wall time the start-up wait began), ``step_to(t)``
+    (fly the burns due and move the truth to ``t``), ``publish_clock()``, ``status(level, message)``, ``fault(reason)``
+    and the node's entity factories (``create_publisher``, ``create_timer``, ``count_subscribers``, ...)."""
+
+    def __init__(self, sim, participants, step_timeout, real_time_factor):
+        self.sim = sim
+        self.participants = participants
+        self.step_timeout, self.real_time_factor = step_timeout, real_time_factor
+        self.lockstep = sim.lockstep
+        self.lockstep.on_round_done = self.round_check
+        self.step_pub = sim.create_publisher(LockstepStep, interfaces.LOCKSTEP_STEP_TOPIC, STEP_QOS)
+        sim.create_subscription(LockstepAck, interfaces.LOCKSTEP_ACK_TOPIC, self.on_ack, ACK_QOS)
+        self.acks = {}  # participant -> its latest LockstepAck
+        self.step_index, self.round, self.t_prev = 0, 0, 0.0
+        self.round_counts = {}
+        self.round_sent = None  # wall time the current round was published (None: not started)
+        self.wall_start = None
+        self.continue_timer = None
+        self.steps_published = 0
+        self.timer = sim.create_timer(0.05, self.watch)
+
+    def watch(self):
+        """Wall-clock watchdog of the lockstep clock: starts the run once every participant is up, asks again for
+        a lost acknowledgement, and fails the run with the silent participants named when a step waits longer
+        than ``step_timeout`` (a fault detector only: it never changes what is simulated)."""
+        if self.sim.done:
+            return
+        now = time.monotonic()
+        if self.round_sent is None:  # not started: every participant and subscriber up?
+            if self.ready(now):
+                self.wall_start = now
+                self._publish_step()
+            return
+        waited = now - self.round_sent
+        if self.continue_timer is not None:
+            return
+        limit = self.sim.start_timeout if self.step_index == 0 else self.step_timeout
+        if waited > limit:
+            missing = [p for p in self.participants if self._acked(p) is False]
+            step = f"step {self.step_index} round {self.round} (t = {self.sim.t:.0f} s)"
+            self.sim.fault(f"lockstep: no acknowledgement of {step} from {', '.join(missing) or 'nobody'} within "
+                           f"{limit:g} s" if missing else f"lockstep: {step} incomplete after {limit:g} s: the "
+                           f"simulator still waits for counted messages {self._own_missing()}")
+        elif waited > 1.0 and now - self.round_resent > 1.0:
+            self.round_resent = now
+            self.step_pub.publish(self.step_msg)  # a participant that missed it acknowledges again
+
+    def ready(self, now):
+        sim = self.sim
+        missing = {t: n for t, n in sim.wait_for.items() if sim.count_subscribers(t) < n}
+        if sim.count_subscribers(interfaces.LOCKSTEP_STEP_TOPIC) < len(self.participants):
+            missing[interfaces.LOCKSTEP_STEP_TOPIC] = len(self.participants)
+        if sim.count_publishers(interfaces.LOCKSTEP_ACK_TOPIC) < len(self.participants):
+            missing[interfaces.LOCKSTEP_ACK_TOPIC + " (publishers)"] = len(self.participants)
+        if not missing:
+            return True
+        if now - sim.waiting_since > sim.start_timeout:
+            sim.fault(f"lockstep: participants not up within {sim.start_timeout:g} s: missing {missing}")
+        return False
+
+    def _own_missing(self):
+        counts = self.lockstep.last_counts
+        return {t: counts.get(t, 0) - self.lockstep.received[t] for t in self.lockstep.inputs
+                if counts.get(t, 0) > self.lockstep.received[t]}
+
+    def _acked(self, name):
+        ack = self.acks.get(name)
+        return ack is not None and (ack.step, ack.round) == (self.step_index, self.round)
+
+    def on_ack(self, ack: LockstepAck):
+        if ack.node not in self.participants:
+            return
+        prev = self.acks.get(ack.node)
+        if prev is None or (ack.step, ack.round) >= (prev.step, prev.round):
+            self.acks[ack.node] = ack
+        self.round_check()
+
+    def _totals(self):
+        """Messages published so far per counted topic: the simulator's and every participant's latest count."""
+        totals = dict(self.lockstep.published)
+        for ack in self.acks.values():
+            for topic, n in zip(ack.topics, ack.published):
+                totals[topic] = totals.get(topic, 0) + n
+        return totals
+
+    def _publish_step(self, final=False):
+        totals = self._totals()
+        topics = sorted(totals)
+        msg = LockstepStep(step=self.step_index, round=self.round, period_start=float(self.t_prev), topics=topics,
+                           counts=[int(totals[t]) for t in topics], final=final)
+        msg.header.stamp = sec_to_time(self.sim.t)
+        self.step_msg, self.round_counts = msg, totals
+        self.round_sent = self.round_resent = time.monotonic()
+        self.steps_published += 1
+        self.step_pub.publish(msg)
+        if not final:
+            self.lockstep.on_step_msg(msg)  # the simulator's own inputs of this round
+
+    def round_check(self):
+        """After every acknowledgement: the round is over when every participant and the simulator itself have
+        processed it; a reaction (new messages on a topic someone reads) opens the next round of the same step,
+        else sim time advances."""
+        if self.sim.done or self.round_sent is None or self.continue_timer is not None:
+            return
+        if self.lockstep.last != (self.step_index, self.round):
+            return
+        if not all(self._acked(p) for p in self.participants):
+            return
+        totals = self._totals()
+        read = set(self.lockstep.inputs)
+        for ack in self.acks.values():
+            read.update(ack.inputs)
+        if any(totals.get(t, 0) != self.round_counts.get(t, 0) for t in read):
+            self.round += 1
+            self._publish_step()
+            return
+        self._continue()
+
+    def _continue(self):
+        """Advance to the next step now, or when the real-time factor allows."""
+        sim = self.sim
+        if self.continue_timer is not None:
+            sim.destroy_timer(self.continue_timer)
+            self.continue_timer = None
+        if sim.t >= sim.duration:
+            sim.done = True
+            self._publish_step(final=True)
+            sim.status(OK, "scenario complete")
+            sim.get_logger().info(f"scenario complete: {self.steps_published} lockstep messages in "
+                                  f"{time.monotonic() - self.wall_start:.1f} s")
+            return
+        t_next = min(sim.t + sim.time_step, sim.duration)
+        if self.real_time_factor > 0:
+            wait = self.wall_start + t_next / self.real_time_factor - time.monotonic()
+            if wait > 0:
+                self.continue_timer = sim.create_timer(wait, self._continue)
+                return
+        self.t_prev = sim.t
+        sim.step_to(t_next)
+        self.step_index += 1
+        self.round = 0
+        sim.publish_clock()
+        self._publish_step()

@@ -3,12 +3,14 @@
 Seed 001: TIRA can distinguish the two spacecraft only once they are at least 5 km apart, and a reliable orbit
 determination needs several passes over about 12 h. This stub simulates those measurements and runs the OD:
 
-* ``/clock`` (rosgraph_msgs/Clock, the node runs with ``use_sim_time``): for every measurement epoch k *
-  ``sample_interval`` in (last, now], the latest ``/sim/truth/roe`` is propagated to the epoch
-  (:func:`~roe_sep.core.relmotion.dynamics.propagate` with J2,
-  :func:`~roe_sep.core.relmotion.dynamics.propagate_chief`); where a
-  station sees the picosatellite above its mask and the spacecraft are >= ``min_separation`` apart a noisy
-  ``roe_sep_msgs/RadarMeasurement`` is published on ``/radar/measurements`` (STREAM).
+* Every measurement epoch k * ``sample_interval`` is simulated from the first ``/sim/truth/roe`` sample at or
+  after it, propagated back to the epoch (:func:`~roe_sep.core.relmotion.dynamics.propagate` with J2,
+  :func:`~roe_sep.core.relmotion.dynamics.propagate_chief`), once that sample has arrived: under lockstep each
+  truth sample advances the tracking to its stamp; run alone, the tracking advances to the earlier of ``/clock``
+  (rosgraph_msgs/Clock, the node runs with ``use_sim_time``) and the latest truth sample, so a clock that runs
+  ahead of the truth never has an epoch measured from a stale sample. Where a station sees the picosatellite above
+  its mask and the spacecraft are >= ``min_separation`` apart a noisy ``roe_sep_msgs/RadarMeasurement`` is
+  published on ``/radar/measurements`` (STREAM).
 * A pass is a run of consecutive measurement epochs of one station; it counts once closed with >=
   ``min_pass_measurements`` measurements. When >= ``passes_required`` counted passes since the latest executed
   maneuver span >= ``min_arc`` (first measurement of the first to last of the last), the batch least squares of
@@ -77,16 +79,12 @@ class RadarODNode(ManagedNode):
         seed = declare(self, "seed")
         epoch = declare(self, "epoch_utc")
 
-        n = len(names)
-        for name, values in (("station_latitudes_deg", lats), ("station_longitudes_deg", lons),
-                             ("station_altitudes_m", alts)):
-            require(name, len(values) == n, values, f"{n} value(s), one per station of 'stations'")
+        self._check(names, lats, lons, alts)
         try:
             self.jd0 = julian_date(epoch)
         except (ValueError, TypeError) as exc:
             raise ParameterError(f"parameter 'epoch_utc' must be an ISO-8601 UTC date-time, got {epoch!r}: {exc}") \
                 from exc
-
         self.stations = [Station(s, math.radians(la), math.radians(lo), float(h))
                          for s, la, lo, h in zip(names, lats, lons, alts)]
         self.site_ef = [s.ecef for s in self.stations]
@@ -95,19 +93,32 @@ class RadarODNode(ManagedNode):
         self.sigma = np.array([sigma_range, math.radians(sigma_angle), math.radians(sigma_angle)])
         self.rng = np.random.default_rng(seed)
 
-        self.truth = None  # (t [s], dimensionless ROE, chief mean Keplerian elements)
-        self.history_t, self.history_kep = [], []  # every truth sample's t [s] and chief elements, sorted by t
-        self.t_last = None  # last processed measurement epoch [s]
-        self.last_burn = -math.inf
-        self.pass_ids = [0] * n  # passes started per station
-        self.open_pass = [False] * n
+        self._forget()
+        self.pass_ids = [0] * len(self.stations)  # passes started per station
         self.too_close = False  # a station sees the picosatellite, but closer than min_separation
-        self.records = []  # (t, station, pass_id, z, chief, theta, truth_t)
         self.estimates = 0
         self.published = 0
         # track() calls of the current lockstep round, run together when the round's messages are done
         # (flush_tracks): one vectorized geometry pass per round instead of one per truth sample
         self.deferred = []
+        self.clock = None  # latest /clock [s] (run alone)
+
+    def _check(self, names, lats, lons, alts):
+        """ParameterError unless every station has its coordinates (the table checks each parameter alone)."""
+        n = len(names)
+        for name, values in (("station_latitudes_deg", lats), ("station_longitudes_deg", lons),
+                             ("station_altitudes_m", alts)):
+            require(name, len(values) == n, values, f"{n} value(s), one per station of 'stations'")
+
+    def _forget(self):
+        """No truth, no tracking, no records: the state of a run not started."""
+        self.truth = None  # (t [s], dimensionless ROE, chief mean Keplerian elements)
+        # every truth sample's t [s], dimensionless ROE and chief elements, sorted by t
+        self.history_t, self.history_roe, self.history_kep = [], [], []
+        self.t_last = None  # last processed measurement epoch [s]
+        self.last_burn = -math.inf
+        self.open_pass = [False] * len(self.stations)
+        self.records = []  # (t, station, pass_id, z, chief, theta, truth_t)
 
     def activate(self):
         """Publishers, subscriptions, services (the ``activate`` transition)."""
@@ -147,12 +158,15 @@ class RadarODNode(ManagedNode):
             self.truth = truth
         k = bisect.bisect_left(self.history_t, truth[0])
         if k < len(self.history_t) and self.history_t[k] == truth[0]:  # a burn's post-burn sample replaces its pre
-            self.history_kep[k] = truth[2]
+            self.history_roe[k], self.history_kep[k] = truth[1], truth[2]
         else:
             self.history_t.insert(k, truth[0])
+            self.history_roe.insert(k, truth[1])
             self.history_kep.insert(k, truth[2])
         if self.lockstep.active:  # lockstep: the truth stream is the clock (every sample, whatever the step)
             self.advance(truth[0])
+        elif self.t_last is not None:  # run alone, the clock has started the tracking
+            self.advance_alone()
 
     @staticmethod
     def parse_truth(msg: RelativeOrbitalElements):
@@ -177,11 +191,29 @@ class RadarODNode(ManagedNode):
                                    "are no longer used")
 
     def on_clock(self, msg: Clock):
-        if not self.lockstep.active:
-            self.advance(time_to_sec(msg.clock))
+        if self.lockstep.active:
+            return
+        now = time_to_sec(msg.clock)
+        if self.clock is not None and now < self.clock - self.dt:
+            self.get_logger().warn(f"sim time jumped back from {self.clock:.1f} s to {now:.1f} s: restarting")
+            self.reset()
+        self.clock = now
+        if self.truth is None or self.t_last is None:
+            self.t_last = now  # start: no back-fill
+            return
+        self.advance_alone()
 
-    def advance(self, now):
-        """Measurements for every epoch k * ``sample_interval`` in (last, now]."""
+    def advance_alone(self):
+        """Run alone: measure up to the clock, but only the epochs that a truth sample at or after them has arrived
+        for, each from the first such sample (what lockstep does, whichever of the clock and the truth comes
+        first)."""
+        frontier = min(self.clock, self.history_t[-1])
+        if frontier > self.t_last:
+            self.advance(frontier, from_history=True)
+
+    def advance(self, now, from_history=False):
+        """Measurements for every epoch k * ``sample_interval`` in (last, now]: from the truth in force, or
+        (``from_history``) each from the first truth sample at or after it."""
         if self.t_last is not None and now < self.t_last - self.dt:
             self.get_logger().warn(f"sim time jumped back from {self.t_last:.1f} s to {now:.1f} s: restarting")
             self.reset()
@@ -192,22 +224,26 @@ class RadarODNode(ManagedNode):
         last = math.floor(now / self.dt)
         self.t_last = now
         for k0 in range(first, last + 1, CHUNK):  # a long clock jump in bounded pieces
-            self.track(np.arange(k0, min(k0 + CHUNK, last + 1)) * self.dt)
+            epochs = np.arange(k0, min(k0 + CHUNK, last + 1)) * self.dt
+            if not from_history:
+                self.track(epochs)
+                continue
+            # (k * dt may exceed the latest sample's stamp by a rounding error: that sample, then)
+            source = np.minimum(np.searchsorted(self.history_t, epochs, side="left"), len(self.history_t) - 1)
+            for k in np.unique(source):
+                self.track(epochs[source == k], (self.history_t[k], self.history_roe[k], self.history_kep[k]))
 
     def reset(self):
         """Forget the run (a restarted simulator publishes its truth and burns again)."""
         self.flush_tracks()
-        self.truth, self.t_last, self.last_burn = None, None, -math.inf
-        self.open_pass = [False] * len(self.stations)
-        self.records.clear()
-        self.history_t, self.history_kep = [], []
+        self._forget()
 
     # --- measurements --------------------------------------------------------------------------------------
-    def track(self, epochs):
-        """Measurements at ``epochs`` [s] from the truth in force and the burns known now. Inside a lockstep round
-        the work waits for the end of the round (:meth:`flush_tracks`), whatever else the round holds: the
-        measurements, passes and estimates are those of tracking at once, in the same order."""
-        self.deferred.append((epochs, self.truth, self.last_burn, self.t_last))
+    def track(self, epochs, truth=None):
+        """Measurements at ``epochs`` [s] from ``truth`` (default: the truth in force) and the burns known now.
+        Inside a lockstep round the work waits for the end of the round (:meth:`flush_tracks`), whatever else the
+        round holds: the measurements, passes and estimates are those of tracking at once, in the same order."""
+        self.deferred.append((epochs, self.truth if truth is None else truth, self.last_burn, self.t_last))
         if not self.lockstep.in_batch:
             self.flush_tracks()
 

@@ -110,11 +110,11 @@ def test_nonlinear_truth_drop_in_for_truth_model():
     t = 0.0
     for k in range(200):
         t_to = t + 40.0
-        if nlt.separated:  # SimNode._advance: distances over the step, then the truth samples inside it
+        if nlt.separated:  # SimulatedTruth.advance: distances over the step, then the truth samples inside it
             times, dist = nlt.distances(t, t_to, 10.0)
             assert times.size == 5 and np.all(np.isfinite(dist))
         nlt.roe_at(t + 20.0)
-        if k == 15:  # SimNode._execute: advance to the epoch, then the burn
+        if k == 15:  # BurnExecution.execute: advance to the epoch, then the burn
             nlt.roe_at(t_to)
             for truth in (nlt, sec):
                 truth.apply(t_to, np.array([-1.33, -0.16, 0.44]))

@@ -74,8 +74,9 @@ class TruthModel:
         times = np.append(np.arange(t_from, t_to, step), t_to)
         return times, np.linalg.norm(self.rtn_at(times)[0], axis=-1)
 
-    def apply(self, t, dv_rel):
-        """Execute a relative impulse [m/s] (the ejection: the picosatellite's; a carrier burn: minus its own)."""
+    def apply(self, t, dv_rel, spacecraft=None):
+        """Execute a relative impulse [m/s] (the ejection: the picosatellite's; a carrier burn: minus its own);
+        ``spacecraft`` (which one burnt) changes nothing here: the relative orbit is all this model has."""
         state = self.roe_at(t)
         self.roe = state + delta_roe(np.asarray(dv_rel, dtype=float), self.u_at(t), self.a, mean_motion(self.a))
         self.t_state = float(t)

@@ -1,0 +1,153 @@
+"""The simulator's burn execution, without ROS: the burns of the ejection and of the plans in force, the safety
+monitor's verdicts on the plans, and each burn flown on the truth at its epoch with the seeded execution and
+attitude errors (seed 002 Eq. 22; a reduced drift-stop's magnitude error on its unreduced burn, Eq. 18).
+
+A plan replaces the burns of the previous plan on the same topic that are not executed yet; a burn already flown is
+never flown again (a restarted planner re-publishes the plan it made before).
+"""
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .secular import error_references
+
+EJECTION = "ejection"  # the source of the ejection's burn (a plan's source: the topic it came on)
+
+
+def relative_impulse(dv_rtn, spacecraft) -> np.ndarray:
+    """The impulse's effect on the relative motion (picosatellite w.r.t. carrier) of ``dv_rtn`` [m/s] of
+    ``spacecraft``: +dv for the picosatellite's own velocity change (the ejection), -dv for a carrier burn."""
+    dv = np.asarray(dv_rtn, dtype=float)
+    if spacecraft == "carrier":
+        return -dv
+    if spacecraft == "picosatellite":
+        return dv
+    raise ValueError(f"unknown spacecraft {spacecraft!r} (expected 'carrier' or 'picosatellite')")
+
+
+@dataclass
+class PendingBurn:
+    epoch: float  # s, when it is flown
+    dv_rtn: np.ndarray  # m/s, as commanded, in the RTN frame of the spacecraft that burns
+    spacecraft: str
+    purpose: str
+    source: str  # EJECTION or the topic of its plan
+    plan_stamp: float  # s, the stamp of its plan (the ejection event's)
+    error_reference: np.ndarray | None = None  # the unreduced drift-stop its magnitude error acts on (Eq. 18)
+
+    @property
+    def key(self):
+        """What identifies a burn across re-published plans."""
+        return self.source, self.purpose, round(self.epoch, 3)
+
+
+@dataclass
+class ExecutedBurn:
+    epoch: float  # s
+    u: float  # rad, the carrier's mean argument of latitude at the burn (before it)
+    dv_rtn: np.ndarray  # m/s, as executed
+    spacecraft: str
+    purpose: str
+
+
+class BurnExecution:
+    """The pending burns and their execution on ``truth`` (a :class:`~.simulated.SimulatedTruth`). ``report(level,
+    text)`` (level 'WARN' or 'ERROR') says why a burn or a plan was not taken as it came."""
+
+    def __init__(self, truth, errors, ejection_delay, require_approval, report):
+        self.truth, self.errors, self.ejection_delay = truth, errors, ejection_delay
+        self.require_approval = require_approval
+        self.report = report
+        self.pending: list[PendingBurn] = []
+        self.flown = set()  # key of every executed burn
+        self.plan_stamps = {}  # source -> stamp of the plan in force
+        self.approvals = {}  # (source, plan stamp) -> bool
+        self.seen_ejections = set()
+        self.burns = 0
+        self.ejected_at = None  # s, set by the ejection (the free-running clock clears it)
+
+    # ------------------------------------------------------------------ inputs
+    def eject(self, stamp, dv_rtn, spacecraft, purpose):
+        """The commanded ejection at ``stamp`` [s]: the spring fires ``ejection_delay`` after it (the executed
+        maneuver says when). The same event again is ignored; a bad one or a second ejection is reported."""
+        dv = np.asarray(dv_rtn, dtype=float)
+        if stamp in self.seen_ejections:
+            return
+        if not (math.isfinite(stamp) and np.all(np.isfinite(dv))) or spacecraft != "picosatellite":
+            self.report("ERROR", f"ejection event rejected (epoch {stamp}, dv {dv.tolist()}, "
+                                 f"spacecraft {spacecraft!r})")
+            return
+        if self.truth.model.separated:
+            self.report("WARN", "second ejection event ignored: the picosatellite is already released")
+            return
+        self.seen_ejections.add(stamp)
+        self.pending.append(PendingBurn(stamp + self.ejection_delay, dv, spacecraft, purpose, EJECTION, stamp))
+
+    def plan(self, source, stamp, maneuvers, p_reduction):
+        """A plan of ``maneuvers`` ((epoch [s], dv RTN [m/s], spacecraft, purpose) each) stamped ``stamp`` [s] on
+        ``source``: its burns not flown yet replace the pending ones of that source. Returns them, or None for the
+        plan in force again; ValueError (the plan is not taken) for a bad burn."""
+        if self.plan_stamps.get(source) == stamp:
+            return None
+        burns = [PendingBurn(epoch, np.asarray(dv, dtype=float), spacecraft, purpose, source, stamp)
+                 for epoch, dv, spacecraft, purpose in maneuvers]
+        for b in burns:
+            relative_impulse(b.dv_rtn, b.spacecraft)
+            if not (math.isfinite(b.epoch) and np.all(np.isfinite(b.dv_rtn))):
+                raise ValueError("non-finite epoch or dv")
+        refs = error_references([b.purpose for b in burns], [b.dv_rtn for b in burns], p_reduction)
+        for b, ref in zip(burns, refs):
+            b.error_reference = ref
+        burns = [b for b in burns if b.key not in self.flown]
+        self.pending = [b for b in self.pending if b.source != source] + burns
+        self.plan_stamps[source] = stamp
+        return burns
+
+    def check(self, source, stamp, safe):
+        """The safety monitor's verdict on the plan of ``source`` stamped ``stamp`` [s]."""
+        self.approvals[(source, stamp)] = bool(safe)
+
+    # ------------------------------------------------------------------ execution
+    def due(self, t):
+        """The pending burns with an epoch up to ``t`` [s], in epoch order."""
+        return sorted((b for b in self.pending if b.epoch <= t), key=lambda b: b.epoch)
+
+    def needs_check(self, burn):
+        return burn.source != EJECTION and self.require_approval
+
+    def verdict(self, burn):
+        """True: fly it; False: the monitor flagged its plan (reported); None: its plan is not checked yet."""
+        if not self.needs_check(burn):
+            return True
+        verdict = self.approvals.get((burn.source, burn.plan_stamp))
+        if verdict is False:
+            self.report("ERROR", f"{self.describe(burn)} not executed: the safety monitor flagged the plan")
+        return verdict
+
+    @staticmethod
+    def describe(burn):
+        return f"burn at t = {burn.epoch:.0f} s of the plan on {burn.source}"
+
+    def take(self, burn):
+        """Take ``burn`` off the pending ones (to fly it or to drop it)."""
+        self.pending.remove(burn)
+        return burn
+
+    def execute(self, burn) -> ExecutedBurn:
+        """Fly ``burn`` (taken) at its epoch, or now if that has passed (WARN): the truth moves there, the dispersed
+        burn is applied."""
+        t_exec = max(burn.epoch, self.truth.t)
+        if burn.epoch < self.truth.t - 1e-6:
+            self.report("WARN", f"{burn.purpose} burn executed late at t = {self.truth.t:.0f} s (planned "
+                                f"{burn.epoch:.0f} s)")
+        self.truth.advance(t_exec)
+        executed = self.errors.executed(burn.dv_rtn, burn.spacecraft, burn.error_reference)
+        done = ExecutedBurn(t_exec, float(self.truth.model.u_at(t_exec)), executed, burn.spacecraft, burn.purpose)
+        self.truth.model.apply(t_exec, relative_impulse(executed, burn.spacecraft), burn.spacecraft)
+        self.flown.add(burn.key)
+        if burn.purpose == "ejection":
+            self.ejected_at = t_exec
+        self.burns += 1
+        return done

@@ -1,0 +1,126 @@
+"""The simulator's truth over a run, without ROS: the dispersed truth model of a run seed, its timeline (truth samples
+every ``truth_period``, an hourly report, the minimum-distance tracking) and the closest approach after the
+departure. The ``sim`` node (:mod:`roe_sep.nodes.sim`) publishes what this computes.
+"""
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..constants import ARCSEC
+from ..relmotion.dynamics import drag_da_dot
+from .secular import ExecutionErrors, TruthModel, chief_from_u
+
+EJECTION_TIMING_STREAM = 2  # the ejection delay's stream of a run seed (graph.RADAR_STREAM = 1: the radar noise)
+STATUS_PERIOD = 3600.0  # s of sim time between the simulator's routine reports
+
+
+@dataclass
+class Dispersed:
+    """What a run seed draws: the truth model (with the dispersed differential drag), the execution errors of
+    every burn (seed 002 Eq. 22) and the delay of the release mechanism after the commanded ejection epoch."""
+
+    model: object  # TruthModel or NonlinearTruth
+    errors: ExecutionErrors
+    ejection_delay: float  # s
+    da_dot: float  # 1/s, the true differential drag
+
+
+def dispersed_truth(scenario, carrier, raan, u0, seed, disperse, dynamics, j2, ejection_delay_max) -> Dispersed:
+    """The run of ``seed``: ``scenario`` (:func:`roe_sep.core.config.load_scenario`), ``carrier`` its separation design
+    (a, inc), ``raan`` and ``u0`` [rad] the carrier's node and mean argument of latitude at sim time 0, ``dynamics``
+    'secular' (:class:`~.secular.TruthModel`, with J2 if ``j2``) or 'nonlinear' (:class:`~.nonlinear.NonlinearTruth`);
+    ``disperse`` False: no drag uncertainty, no execution errors, no ejection delay. The draws are those of
+    ``numpy.random.default_rng(seed)`` in a fixed order (ballistic factor, then the execution errors) and the ejection
+    delay from its own stream of the seed, so each dispersion keeps its draws whatever the others do."""
+    sep, mc = scenario.separation, scenario.monte_carlo
+    a, inc = carrier.a, carrier.inc
+    rng = np.random.default_rng(seed)
+    db_factor = rng.normal(1.0, mc.ballistic_sigma) if disperse else 1.0
+    da_dot = float(drag_da_dot(mc.delta_b * db_factor, mc.density, a)) if mc.drag else 0.0
+    chief0 = chief_from_u(a, inc, raan, u0)
+    if dynamics == "nonlinear":
+        from .nonlinear import Atmosphere, NonlinearTruth
+
+        b_c = mc.carrier.ballistic if mc.drag else 0.0
+        b_d = b_c + mc.delta_b * db_factor if mc.drag else 0.0
+        model = NonlinearTruth(chief0, 0.0, b_c, b_d, Atmosphere.normalised(mc.density, chief0), da_dot=da_dot)
+    else:
+        model = TruthModel(chief0, 0.0, da_dot, j2)
+    timing = np.random.default_rng(np.random.SeedSequence([int(seed), EJECTION_TIMING_STREAM]))
+    ejection_delay = float(timing.uniform(0.0, ejection_delay_max)) if disperse else 0.0
+    errors = ExecutionErrors(rng, sep.spl_sigma if disperse else 0.0, sep.thruster_sigma if disperse else 0.0,
+                             mc.attitude_sigma_arcsec * ARCSEC if disperse else 0.0)
+    return Dispersed(model, errors, ejection_delay, da_dot)
+
+
+class ClosestApproach:
+    """Closest approach after the departure: the smallest local minimum of |r| once it exceeded ``departure`` [m]
+    (the receding start of the separation itself is no approach), fed with the distances of consecutive steps."""
+
+    def __init__(self, departure):
+        self.departure = departure
+        self.departed = False
+        self.min_dist = (math.inf, math.nan)  # (m, s)
+        self.tail = (np.empty(0), np.empty(0))  # last samples of the previous step (local minima across steps)
+
+    def update(self, times, dist):
+        if self.tail[0].size and times.size and times[0] <= self.tail[0][-1]:  # consecutive steps share an end
+            times, dist = times[1:], dist[1:]
+        times = np.concatenate([self.tail[0], times])
+        dist = np.concatenate([self.tail[1], dist])
+        if not self.departed:
+            out = np.nonzero(dist >= self.departure)[0]
+            if out.size == 0:
+                self.tail = (times[-2:], dist[-2:])
+                return
+            self.departed = True
+            times, dist = times[out[0]:], dist[out[0]:]
+        inner = np.nonzero((dist[1:-1] <= dist[:-2]) & (dist[1:-1] < dist[2:]))[0] + 1
+        if inner.size:
+            k = inner[np.argmin(dist[inner])]
+            if dist[k] < self.min_dist[0]:
+                self.min_dist = (float(dist[k]), float(times[k]))
+        self.tail = (times[-2:], dist[-2:])
+
+
+class SimulatedTruth:
+    """The truth's timeline: :meth:`advance` moves ``model`` to a sim time, hands the truth samples of every
+    ``truth_period`` epoch on the way to ``on_samples(epochs, (kep, roe, (pos, vel)))``, tracks the closest approach
+    on a ``distance_step`` grid and calls ``on_hour()`` at every full hour of sim time at its own epoch, so that every
+    output is the same whatever the step size."""
+
+    def __init__(self, model, truth_period, distance_step, departure, on_samples, on_hour):
+        self.model = model
+        self.truth_period, self.distance_step = truth_period, distance_step
+        self.closest = ClosestApproach(departure)
+        self.on_samples, self.on_hour = on_samples, on_hour
+        self.t = 0.0
+        self.next_truth = 0.0
+        self.next_status = STATUS_PERIOD
+
+    def advance(self, t_to):
+        """Move the truth to ``t_to`` [s]."""
+        while self.next_status <= t_to:
+            self._advance_to(self.next_status)
+            self.next_status += STATUS_PERIOD
+            self.on_hour()
+        self._advance_to(t_to)
+
+    def _advance_to(self, t_to):
+        if t_to <= self.t:
+            return
+        if self.model.separated:
+            self.closest.update(*self.model.distances(self.t, t_to, self.distance_step))
+        epochs = []
+        while self.next_truth <= t_to:
+            epochs.append(self.next_truth)
+            self.next_truth += self.truth_period
+        if epochs:
+            self.publish(epochs)
+        self.t = t_to
+
+    def publish(self, epochs):
+        """The truth samples at each of ``epochs`` [s] (evaluated in one vectorized pass) to ``on_samples``."""
+        self.on_samples(epochs, self.model.samples(np.asarray(epochs, dtype=float)))

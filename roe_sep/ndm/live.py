@@ -1,0 +1,65 @@
+"""A run's CCSDS set written while the run goes (the ``ground_bridge`` node's output), without ROS: the messages
+received so far, and a writer thread that writes the set from a snapshot of them on request. Serializing the OEM of a
+whole run takes seconds, during which the caller (a node's executor) must keep taking messages."""
+
+import queue
+import threading
+
+from .options import RunMessages
+
+
+class LiveSet:
+    """The set of ``opts`` (:class:`~.options.Options`) in ``out`` (a directory) as ``fmt`` files, from the messages
+    :meth:`add` received; ``now()`` the sim time [s] of a write (``written``: file stem -> sim time of its last write);
+    ``on_error(exc)`` when a write fails (the thread goes on)."""
+
+    def __init__(self, out, fmt, opts, now, on_error):
+        self.out, self.fmt, self.opts = out, fmt, opts
+        self.now, self.on_error = now, on_error
+        self.run = RunMessages()
+        self.lock = threading.Lock()
+        self.requests = queue.Queue()
+        self.written = {}  # file stem -> sim time of the last write
+        self.writer = threading.Thread(target=self._writer, name="ccsds_writer", daemon=True)
+        self.writer.start()
+
+    def add(self, topic, msg):
+        with self.lock:
+            self.run.add(topic, msg)
+
+    def request(self, periodic):
+        """Queue a write: the OPMs, and with ``periodic`` the OEM, TDM and CDM too."""
+        self.requests.put(periodic)
+
+    def close(self):
+        """The final, complete set: the writer thread finishes its queue, then writes everything once more."""
+        self.requests.put(None)
+        self.writer.join()
+
+    def _writer(self):
+        from . import dataset  # noqa: F401  (load the NDM library here, while the executor already spins)
+
+        while True:
+            batch = [self.requests.get()]
+            while not self.requests.empty():  # coalesce what queued up meanwhile
+                batch.append(self.requests.get())
+            if None in batch:  # shutdown: the final, complete set
+                self.write(True)
+                return
+            self.write(any(batch))
+
+    def write(self, periodic):
+        """Write the OPMs (always: small) and, if ``periodic``, the OEM, TDM and CDM, from a snapshot of the
+        messages received so far."""
+        with self.lock:
+            snapshot = RunMessages({t: list(ms) for t, ms in self.run.by_topic.items()})
+        try:
+            from .dataset import messages_of  # the NDM library loads in this thread, not at start-up
+            from .messages import write_message
+
+            msgs = messages_of(snapshot, self.opts, periodic)
+            for stem, message in msgs.items():
+                write_message(self.out / f"{stem}.{self.fmt}", message, self.fmt)
+                self.written[stem] = self.now()
+        except Exception as exc:  # noqa: BLE001  (the writer thread must survive any bad input)
+            self.on_error(exc)
