@@ -1,7 +1,7 @@
 """How every roe_sep process spins: init, construct, spin until SIGINT/SIGTERM, drain, clean shutdown, exit code.
 
-One life cycle (:func:`serve`) for a node alone (:func:`run`, the ``main()`` of each node), for several nodes on
-one executor (:mod:`roe_sep.nodes.suite`) and for the lifecycle manager (its start-up before spinning):
+One life cycle (:func:`serve`) for a node alone (:func:`run`, the ``main()`` of each node, the lifecycle manager's
+too) and for several nodes on one executor (:mod:`roe_sep.nodes.suite`); nothing waits outside the spin:
 
 * rclpy's own signal handler is off. SIGINT/SIGTERM only set a flag that the loop checks between short
   ``spin_once`` calls: a signal never interrupts a callback halfway, and the context is never shut down under an
@@ -81,13 +81,12 @@ def spin(executor, nodes=(), until=None, errors=None) -> int:
     return 0
 
 
-def serve(factories, args=None, make_executor=SingleThreadedExecutor, start=None, until=None, errors=None) -> int:
+def serve(factories, args=None, make_executor=SingleThreadedExecutor, until=None, errors=None) -> int:
     """The whole life of a process: :func:`init`; construct the nodes of ``factories`` (``[(label, factory)]``, in
-    order); ``start(nodes)`` (optional: a non-zero exit code it returns ends the process before spinning); the
-    nodes on one executor from ``make_executor()``; :func:`spin` with the drain (until a signal, or ``until()``
-    is true: :func:`roe_sep.run.run` in one process); then the executor shut down and
-    the nodes destroyed, the recorder first (the bag is complete before another node spends seconds on its own
-    shutdown work, e.g. the ground_bridge's final CCSDS set), the others in reverse order.
+    order); the nodes on one executor from ``make_executor()``; :func:`spin` with the drain (until a signal, or
+    ``until()`` is true: :func:`roe_sep.run.run` in one process, a lifecycle manager whose start-up failed); then the
+    executor shut down and the nodes destroyed, the recorder first (the bag is complete before another node spends
+    seconds on its own shutdown work, e.g. the ground_bridge's final CCSDS set), the others in reverse order.
 
     Exit code 2 when a node refuses its parameters (``[ERROR] label: ...``, or without the label when it is None),
     1 when a callback raised, else 0; the reason of a non-zero code is appended to ``errors`` (a list) if given.
@@ -105,13 +104,9 @@ def serve(factories, args=None, make_executor=SingleThreadedExecutor, start=None
                 if errors is not None:
                     errors.append(f"{label}: {exc}" if label else str(exc))
                 return 2
-        # start() before the nodes join the executor: rclpy's spin_until_future_complete (the lifecycle manager's
-        # start-up) moves a node to the global executor and then removes it from any
-        code = start(nodes) if start is not None else 0
-        if not code:
-            for node in nodes:
-                executor.add_node(node)
-            code = spin(executor, nodes, until, errors)
+        for node in nodes:
+            executor.add_node(node)
+        code = spin(executor, nodes, until, errors)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
