@@ -1,18 +1,17 @@
 """``python -m roe_sep.campaign.child SPEC_JSON``: one campaign run, :func:`roe_sep.run.run` with the given keyword
-arguments, every node in this process (started by :func:`roe_sep.campaign.runner.execute` in a session of its own).
+arguments, every node in this process (started by :func:`roe_sep.campaign.runner.execute` in a session of its own;
+the kernel kills it when its worker dies).
 Exit 0 once ``report.json`` is written; 1 with a one-line reason on stderr otherwise."""
 
 import json
 import sys
 
 from ..checks import one_line
-from .runner import watch_parent
 
 
 def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
     spec = json.loads(argv[0])
-    watch_parent()
     from ..run import run
 
     try:

@@ -6,13 +6,14 @@ nodes, parameters and lockstep as ``roe-sep run``, hence the same row as ``roe-s
 two processes (test_campaign), for about 13 instead of 21 CPU-s per run (no process start-ups, no inter-process
 transport; bench/bench_campaign.py). The ground_bridge (CCSDS export) only listens; a run has it with ``ccsds``.
 
-Isolation. The run's nodes and its observer live in a child process started in a new session (process group): the
-worker's own signals (Ctrl-C on the terminal) never reach them, the worker kills the whole group when the run
-exceeds its wall-time limit, and the child's watchdog kills its group when the worker dies (parent changed), so an
-interrupted campaign leaves no node behind. The DDS domain is taken from a range with an exclusive ``flock`` per
-domain in the temporary directory, so concurrent runs on one host (any number of workers, any number of campaigns)
-never share a domain; discovery stays on loopback (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``), so workers on
-other hosts cannot collide either. The lock is the kernel's: a dead worker releases it.
+Isolation. The run's nodes and its observer live in a child process of :func:`roe_sep.children.spawn`, in a
+session (process group) of its own: the worker's own signals (Ctrl-C on the terminal) never reach them, the worker
+kills the whole group when the run exceeds its wall-time limit, and the kernel kills the child when the worker dies
+(``PR_SET_PDEATHSIG``, SIGKILL), so an interrupted campaign leaves no node behind. The DDS domain is taken from a
+range with an exclusive ``flock`` per domain in the temporary directory, so concurrent runs on one host (any number
+of workers, any number of campaigns) never share a domain; discovery stays on loopback
+(``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``), so workers on other hosts cannot collide either. The lock is the
+kernel's: a dead worker releases it.
 
 Seeds. The simulator's ``seed`` is the run seed (SPL magnitude and direction, carrier burn execution and attitude
 errors, differential drag); the radar noise is seeded with :func:`radar_seed` of the run seed, an independent
@@ -29,13 +30,13 @@ import signal
 import subprocess
 import sys
 import tempfile
-import threading
 import time
 from pathlib import Path
 
 import yaml
 
 from .. import jsonutil
+from ..children import spawn
 from ..run import radar_seed
 from .table import failed_row, row_from_report
 
@@ -111,8 +112,8 @@ def execute(spec: dict) -> dict:
             child.update(seed=seed, out=str(run_dir), params=str(run_dir / "overrides.yaml"), domain_id=domain,
                          ccsds=ccsds)
             with open(run_dir / "campaign.log", "w", encoding="utf-8") as log:
-                proc = subprocess.Popen([sys.executable, "-m", "roe_sep.campaign.child", json.dumps(child)],
-                                        stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+                proc = spawn([sys.executable, "-m", "roe_sep.campaign.child", json.dumps(child)],
+                             death_signal=signal.SIGKILL, stdout=log, stderr=subprocess.STDOUT)
                 try:
                     code = proc.wait(timeout=float(spec["timeout"]) + KILL_MARGIN)
                 except subprocess.TimeoutExpired:
@@ -143,15 +144,3 @@ def _finish(row, t0, domain):
     row["domain_id"] = domain
     return row
 
-
-def watch_parent(interval=0.5):
-    """Kill this process's group (this run's nodes) once the parent (the Dask worker) is gone."""
-    parent = os.getppid()
-
-    def watch():
-        while True:
-            time.sleep(interval)
-            if os.getppid() != parent:
-                os.killpg(0, signal.SIGKILL)
-
-    threading.Thread(target=watch, daemon=True, name="parent-watchdog").start()

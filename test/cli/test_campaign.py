@@ -271,7 +271,7 @@ def test_ctrl_c_mid_campaign_then_rerun_completes_only_the_missing_runs(campaign
     assert proc.returncode == 130, stderr[-2000:]
     before = table.read()
     assert 1 <= len(before) < runs
-    time.sleep(1.0)  # the run processes' watchdogs act within 0.5 s of their worker's end
+    time.sleep(1.0)  # the kernel kills a run process when its worker ends (PR_SET_PDEATHSIG)
     left = subprocess.run(["pgrep", "-f", f"roe_sep.campaign.child .*{out}"], capture_output=True, text=True)
     assert left.stdout.strip() == "", "a run process outlived its campaign"
     rerun = subprocess.run(cmd, env=env, cwd=ROOT, capture_output=True, text=True, timeout=900)
