@@ -128,7 +128,7 @@ class LifecycleManager(Node):
 
 def main(args=None):
     """Exit 1 when a transition failed; 0 on SIGINT/SIGTERM (whether the start-up had ended or not)."""
-    from .spin import serve
+    from .spin import leave, serve
 
     managers = []
 
@@ -137,7 +137,7 @@ def main(args=None):
         return managers[-1]
 
     code = serve([(None, manager)], args, until=lambda: managers[0].failed)
-    return code or (1 if managers and managers[0].failed else 0)
+    return leave(code or (1 if managers and managers[0].failed else 0))
 
 
 if __name__ == "__main__":

@@ -120,6 +120,17 @@ def serve(factories, args=None, make_executor=SingleThreadedExecutor, until=None
     return code
 
 
+def leave(code: int) -> int:
+    """The end of a node process's ``main()``: SIGINT/SIGTERM ignored from here on, ``code`` returned. Python's
+    finalization resets a signal's Python handler to the default action, and the late SIGINT of ``ros2 launch``
+    (sent after the terminal's Ctrl-C had already stopped the node) then killed a cleanly stopped node while rmw
+    was tearing down ('process has died [exit code -2]')."""
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, signal.SIG_IGN)
+    return code
+
+
 def run(node_factory, args=None) -> int:
-    """A node's ``main()``: the node built by ``node_factory()`` alone on a SingleThreadedExecutor (:func:`serve`)."""
-    return serve([(None, node_factory)], args)
+    """A node's ``main()``: the node built by ``node_factory()`` alone on a SingleThreadedExecutor (:func:`serve`),
+    then :func:`leave`."""
+    return leave(serve([(None, node_factory)], args))
