@@ -1,7 +1,11 @@
-"""Ctrl-C of ``ros2 launch roe_sep separation.launch.py`` (and of its XML front end) mid-run: every node finishes
-cleanly, launch exits 0 without an ``[ERROR]`` (no second Shutdown event that would shut launch_ros's ROS adapter down
-twice; no node killed by launch's late SIGINT while it exits), the report says why the run ended, and no process is
-left. The real ``ros2`` command line of scripts/ros2_cli.sh (``pytest -m ros2cli``); skips without its sources."""
+"""Ctrl-C with the real ``ros2`` command line of scripts/ros2_cli.sh (``pytest -m ros2cli``; skips without its
+sources), as a user meets it:
+
+* ``ros2 launch roe_sep separation.launch.py`` (and its XML front end) mid-run: every node finishes cleanly, launch
+  exits 0 without an ``[ERROR]`` (no second Shutdown event that would shut launch_ros's ROS adapter down twice; no
+  node killed by launch's late SIGINT while it exits), the report says why the run ended, and no process is left;
+* ``ros2 run roe_sep lifecycle_manager`` alone, waiting for its nodes: ``ros2 param list /lifecycle_manager``
+  answers, and Ctrl-C ends it with status 0."""
 
 import json
 import os
@@ -65,3 +69,33 @@ def test_ctrl_c_mid_run_exits_0_without_error_and_leaves_no_process(ros2_env, fr
     assert left == {}, left
     report = json.loads((out / "report.json").read_text())
     assert report["run"]["reason"] == "launch shut down (ctrl-c (SIGINT))" and report["run"]["completed"] is False
+
+
+def test_lifecycle_manager_alone_answers_ros2_param_list_and_exits_0_on_ctrl_c(ros2_env):
+    proc = subprocess.Popen(["ros2", "run", "roe_sep", "lifecycle_manager", "--ros-args", "-p",
+                             "node_names:=[nobody_here]"], cwd=ROOT, env=ros2_env, stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, text=True, start_new_session=True)
+    listed = None
+    try:
+        deadline = time.monotonic() + 120.0
+        while proc.poll() is None and time.monotonic() < deadline:
+            try:  # never the ros2 daemon: it would outlive the test
+                ask = subprocess.run(["ros2", "param", "list", "/lifecycle_manager", "--no-daemon", "--spin-time", "3"],
+                                     env=ros2_env, capture_output=True, text=True, timeout=60)
+            except subprocess.TimeoutExpired:  # no answer
+                continue
+            if ask.returncode == 0 and "node_names" in ask.stdout:
+                listed = ask.stdout
+                break
+            time.sleep(1.0)
+        tree = descendants(proc.pid)
+        os.killpg(proc.pid, signal.SIGINT)  # Ctrl-C: ros2 run and the manager
+        out, _ = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.communicate()
+    assert listed is not None and "timeout" in listed, out
+    assert proc.returncode == 0, out
+    assert "Traceback" not in out, out
+    assert wait_gone(tree, timeout=30.0) == {}
