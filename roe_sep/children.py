@@ -3,9 +3,9 @@
 Every process roe_sep starts (the node processes of ``roe-sep run``, the Foxglove view of ``roe-sep replay
 --foxglove``, the run processes of ``roe-sep campaign``) is started by :func:`spawn`:
 
-* in a process group of its own (a new session): a terminal's Ctrl-C or hang-up reaches the parent alone, which
-  stops its children in its own order (``roe-sep run``: the recorder last, so that the bag is closed) instead of
-  every process being hit at once;
+* in a process group of its own (pgid = pid; the session, hence the scheduler's autogroup, stays the parent's): a
+  terminal's Ctrl-C or hang-up reaches the parent alone, which stops its children in its own order (``roe-sep run``:
+  the recorder last, so that the bag is closed) instead of every process being hit at once;
 * with ``PR_SET_PDEATHSIG`` (prctl(2), Linux) set in the child before it runs its program: when the parent dies,
   however it dies, the kernel sends the child ``death_signal`` (SIGTERM by default: a node stops as on a Ctrl-C).
   The kernel ties it to the parent *thread* that started the child, which must therefore outlive it (the parents
@@ -54,10 +54,10 @@ def _die_with(parent, death_signal):
 
 
 def spawn(cmd, death_signal=signal.SIGTERM, **popen_kwargs) -> subprocess.Popen:
-    """``subprocess.Popen(cmd, **popen_kwargs)`` in a new session (its own process group, pgid = pid) that receives
+    """``subprocess.Popen(cmd, **popen_kwargs)`` in a process group of its own (pgid = pid) that receives
     ``death_signal`` when this process (the calling thread) ends."""
     _started[:] = [p for p in _started if p.poll() is None]
-    proc = subprocess.Popen(cmd, start_new_session=True, preexec_fn=_die_with(os.getpid(), death_signal),
+    proc = subprocess.Popen(cmd, process_group=0, preexec_fn=_die_with(os.getpid(), death_signal),
                             **popen_kwargs)
     _started.append(proc)
     return proc

@@ -1,5 +1,5 @@
 """``python -m roe_sep.campaign.child SPEC_JSON``: one campaign run, :func:`roe_sep.run.run` with the given keyword
-arguments, every node in this process (started by :func:`roe_sep.campaign.runner.execute` in a session of its own;
+arguments, every node in this process (started by :func:`roe_sep.campaign.runner.execute` in a process group of its own;
 the kernel kills it when its worker dies).
 Exit 0 once ``report.json`` is written; 1 with a one-line reason on stderr otherwise."""
 

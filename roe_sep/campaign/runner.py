@@ -7,7 +7,7 @@ two processes (test_campaign), for about 13 instead of 21 CPU-s per run (no proc
 transport; bench/bench_campaign.py). The ground_bridge (CCSDS export) only listens; a run has it with ``ccsds``.
 
 Isolation. The run's nodes and its observer live in a child process of :func:`roe_sep.children.spawn`, in a
-session (process group) of its own: the worker's own signals (Ctrl-C on the terminal) never reach them, the worker
+process group of its own: the worker's own signals (Ctrl-C on the terminal) never reach them, the worker
 kills the whole group when the run exceeds its wall-time limit, and the kernel kills the child when the worker dies
 (``PR_SET_PDEATHSIG``, SIGKILL), so an interrupted campaign leaves no node behind. The DDS domain is taken from a
 range with an exclusive ``flock`` per domain in the temporary directory, so concurrent runs on one host (any number

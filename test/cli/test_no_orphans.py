@@ -70,7 +70,7 @@ def test_no_process_outlives_its_parent(name, sig, tmp_path):
         tree = wait_for(proc, wanted)
         time.sleep(1.0)  # the children under way (the view serving, the nodes spinning)
         tree.update(descendants(proc.pid))
-        proc.send_signal(sig)  # to the parent alone: its children are in sessions of their own
+        proc.send_signal(sig)  # to the parent alone: its children are in process groups of their own
         out, err = proc.communicate(timeout=240)
     finally:
         if proc.poll() is None:
