@@ -55,8 +55,10 @@ def _die_with(parent, death_signal):
 
 def spawn(cmd, death_signal=signal.SIGTERM, **popen_kwargs) -> subprocess.Popen:
     """``subprocess.Popen(cmd, **popen_kwargs)`` in a process group of its own (pgid = pid) that receives
-    ``death_signal`` when this process (the calling thread) ends."""
+    ``death_signal`` when this process (the calling thread) ends. Its stdin is /dev/null unless given: a background
+    group that read the terminal would be stopped (SIGTTIN)."""
     _started[:] = [p for p in _started if p.poll() is None]
+    popen_kwargs.setdefault("stdin", subprocess.DEVNULL)
     proc = subprocess.Popen(cmd, process_group=0, preexec_fn=_die_with(os.getpid(), death_signal),
                             **popen_kwargs)
     _started.append(proc)
