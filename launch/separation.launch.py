@@ -26,7 +26,7 @@ from launch.actions import (
     RegisterEventHandler,
     TimerAction,
 )
-from launch.event_handlers import OnProcessExit
+from launch.event_handlers import OnProcessExit, OnShutdown
 from launch.events import Shutdown
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
@@ -77,9 +77,16 @@ def _graph(context):
                         parameters=[str(params_file)]) for name in graph_nodes(managed=managed)}
 
     def shutdown(reason):
-        if state["end"] is None:
-            state["end"] = reason
+        """End the launch, once: every Shutdown event shuts launch_ros's ROS adapter down (its OnShutdown handler),
+        and a second one raises 'Cannot shutdown a ROS adapter that is not running' (launch then exits 1)."""
+        if state["end"] is not None:
+            return None
+        state["end"] = reason
         return [EmitEvent(event=Shutdown(reason=reason))]
+
+    def on_shutdown(event, ctx):  # any Shutdown, also launch's own on Ctrl-C: the nodes' exits that follow are no
+        if state["end"] is None:  # early exits, and emit no second Shutdown
+            state["end"] = f"launch shut down ({event.reason})"
 
     def on_status(array):  # in the launch's ROS node thread
         for s in array.status:
@@ -102,11 +109,8 @@ def _graph(context):
             state["codes"][name] = event.returncode
             if name == "recorder":
                 return write_report()
-            if state["end"] is None:
-                how = (f"killed by signal {-event.returncode}" if event.returncode < 0
-                       else f"exit status {event.returncode}")
-                return shutdown(f"{name} exited early ({how})")
-            return None
+            how = f"killed by signal {-event.returncode}" if event.returncode < 0 else f"exit status {event.returncode}"
+            return shutdown(f"{name} exited early ({how})")
         return handler
 
     def write_report():
@@ -126,8 +130,9 @@ def _graph(context):
                             f"{sum(1 for c in criteria.values() if c is True)} of {len(criteria)} criteria met, "
                             f"carrier dv {report.get('dv_total')} m/s ({state['end']})")]
 
-    actions = [RegisterEventHandler(OnProcessExit(target_action=node, on_exit=on_exit(name)))
-               for name, node in nodes.items()]
+    actions = [RegisterEventHandler(OnShutdown(on_shutdown=on_shutdown))]
+    actions += [RegisterEventHandler(OnProcessExit(target_action=node, on_exit=on_exit(name)))
+                for name, node in nodes.items()]
     first, *rest = nodes.values()
     actions += [first, TimerAction(period=1.0, actions=rest),  # the recorder discovers the graph first
                 TimerAction(period=timeout, actions=[OpaqueFunction(

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import yaml
 
+from .children import spawn
 from .graph import (  # noqa: F401 (re-exported)
     NODES,
     OPTIONAL_NODES,
@@ -70,7 +71,7 @@ class Deployment:
     def _spawn(self, name, module_args):
         log = open(self.out / "logs" / f"{name}.log", "w", encoding="utf-8")
         cmd = [sys.executable, "-m", *module_args, "--ros-args", "--params-file", str(self.params_file)]
-        self.procs[name] = (subprocess.Popen(cmd, env=self.env, stdout=log, stderr=subprocess.STDOUT), log)
+        self.procs[name] = (spawn(cmd, env=self.env, stdout=log, stderr=subprocess.STDOUT), log)
 
     def dead(self):
         return [n for n, (p, _) in self.procs.items() if p.poll() is not None]
@@ -236,8 +237,9 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
             if node == "recorder":
                 time.sleep(1.0)  # let the recorder discover the graph before the clock starts
         reached, reason = wait_for_completion(sim_duration, deployment, timeout, progress)
-    except KeyboardInterrupt:
-        reached, reason = False, "interrupted (Ctrl-C)"
+    except KeyboardInterrupt as exc:  # Ctrl-C, or children.Interrupted: SIGTERM/SIGHUP under children.guarded()
+        signum = getattr(exc, "signum", signal.SIGINT)
+        reached, reason = False, "interrupted (Ctrl-C)" if signum == signal.SIGINT else f"interrupted ({exc})"
     except Exception as exc:  # noqa: BLE001 -- the runner outlives what goes wrong and says what it was
         reached, reason = False, f"runner error: {type(exc).__name__}: {exc}"
     finally:

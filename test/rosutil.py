@@ -60,3 +60,65 @@ def spin_until(node, predicate, timeout=20.0):
         if predicate():
             return True
     return predicate()
+
+
+def free_port():
+    """A TCP port of 127.0.0.1 that nobody listens on (now)."""
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _stat(pid):
+    """(parent pid, state letter, start time in clock ticks) of a process from /proc, None if it is gone."""
+    try:
+        text = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return None
+    fields = text[text.rindex(")") + 2:].split()  # after "pid (comm) "
+    return int(fields[1]), fields[0], int(fields[19])
+
+
+def _cmdline(pid):
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace").strip()
+    except OSError:
+        return ""
+
+
+def descendants(pid):
+    """Every process below ``pid`` now (children, their children, ...): {pid: (start time, command line)}; a walk
+    of /proc by parent pid. Kept with the start time, so that a reused pid is not taken for the process."""
+    parents = {}
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            st = _stat(int(entry.name))
+            if st is not None:
+                parents.setdefault(st[0], []).append((int(entry.name), st[2]))
+    found, todo = {}, [pid]
+    while todo:
+        for child, start in parents.get(todo.pop(), ()):
+            if child not in found:
+                found[child] = (start, _cmdline(child))
+                todo.append(child)
+    return found
+
+
+def still_running(procs):
+    """The processes of a :func:`descendants` capture that still run (not gone, not a zombie, not a reused pid)."""
+    left = {}
+    for pid, (start, cmd) in procs.items():
+        st = _stat(pid)
+        if st is not None and st[2] == start and st[1] != "Z":
+            left[pid] = cmd
+    return left
+
+
+def wait_gone(procs, timeout=60.0):
+    """Wait until no process of ``procs`` (a :func:`descendants` capture) runs; returns those still running."""
+    deadline = time.monotonic() + timeout
+    while still_running(procs) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    return still_running(procs)

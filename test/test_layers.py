@@ -2,7 +2,7 @@
 
 Layers, lowest first (a module may import its own layer and the ones below, never one above):
 
-    core, checks, jsonutil  <-  interfaces, bag  <-  nodes  <-  run, report, plots  <-  cli, docgen
+    core, checks, children, jsonutil  <-  interfaces, bag  <-  nodes  <-  run, report, plots  <-  cli, docgen
 
 Every import counts, also the ones inside functions (a lazy import hides a circle, it does not remove it). Only
 imports of ``roe_sep`` modules are followed; ``from pkg import name`` is an edge to the submodule ``pkg.name`` when
@@ -16,8 +16,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1] / "roe_sep"
 
-LAYERS = {"core": 0, "checks": 0, "jsonutil": 0, "interfaces": 1, "bag": 1, "ndm": 1, "graph": 1, "nodes": 2, "run": 3,
-          "report": 3, "plots": 3, "engine": 3, "campaign": 3, "cli": 4, "docgen": 4}
+LAYERS = {"core": 0, "checks": 0, "children": 0, "jsonutil": 0, "interfaces": 1, "bag": 1, "ndm": 1, "graph": 1,
+          "nodes": 2, "run": 3, "report": 3, "plots": 3, "engine": 3, "campaign": 3, "cli": 4, "docgen": 4}
 ROS_MODULES = ("rclpy", "roe_sep_msgs", "rosgraph_msgs", "diagnostic_msgs", "builtin_interfaces", "geometry_msgs",
                "std_msgs", "rcl_interfaces", "ament_index_python")
 

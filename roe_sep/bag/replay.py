@@ -16,6 +16,7 @@ import sys
 import time
 
 from ..checks import OneLineParser, finite_float, one_line
+from ..children import exit_status
 from . import reader
 from .errors import BagError
 from .qos import to_rclpy
@@ -156,9 +157,9 @@ def play(bag, topics, args, has_clock) -> int:
             pubs[msg.topic].publish(msg.data)
             count, last = count + 1, msg.log_time
         wait_until(time.monotonic() + args.linger, lambda now: last)
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
         print(f"roe-sep replay: interrupted after {count} messages", file=sys.stderr)
-        return 130
+        return exit_status(exc)
     except Exception as exc:  # noqa: BLE001  (a record unreadable mid-play: stop with one line, not a traceback)
         print(f"roe-sep: error: replay stopped after {count} messages: {type(exc).__name__}: {one_line(exc)}",
               file=sys.stderr)

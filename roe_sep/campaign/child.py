@@ -1,19 +1,18 @@
 """``python -m roe_sep.campaign.child SPEC_JSON``: one campaign run, :func:`roe_sep.run.run` with the given keyword
 arguments, every node in this process (forked by the worker's fork server, :mod:`roe_sep.campaign.forkserver`, in a
-session of its own; the same as a fresh interpreter running this module).
+process group of its own that the kernel kills when the fork server ends; the same as a fresh interpreter running
+this module).
 Exit 0 once ``report.json`` is written; 1 with a one-line reason on stderr otherwise."""
 
 import json
 import sys
 
 from ..checks import one_line
-from .runner import watch_parent
 
 
 def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
     spec = json.loads(argv[0])
-    watch_parent()
     from ..run import run
 
     try:

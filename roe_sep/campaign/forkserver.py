@@ -7,8 +7,9 @@ Nothing leaks between runs: every run is still a process of its own, forked from
 never initialised rclpy (no DDS participant, no thread, no context exists in it when it forks), so each run starts
 from the same state, the one a fresh ``python -m roe_sep.campaign.child`` reaches after its imports. The memoised
 sweep is a pure function of frozen inputs (the same float whether computed here or in the run). The run is the same
-code path as before (:func:`roe_sep.campaign.child.main`), in a session of its own with its output in its log file;
-the worker kills its process group on a timeout, exactly as it did for the child process.
+code path (:func:`roe_sep.campaign.child.main`), in a process group of its own with its output in its log file; the
+worker kills that group on a timeout. The kernel ends a run when its fork server dies and the fork server when its
+worker dies (``PR_SET_PDEATHSIG``, :mod:`roe_sep.children`).
 
 Protocol (JSON lines; the server is single-threaded and polls, so forking is safe):
 
@@ -16,8 +17,7 @@ Protocol (JSON lines; the server is single-threaded and polls, so forking is saf
   ``{"exit": N, "code": C}`` when that child is reaped (C: its exit status, or -signal).
 * ``{"warm": {"config": PATH|null, "params": PATH}}``: compute the start-up sweep the planner of a run with these
   settings will ask for (memoised in the server, inherited by every later fork); answered ``{"warm": true}``.
-* End of input (the worker is gone or closed the pipe): the server exits; a run in progress notices its parent is
-  gone (:func:`roe_sep.campaign.runner.watch_parent`) and kills its own group.
+* End of input (the worker closed the pipe): the server exits, and the kernel ends a run still in progress.
 """
 
 import json
@@ -28,6 +28,8 @@ import subprocess
 import sys
 import threading
 import time
+
+from ..children import die_with, spawn
 
 POLL = 0.05  # s between checks of the request pipe and of exited children
 
@@ -51,11 +53,13 @@ def _warm(spec):
     startup_p(scenario, *(params.get(k, defaults[k].default) for k in ("mc_samples", "mc_seed")))
 
 
-def _child(argv, log):
-    """In the forked child: a session of its own, output to ``log``, default signal dispositions; never returns."""
+def _child(argv, log, parent):
+    """In the forked child: a process group of its own that dies with the server, output to ``log``, default signal
+    dispositions; never returns."""
     code = 1
     try:
-        os.setsid()
+        os.setpgid(0, 0)
+        die_with(parent, signal.SIGKILL)
         fd = os.open(log, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
         null = os.open(os.devnull, os.O_RDONLY)
         os.dup2(null, 0)
@@ -100,6 +104,7 @@ def serve():
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the worker decides; a terminal's Ctrl-C goes to the worker
     out = sys.stdout
+    server_pid = os.getpid()
     children = set()
     buf = b""
     print(json.dumps({"ready": os.getpid()}), file=out, flush=True)
@@ -128,7 +133,7 @@ def serve():
             out.flush()
             pid = os.fork()
             if pid == 0:
-                _child(req["argv"], req["log"])
+                _child(req["argv"], req["log"], server_pid)
             children.add(pid)
             print(json.dumps({"pid": pid}), file=out, flush=True)
 
@@ -142,8 +147,8 @@ class ForkServer:
     """The worker's handle on its fork server (started on first use; one per worker thread, see :func:`server`)."""
 
     def __init__(self):
-        self.proc = subprocess.Popen([sys.executable, "-m", "roe_sep.campaign.forkserver"], stdin=subprocess.PIPE,
-                                     stdout=subprocess.PIPE, start_new_session=True)
+        self.proc = spawn([sys.executable, "-m", "roe_sep.campaign.forkserver"], death_signal=signal.SIGKILL,
+                          stdin=subprocess.PIPE, stdout=subprocess.PIPE)
         self.buf = b""
         self.exits = {}
         self._expect("ready")

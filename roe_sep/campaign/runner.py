@@ -7,13 +7,14 @@ default two processes (test_campaign). It is forked from the worker's fork serve
 imported what a run imports and computed the planner's start-up sweep once, so a run pays neither; the ground_bridge
 (CCSDS export) only listens, and a run has it with ``ccsds``.
 
-Isolation. The run's process is in a session (process group) of its own: the worker's own signals (Ctrl-C on the
-terminal) never reach it, the worker kills the whole group when the run exceeds its wall-time limit, and the run's
-watchdog kills its group when its parent (the fork server, which ends with its worker) is gone, so an interrupted
-campaign leaves no node behind. The DDS domain is taken from a range with an exclusive ``flock`` per domain in the
-temporary directory, so concurrent runs on one host (any number of workers, any number of campaigns) never share a
-domain; discovery stays on loopback (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``), so workers on other hosts cannot
-collide either. The lock is the kernel's: a dead worker releases it.
+Isolation. The run's nodes and its observer live in a process of their own, in a process group of their own: the
+worker's own signals (Ctrl-C on the terminal) never reach them, the worker kills the whole group when the run exceeds
+its wall-time limit, and the kernel kills the run when its fork server dies, and the fork server when its worker dies
+(``PR_SET_PDEATHSIG``, SIGKILL: :mod:`roe_sep.children`), so an interrupted campaign leaves no node behind. The DDS
+domain is taken from a range with an exclusive ``flock`` per domain in the temporary directory, so concurrent runs on
+one host (any number of workers, any number of campaigns) never share a domain; discovery stays on loopback
+(``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``), so workers on other hosts cannot collide either. The lock is the
+kernel's: a dead worker releases it.
 
 Seeds. The simulator's ``seed`` is the run seed (SPL magnitude and direction, carrier burn execution and attitude
 errors, differential drag); the radar noise is seeded with :func:`radar_seed` of the run seed, an independent
@@ -29,7 +30,6 @@ import shutil
 import signal
 import subprocess
 import tempfile
-import threading
 import time
 from pathlib import Path
 
@@ -144,15 +144,3 @@ def _finish(row, t0, domain):
     row["domain_id"] = domain
     return row
 
-
-def watch_parent(interval=0.5):
-    """Kill this process's group (this run's nodes) once the parent (the Dask worker) is gone."""
-    parent = os.getppid()
-
-    def watch():
-        while True:
-            time.sleep(interval)
-            if os.getppid() != parent:
-                os.killpg(0, signal.SIGKILL)
-
-    threading.Thread(target=watch, daemon=True, name="parent-watchdog").start()

@@ -13,6 +13,7 @@ import sys
 
 from ..bag.errors import BagError
 from ..checks import OneLineParser, one_line
+from ..children import exit_status
 from ..core.config import ConfigError
 from ..core.separation.double_impulse import InfeasibleDesignError
 from . import analysis, campaign, collision, design, export, nonlinear, ops, run
@@ -60,9 +61,9 @@ def main(argv=None):
     except OSError as exc:  # a file that cannot be read or written (--plots, --out, --config ...)
         print(f"roe-sep: error: {one_line(_os_error(exc))}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:  # Ctrl-C; SIGTERM/SIGHUP too under children.guarded() (run, replay, campaign)
         print("roe-sep: interrupted", file=sys.stderr)
-        return 130
+        return exit_status(exc)
     except Exception as exc:  # noqa: BLE001  (last resort: one line, never a traceback on the terminal)
         if os.environ.get("ROE_SEP_DEBUG"):
             raise

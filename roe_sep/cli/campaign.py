@@ -4,6 +4,7 @@ import argparse
 import os
 import sys
 
+from ..children import guarded
 from .common import SEED_MAX, emit, finite_float, integer, seed
 from .run import DAY, check_params_file
 
@@ -104,11 +105,12 @@ def cmd_campaign(args):
         check_params_file(args.params)
         overrides = load_overrides(args.params)
     workers = args.workers or (None if args.scheduler else os.cpu_count() or 1)
-    rep = run_campaign(args.runs, args.seed, args.out, workers=workers, scheduler=args.scheduler,
-                       config=args.config, overrides=overrides, duration=args.duration, timeout=args.timeout,
-                       domains=args.domains, retry_failed=args.retry_failed,
-                       progress=not args.json and sys.stderr.isatty(), open_loop_samples=args.open_loop_samples,
-                       figures=not args.no_figures, ccsds=args.ccsds, bags=not args.no_bags)
+    with guarded():  # SIGTERM/SIGHUP stop the campaign as Ctrl-C does (exit 128 + signal number)
+        rep = run_campaign(args.runs, args.seed, args.out, workers=workers, scheduler=args.scheduler,
+                           config=args.config, overrides=overrides, duration=args.duration, timeout=args.timeout,
+                           domains=args.domains, retry_failed=args.retry_failed,
+                           progress=not args.json and sys.stderr.isatty(), open_loop_samples=args.open_loop_samples,
+                           figures=not args.no_figures, ccsds=args.ccsds, bags=not args.no_bags)
     emit(rep, args.json, print_campaign)
     return 0 if rep["failed"] == 0 else 1
 

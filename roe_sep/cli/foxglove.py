@@ -9,6 +9,8 @@ import sys
 import threading
 import time
 
+from ..children import spawn
+
 DEFAULT_PORT = 8765
 
 
@@ -44,7 +46,7 @@ def with_foxglove(port, body, sim_time=False, ready_timeout=30.0):
     """Run ``body()`` with a ``foxglove_view`` node serving ``port``; the node is stopped (SIGINT) afterwards."""
     cmd = [sys.executable, "-m", "roe_sep.nodes.foxglove_view", "--ros-args", "-p", f"port:={port}",
            "-p", f"use_sim_time:={'true' if sim_time else 'false'}"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    proc = spawn(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     deadline = time.monotonic() + ready_timeout
     ready = False
     while time.monotonic() < deadline and not ready:

@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 from .. import jsonutil
+from ..children import guarded
 from ..graph import EXECUTORS
 from .common import emit, finite_float, seed, vec
 from .foxglove import DEFAULT_PORT, port_number
@@ -90,10 +91,11 @@ def cmd_run(args):
     if args.params:
         check_params_file(args.params)
 
-    rep = run(config=args.config, out=args.out, params=args.params, duration=args.duration, seed=args.seed,
-              timeout=args.timeout, progress=not args.json and sys.stderr.isatty(),
-              real_time_factor=args.real_time_factor, foxglove=args.foxglove,
-              process_per_node=args.process_per_node, executor=args.executor, in_process=args.in_process)
+    with guarded():  # SIGTERM/SIGHUP stop the run as Ctrl-C does; no node process outlives it
+        rep = run(config=args.config, out=args.out, params=args.params, duration=args.duration, seed=args.seed,
+                  timeout=args.timeout, progress=not args.json and sys.stderr.isatty(),
+                  real_time_factor=args.real_time_factor, foxglove=args.foxglove,
+                  process_per_node=args.process_per_node, executor=args.executor, in_process=args.in_process)
 
     def human(r):
         print_run(r)
@@ -111,7 +113,8 @@ def delegated(argv):
         rest, port = split_foxglove(argv[1:])
         if port is None:
             return replay.main(rest)
-        return with_foxglove(port, lambda: replay.main(rest), sim_time="--clock" in rest)
+        with guarded():  # SIGTERM/SIGHUP stop the replay as Ctrl-C does, and the view with it
+            return with_foxglove(port, lambda: replay.main(rest), sim_time="--clock" in rest)
     if argv[:2] == ["bag", "recover"]:
         from ..bag import recover
 

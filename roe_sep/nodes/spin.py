@@ -1,7 +1,7 @@
 """How every roe_sep process spins: init, construct, spin until SIGINT/SIGTERM, drain, clean shutdown, exit code.
 
-One life cycle (:func:`serve`) for a node alone (:func:`run`, the ``main()`` of each node), for several nodes on
-one executor (:mod:`roe_sep.nodes.suite`) and for the lifecycle manager (its start-up before spinning):
+One life cycle (:func:`serve`) for a node alone (:func:`run`, the ``main()`` of each node, the lifecycle manager's
+too) and for several nodes on one executor (:mod:`roe_sep.nodes.suite`); nothing waits outside the spin:
 
 * rclpy's own signal handler is off. SIGINT/SIGTERM only set a flag that the loop checks between short
   ``spin_once`` calls: a signal never interrupts a callback halfway, and the context is never shut down under an
@@ -113,13 +113,12 @@ def spin(executor, nodes=(), until=None, errors=None) -> int:
     return 0
 
 
-def serve(factories, args=None, make_executor=SingleThreadedExecutor, start=None, until=None, errors=None) -> int:
+def serve(factories, args=None, make_executor=SingleThreadedExecutor, until=None, errors=None) -> int:
     """The whole life of a process: :func:`init`; construct the nodes of ``factories`` (``[(label, factory)]``, in
-    order); ``start(nodes)`` (optional: a non-zero exit code it returns ends the process before spinning); the
-    nodes on one executor from ``make_executor()``; :func:`spin` with the drain (until a signal, or ``until()``
-    is true: :func:`roe_sep.run.run` in one process); then the executor shut down and
-    the nodes destroyed, the recorder first (the bag is complete before another node spends seconds on its own
-    shutdown work, e.g. the ground_bridge's final CCSDS set), the others in reverse order.
+    order); the nodes on one executor from ``make_executor()``; :func:`spin` with the drain (until a signal, or
+    ``until()`` is true: :func:`roe_sep.run.run` in one process, a lifecycle manager whose start-up failed); then the
+    executor shut down and the nodes destroyed, the recorder first (the bag is complete before another node spends
+    seconds on its own shutdown work, e.g. the ground_bridge's final CCSDS set), the others in reverse order.
 
     Exit code 2 when rcl refuses the ROS arguments (a missing or malformed ``--params-file``) or a node refuses its
     parameters (``[ERROR] label: ...``, or without the label when it is None),
@@ -145,13 +144,9 @@ def serve(factories, args=None, make_executor=SingleThreadedExecutor, start=None
                 if errors is not None:
                     errors.append(f"{label}: {exc}" if label else str(exc))
                 return 2
-        # start() before the nodes join the executor: rclpy's spin_until_future_complete (the lifecycle manager's
-        # start-up) moves a node to the global executor and then removes it from any
-        code = start(nodes) if start is not None else 0
-        if not code:
-            for node in nodes:
-                executor.add_node(node)
-            code = spin(executor, nodes, until, errors)
+        for node in nodes:
+            executor.add_node(node)
+        code = spin(executor, nodes, until, errors)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
@@ -165,11 +160,21 @@ def serve(factories, args=None, make_executor=SingleThreadedExecutor, start=None
     return code
 
 
+def leave(code: int) -> int:
+    """The end of a node process's ``main()``: SIGINT/SIGTERM ignored from here on, ``code`` returned. Python's
+    finalization resets a signal's Python handler to the default action, and the late SIGINT of ``ros2 launch``
+    (sent after the terminal's Ctrl-C had already stopped the node) then killed a cleanly stopped node while rmw
+    was tearing down ('process has died [exit code -2]')."""
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, signal.SIG_IGN)
+    return code
+
+
 def run(node_factory, args=None) -> int:
     """A node's ``main()``: the node built by ``node_factory()`` alone on a SingleThreadedExecutor (:func:`serve`),
-    its errors labelled with the node's name (its parameter table's); ``-h``/``--help`` prints
+    its errors labelled with the node's name (its parameter table's), then :func:`leave`; ``-h``/``--help`` prints
     the usage and the parameter table, exit code 0, before ROS starts."""
     name = node_table(node_factory)
     if help_requested(args):
         return print_usage(name, sys.modules[node_factory.__module__].__doc__ or "")
-    return serve([(name, node_factory)], args)
+    return leave(serve([(name, node_factory)], args))

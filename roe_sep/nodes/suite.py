@@ -31,7 +31,7 @@ from rclpy.utilities import remove_ros_args
 
 from ..graph import EXECUTORS
 from .params import help_requested
-from .spin import serve
+from .spin import leave, serve
 
 NODE_CLASSES = {
     "recorder": "recorder:RecorderNode",
@@ -94,8 +94,8 @@ def main(args=None) -> int:
     except ValueError as exc:
         print(f"[ERROR] {exc}", file=sys.stderr)
         return 2
-    return serve([(name, lambda name=name: node_class(name)()) for name in names], argv,
-                 make_executor=lambda: make_executor(executor_name))
+    return leave(serve([(name, lambda name=name: node_class(name)()) for name in names], argv,
+                       make_executor=lambda: make_executor(executor_name)))
 
 
 if __name__ == "__main__":

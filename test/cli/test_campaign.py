@@ -278,7 +278,7 @@ def test_ctrl_c_mid_campaign_then_rerun_completes_only_the_missing_runs(campaign
     assert proc.returncode == 130, stderr[-2000:]
     before = table.read()
     assert 1 <= len(before) < runs
-    time.sleep(1.0)  # the run processes' watchdogs act within 0.5 s of their worker's end
+    time.sleep(1.0)  # the kernel kills a run process when its fork server ends, and that when its worker ends
     left = [p for p in tree if p.is_running() and p.status() != psutil.STATUS_ZOMBIE]
     assert not left, f"processes outlived their campaign: {[p.cmdline() for p in left]}"
     rerun = subprocess.run(cmd, env=env, cwd=ROOT, capture_output=True, text=True, timeout=900)

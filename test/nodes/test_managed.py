@@ -6,6 +6,7 @@ import time
 import pytest
 from lifecycle_msgs.msg import State  # noqa: E402
 from lifecycle_msgs.srv import GetState  # noqa: E402
+from rcl_interfaces.srv import ListParameters  # noqa: E402
 from rclpy.lifecycle import TransitionCallbackReturn  # noqa: E402
 from rosutil import rclpy, start_node, stop_node, wait_exit  # noqa: I001  (skips without rclpy)
 
@@ -102,6 +103,34 @@ def _state(node, name):
         node.destroy_client(client)
 
 
+@pytest.mark.dds
+def test_lifecycle_manager_answers_while_it_waits_and_exits_0_on_sigint():
+    """Waiting for a node that never comes, the manager still serves its parameter services (what ``ros2 param list
+    /lifecycle_manager`` asks); SIGINT then ends it with status 0."""
+    manager = start_node("lifecycle_manager", "-p", "node_names:=['nobody_here']", "-p", "timeout:=120.0")
+    rclpy.init()
+    probe = rclpy.create_node("manager_probe")
+    names = None
+    try:
+        client = probe.create_client(ListParameters, "/lifecycle_manager/list_parameters")
+        deadline = time.monotonic() + 60.0
+        while names is None and time.monotonic() < deadline and manager.poll() is None:
+            if not client.wait_for_service(timeout_sec=2.0):
+                continue
+            future = client.call_async(ListParameters.Request())
+            rclpy.spin_until_future_complete(probe, future, timeout_sec=5.0)
+            if future.done():
+                names = set(future.result().result.names)
+    finally:
+        probe.destroy_node()
+        rclpy.try_shutdown()
+        code, out = stop_node(manager)
+    assert names is not None and {"node_names", "timeout", "use_sim_time"} <= names, (names, out)
+    assert code == 0, out
+    assert "Traceback" not in out and "managed nodes active" not in out, out
+
+
+@pytest.mark.dds
 def test_lifecycle_manager_starts_the_nodes_in_order():
     monitor = start_node("safety_monitor", "-p", "autostart:=false", "-p", "use_sim_time:=false")
     planner = start_node("planner", "-p", "autostart:=false", "-p", "use_sim_time:=false", *FAST_PLANNER)
@@ -131,6 +160,7 @@ def test_lifecycle_manager_starts_the_nodes_in_order():
     assert all(code == 0 for code, _ in outs), outs
 
 
+@pytest.mark.dds
 def test_lifecycle_manager_stops_at_a_failed_configure():
     planner = start_node("planner", "-p", "autostart:=false", "-p", "use_sim_time:=false", "-p", "k:=4",
                          *FAST_PLANNER)
