@@ -33,7 +33,7 @@ def command(name, tmp_path):
         return (["run", "--out", str(tmp_path / "run"), "--timeout", "600"], {"roe_sep.nodes.suite": 2}, None)
     return (["campaign", "--runs", "1", "--workers", "1", "--duration", "20000", "--out", str(tmp_path / "c"),
              "--domains", _domains(), "--open-loop-samples", "100", "--no-figures", "--json"],
-            {"roe_sep.campaign.child": 1}, None)
+            {"roe_sep.campaign.forkserver": 2}, None)
 
 
 def wait_for(proc, wanted, timeout=240.0):
