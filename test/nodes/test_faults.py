@@ -171,9 +171,9 @@ def test_fuzzing_every_subscribed_topic(tmp_path, per_node):
     """A fuzzer publishes invalid messages on every topic a node reads while the run starts and steps; then it
     stops and leaves the graph, and the closed loop completes safe: with a process per node, and in the default
     layout, where an exception escaping one node's callback would stop every node of its process."""
+    path = os.pathsep.join([str(ROOT / "test" / "nodes"), str(ROOT / "test"), os.environ.get("PYTHONPATH", "")])
     fuzzer = subprocess.Popen([sys.executable, "-c", "import test_faults; test_faults.fuzz_main(25.0)"],
-                              env={**ros_env(), "PYTHONPATH": str(ROOT / "test") + os.pathsep +
-                                   os.environ.get("PYTHONPATH", "")},
+                              env={**ros_env(), "PYTHONPATH": path},
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT / "test")
     try:
         result = run(out=tmp_path / "fuzzed", duration=100000.0, timeout=600, real_time_factor=100000.0 / 30.0,
