@@ -16,8 +16,8 @@ import sys
 import time
 
 from ..checks import OneLineParser, finite_float, one_line
+from ..errors import BagError
 from . import reader
-from .errors import BagError
 from .qos import to_rclpy
 
 CLOCK_TOPIC = "/clock"

@@ -14,14 +14,10 @@ import typing
 from dataclasses import dataclass, field
 
 from ..checks import SEED_MAX, check_number, one_line
+from ..errors import ConfigError
 from .constants import SECONDS_PER_DAY
 from .montecarlo.sweep import DEFAULT_P_VALUES, MonteCarloConfig, Spacecraft
 from .separation.double_impulse import SeparationConfig
-
-
-class ConfigError(ValueError):
-    """A configuration key or value is invalid; the message names it."""
-
 
 # The range of every numeric key: (class, field) -> (lo, hi, lo_open, hi_open, unit). Physical limits or the domain
 # of the models (LEO circular carrier, close formation); a value outside is refused with the key, value and range.

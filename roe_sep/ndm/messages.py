@@ -22,16 +22,13 @@ from ccsds_ndm.mapping import NDMFileFormats
 from ccsds_ndm.models import ndmxml2 as nd
 from ccsds_ndm.ndm_io import NdmIo
 
+from ..errors import NdmError
 from . import frames
 from .options import FORMATS
 
 ORIGINATOR = "ROE_SEP"
 G0 = 9.80665
 """Standard gravity [m/s^2] of the rocket equation (Isp in seconds)."""
-
-
-class NdmError(ValueError):
-    """A navigation data message that cannot be read or is not what roe_sep expects (the message says why)."""
 
 
 def _f(x) -> float:

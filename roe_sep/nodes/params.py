@@ -5,9 +5,7 @@ import math
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.exceptions import ParameterException
 
-
-class ParameterError(ValueError):
-    """A node parameter is invalid; the message names it."""
+from ..errors import ParameterError
 
 
 def declare(node, name, default, description):

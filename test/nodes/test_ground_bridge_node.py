@@ -21,7 +21,7 @@ from roe_sep import interfaces
 from roe_sep.bag.reader import messages
 from roe_sep.ndm import frames
 from roe_sep.ndm import messages as ndm
-from roe_sep.ndm.dataset import stamp
+from roe_sep.stamps import time_to_sec as stamp
 
 BAG = Path(__file__).resolve().parents[2] / "bags" / "default_run"
 EPOCH = "2016-07-01T00:00:00"

@@ -19,13 +19,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ...errors import InfeasibleDesignError
 from ..relmotion.dynamics import arg_latitude_rate, propagate, sun_synchronous_inclination
 from ..relmotion.maneuvers import delta_roe
 from ..relmotion.orbit import mean_motion, semi_major_axis
-
-
-class InfeasibleDesignError(ValueError):
-    """The requested separation violates a constraint of seed 002 Table 1 (named in the message)."""
 
 
 @dataclass(frozen=True)
