@@ -24,9 +24,7 @@ import dataclasses
 
 def plain(value):
     """``value`` with every NumPy scalar or array (anything with ``tolist()``) as the Python number or list it
-    holds, inside lists, tuples, dicts and dataclasses too (a dataclass becomes a dict of its fields)."""
-    if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        return {f.name: plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
+    holds, inside lists, tuples (named ones too) and dicts."""
     if callable(getattr(value, "tolist", None)) and not isinstance(value, (str, bytes)):
         value = value.tolist()
     if isinstance(value, dict):
@@ -40,7 +38,11 @@ def plain(value):
 
 
 def show(value) -> str:
-    """How a message shows a value: the repr of :func:`plain` of it (``0.0``, ``[97.0, 0.0]``, ``'abc'``)."""
+    """How a message shows a value: the repr of :func:`plain` of it (``0.0``, ``[97.0, 0.0]``, ``'abc'``); a
+    dataclass as its repr with each field shown so (``CubeSat(cd=2.2, area=0.01, mass=1.0)``)."""
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        fields = ", ".join(f"{f.name}={show(getattr(value, f.name))}" for f in dataclasses.fields(value) if f.repr)
+        return f"{type(value).__name__}({fields})"
     return repr(plain(value))
 
 

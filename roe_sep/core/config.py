@@ -14,7 +14,7 @@ import typing
 from dataclasses import dataclass, field
 
 from ..checks import SEED_MAX, check_number, one_line
-from ..errors import ConfigError
+from ..errors import ConfigError, show
 from .constants import SECONDS_PER_DAY
 from .montecarlo.sweep import DEFAULT_P_VALUES, MonteCarloConfig, Spacecraft
 from .separation.double_impulse import SeparationConfig
@@ -73,17 +73,17 @@ def _coerce(path, value, hint):
         return _build(path, hint, value)
     if hint is bool:
         if not isinstance(value, bool):
-            raise ConfigError(f"{path}: expected true/false, got {value!r}")
+            raise ConfigError(f"{path}: expected true/false, got {show(value)}")
         return value
     if hint is int:
         if isinstance(value, bool) or not isinstance(value, int):
-            raise ConfigError(f"{path}: expected an integer, got {value!r}")
+            raise ConfigError(f"{path}: expected an integer, got {show(value)}")
         return value
     if hint is float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ConfigError(f"{path}: expected a number, got {value!r}")
+            raise ConfigError(f"{path}: expected a number, got {show(value)}")
         if not math.isfinite(value):
-            raise ConfigError(f"{path}: expected a finite number, got {value!r}")
+            raise ConfigError(f"{path}: expected a finite number, got {show(value)}")
         return float(value)
     return value
 
@@ -121,7 +121,7 @@ def scenario_from_dict(data) -> Scenario:
     mc = dict(data.get("monte_carlo") or {})
     p_values = mc.pop("p_values", DEFAULT_P_VALUES)
     if not isinstance(p_values, (list, tuple)) or not p_values:
-        raise ConfigError(f"monte_carlo.p_values: expected a non-empty list of numbers [m/s], got {p_values!r}")
+        raise ConfigError(f"monte_carlo.p_values: expected a non-empty list of numbers [m/s], got {show(p_values)}")
     p_values = tuple(_coerce(f"monte_carlo.p_values[{i}]", p, float) for i, p in enumerate(p_values))
     if any(not P_RANGE[0] <= p <= P_RANGE[1] for p in p_values):
         raise ConfigError(f"monte_carlo.p_values: reductions |p| must be non-negative and at most {P_RANGE[1]:g} m/s, "

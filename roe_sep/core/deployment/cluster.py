@@ -61,6 +61,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.special import dawsn, ndtr, ndtri
 
+from ...errors import ConfigError, show
 from ..relmotion.orbit import mean_motion, semi_major_axis
 from .cluster_dynamics import drag_acceleration, drag_offset, hcw_matrix, hcw_terms, singular_values
 from .cluster_envelope import conditions, omega_bound
@@ -174,7 +175,7 @@ class ClusterConfig:
 
 def cluster_config_from_dict(data) -> ClusterConfig:
     """Build a :class:`ClusterConfig` from a parsed YAML mapping; unknown keys and bad values are named."""
-    from ..config import ConfigError, _coerce
+    from ..config import _coerce
 
     data = {} if data is None else data
     if not isinstance(data, dict):
@@ -192,7 +193,7 @@ def cluster_config_from_dict(data) -> ClusterConfig:
             for i, s in enumerate(v):
                 if not isinstance(s, dict) or set(s) - {"name", "velocity", "delta_q", "cluster"} or \
                         not {"velocity", "delta_q"} <= set(s):
-                    raise ConfigError(f"sats[{i}]: expected {{name, velocity, delta_q, cluster}}, got {s!r}")
+                    raise ConfigError(f"sats[{i}]: expected {{name, velocity, delta_q, cluster}}, got {show(s)}")
                 sats.append(Nanosatellite(str(s.get("name", f"ns{i + 1}")), _coerce(f"sats[{i}].velocity",
                                           s["velocity"], float), _coerce(f"sats[{i}].delta_q", s["delta_q"], float),
                                           _coerce(f"sats[{i}].cluster", s.get("cluster", True), bool)))

@@ -37,6 +37,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from ...errors import show
 from ..constants import SECONDS_PER_DAY
 from ..relmotion.dynamics import arg_latitude_rate, ballistic_coefficient, drag_da_dot, propagate
 from ..relmotion.maneuvers import delta_roe
@@ -93,12 +94,12 @@ class DeploymentConfig:
         for name in ("inclinations_deg", "dv", "angles_deg"):
             v = np.asarray(getattr(self, name), dtype=float)
             if v.ndim != 1 or v.size == 0 or not np.all(np.isfinite(v)):
-                raise ValueError(f"{name} must be a non-empty list of finite numbers, got {getattr(self, name)!r}")
+                raise ValueError(f"{name} must be a non-empty list of finite numbers, got {show(getattr(self, name))}")
         inc = np.asarray(self.inclinations_deg, dtype=float)
         if np.any((inc <= 0.0) | (inc >= 180.0)):
-            raise ValueError(f"inclinations_deg must lie in (0, 180) deg, got {list(inc)}")
+            raise ValueError(f"inclinations_deg must lie in (0, 180) deg, got {show(inc)}")
         if np.any(np.asarray(self.dv, dtype=float) <= 0.0):
-            raise ValueError(f"dv must be positive [m/s], got {list(self.dv)}")
+            raise ValueError(f"dv must be positive [m/s], got {show(list(self.dv))}")
         if not (np.isfinite(self.days) and 0.0 < self.days <= 60.0):
             raise ValueError(f"days must be in (0, 60], got {self.days}")
         if not (np.isfinite(self.step) and 1.0 <= self.step <= 0.25 * self.days * SECONDS_PER_DAY):
@@ -107,7 +108,7 @@ class DeploymentConfig:
             raise ValueError(f"density must be finite and non-negative [kg/m^3], got {self.density}")
         c = self.cubesat
         if not all(np.isfinite(x) and x > 0 for x in (c.cd, c.area, c.mass)):
-            raise ValueError(f"cubesat: cd, area and mass must be finite and positive, got {c}")
+            raise ValueError(f"cubesat: cd, area and mass must be finite and positive, got {show(c)}")
         if not (np.isfinite(self.mother_ballistic) and self.mother_ballistic >= 0.0):
             raise ValueError(f"mother_ballistic must be finite and non-negative [m^2/kg], got {self.mother_ballistic}")
         if not np.isfinite(self.u0_deg):

@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ...errors import show
 from .allocator import keep_freed_memory
 from .stats import wilson_interval
 from .sweep import Draws, SweepResult, after_stop, draw, pre_stop, summarize
@@ -71,7 +72,7 @@ def chunk_plan(samples: int, chunk_size: int, block: int = BLOCK_SIZE):
     if isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer)) or chunk_size < block \
             or chunk_size % block:
         raise ValueError(f"--chunk-size must be a positive multiple of the {block}-sample random-number block, "
-                         f"got {chunk_size!r}")
+                         f"got {show(chunk_size)}")
     per, total = chunk_size // block, block_count(samples, block)
     return [(first, min(per, total - first)) for first in range(0, total, per)]
 
@@ -254,7 +255,8 @@ def stream_sweep(design, mc, p_values, chunk_size=DEFAULT_CHUNK_SIZE, block=BLOC
     mc.validate()
     ps = tuple(float(p) for p in p_values)
     if not ps or not all(np.isfinite(p) and p >= 0 for p in ps):
-        raise ValueError(f"p values must be a non-empty list of finite non-negative numbers [m/s], got {p_values!r}")
+        raise ValueError(f"p values must be a non-empty list of finite non-negative numbers [m/s], "
+                         f"got {show(p_values)}")
     plan = chunk_plan(mc.samples, chunk_size, block)
     total = SweepStats.empty(ps, 1.0 - 3.0 * design.config.spl_sigma)
     for part in mapper(evaluate_chunk, plan, design, mc, ps, block):

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ...errors import show
 from ..constants import ARCSEC, SECONDS_PER_DAY
 from ..relmotion.dynamics import arg_latitude_rate, ballistic_coefficient, drag_da_dot, propagate
 from ..relmotion.maneuvers import delta_roe, dispersed_dv
@@ -62,7 +63,7 @@ class MonteCarloConfig:
 
     def validate(self):
         if isinstance(self.samples, bool) or not isinstance(self.samples, (int, np.integer)) or self.samples < 1:
-            raise ValueError(f"samples must be a positive integer, got {self.samples!r}")
+            raise ValueError(f"samples must be a positive integer, got {show(self.samples)}")
         for name in ("attitude_sigma_arcsec", "ballistic_sigma", "density", "horizon", "evaporation_distance"):
             v = getattr(self, name)
             if not np.isfinite(v) or v < 0:
@@ -243,7 +244,8 @@ def sweep(design: DoubleImpulseDesign, mc: MonteCarloConfig, p_values=DEFAULT_P_
     mc.validate()
     ps = [float(p) for p in p_values]
     if not ps or not all(np.isfinite(p) and p >= 0 for p in ps):
-        raise ValueError(f"p values must be a non-empty list of finite non-negative numbers [m/s], got {p_values!r}")
+        raise ValueError(f"p values must be a non-empty list of finite non-negative numbers [m/s], "
+                         f"got {show(p_values)}")
     d = draw(design, mc)
     pre = pre_stop(design, mc, d)
     rows, outcomes = [], {}

@@ -28,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...errors import ConfigError, show
 from ..constants import MU_EARTH, R_EARTH
 from ..od.radar import raan_from_sun
 from ..relmotion.dynamics import sun_synchronous_inclination
@@ -76,7 +77,6 @@ _ORBIT_KEYS = {"altitude_m": (150e3, 2000e3, False, False, "m"), "inclination_de
 def _check_section(where, section, keys, required=(), other=()):
     """Refuse unknown keys and numbers out of range in one mapping of the ops configuration (ConfigError)."""
     from ...checks import check_number
-    from ..config import ConfigError
 
     unknown = sorted(set(section) - set(keys) - set(other))
     if unknown:
@@ -94,8 +94,6 @@ def _check_section(where, section, keys, required=(), other=()):
 
 def ops_config_from_dict(data) -> OpsConfig:
     """Validate a parsed ops YAML: every section, key and number is checked (ConfigError naming the key)."""
-    from ..config import ConfigError
-
     if not isinstance(data, dict):
         raise ConfigError(f"expected a mapping at the top level, got {type(data).__name__}")
     sections = ("stations", "radar", "camera", "rules", "orbit")
@@ -119,7 +117,7 @@ def ops_config_from_dict(data) -> OpsConfig:
         if vec is None or any(isinstance(x, bool) or not isinstance(x, (int, float)) for x in vec) \
                 or not np.all(np.isfinite(vec)) or np.linalg.norm(vec) == 0:
             raise ConfigError(f"camera.boresight_rtn: expected 'ejection' or three finite numbers [R, T, N] not all "
-                              f"zero, got {b!r}")
+                              f"zero, got {show(b)}")
     _check_section("rules", data["rules"], _RULE_KEYS)
     rules = data["rules"]
     if rules.get("confirm_before_h", 16.0) <= rules.get("confirm_after_h", 11.0):
@@ -276,7 +274,7 @@ def plan(cfg: OpsConfig, date: _dt.date, days: float = 2.0, boresight_rtn=None) 
     from skyfield.api import wgs84
 
     if not (isinstance(days, (int, float)) and 0 < days <= 7):
-        raise ValueError(f"days must be in (0, 7], got {days!r}")
+        raise ValueError(f"days must be in (0, 7], got {show(days)}")
     start = _dt.datetime(date.year, date.month, date.day, tzinfo=_dt.timezone.utc)
     if cfg.tle:
         age = (start - tle_epoch(cfg)).total_seconds() / 86400.0
@@ -363,7 +361,7 @@ def _boresight(cfg: OpsConfig):
         return dv / np.linalg.norm(dv)
     vec = np.asarray(b, dtype=float)
     if vec.shape != (3,) or not np.all(np.isfinite(vec)) or np.linalg.norm(vec) == 0:
-        raise ValueError(f"camera.boresight_rtn must be 'ejection' or three finite numbers, got {b!r}")
+        raise ValueError(f"camera.boresight_rtn must be 'ejection' or three finite numbers, got {show(b)}")
     return vec / np.linalg.norm(vec)
 
 

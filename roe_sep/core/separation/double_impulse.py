@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...errors import InfeasibleDesignError
+from ...errors import InfeasibleDesignError, show
 from ..relmotion.dynamics import arg_latitude_rate, propagate, sun_synchronous_inclination
 from ..relmotion.maneuvers import delta_roe
 from ..relmotion.orbit import mean_motion, semi_major_axis
@@ -116,7 +116,7 @@ def reduction_bounds(dv_t1, cfg: SeparationConfig):
 
 def _require_finite(name, value, positive=True):
     if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
-        raise ValueError(f"{name} must be a number, got {value!r}")
+        raise ValueError(f"{name} must be a number, got {show(value)}")
     if not math.isfinite(value):
         raise ValueError(f"{name} must be finite, got {value}")
     if positive and value <= 0:
@@ -132,9 +132,9 @@ def validate_config(cfg: SeparationConfig):
     if cfg.inclination_deg is not None:
         _require_finite("inclination_deg", cfg.inclination_deg, positive=False)
     if not isinstance(cfg.leading, bool):
-        raise ValueError(f"leading must be true or false, got {cfg.leading!r}")
+        raise ValueError(f"leading must be true or false, got {show(cfg.leading)}")
     if isinstance(cfg.k, bool) or not isinstance(cfg.k, (int, np.integer)) or cfg.k < 1 or cfg.k % 2 == 0:
-        raise ValueError(f"k must be an odd natural number (half revolutions to the drift-stop), got {cfg.k!r}")
+        raise ValueError(f"k must be an odd natural number (half revolutions to the drift-stop), got {show(cfg.k)}")
     if cfg.a_dl_min >= cfg.a_dl_max:
         raise ValueError(f"a_dl_min ({cfg.a_dl_min} m) must be below a_dl_max ({cfg.a_dl_max} m)")
     if cfg.eta_deg is not None:
@@ -259,10 +259,10 @@ def plan_drift_stop(dv1_rtn, u1, epoch1, a, inc, k, p, j2=True):
     (with J2 when ``j2``); the aimed ROE apply Eq. (2) to both commanded impulses with the secular propagation.
     """
     if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1 or k % 2 == 0:
-        raise ValueError(f"k must be an odd natural number, got {k!r}")
+        raise ValueError(f"k must be an odd natural number, got {show(k)}")
     dv1 = np.asarray(dv1_rtn, dtype=float)
     if dv1.shape != (3,) or not np.all(np.isfinite(dv1)):
-        raise ValueError(f"ejection dv must be three finite numbers [m/s], got {dv1_rtn!r}")
+        raise ValueError(f"ejection dv must be three finite numbers [m/s], got {show(dv1_rtn)}")
     for name, value in (("u1", u1), ("epoch1", epoch1), ("a", a), ("inc", inc), ("p", p)):
         _require_finite(name, float(value), positive=name == "a")
     n = float(mean_motion(a))

@@ -36,6 +36,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ...errors import show
 from ..constants import SECONDS_PER_DAY
 from ..montecarlo.sweep import MonteCarloConfig
 from ..relmotion.dynamics import (
@@ -77,11 +78,11 @@ class MultiImpulseConfig:
         for name in ("spl_dv", "max_burn", "dv_quantum", "min_stop_delay_rev", "pair_delay"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
-                raise ValueError(f"{name} must be a finite positive number, got {v!r}")
+                raise ValueError(f"{name} must be a finite positive number, got {show(v)}")
         if not math.isfinite(self.u1_deg):
-            raise ValueError(f"u1_deg must be finite, got {self.u1_deg!r}")
+            raise ValueError(f"u1_deg must be finite, got {show(self.u1_deg)}")
         if self.a_di_f is not None and (not math.isfinite(self.a_di_f) or self.a_di_f <= 0):
-            raise ValueError(f"a_di_f must be a finite positive number [m] or null, got {self.a_di_f!r}")
+            raise ValueError(f"a_di_f must be a finite positive number [m] or null, got {show(self.a_di_f)}")
         if self.dv_quantum > self.max_burn:
             raise ValueError(f"dv_quantum ({self.dv_quantum} m/s) must not exceed max_burn ({self.max_burn} m/s)")
 
@@ -229,7 +230,7 @@ def plan_carrier_burns(dv1_rtn, u1, epoch1, a, inc, sep: SeparationConfig, mcfg:
     """
     dv1 = np.asarray(dv1_rtn, dtype=float)
     if dv1.shape != (3,) or not np.all(np.isfinite(dv1)):
-        raise ValueError(f"ejection dv must be three finite numbers [m/s], got {dv1_rtn!r}")
+        raise ValueError(f"ejection dv must be three finite numbers [m/s], got {show(dv1_rtn)}")
     mcfg.validate()
     n = float(mean_motion(a))
     u_rate = float(arg_latitude_rate(a, inc, j2))
