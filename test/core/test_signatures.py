@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 CORE = Path(__file__).resolve().parents[2] / "roe_sep" / "core"
-PACKAGES = ["relmotion"]
+PACKAGES = ["relmotion", "safety"]
 
 
 def public_functions(path: Path):
