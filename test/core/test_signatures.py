@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 CORE = Path(__file__).resolve().parents[2] / "roe_sep" / "core"
-PACKAGES = ["relmotion", "safety"]
+PACKAGES = ["relmotion", "safety", "separation"]
 
 
 def public_functions(path: Path):
