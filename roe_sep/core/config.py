@@ -11,7 +11,9 @@ import dataclasses
 import math
 import types
 import typing
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from os import PathLike
 
 from ..checks import SEED_MAX, check_number, one_line
 from ..errors import ConfigError, show
@@ -110,7 +112,7 @@ def _build(path, cls, data):
     return cls(**kwargs)
 
 
-def scenario_from_dict(data) -> Scenario:
+def scenario_from_dict(data: dict | None) -> Scenario:
     """Build a :class:`Scenario` from a parsed YAML mapping (``None`` or ``{}`` gives the defaults)."""
     data = {} if data is None else data
     if not isinstance(data, dict):
@@ -133,8 +135,9 @@ def scenario_from_dict(data) -> Scenario:
     )
 
 
-def read_yaml(path):
-    """The parsed content of a YAML configuration file; unreadable or invalid files raise :class:`ConfigError`."""
+def read_yaml(path: str | PathLike) -> object:
+    """The parsed content of a YAML configuration file (a mapping, a list, a scalar or None for an empty file);
+    unreadable or invalid files raise :class:`ConfigError`."""
     import yaml
 
     try:
@@ -151,9 +154,25 @@ def read_yaml(path):
         raise ConfigError(f"configuration {path} is not valid YAML{where}: {what}") from exc
 
 
-def load_yaml_config(path, build, what="configuration"):
+def load_yaml_config(path: str | PathLike, build: Callable[[object], typing.Any],
+                     what: str = "configuration") -> typing.Any:
     """``build(read_yaml(path))``; a :class:`ConfigError` of ``build`` gets the file's name in front
-    (``configuration FILE: separation.spl_dv: expected ...``)."""
+    (``configuration FILE: separation.spl_dv: expected ...``).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The YAML file.
+    build : callable
+        Parsed YAML -> the configuration object; raises :class:`ConfigError` naming the key.
+    what : str
+        What the file is, in front of its name in a message.
+
+    Returns
+    -------
+    object
+        What ``build`` returns.
+    """
     data = read_yaml(path)
     try:
         return build(data)
@@ -161,7 +180,7 @@ def load_yaml_config(path, build, what="configuration"):
         raise ConfigError(f"{what} {path}: {exc}") from None
 
 
-def load_scenario(path=None) -> Scenario:
+def load_scenario(path: str | PathLike | None = None) -> Scenario:
     """Read a scenario YAML file; ``None`` gives the embedded default scenario."""
     return Scenario() if path is None else load_yaml_config(path, scenario_from_dict)
 
