@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 CORE = Path(__file__).resolve().parents[2] / "roe_sep" / "core"
-PACKAGES = ["config.py", "relmotion", "safety", "separation"]
+PACKAGES = ["config.py", "ops", "relmotion", "safety", "separation"]
 
 
 def public_functions(path: Path):
