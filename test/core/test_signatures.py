@@ -9,7 +9,8 @@ import pytest
 
 CORE = Path(__file__).resolve().parents[2] / "roe_sep" / "core"
 PACKAGES = ["config.py", "montecarlo/acceptance.py", "montecarlo/allocator.py", "montecarlo/evaporation.py",
-            "montecarlo/stats.py", "montecarlo/sweep.py", "ops", "relmotion", "safety", "separation"]
+            "montecarlo/stats.py", "montecarlo/streaming.py", "montecarlo/sweep.py", "ops", "relmotion", "safety",
+            "separation"]
 
 
 def public_functions(path: Path):
