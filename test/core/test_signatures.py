@@ -8,9 +8,7 @@ from pathlib import Path
 import pytest
 
 CORE = Path(__file__).resolve().parents[2] / "roe_sep" / "core"
-PACKAGES = ["config.py", "montecarlo/acceptance.py", "montecarlo/allocator.py", "montecarlo/evaporation.py",
-            "montecarlo/stats.py", "montecarlo/streaming.py", "montecarlo/sweep.py", "ops", "relmotion", "safety",
-            "separation"]
+PACKAGES = ["config.py", "montecarlo", "ops", "relmotion", "safety", "separation"]  # deployment, truth: not yet
 
 
 def public_functions(path: Path):
