@@ -454,14 +454,8 @@ def deterministic_pair_bound(t: ArrayLike, vi: ArrayLike, dti: ArrayLike, pi: Ar
 
     Parameters
     ----------
-    t : array_like, shape (T,)
-        Times [s from the program start].
-    vi, vj : array_like, shape (...)
-        Separation speeds of NS i and j [m/s].
-    dti, dtj : array_like, shape (...)
-        Their delays [s from the program start].
-    pi, pj : array_like, shape (...)
-        Their drag accelerations [m/s^2] (:func:`~.cluster_dynamics.drag_acceleration`).
+    t, vi, dti, pi, vj, dtj, pj
+        As for :func:`pair_moments`.
     n : float
         Mean motion [rad/s].
 

@@ -121,10 +121,8 @@ def normal_from_draws(design: DoubleImpulseDesign, mc: MonteCarloConfig, d: Draw
 
     Parameters
     ----------
-    design : DoubleImpulseDesign
-        The nominal design.
-    mc : MonteCarloConfig
-        Dispersions, drag, J2, horizon.
+    design, mc
+        As for :func:`draws_from_normal`.
     d : Draws
         n samples.
 
@@ -191,10 +189,8 @@ def arcs(design: DoubleImpulseDesign, mc: MonteCarloConfig, d: Draws, p: float) 
 
     Parameters
     ----------
-    design : DoubleImpulseDesign
-        The nominal design.
-    mc : MonteCarloConfig
-        Dispersions, drag, J2, horizon.
+    design, mc
+        As for :func:`draws_from_normal`.
     d : Draws
         n samples.
     p : float
@@ -267,10 +263,8 @@ def min_distance(design: DoubleImpulseDesign, mc: MonteCarloConfig, d: Draws, cf
 
     Parameters
     ----------
-    design : DoubleImpulseDesign
-        The nominal design.
-    mc : MonteCarloConfig
-        Dispersions, drag, J2, horizon.
+    design, mc
+        As for :func:`draws_from_normal`.
     d : Draws
         n samples.
     cfg : CollisionConfig
@@ -405,10 +399,8 @@ def evaluate_chunk(chunk: tuple[int, int], design: DoubleImpulseDesign, mc: Mont
     ----------
     chunk : (int, int)
         ``(first block, number of blocks)``.
-    design : DoubleImpulseDesign
-        The nominal design.
-    mc : MonteCarloConfig
-        Dispersions, drag, J2, horizon.
+    design, mc
+        As for :func:`draws_from_normal`.
     cfg : CollisionConfig
         Hard-body radius, reduction, tolerances.
     proposal : Proposal, optional
@@ -462,10 +454,8 @@ def cross_entropy(design: DoubleImpulseDesign, mc: MonteCarloConfig, cfg: Collis
 
     Parameters
     ----------
-    design : DoubleImpulseDesign
-        The nominal design.
-    mc : MonteCarloConfig
-        Dispersions, drag, J2, horizon.
+    design, mc
+        As for :func:`draws_from_normal`.
     cfg : CollisionConfig
         The hard-body radius R [m] the levels aim at.
     samples_per_level : int
@@ -575,10 +565,8 @@ def closest_approach(design: DoubleImpulseDesign, mc: MonteCarloConfig, cfg: Col
 
     Parameters
     ----------
-    design : DoubleImpulseDesign
-        The nominal design.
-    mc : MonteCarloConfig
-        Dispersions, drag, J2, horizon.
+    design, mc
+        As for :func:`draws_from_normal`.
     cfg : CollisionConfig
         Reduction, departure distance, tolerances.
     z : array_like, shape (9,)
@@ -608,10 +596,8 @@ def design_point(design: DoubleImpulseDesign, mc: MonteCarloConfig, cfg: Collisi
 
     Parameters
     ----------
-    design : DoubleImpulseDesign
-        The nominal design.
-    mc : MonteCarloConfig
-        Dispersions, drag, J2, horizon.
+    design, mc
+        As for :func:`draws_from_normal`.
     cfg : CollisionConfig
         The hard-body radius R [m].
     starts : array_like, shape (k, 9)

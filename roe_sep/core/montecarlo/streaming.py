@@ -88,10 +88,8 @@ def chunk_draws(design: DoubleImpulseDesign, mc: MonteCarloConfig, first: int, c
 
     Parameters
     ----------
-    design : DoubleImpulseDesign
-        The nominal design.
-    mc : MonteCarloConfig
-        The run's settings; ``mc.seed`` an int (:func:`resolve_seed`).
+    design, mc
+        As for :func:`block_draws`.
     first : int
         The first block.
     count : int
@@ -290,10 +288,8 @@ def evaluate_chunk(chunk: tuple[int, int], design: DoubleImpulseDesign, mc: Mont
     ----------
     chunk : (int, int)
         ``(first block, number of blocks)`` (:func:`chunk_plan`).
-    design : DoubleImpulseDesign
-        The nominal design.
-    mc : MonteCarloConfig
-        The run's settings; ``mc.seed`` an int (:func:`resolve_seed`).
+    design, mc
+        As for :func:`block_draws`.
     p_values : sequence of float
         The reductions [m/s].
     block : int
@@ -340,10 +336,8 @@ def stream_sweep(design: DoubleImpulseDesign, mc: MonteCarloConfig, p_values: It
 
     Parameters
     ----------
-    design : DoubleImpulseDesign
-        The nominal design.
-    mc : MonteCarloConfig
-        The run's settings; ``mc.seed`` an int (:func:`resolve_seed`).
+    design, mc
+        As for :func:`block_draws`.
     p_values : iterable of float
         The reductions [m/s], finite and non-negative.
     chunk_size : int
@@ -417,10 +411,8 @@ def in_memory_result(design: DoubleImpulseDesign, mc: MonteCarloConfig, stats: S
 
     Parameters
     ----------
-    design : DoubleImpulseDesign
-        The nominal design.
-    mc : MonteCarloConfig
-        The run's settings; ``mc.seed`` an int (:func:`resolve_seed`).
+    design, mc
+        As for :func:`block_draws`.
     stats : SweepStats
         The streamed statistics (its p values and rows).
     block : int

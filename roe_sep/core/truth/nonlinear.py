@@ -286,14 +286,8 @@ class MsisAtmosphere:
             The carrier's mean elements ``[a, e, i, raan, argp, M]`` at t = 0.
         span : float
             The fitted time span [s].
-        epoch_utc : str
-            ISO-8601 UTC epoch of t = 0.
-        f107 : float
-            F10.7 of the previous day [sfu].
-        f107a : float
-            Its 81-day mean [sfu].
-        ap : float
-            Daily Ap.
+        epoch_utc, f107, f107a, ap
+            As for :func:`nrlmsis_density`.
         step : float
             Sampling of the orbit [s].
 
@@ -405,14 +399,8 @@ def truth_atmosphere(model: str, density: float, chief_mean: ArrayLike, span: fl
         The carrier's mean elements at t = 0.
     span : float
         The span of the ``msis`` fit [s].
-    epoch_utc : str
-        ISO-8601 UTC epoch of t = 0.
-    f107 : float
-        F10.7 of the previous day [sfu].
-    f107a : float
-        Its 81-day mean [sfu].
-    ap : float
-        Daily Ap.
+    epoch_utc, f107, f107a, ap
+        As for :func:`nrlmsis_density`.
 
     Returns
     -------
@@ -853,16 +841,8 @@ def propagate_pairs_grid(states0: ArrayLike, t0: float, times: ArrayLike, b_chie
         Start [s].
     times : array_like, shape (T,)
         Sorted output epochs [s], >= ``t0``.
-    b_chief, b_deputy : array_like
-        Ballistic coefficients B = c_d A / m [m^2/kg], broadcast to ``(N,)``.
-    atmosphere : Atmosphere or MsisAtmosphere
-        The truth's density.
-    zonals : int
-        Highest zonal harmonic (2: J2 only, 4: J2-J4).
-    tol : float
-        Taylor integrator tolerance.
-    workers : int, optional
-        Threads (None: every CPU this process may use).
+    b_chief, b_deputy, atmosphere, zonals, tol, workers
+        As for :func:`propagate_pairs`.
 
     Returns
     -------
