@@ -8,13 +8,16 @@ One message format everywhere: the option or key, what is allowed, the value giv
 * :class:`OneLineParser`: an ``argparse.ArgumentParser`` whose usage errors are one line (``prog: error: ...``)
   instead of the usage block + error, so scripts can log them as a single line.
 
-Layer 0 (no roe_sep import): used by :mod:`roe_sep.cli.common` (which re-exports it), :mod:`roe_sep.bag.replay`
-and :mod:`roe_sep.bag.recover` (which parse their own arguments) and the configuration loaders of the core.
+Beside the core (imports only :mod:`roe_sep.errors`): used by :mod:`roe_sep.cli.common` (which re-exports it),
+:mod:`roe_sep.bag.replay` and :mod:`roe_sep.bag.recover` (which parse their own arguments) and the configuration
+loaders of the core.
 """
 
 import argparse
 import math
 import sys
+
+from .errors import show
 
 SEED_MAX = 2**32 - 1  # every seed of the project: numpy accepts larger, but one range keeps them reproducible
 
@@ -58,7 +61,7 @@ def check_number(name, value, lo=None, hi=None, *, lo_open=False, hi_open=False,
     allowed = describe_range(lo, hi, lo_open, hi_open, integer, unit)
     ok = not isinstance(value, bool) and isinstance(value, int if integer else (int, float))
     if not (ok and in_range(value, lo, hi, lo_open, hi_open)):
-        raise ValueError(f"{name}: expected {allowed}, got {value!r}")
+        raise ValueError(f"{name}: expected {allowed}, got {show(value)}")
     return int(value) if integer else float(value)
 
 

@@ -14,17 +14,14 @@ from pathlib import Path
 
 import numpy as np
 
-from . import interfaces
+from . import interfaces, validate
 from .core.od.batch import nees
 from .core.relmotion.dynamics import propagate
 from .core.safety.metrics import min_rn_distance
 from .core.safety.monitor import ERROR_CRITERIA, MonitorLimits, in_fov
+from .stamps import time_to_sec
 
 ROE_KEYS = ("a_da", "a_dl", "a_dex", "a_dey", "a_dix", "a_diy")
-
-
-def _stamp(t):
-    return t.sec + t.nanosec * 1e-9
 
 
 def read_topics(bag_dir, topics):
@@ -44,21 +41,19 @@ def read_topics(bag_dir, topics):
 def truth_at(truth, t, truth_da_dot):
     """Truth a*ROE [m] at ``t`` from the last truth sample at or before it (the simulator publishes one right after
     every burn, so none lies in between) and the true drag drift [m/day]; None without a sample."""
-    before = [m for _, m in truth if _stamp(m.header.stamp) <= t]
+    before = [m for _, m in truth if time_to_sec(m.header.stamp) <= t]
     if not before or not math.isfinite(truth_da_dot):
         return None
     ref = before[-1]
     a = ref.chief.semi_major_axis
     roe = np.array([getattr(ref, k) for k in ROE_KEYS]) / a
-    return propagate(roe, t - _stamp(ref.header.stamp), a, ref.chief.inclination, True,
+    return propagate(roe, t - time_to_sec(ref.header.stamp), a, ref.chief.inclination, True,
                      truth_da_dot / a / 86400.0) * a
 
 
 def valid_only(data):
-    """Drop what the nodes themselves reject (:mod:`roe_sep.nodes.validate`): a bag records every message on a
-    topic, also a foreign publisher's garbage, which must not enter the report."""
-    from .nodes import validate
-
+    """Drop what the nodes themselves reject (:mod:`roe_sep.validate`): a bag records every message on a topic,
+    also a foreign publisher's garbage, which must not enter the report."""
     checks = {interfaces.TRUTH_ROE_TOPIC: validate.truth, interfaces.EXECUTED_TOPIC: validate.executed,
               interfaces.OD_TOPIC: validate.orbit_determination, interfaces.DRIFT_STOP_PLAN_TOPIC: validate.plan,
               interfaces.ACQUISITION_PLAN_TOPIC: validate.plan, interfaces.PLAN_CHECK_TOPIC: validate.safety_status,
@@ -87,8 +82,8 @@ def planner_model_error(plans, truth, truth_da_dot):
     if not plans:
         return None
     aimed = plans[-1][1].aimed
-    t = _stamp(aimed.header.stamp)
-    if not truth or t > _stamp(truth[-1][1].header.stamp):
+    t = time_to_sec(aimed.header.stamp)
+    if not truth or t > time_to_sec(truth[-1][1].header.stamp):
         return None  # aimed beyond the end of the run: no truth there
     true = truth_at(truth, t, truth_da_dot)
     if true is None:
@@ -108,7 +103,7 @@ def initial_conditions(truth, plans, ic_burns, truth_da_dot, limits, drift_toler
     ``ei_tolerance_deg`` with the minimum R-N distance (Eq. 25) of at least ``min_rn_distance``, in the FOV."""
     if not plans or not ic_burns:
         return None
-    t_ic = _stamp(plans[-1][1].aimed.header.stamp)
+    t_ic = time_to_sec(plans[-1][1].aimed.header.stamp)
     roe = truth_at(truth, t_ic, truth_da_dot)
     if roe is None:
         return None
@@ -134,7 +129,7 @@ def od_solution(msg, truth, truth_da_dot):
     sigmas (standard normal for an honest covariance). No error without truth at the epoch."""
     est = msg.estimate
     cov = np.asarray(est.covariance, dtype=float).reshape(6, 6)
-    t_od = _stamp(est.header.stamp)
+    t_od = time_to_sec(est.header.stamp)
     out = {"epoch": t_od, "passes": int(msg.passes), "measurements": int(msg.measurements),
            "residual_rms": float(msg.residual_rms), "estimate": [getattr(est, k) for k in ROE_KEYS],
            "sigma": np.sqrt(np.clip(np.diag(cov), 0, None)).tolist(), "a_da_dot": float(msg.a_da_dot),
@@ -157,7 +152,7 @@ def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()
     maneuvers = []
     for _, m in data[interfaces.EXECUTED_TOPIC]:
         dv = [m.dv_rtn.x, m.dv_rtn.y, m.dv_rtn.z]
-        maneuvers.append({"purpose": m.purpose, "spacecraft": m.spacecraft, "epoch": _stamp(m.epoch),
+        maneuvers.append({"purpose": m.purpose, "spacecraft": m.spacecraft, "epoch": time_to_sec(m.epoch),
                           "u_deg": math.degrees(m.mean_arg_latitude), "dv_rtn": dv, "dv": float(np.linalg.norm(dv))})
     maneuvers.sort(key=lambda x: x["epoch"])
     carrier = [m for m in maneuvers if m["spacecraft"] == "carrier"]
@@ -213,7 +208,7 @@ def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()
         # ejection to the IC epoch, when the truth meets the ICs there (None: not reached, or no plan or ejection)
         "time_to_ic": (ic["epoch"] - ejection["epoch"]) if (ic and ic["reached"] and ejection) else None,
         "final_roe": final_roe,
-        "final_epoch": _stamp(final.header.stamp) if final else None,
+        "final_epoch": time_to_sec(final.header.stamp) if final else None,
         "min_distance": min_distance if math.isfinite(min_distance) else None,  # None: no approach after departure
         "min_distance_epoch": float(values.get("min_distance_time_s", "nan")),
         "truth_drag_a_da_dot_m_per_day": truth_da_dot,
@@ -222,7 +217,7 @@ def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()
         "model_error": model_error,  # planners' prediction - truth [m] at the drift-stop and at the IC epoch
         "execution_warnings": late,  # burns executed late or dropped (unapproved), from the simulator
         "end_violations": list(last.violations) if last is not None else None,  # informational (drag drift on)
-        "plan_checks": [{"source": s.source, "plan_stamp": _stamp(s.plan_stamp), "safe": s.safe,
+        "plan_checks": [{"source": s.source, "plan_stamp": time_to_sec(s.plan_stamp), "safe": s.safe,
                          "violations": list(s.violations)} for s in plan_checks],
         "duration": duration,
     }

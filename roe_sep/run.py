@@ -33,6 +33,7 @@ from .graph import (  # noqa: F401 (re-exported)
     run_overrides,
     suites,
 )
+from .stamps import time_to_sec
 
 
 def ros_environment(domain_id=None):
@@ -162,7 +163,7 @@ def wait_for_completion(duration, deployment, timeout, progress):
         now["end"] = final_status(array) or now["end"]
 
     node.create_subscription(Clock, interfaces.CLOCK_TOPIC,
-                             lambda m: now.update(t=m.clock.sec + m.clock.nanosec * 1e-9), 10)
+                             lambda m: now.update(t=time_to_sec(m.clock)), 10)
     node.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, on_status, interfaces.DIAGNOSTICS)
     start = time.monotonic()
     shown = -1
@@ -316,7 +317,7 @@ def _run_in_process(nodes, params_file, log_dir, duration, timeout, progress, ex
         node.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, on_status, interfaces.DIAGNOSTICS)
         if progress:
             node.create_subscription(Clock, interfaces.CLOCK_TOPIC,
-                                     lambda m: state.update(t=m.clock.sec + m.clock.nanosec * 1e-9), 10)
+                                     lambda m: state.update(t=time_to_sec(m.clock)), 10)
         return node
 
     def until():

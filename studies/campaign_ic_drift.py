@@ -32,8 +32,8 @@ from roe_sep.campaign.table import Table  # noqa: E402
 from roe_sep.core.montecarlo.stats import nees_bounds  # noqa: E402
 from roe_sep.core.relmotion.maneuvers import delta_roe  # noqa: E402
 from roe_sep.core.relmotion.orbit import mean_motion  # noqa: E402
-from roe_sep.ndm.dataset import stamp  # noqa: E402
 from roe_sep.report import od_solution, read_topics  # noqa: E402
+from roe_sep.stamps import time_to_sec  # noqa: E402
 
 TOPICS = (interfaces.ACQUISITION_PLAN_TOPIC, interfaces.EXECUTED_TOPIC, interfaces.OD_TOPIC,
           interfaces.TRUTH_ROE_TOPIC)
@@ -46,17 +46,17 @@ def run_budget(run_dir: Path):
         return None
     data = read_topics(run_dir / "bag", TOPICS)
     plan = data[interfaces.ACQUISITION_PLAN_TOPIC][-1][1]
-    t_plan = stamp(plan.header.stamp)
+    t_plan = time_to_sec(plan.header.stamp)
     a = plan.aimed.chief.semi_major_axis
     n = mean_motion(a)
-    planned = {round(stamp(m.epoch)): np.array([m.dv_rtn.x, m.dv_rtn.y, m.dv_rtn.z]) for m in plan.maneuvers}
+    planned = {round(time_to_sec(m.epoch)): np.array([m.dv_rtn.x, m.dv_rtn.y, m.dv_rtn.z]) for m in plan.maneuvers}
     execution = 0.0
     flown = [m for _, m in data[interfaces.EXECUTED_TOPIC]
-             if m.spacecraft == "carrier" and m.purpose == "ic_acquisition" and stamp(m.epoch) >= t_plan]
+             if m.spacecraft == "carrier" and m.purpose == "ic_acquisition" and time_to_sec(m.epoch) >= t_plan]
     for m in flown:
-        err = np.array([m.dv_rtn.x, m.dv_rtn.y, m.dv_rtn.z]) - planned[round(stamp(m.epoch))]
+        err = np.array([m.dv_rtn.x, m.dv_rtn.y, m.dv_rtn.z]) - planned[round(time_to_sec(m.epoch))]
         execution += float(delta_roe(-err, m.mean_arg_latitude, a, n)[0]) * a
-    ods = [od for _, od in data[interfaces.OD_TOPIC] if stamp(od.estimate.header.stamp) <= t_plan]
+    ods = [od for _, od in data[interfaces.OD_TOPIC] if time_to_sec(od.estimate.header.stamp) <= t_plan]
     estimate = estimate_a_da = rate_z = lead_days = None
     if ods:  # the report's own comparison of a solution with the truth at its epoch
         sol = od_solution(ods[-1], data[interfaces.TRUTH_ROE_TOPIC], rep["truth_drag_a_da_dot_m_per_day"])

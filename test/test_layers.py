@@ -2,7 +2,11 @@
 
 Layers, lowest first (a module may import its own layer and the ones below, never one above):
 
-    core, checks, children, jsonutil  <-  interfaces, bag  <-  nodes  <-  run, report, plots  <-  cli, docgen
+    errors, stamps  <-  core, checks, children, jsonutil  <-  interfaces, validate, bag, ndm, graph  <-  nodes
+        <-  run, report, plots, engine, campaign  <-  cli, docgen
+
+``roe_sep.errors`` imports nothing of roe_sep (every layer may import it); the report imports no node, not even
+through another module (it is built offline from a bag).
 
 Every import counts, also the ones inside functions (a lazy import hides a circle, it does not remove it). Only
 imports of ``roe_sep`` modules are followed; ``from pkg import name`` is an edge to the submodule ``pkg.name`` when
@@ -10,14 +14,17 @@ that exists, else to ``pkg`` itself. The core also never imports ROS (rclpy or a
 """
 
 import ast
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1] / "roe_sep"
 
-LAYERS = {"core": 0, "checks": 0, "children": 0, "jsonutil": 0, "interfaces": 1, "bag": 1, "ndm": 1, "graph": 1,
-          "nodes": 2, "run": 3, "report": 3, "plots": 3, "engine": 3, "campaign": 3, "cli": 4, "docgen": 4}
+LAYERS = {"errors": 0, "stamps": 0, "core": 1, "checks": 1, "children": 1, "jsonutil": 1, "interfaces": 2,
+          "validate": 2, "bag": 2, "ndm": 2, "graph": 2, "nodes": 3, "run": 4, "report": 4, "plots": 4, "engine": 4,
+          "campaign": 4, "cli": 5, "docgen": 5}
 ROS_MODULES = ("rclpy", "roe_sep_msgs", "rosgraph_msgs", "diagnostic_msgs", "builtin_interfaces", "geometry_msgs",
                "std_msgs", "rcl_interfaces", "ament_index_python")
 
@@ -81,9 +88,39 @@ def test_no_upward_import(graph):
 
 
 def test_core_imports_no_ros(graph):
-    bad = [f"{src} imports {ext} at line {line}" for src, (_, external) in graph.items() if layer(src) == 0
+    bad = [f"{src} imports {ext} at line {line}" for src, (_, external) in graph.items() if layer(src) <= LAYERS["core"]
            for ext, line in external if ext.split(".")[0] in ROS_MODULES]
     assert bad == []
+
+
+def test_errors_import_nothing_of_roe_sep(graph):
+    assert graph["roe_sep.errors"][0] == []
+
+
+def reachable(adjacency: dict, start: str) -> set:
+    """Every module ``start`` imports, directly or through others."""
+    seen, todo = set(), [start]
+    while todo:
+        for w in adjacency.get(todo.pop(), ()):
+            if w not in seen:
+                seen.add(w)
+                todo.append(w)
+    return seen
+
+
+def test_report_imports_no_node(graph):
+    adjacency = {src: {dst for dst, _ in edges} for src, (edges, _) in graph.items()}
+    assert sorted(m for m in reachable(adjacency, "roe_sep.report") if m.startswith("roe_sep.nodes")) == []
+
+
+def test_report_builds_without_the_nodes_package():
+    """In a fresh interpreter, importing the report and building the report of the recorded default run (which
+    validates its messages) loads no module of ``roe_sep.nodes``."""
+    code = ("import sys, roe_sep.report as r; safe = r.build_report(sys.argv[1])['safe']; "
+            "print(safe, sorted(m for m in sys.modules if m.startswith('roe_sep.nodes')))")
+    out = subprocess.run([sys.executable, "-c", code, str(ROOT.parent / "bags" / "default_run")], capture_output=True,
+                         text=True, timeout=120, check=True)
+    assert out.stdout.strip() == "True []"
 
 
 def find_cycles(adjacency: dict) -> list:
@@ -128,4 +165,5 @@ def test_the_checks_can_fail():
     """The detectors themselves: a two-module circle and an upward edge are found."""
     assert find_cycles({"a": {"b"}, "b": {"a"}, "c": {"a"}}) == [["a", "b"]]
     assert layer("roe_sep.cli.design") > layer("roe_sep.core.config")
-    assert layer("roe_sep.core.relmotion.roe") == 0 and layer("roe_sep.nodes.sim") == 2
+    assert layer("roe_sep.core.relmotion.roe") == 1 and layer("roe_sep.nodes.sim") == 3
+    assert reachable({"report": {"x"}, "x": {"nodes.sim"}, "nodes.sim": set()}, "report") == {"x", "nodes.sim"}

@@ -9,7 +9,7 @@ profiles <-> rosbag2 dictionaries), :mod:`.metadata` (``metadata.yaml``), :mod:`
 """
 
 
-from .errors import BagError
+from ..errors import BagError
 
 __all__ = ["BagError", "info"]
 

@@ -15,6 +15,8 @@ import re
 import sys
 from pathlib import Path
 
+from ..errors import DefinitionNotFound
+
 SEPARATOR = "=" * 80 + "\n"
 # foo_msgs/Bar or foo_msgs/msg/Bar
 _TYPENAME = re.compile(r"^([a-zA-Z][a-zA-Z0-9_]*)/((?:msg|srv)/)?([a-zA-Z][a-zA-Z0-9_]*)$")
@@ -22,10 +24,6 @@ _TYPENAME = re.compile(r"^([a-zA-Z][a-zA-Z0-9_]*)/((?:msg|srv)/)?([a-zA-Z][a-zA-
 _FIELD_TYPE = re.compile(r"(?:^|\n)\s*([a-zA-Z0-9_/]+)(?:\[[^\]]*\])?\s+")
 PRIMITIVES = frozenset({"bool", "byte", "char", "float32", "float64", "int8", "uint8", "int16", "uint16", "int32",
                         "uint32", "int64", "uint64", "string", "wstring"})
-
-
-class DefinitionNotFound(LookupError):
-    """No installed ``.msg`` file for a type."""
 
 
 def split_type(name: str):

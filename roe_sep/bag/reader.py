@@ -11,8 +11,8 @@ from pathlib import Path
 from mcap.reader import make_reader
 
 from ..checks import one_line
+from ..errors import BagError
 from . import metadata
-from .errors import BagError
 from .scan import Scan
 
 Message = collections.namedtuple("Message", "topic type data log_time publish_time sequence")

@@ -21,8 +21,8 @@ from pathlib import Path
 import yaml
 
 from ..checks import OneLineParser, one_line
+from ..errors import BagError
 from . import metadata
-from .errors import BagError
 from .reader import resolve
 from .scan import MAGIC, Scan
 from .writer import BagWriter, check_output

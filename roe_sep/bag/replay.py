@@ -17,8 +17,8 @@ import time
 
 from ..checks import OneLineParser, finite_float, one_line
 from ..children import exit_status
+from ..errors import BagError
 from . import reader
-from .errors import BagError
 from .qos import to_rclpy
 
 CLOCK_TOPIC = "/clock"

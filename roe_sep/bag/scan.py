@@ -11,7 +11,7 @@ from mcap.exceptions import EndOfFile
 from mcap.stream_reader import StreamReader
 
 from ..checks import one_line
-from .errors import BagError
+from ..errors import BagError
 
 MAGIC = b"\x89MCAP0\r\n"
 _FOOTER = 0x02

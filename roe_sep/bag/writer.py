@@ -15,8 +15,8 @@ from pathlib import Path
 
 from mcap.writer import CompressionType, Writer
 
+from ..errors import BagError
 from . import definitions, metadata
-from .errors import BagError
 
 CHUNK_SIZE = 64 * 1024
 PROFILE = "ros2"

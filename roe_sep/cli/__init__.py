@@ -11,11 +11,9 @@ option parsers they share.
 import os
 import sys
 
-from ..bag.errors import BagError
 from ..checks import OneLineParser, one_line
 from ..children import exit_status
-from ..core.config import ConfigError
-from ..core.separation.double_impulse import InfeasibleDesignError
+from ..errors import RoeSepError
 from . import analysis, campaign, collision, design, export, nonlinear, ops, run
 
 EXIT_BAD_INPUT = 2  # bad option, bad file, infeasible design: the one-line message names it
@@ -52,7 +50,7 @@ def main(argv=None):
             return delegated
         args = build_parser().parse_args(argv)
         code = args.func(args)
-    except (ConfigError, InfeasibleDesignError, ValueError, BagError) as exc:
+    except (RoeSepError, ValueError) as exc:  # roe_sep.errors, and a bare ValueError of an argument check
         print(f"roe-sep: error: {one_line(exc)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except BrokenPipeError:  # e.g. `roe-sep mc --json | head`

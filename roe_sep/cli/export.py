@@ -5,9 +5,9 @@ from pathlib import Path
 
 import yaml
 
-from ..bag.errors import BagError
 from ..bag.reader import resolve
 from ..core.config import load_scenario
+from ..errors import BagError
 from ..ndm import frames
 from ..ndm.options import FORMATS, TOPICS, Options, RunMessages  # light: the NDM library loads when a set is written
 from .common import emit, finite_float

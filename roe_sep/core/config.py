@@ -11,17 +11,15 @@ import dataclasses
 import math
 import types
 import typing
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from os import PathLike
 
 from ..checks import SEED_MAX, check_number, one_line
+from ..errors import ConfigError, show
 from .constants import SECONDS_PER_DAY
 from .montecarlo.sweep import DEFAULT_P_VALUES, MonteCarloConfig, Spacecraft
 from .separation.double_impulse import SeparationConfig
-
-
-class ConfigError(ValueError):
-    """A configuration key or value is invalid; the message names it."""
-
 
 # The range of every numeric key: (class, field) -> (lo, hi, lo_open, hi_open, unit). Physical limits or the domain
 # of the models (LEO circular carrier, close formation); a value outside is refused with the key, value and range.
@@ -77,17 +75,17 @@ def _coerce(path, value, hint):
         return _build(path, hint, value)
     if hint is bool:
         if not isinstance(value, bool):
-            raise ConfigError(f"{path}: expected true/false, got {value!r}")
+            raise ConfigError(f"{path}: expected true/false, got {show(value)}")
         return value
     if hint is int:
         if isinstance(value, bool) or not isinstance(value, int):
-            raise ConfigError(f"{path}: expected an integer, got {value!r}")
+            raise ConfigError(f"{path}: expected an integer, got {show(value)}")
         return value
     if hint is float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ConfigError(f"{path}: expected a number, got {value!r}")
+            raise ConfigError(f"{path}: expected a number, got {show(value)}")
         if not math.isfinite(value):
-            raise ConfigError(f"{path}: expected a finite number, got {value!r}")
+            raise ConfigError(f"{path}: expected a finite number, got {show(value)}")
         return float(value)
     return value
 
@@ -114,7 +112,7 @@ def _build(path, cls, data):
     return cls(**kwargs)
 
 
-def scenario_from_dict(data) -> Scenario:
+def scenario_from_dict(data: dict | None) -> Scenario:
     """Build a :class:`Scenario` from a parsed YAML mapping (``None`` or ``{}`` gives the defaults)."""
     data = {} if data is None else data
     if not isinstance(data, dict):
@@ -125,7 +123,7 @@ def scenario_from_dict(data) -> Scenario:
     mc = dict(data.get("monte_carlo") or {})
     p_values = mc.pop("p_values", DEFAULT_P_VALUES)
     if not isinstance(p_values, (list, tuple)) or not p_values:
-        raise ConfigError(f"monte_carlo.p_values: expected a non-empty list of numbers [m/s], got {p_values!r}")
+        raise ConfigError(f"monte_carlo.p_values: expected a non-empty list of numbers [m/s], got {show(p_values)}")
     p_values = tuple(_coerce(f"monte_carlo.p_values[{i}]", p, float) for i, p in enumerate(p_values))
     if any(not P_RANGE[0] <= p <= P_RANGE[1] for p in p_values):
         raise ConfigError(f"monte_carlo.p_values: reductions |p| must be non-negative and at most {P_RANGE[1]:g} m/s, "
@@ -137,8 +135,9 @@ def scenario_from_dict(data) -> Scenario:
     )
 
 
-def read_yaml(path):
-    """The parsed content of a YAML configuration file; unreadable or invalid files raise :class:`ConfigError`."""
+def read_yaml(path: str | PathLike) -> object:
+    """The parsed content of a YAML configuration file (a mapping, a list, a scalar or None for an empty file);
+    unreadable or invalid files raise :class:`ConfigError`."""
     import yaml
 
     try:
@@ -155,9 +154,25 @@ def read_yaml(path):
         raise ConfigError(f"configuration {path} is not valid YAML{where}: {what}") from exc
 
 
-def load_yaml_config(path, build, what="configuration"):
+def load_yaml_config(path: str | PathLike, build: Callable[[object], typing.Any],
+                     what: str = "configuration") -> typing.Any:
     """``build(read_yaml(path))``; a :class:`ConfigError` of ``build`` gets the file's name in front
-    (``configuration FILE: separation.spl_dv: expected ...``)."""
+    (``configuration FILE: separation.spl_dv: expected ...``).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The YAML file.
+    build : callable
+        Parsed YAML -> the configuration object; raises :class:`ConfigError` naming the key.
+    what : str
+        What the file is, in front of its name in a message.
+
+    Returns
+    -------
+    object
+        What ``build`` returns.
+    """
     data = read_yaml(path)
     try:
         return build(data)
@@ -165,7 +180,7 @@ def load_yaml_config(path, build, what="configuration"):
         raise ConfigError(f"{what} {path}: {exc}") from None
 
 
-def load_scenario(path=None) -> Scenario:
+def load_scenario(path: str | PathLike | None = None) -> Scenario:
     """Read a scenario YAML file; ``None`` gives the embedded default scenario."""
     return Scenario() if path is None else load_yaml_config(path, scenario_from_dict)
 

@@ -25,6 +25,8 @@ A task that raises re-raises here with the worker's exception; the cluster is cl
 import contextlib
 import logging
 
+from ..errors import show
+
 __all__ = ["cluster", "ordered_map", "client_threads", "auto_batch"]
 
 
@@ -47,7 +49,7 @@ def cluster(workers=None, scheduler=None, connect_timeout=10.0):
             yield client
         return
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise ValueError(f"--workers must be a positive integer, got {workers!r}")
+        raise ValueError(f"--workers must be a positive integer, got {show(workers)}")
     # dashboard off; the scheduler's plain HTTP routes (health, metrics) on a free port of 127.0.0.1, not 8787
     with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
                       dashboard_address=None, scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
@@ -86,7 +88,7 @@ def ordered_map(client, fn, items, *args, max_in_flight=None, ordered=True, batc
             yield fn(item, *args) if ordered else (i, fn(item, *args))
         return
     if isinstance(batch, bool) or not isinstance(batch, int) or batch < 1:
-        raise ValueError(f"batch must be a positive integer, got {batch!r}")
+        raise ValueError(f"batch must be a positive integer, got {show(batch)}")
     if batch > 1:
         groups = [items[i:i + batch] for i in range(0, len(items), batch)]
         for res in ordered_map(client, _apply_batch, groups, fn, *args, max_in_flight=max_in_flight,

@@ -15,6 +15,7 @@ import numpy as np
 from .. import interfaces
 from ..core.relmotion.dynamics import propagate, propagate_chief
 from ..core.relmotion.roe import roe_to_rtn
+from ..stamps import time_to_sec
 from . import frames
 from .messages import (
     Burn,
@@ -32,11 +33,6 @@ from .messages import (
 from .options import TOPICS, Options, RunMessages  # noqa: F401  (re-exported)
 
 ROE_FIELDS = ("a_da", "a_dl", "a_dex", "a_dey", "a_dix", "a_diy")
-
-
-def stamp(t) -> float:
-    """Seconds of a builtin_interfaces/Time."""
-    return t.sec + t.nanosec * 1e-9
 
 
 def kepler(el) -> np.ndarray:
@@ -59,7 +55,7 @@ class Truth:
     propagation of the nearest earlier sample's chief elements, radar_od's model)."""
 
     def __init__(self, msgs):
-        rows = sorted(((stamp(m.header.stamp), k, m) for k, m in enumerate(msgs)), key=lambda r: (r[0], r[1]))
+        rows = sorted(((time_to_sec(m.header.stamp), k, m) for k, m in enumerate(msgs)), key=lambda r: (r[0], r[1]))
         self.t = np.array([r[0] for r in rows])
         self.roe = np.array([roe_of(r[2]) for r in rows]).reshape(-1, 6)
         self.chief = np.array([kepler(r[2].chief) for r in rows]).reshape(-1, 6)
@@ -75,16 +71,16 @@ class Truth:
 
 def approved(run: RunMessages):
     """Approved plans, ``[(topic, plan), ...]`` in check order: a plan whose ``/safety/plan_check`` says safe."""
-    ok = {(c.source, round(stamp(c.plan_stamp), 6)) for c in run[interfaces.PLAN_CHECK_TOPIC] if c.safe}
+    ok = {(c.source, round(time_to_sec(c.plan_stamp), 6)) for c in run[interfaces.PLAN_CHECK_TOPIC] if c.safe}
     out = []
     for topic in (interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.ACQUISITION_PLAN_TOPIC):
         seen = set()
         for p in run[topic]:
-            key = round(stamp(p.header.stamp), 6)
+            key = round(time_to_sec(p.header.stamp), 6)
             if (f"plan:{topic}", key) in ok and key not in seen:
                 seen.add(key)
                 out.append((topic, p))
-    return sorted(out, key=lambda tp: stamp(tp[1].header.stamp))
+    return sorted(out, key=lambda tp: time_to_sec(tp[1].header.stamp))
 
 
 def spacecraft(opts: Options) -> SpacecraftParameters:
@@ -97,7 +93,7 @@ def _burns(maneuvers, truth: Truth, opts: Options, frame):
     out = []
     mass = opts.carrier_mass
     for m in maneuvers:
-        t = stamp(m.epoch)
+        t = time_to_sec(m.epoch)
         dv = vec(m.dv_rtn)
         if not np.any(dv):
             continue
@@ -118,9 +114,9 @@ def plan_opm(plan, truth: Truth, opts: Options, frame=frames.LOCAL_FRAME, label=
     carrier = [m for m in plan.maneuvers if m.spacecraft == "carrier"]
     if not carrier:
         return None
-    t0 = stamp(carrier[0].epoch)
+    t0 = time_to_sec(carrier[0].epoch)
     r, v = frames.chief_state(truth.chief_at(t0)[0], opts.epoch_utc, t0)
-    comments = [f"roe_sep {label}: strategy {plan.strategy}, computed at sim time {stamp(plan.header.stamp)!r} s",
+    comments = [f"roe_sep {label}: strategy {plan.strategy}, computed at sim time {time_to_sec(plan.header.stamp)!r} s",
                 "carrier state: mean near-circular orbit of the simulator (mean of date, precessed IAU 1976)",
                 f"MAN_DELTA_MASS from the rocket equation, m = {opts.carrier_mass!r} kg, Isp = {opts.carrier_isp!r} s"]
     return build_opm(opts.carrier_name, opts.carrier_name, opts.epoch_utc, t0, r, v,
@@ -129,12 +125,12 @@ def plan_opm(plan, truth: Truth, opts: Options, frame=frames.LOCAL_FRAME, label=
 
 def executed_opm(run: RunMessages, truth: Truth, opts: Options):
     """OPM of the carrier burns as executed (``/sim/executed_maneuvers``, with the execution errors), RTN."""
-    done = sorted({(stamp(m.epoch), m.purpose): m for m in run[interfaces.EXECUTED_TOPIC]
+    done = sorted({(time_to_sec(m.epoch), m.purpose): m for m in run[interfaces.EXECUTED_TOPIC]
                    if m.spacecraft == "carrier"}.items())
     if not done:
         return None
     ms = [m for _, m in done]
-    t0 = stamp(ms[0].epoch)
+    t0 = time_to_sec(ms[0].epoch)
     r, v = frames.chief_state(truth.chief_at(t0)[0], opts.epoch_utc, t0)
     return build_opm(opts.carrier_name, opts.carrier_name, opts.epoch_utc, t0, r, v,
                      _burns(ms, truth, opts, frames.LOCAL_FRAME), spacecraft(opts),
@@ -142,7 +138,7 @@ def executed_opm(run: RunMessages, truth: Truth, opts: Options):
 
 
 def _ejection_epoch(run: RunMessages, truth: Truth):
-    ej = [stamp(m.epoch) for m in run[interfaces.EXECUTED_TOPIC] if m.purpose == "ejection"]
+    ej = [time_to_sec(m.epoch) for m in run[interfaces.EXECUTED_TOPIC] if m.purpose == "ejection"]
     if ej:
         return min(ej)
     sep = np.nonzero(np.any(truth.roe != 0.0, axis=1))[0]
@@ -173,7 +169,7 @@ def truth_segments(run: RunMessages, truth: Truth, opts: Options):
     t_ej = _ejection_epoch(run, truth)
     if t_ej is None:
         return segs
-    burns = sorted({stamp(m.epoch) for m in run[interfaces.EXECUTED_TOPIC]})
+    burns = sorted({time_to_sec(m.epoch) for m in run[interfaces.EXECUTED_TOPIC]})
     bounds = [b for b in burns if b >= t_ej] + [math.inf]
     for lo, hi in zip(bounds[:-1], bounds[1:]):
         # the samples of [lo, hi): the last sample at lo is the post-burn state
@@ -192,13 +188,13 @@ def truth_segments(run: RunMessages, truth: Truth, opts: Options):
 def od_segments(run: RunMessages, truth: Truth, opts: Options):
     """One OEM segment per OD solution: the estimate propagated (secular model, estimated drag drift) from its
     epoch to the next solution's (or the run's end), the covariance at its epoch in EME2000."""
-    ods = sorted(run[interfaces.OD_TOPIC], key=lambda o: stamp(o.estimate.header.stamp))
+    ods = sorted(run[interfaces.OD_TOPIC], key=lambda o: time_to_sec(o.estimate.header.stamp))
     t_end = float(truth.t[-1]) if len(truth) else None
     segs = []
     for k, od in enumerate(ods):
         est = od.estimate
-        t0 = stamp(est.header.stamp)
-        t1 = stamp(ods[k + 1].estimate.header.stamp) if k + 1 < len(ods) else (t_end or t0)
+        t0 = time_to_sec(est.header.stamp)
+        t1 = time_to_sec(ods[k + 1].estimate.header.stamp) if k + 1 < len(ods) else (t_end or t0)
         if t1 <= t0:
             continue
         t = np.append(np.arange(t0, t1, opts.od_step), t1)
@@ -225,9 +221,9 @@ def radar_passes(run: RunMessages):
     for m in run[interfaces.RADAR_TOPIC]:
         groups.setdefault((m.station, m.pass_id), []).append(m)
     out = []
-    for (station, pass_id), ms in sorted(groups.items(), key=lambda kv: stamp(kv[1][0].header.stamp)):
-        ms = sorted(ms, key=lambda m: stamp(m.header.stamp))
-        out.append(TrackingPass(station, pass_id, np.array([stamp(m.header.stamp) for m in ms]),
+    for (station, pass_id), ms in sorted(groups.items(), key=lambda kv: time_to_sec(kv[1][0].header.stamp)):
+        ms = sorted(ms, key=lambda m: time_to_sec(m.header.stamp))
+        out.append(TrackingPass(station, pass_id, np.array([time_to_sec(m.header.stamp) for m in ms]),
                                 np.array([[m.range, m.azimuth, m.elevation] for m in ms]),
                                 ms[0].sigma_range, ms[0].sigma_angle))
     return out
@@ -267,12 +263,12 @@ def closest_approach(run: RunMessages, truth: Truth, opts: Options):
 def _od_covariance_at(run: RunMessages, t):
     """RTN covariance input: the last OD estimate's ROE covariance (dimensionless) propagated to ``t`` with the
     linear secular model, or None without an estimate before ``t``."""
-    ods = [o for o in run[interfaces.OD_TOPIC] if stamp(o.estimate.header.stamp) <= t]
+    ods = [o for o in run[interfaces.OD_TOPIC] if time_to_sec(o.estimate.header.stamp) <= t]
     if not ods:
         return None
-    est = max(ods, key=lambda o: stamp(o.estimate.header.stamp)).estimate
+    est = max(ods, key=lambda o: time_to_sec(o.estimate.header.stamp)).estimate
     kep = kepler(est.chief)
-    stm = propagate(np.eye(6), t - stamp(est.header.stamp), kep[0], kep[2], True, 0.0).T
+    stm = propagate(np.eye(6), t - time_to_sec(est.header.stamp), kep[0], kep[2], True, 0.0).T
     cov = np.asarray(est.covariance, dtype=float).reshape(6, 6) / kep[0] ** 2
     return stm @ cov @ stm.T
 

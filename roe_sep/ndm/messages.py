@@ -22,6 +22,7 @@ from ccsds_ndm.mapping import NDMFileFormats
 from ccsds_ndm.models import ndmxml2 as nd
 from ccsds_ndm.ndm_io import NdmIo
 
+from ..errors import NdmError, show
 from . import frames
 from .options import FORMATS
 
@@ -33,15 +34,11 @@ G0 = 9.80665
 """Standard gravity [m/s^2] of the rocket equation (Isp in seconds)."""
 
 
-class NdmError(ValueError):
-    """A navigation data message that cannot be read or is not what roe_sep expects (the message says why)."""
-
-
 def _f(x) -> float:
     """A plain, finite Python float (the library writes numpy scalars as ``NP.FLOAT64(...)``)."""
     v = float(x)
     if not math.isfinite(v):
-        raise ValueError(f"non-finite value {x!r} cannot go into a CCSDS message")
+        raise ValueError(f"non-finite value {show(x)} cannot go into a CCSDS message")
     return v
 
 

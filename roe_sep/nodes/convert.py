@@ -1,7 +1,5 @@
 """Conversions between roe_sep_msgs messages and core quantities (SI, dimensionless ROE <-> a*ROE meters)."""
 
-import math
-
 import numpy as np
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Vector3
@@ -10,23 +8,16 @@ from roe_sep_msgs.msg import ImpulsiveManeuver, OrbitalElements, RelativeOrbital
 from .. import interfaces
 from ..core.relmotion.roe import wrap_angle
 from ..core.truth.execution import relative_impulse
+from ..stamps import sec_nanosec, time_to_sec
 
 ROE_FIELDS = ("a_da", "a_dl", "a_dex", "a_dey", "a_dix", "a_diy")
 KEPLER_FIELDS = ("semi_major_axis", "eccentricity", "inclination", "raan", "arg_perigee", "mean_arg_latitude")
 
 
-def time_to_sec(t: Time) -> float:
-    return t.sec + t.nanosec * 1e-9
-
-
 def sec_to_time(seconds: float) -> Time:
-    if not math.isfinite(seconds):
-        raise ValueError(f"time must be finite, got {seconds}")
-    sec = math.floor(seconds)
-    nanosec = int(round((seconds - sec) * 1e9))
-    if nanosec >= 1_000_000_000:
-        sec, nanosec = sec + 1, nanosec - 1_000_000_000
-    return Time(sec=int(sec), nanosec=nanosec)
+    """A builtin_interfaces/Time of ``seconds`` (:func:`roe_sep.stamps.sec_nanosec`: finite, nanosecond carry)."""
+    sec, nanosec = sec_nanosec(seconds)
+    return Time(sec=sec, nanosec=nanosec)
 
 
 def vector_to_array(v: Vector3) -> np.ndarray:

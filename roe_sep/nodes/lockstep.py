@@ -27,9 +27,10 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from roe_sep_msgs.msg import LockstepAck, LockstepStep
 
 from .. import interfaces
+from ..errors import BadMessage
+from ..validate import validator_for
 from .convert import sec_to_time, time_to_sec
 from .diagnostics import ERROR, OK, publish_status
-from .validate import BadMessage, validator_for
 
 STEP_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10, reliability=ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.VOLATILE)

@@ -25,6 +25,7 @@ from ..core.acquisition.planner import AcquisitionConfig, parse_axes
 from ..core.deployment.sweep import MODELS, USSA76_DENSITY_400KM
 from ..core.od.radar import DEFAULT_EPOCH_UTC, julian_date
 from ..core.safety.monitor import MonitorLimits
+from ..errors import show
 from ..graph import MANAGED
 from ..ndm.options import FORMATS
 
@@ -124,13 +125,6 @@ def problem(p: Param, value):
     if not bad and p.check is not None:
         bad = not p.check(value)
     return f"must be {rule_text(p)}" if bad else None
-
-
-def show(value) -> str:
-    """A parameter value as the user wrote it (Python's repr of plain lists, never of arrays)."""
-    if isinstance(value, (str, bool, int, float)) or value is None:
-        return repr(value)
-    return repr(list(value))
 
 
 # ------------------------------------------------------------------------------------------------ rules as predicates

@@ -14,15 +14,12 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from rclpy.exceptions import InvalidParameterTypeException
 from rclpy.parameter import Parameter
 
+from ..errors import ParameterError, show
 from . import parameters
 
 ROS_TYPES = {"bool": Parameter.Type.BOOL, "int": Parameter.Type.INTEGER, "double": Parameter.Type.DOUBLE,
              "string": Parameter.Type.STRING, "string[]": Parameter.Type.STRING_ARRAY,
              "double[]": Parameter.Type.DOUBLE_ARRAY}
-
-
-class ParameterError(ValueError):
-    """A node parameter is invalid; the message names it."""
 
 
 def descriptor(p: parameters.Param) -> ParameterDescriptor:
@@ -76,7 +73,7 @@ def _check_on_set(node):
             why = parameters.problem(p, _plain(prm.value))
             if why:
                 return SetParametersResult(successful=False,
-                                           reason=f"parameter '{prm.name}' {why}, got {parameters.show(prm.value)}")
+                                           reason=f"parameter '{prm.name}' {why}, got {show(prm.value)}")
         return SetParametersResult(successful=True)
 
     node.add_on_set_parameters_callback(check)
@@ -96,14 +93,14 @@ def declare(node, name, attr=None):
             value = node.declare_parameter(name, ptype, ParameterDescriptor(type=ptype.value)).value
         except InvalidParameterTypeException:
             raise ParameterError(f"parameter '{name}' must be {parameters.type_text(p)}, got "
-                                 f"{parameters.show(_plain(_given(node, name)))}") from None
+                                 f"{show(_plain(_given(node, name)))}") from None
         if value is None:
             # not given, or given as [] (rcl cannot type an empty list): the default, or an empty list of the type
             value = [] if p.type.endswith("[]") and name in getattr(node, "_parameter_overrides", {}) else p.default
             node.set_parameters([Parameter(name, ptype, value)])
         why = parameters.problem(p, _plain(value))
         if why:
-            raise ParameterError(f"parameter '{name}' {why}, got {parameters.show(_plain(value))}")
+            raise ParameterError(f"parameter '{name}' {why}, got {show(_plain(value))}")
         node.set_descriptor(name, descriptor(p))
         if attr is not None and not p.read_only:
             node.add_post_set_parameters_callback(
@@ -111,7 +108,7 @@ def declare(node, name, attr=None):
     value = _plain(node.get_parameter(name).value)
     why = parameters.problem(p, value)
     if why:
-        raise ParameterError(f"parameter '{name}' {why}, got {parameters.show(value)}")
+        raise ParameterError(f"parameter '{name}' {why}, got {show(value)}")
     return value
 
 
@@ -119,7 +116,7 @@ def require(name, ok, value, what):
     """Raise :class:`ParameterError` naming ``name`` unless ``ok`` (a rule between parameters: the table checks
     each on its own)."""
     if not ok:
-        raise ParameterError(f"parameter '{name}' must be {what}, got {parameters.show(value)}")
+        raise ParameterError(f"parameter '{name}' must be {what}, got {show(value)}")
 
 
 def finite(value):

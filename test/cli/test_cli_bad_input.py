@@ -9,6 +9,7 @@ Each case runs in-process (``roe_sep.cli.main``, output captured) under a wall-t
 * ``silent``: exit 0 on bad input;
 * ``hang``: the alarm fired;
 * ``multiline``: the right exit status but the error spans several lines;
+* ``numpy``: a NumPy repr in the output (``np.float64(0.0)``, ``array([...])``) instead of the plain value;
 * ``wrong``: another exit status or a message that does not name the option and value.
 
 The counts are printed at the end (``test_zz_counts``). Then every subcommand's ``--json`` output (tiny sample
@@ -18,6 +19,7 @@ alone, ``-m 'not fault'`` skips it.
 
 import collections
 import json
+import re
 import shutil
 import signal
 import struct
@@ -36,6 +38,7 @@ TIMEOUT_S = 20  # per case; a correct refusal takes milliseconds
 N = ["nan", "inf", "-inf", "abc", "1e308"]  # bad for every numeric option
 NEG = ["0", "-1"]
 MAGIC = b"\x89MCAP0\r\n"
+NUMPY_REPR = re.compile(r"\bnp\.[A-Za-z_]\w*|\barray\(")  # np.float64(0.0), np.True_, array([1.0])
 
 RESULTS = collections.Counter()
 NAN_OUTPUTS = []
@@ -394,6 +397,8 @@ def classify(code, out, err, expect, needles):
         return "traceback"
     if code == 0 and expect != 0:
         return "silent"
+    if NUMPY_REPR.search(out + err):
+        return "numpy"
     if code != expect:
         return "wrong"
     if expect == 2:
@@ -437,7 +442,8 @@ def test_zz_counts(capsys):
     with capsys.disabled():
         print(f"\n[bad input] {RESULTS['cases']} cases: ok {RESULTS['ok']}, tracebacks {RESULTS['traceback']}, "
               f"silent accepts {RESULTS['silent']}, hangs {RESULTS['hang']}, multi-line errors {RESULTS['multiline']}"
-              f", wrong status/message {RESULTS['wrong']}, NaN outputs {len(NAN_OUTPUTS)}")
+              f", wrong status/message {RESULTS['wrong']}, NumPy reprs {RESULTS['numpy']}, "
+              f"NaN outputs {len(NAN_OUTPUTS)}")
     if RESULTS["cases"] == len(CASES):
         assert RESULTS["ok"] == len(CASES)
 

@@ -23,7 +23,8 @@ from roe_sep.core.relmotion.orbit import mean_motion
 from roe_sep.core.relmotion.roe import kepler_to_roe, roe_to_kepler
 from roe_sep.ndm import frames
 from roe_sep.ndm import messages as ndm
-from roe_sep.ndm.dataset import Options, Truth, approved, stamp, vec
+from roe_sep.ndm.dataset import Options, Truth, approved, vec
+from roe_sep.stamps import time_to_sec
 
 BAG = Path(__file__).resolve().parents[2] / "bags" / "default_run"
 EPOCH = "2016-07-01T00:00:00"
@@ -235,7 +236,7 @@ def test_opm_dv_equals_the_plans_to_one_micrometer_per_second(exported, run):
             mass = seg.data.spacecraft_parameters.mass.value
             for m, b in zip(mans, burns):
                 t = frames.sim_time(EPOCH, m.man_epoch_ignition)
-                assert t == pytest.approx(stamp(b.epoch), abs=1e-6)
+                assert t == pytest.approx(time_to_sec(b.epoch), abs=1e-6)
                 dv = np.array([m.man_dv_1.value, m.man_dv_2.value, m.man_dv_3.value]) * 1e3
                 assert m.man_delta_mass.value < 0 and m.man_duration.value == 0.0
                 mass += m.man_delta_mass.value
@@ -251,7 +252,8 @@ def test_opm_dv_equals_the_plans_to_one_micrometer_per_second(exported, run):
             assert 0.0 < seg.data.spacecraft_parameters.mass.value - mass < 1.0
     assert worst < 1e-6
     # the EME2000 file's own carrier state at each burn: the RTN dv back exactly (same state, same rotation)
-    executed = {stamp(m.epoch): vec(m.dv_rtn) for m in run[interfaces.EXECUTED_TOPIC] if m.spacecraft == "carrier"}
+    executed = {time_to_sec(m.epoch): vec(m.dv_rtn) for m in run[interfaces.EXECUTED_TOPIC]
+                if m.spacecraft == "carrier"}
     opm = ndm.read_message(out / f"executed_carrier.opm.{fmt}").body.segment.data.maneuver_parameters
     report = json.loads(BAG.with_suffix(".report.json").read_text())
     assert len(opm) == len(executed) == sum(m["spacecraft"] == "carrier" for m in report["maneuvers"]) == 7
@@ -291,8 +293,8 @@ def test_cdm_is_the_runs_closest_approach(exported):
 
 
 def _radar_rows(run, t_from, t_to):
-    return sorted((m for m in run[interfaces.RADAR_TOPIC] if t_from <= stamp(m.header.stamp) <= t_to),
-                  key=lambda m: stamp(m.header.stamp))
+    return sorted((m for m in run[interfaces.RADAR_TOPIC] if t_from <= time_to_sec(m.header.stamp) <= t_to),
+                  key=lambda m: time_to_sec(m.header.stamp))
 
 
 def _radar_chief(truth: Truth, t):
@@ -316,9 +318,9 @@ def test_tdm_fed_back_gives_the_runs_od_solution(exported, run):
     """The TDM of export, read back, gives radar_od's first solution: the measurements after the drift-stop up to
     the estimate epoch, the batch least squares of core/od/batch.py."""
     fmt, out = exported
-    od = min(run[interfaces.OD_TOPIC], key=lambda o: stamp(o.estimate.header.stamp))
-    t_est = stamp(od.estimate.header.stamp)
-    last_burn = max(stamp(m.epoch) for m in run[interfaces.EXECUTED_TOPIC] if stamp(m.epoch) <= t_est)
+    od = min(run[interfaces.OD_TOPIC], key=lambda o: time_to_sec(o.estimate.header.stamp))
+    t_est = time_to_sec(od.estimate.header.stamp)
+    last_burn = max(time_to_sec(m.epoch) for m in run[interfaces.EXECUTED_TOPIC] if time_to_sec(m.epoch) <= t_est)
     meas = [m for m in ndm.read_tdm(out / f"radar.tdm.{fmt}", EPOCH) if last_burn <= m.t <= t_est]
     assert len(meas) == od.measurements == 118 and len({m.pass_id for m in meas}) == od.passes == 3
     truth = Truth(run[interfaces.TRUTH_ROE_TOPIC])
@@ -470,7 +472,7 @@ def test_orekit_reads_the_set_as_written_and_refuses_broken_files(exported, run,
             assert len(opm["maneuvers"]) == len(burns) and opm["mass_kg"] == 140.0
             for m, b in zip(opm["maneuvers"], burns):
                 assert m["ref_frame"] == frame and m["delta_mass_kg"] < 0 and m["duration_s"] == 0.0
-                assert frames.sim_time(EPOCH, m["epoch_ignition"]) == pytest.approx(stamp(b.epoch), abs=1e-6)
+                assert frames.sim_time(EPOCH, m["epoch_ignition"]) == pytest.approx(time_to_sec(b.epoch), abs=1e-6)
                 if suffix:
                     assert abs(np.linalg.norm(m["dv_m_s"]) - np.linalg.norm(vec(b.dv_rtn))) < 1e-9
                 else:

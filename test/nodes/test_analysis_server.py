@@ -45,6 +45,8 @@ def test_services(ground, tmp_path):
         assert not bad.success and "dv" in bad.message
         high = _call(ground, dep, DeploymentAssessment.Request(altitude=1500e3, inclination=incl, dv=1.0))
         assert not high.success and "1100 km" in high.message
+        equatorial = _call(ground, dep, DeploymentAssessment.Request(inclination=0.0, dv=1.0))
+        assert not equatorial.success and equatorial.message.endswith("got [0.0]"), equatorial.message  # no NumPy
 
         prog = _call(ground, clu, ClusterProgram.Request(samples=500))
         assert prog.success, prog.message

@@ -21,8 +21,9 @@ from roe_sep import interfaces
 from roe_sep.bag.reader import messages
 from roe_sep.ndm import frames
 from roe_sep.ndm import messages as ndm
-from roe_sep.ndm.dataset import stamp, thin
+from roe_sep.ndm.dataset import thin
 from roe_sep.ndm.options import Options
+from roe_sep.stamps import time_to_sec as stamp
 
 pytestmark = pytest.mark.dds  # every test here starts a node or an rclpy context
 

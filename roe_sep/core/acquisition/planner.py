@@ -56,6 +56,7 @@ import numpy as np
 from scipy import sparse
 from scipy.optimize import Bounds, LinearConstraint, linprog, milp
 
+from ...errors import AcquisitionInfeasible, InvalidAcquisitionConfig
 from ..relmotion.dynamics import arg_latitude_rate, propagate
 from ..relmotion.orbit import mean_motion
 from ..relmotion.trajectory import Burn, Chief, trajectory
@@ -64,18 +65,6 @@ from .lp_transfer import carrier_burn_effects, grid_epochs, grid_response, parse
 
 R_EARTH_MIN = 6.4e6  # m, a semi-major axis below this is not a valid LEO chief
 QUANTA_SLACK = 4  # a quantized solution within this many quanta of the LP optimum ends the search
-
-
-class AcquisitionInfeasible(ValueError):
-    """No carrier plan reaches the initial conditions (or the estimate is unusable); the message says why."""
-
-
-class InvalidAcquisitionConfig(ValueError):
-    """A configuration field is invalid: ``name``, what it ``must`` be, and the offending ``value``."""
-
-    def __init__(self, name, must, value):
-        super().__init__(f"{name} must be {must}, got {value!r}")
-        self.name, self.must, self.value = name, must, value
 
 
 @dataclass(frozen=True)

@@ -57,10 +57,13 @@ isolates the analytical approximations. Propagation: :mod:`~roe_sep.core.deploym
 import dataclasses
 import itertools
 from dataclasses import dataclass, field
+from os import PathLike
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.special import dawsn, ndtr, ndtri
 
+from ...errors import ConfigError, show
 from ..relmotion.orbit import mean_motion, semi_major_axis
 from .cluster_dynamics import drag_acceleration, drag_offset, hcw_matrix, hcw_terms, singular_values
 from .cluster_envelope import conditions, omega_bound
@@ -108,7 +111,8 @@ class ClusterConfig:
     time_step: float = 20.0  # s, sampling of the analytical conditions and the simulation
     method: str = "envelope"  # 'envelope': every state of the P* tumbling set; 'gaussian': the seed's k-sigma model
 
-    def validate(self):
+    def validate(self) -> "ClusterConfig":
+        """Raise ValueError naming the first bad field; ``self`` otherwise."""
         """Raise ValueError naming the first bad value."""
         if not self.sats:
             raise ValueError("sats: at least one nanosatellite is required")
@@ -147,34 +151,39 @@ class ClusterConfig:
         return self
 
     @property
-    def a(self):
+    def a(self) -> float:
+        """Semi-major axis [m] of the orbital stage's circular orbit."""
         return float(semi_major_axis(self.altitude))
 
     @property
-    def n(self):
+    def n(self) -> float:
+        """Mean motion [rad/s]."""
         return float(mean_motion(self.a))
 
     @property
-    def sigma(self):
+    def sigma(self) -> float:
+        """1-sigma of each transverse angular-velocity component [rad/s]."""
         return float(np.radians(self.sigma_deg_s))
 
     @property
-    def omega_star(self):
+    def omega_star(self) -> float:
         """Omega* [rad/s]: the tumbling rates of the P* set of :mod:`~roe_sep.core.deployment.cluster_envelope`."""
         return omega_bound(self.sigma, self.p_required)
 
     @property
-    def horizon(self):
+    def horizon(self) -> float:
+        """The time [s] over which the conditions hold: ``turns`` orbits."""
         return self.turns * 2.0 * np.pi / self.n
 
     @property
-    def delays(self):
+    def delays(self) -> np.ndarray:
+        """The delay grid [s], ``min_delay`` to ``max_delay`` by ``delay_step``."""
         return np.arange(self.min_delay, self.max_delay + 0.5 * self.delay_step, self.delay_step)
 
 
-def cluster_config_from_dict(data) -> ClusterConfig:
+def cluster_config_from_dict(data: dict | None) -> ClusterConfig:
     """Build a :class:`ClusterConfig` from a parsed YAML mapping; unknown keys and bad values are named."""
-    from ..config import ConfigError, _coerce
+    from ..config import _coerce
 
     data = {} if data is None else data
     if not isinstance(data, dict):
@@ -192,7 +201,7 @@ def cluster_config_from_dict(data) -> ClusterConfig:
             for i, s in enumerate(v):
                 if not isinstance(s, dict) or set(s) - {"name", "velocity", "delta_q", "cluster"} or \
                         not {"velocity", "delta_q"} <= set(s):
-                    raise ConfigError(f"sats[{i}]: expected {{name, velocity, delta_q, cluster}}, got {s!r}")
+                    raise ConfigError(f"sats[{i}]: expected {{name, velocity, delta_q, cluster}}, got {show(s)}")
                 sats.append(Nanosatellite(str(s.get("name", f"ns{i + 1}")), _coerce(f"sats[{i}].velocity",
                                           s["velocity"], float), _coerce(f"sats[{i}].delta_q", s["delta_q"], float),
                                           _coerce(f"sats[{i}].cluster", s.get("cluster", True), bool)))
@@ -206,7 +215,7 @@ def cluster_config_from_dict(data) -> ClusterConfig:
         raise ConfigError(str(exc)) from exc
 
 
-def load_cluster_config(path=None) -> ClusterConfig:
+def load_cluster_config(path: str | PathLike | None = None) -> ClusterConfig:
     """Read a cluster YAML (config/cluster.yaml layout); ``None`` gives the embedded Soyuz-stage example."""
     if path is None:
         return ClusterConfig()
@@ -218,17 +227,33 @@ def load_cluster_config(path=None) -> ClusterConfig:
 # ---------------------------------------------------------------- the probabilistic model
 
 
-def mean_cos(sigma, tau):
+def mean_cos(sigma: float, tau: ArrayLike) -> np.ndarray:
     """C(tau) = E[cos(Omega tau)], Omega ~ Rayleigh(sigma): 1 - sqrt(2) s D(s/sqrt(2)), s = sigma tau.
 
-    Closed form of the seed 004 quadrature Q(V_x) (E_Vx = V C(dt)); D is the Dawson function.
+    Closed form of the seed 004 quadrature Q(V_x) (E_Vx = V C(dt)); D is the Dawson function. ``sigma`` [rad/s],
+    ``tau`` [s] (any shape).
     """
     s = sigma * np.asarray(tau, dtype=float)
     return 1.0 - np.sqrt(2.0) * s * dawsn(s / np.sqrt(2.0))
 
 
-def velocity_moments(v, dt, sigma):
-    """(E[V], Var[V]) ``(..., 3)`` of the separation velocity after delay ``dt`` [s] (seed 004 E_V*, Var_V*)."""
+def velocity_moments(v: ArrayLike, dt: ArrayLike, sigma: float) -> tuple[np.ndarray, np.ndarray]:
+    """(E[V], Var[V]) ``(..., 3)`` of the separation velocity after delay ``dt`` [s] (seed 004 E_V*, Var_V*).
+
+    Parameters
+    ----------
+    v : array_like, shape (...)
+        Separation speed [m/s].
+    dt : array_like, shape (...)
+        Delay [s].
+    sigma : float
+        1-sigma of each transverse angular-velocity component [rad/s].
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray), each shape (..., 3)
+        Mean [m/s] and variance [m^2/s^2] of (x, y, z).
+    """
     v = np.asarray(v, dtype=float)
     c1, c2 = mean_cos(sigma, dt), mean_cos(sigma, 2.0 * np.asarray(dt, dtype=float))
     mean = np.stack([v * c1, 0.0 * c1, 0.0 * c1], axis=-1)
@@ -236,8 +261,23 @@ def velocity_moments(v, dt, sigma):
     return mean, np.stack([v**2 * ((1.0 + c2) / 2.0 - c1**2), vy, vy], axis=-1)
 
 
-def velocity_covariance(vi, dti, vj, dtj, sigma):
-    """Cov[V_i, V_j] ``(..., 3)`` (diagonal: x, y, z) of two NS separated from the same tumbling OS."""
+def velocity_covariance(vi: ArrayLike, dti: ArrayLike, vj: ArrayLike, dtj: ArrayLike, sigma: float) -> np.ndarray:
+    """Cov[V_i, V_j] ``(..., 3)`` (diagonal: x, y, z) of two NS separated from the same tumbling OS.
+
+    Parameters
+    ----------
+    vi, vj : array_like, shape (...)
+        Separation speeds [m/s].
+    dti, dtj : array_like, shape (...)
+        Delays [s].
+    sigma : float
+        1-sigma of each transverse angular-velocity component [rad/s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+        The covariance [m^2/s^2] of each component.
+    """
     cm = mean_cos(sigma, np.asarray(dti) - np.asarray(dtj))
     cp = mean_cos(sigma, np.asarray(dti) + np.asarray(dtj))
     vv = np.asarray(vi, dtype=float) * np.asarray(vj, dtype=float)
@@ -246,12 +286,33 @@ def velocity_covariance(vi, dti, vj, dtj, sigma):
     return np.stack([cx, cy, cy], axis=-1)
 
 
-def position_moments(t, v, dt, p_x, sigma, n):
+def position_moments(t: ArrayLike, v: ArrayLike, dt: ArrayLike, p_x: ArrayLike, sigma: float,
+                     n: float) -> tuple[np.ndarray, np.ndarray]:
     """E and Var ``(..., 3)`` of one NS's position w.r.t. the OS at time ``t`` [s] from the program start (Eqs. 1-2).
 
     The NS separates at ``dt`` with speed ``v`` and differential drag acceleration ``p_x``:
     E_x = m00 E_Vx + D_x, E_y = m10 E_Vx + D_y, E_z = 0; Var_x = m00^2 Var_Vx + m01^2 Var_Vy,
     Var_y = m10^2 Var_Vx + m11^2 Var_Vy, Var_z = m22^2 Var_Vz (the seed's Eq. 2 coefficients).
+
+    Parameters
+    ----------
+    t : array_like, shape (..., T)
+        Times [s from the program start].
+    v : array_like, shape (...)
+        Separation speed [m/s].
+    dt : array_like, shape (...)
+        Delay [s].
+    p_x : array_like, shape (...)
+        Drag acceleration [m/s^2].
+    sigma : float
+        1-sigma of each transverse angular-velocity component [rad/s].
+    n : float
+        Mean motion [rad/s].
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray), each shape (..., T, 3)
+        Mean [m] and variance [m^2] of (x, y, z).
     """
     tau = np.asarray(t) - np.asarray(dt)[..., None]
     m00, m01, m10, m11, m22 = hcw_terms(tau, n)
@@ -262,8 +323,30 @@ def position_moments(t, v, dt, p_x, sigma, n):
     return mean, np.stack([m00**2 * vx + m01**2 * vy, m10**2 * vx + m11**2 * vy, m22**2 * vz], axis=-1)
 
 
-def pair_moments(t, vi, dti, pi, vj, dtj, pj, sigma, n):
-    """E and Var ``(..., 3)`` of r_i - r_j at times ``t`` (exact second moments, shared tumbling)."""
+def pair_moments(t: ArrayLike, vi: ArrayLike, dti: ArrayLike, pi: ArrayLike, vj: ArrayLike, dtj: ArrayLike,
+                 pj: ArrayLike, sigma: float, n: float) -> tuple[np.ndarray, np.ndarray]:
+    """E and Var ``(..., 3)`` of r_i - r_j at times ``t`` (exact second moments, shared tumbling).
+
+    Parameters
+    ----------
+    t : array_like, shape (T,)
+        Times [s from the program start].
+    vi, vj : array_like, shape (...)
+        Separation speeds of NS i and j [m/s].
+    dti, dtj : array_like, shape (...)
+        Their delays [s from the program start].
+    pi, pj : array_like, shape (...)
+        Their drag accelerations [m/s^2] (:func:`~.cluster_dynamics.drag_acceleration`).
+    sigma : float
+        1-sigma of each transverse angular-velocity component [rad/s].
+    n : float
+        Mean motion [rad/s].
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray), each shape (..., T, 3)
+        Mean [m] and variance [m^2] of (x, y, z).
+    """
     ti = np.asarray(t) - np.asarray(dti)[..., None]
     tj = np.asarray(t) - np.asarray(dtj)[..., None]
     a = hcw_terms(ti, n)
@@ -286,14 +369,27 @@ def pair_moments(t, vi, dti, pi, vj, dtj, pj, sigma, n):
     return mean, np.maximum(np.stack([vx, vy, vz], axis=-1), 0.0)
 
 
-def quantile_factor(p_required, dims=3):
+def quantile_factor(p_required: float, dims: int = 3) -> float:
     """k with P(all ``dims`` Gaussian coordinates within E +- k sigma) >= P* by Bonferroni:
     k = Phi^-1(1 - (1 - P*) / (2 dims))."""
     return float(ndtri(1.0 - (1.0 - p_required) / (2.0 * dims)))
 
 
-def box_bounds(mean, var, k):
-    """(lower, upper) bounds of the distance that hold with probability >= P* (the k-sigma box, Eqs. 3-5)."""
+def box_bounds(mean: ArrayLike, var: ArrayLike, k: float) -> tuple[np.ndarray, np.ndarray]:
+    """(lower, upper) bounds of the distance that hold with probability >= P* (the k-sigma box, Eqs. 3-5).
+
+    Parameters
+    ----------
+    mean, var : array_like, shape (..., 3)
+        Mean [m] and variance [m^2] of the coordinates.
+    k : float
+        The box half-size in standard deviations (:func:`quantile_factor`).
+
+    Returns
+    -------
+    (lower, upper) : numpy.ndarray, each shape (...)
+        Distance bounds [m].
+    """
     sd = np.sqrt(var)
     am = np.abs(mean)
     lower = np.sqrt(np.sum(np.maximum(am - k * sd, 0.0) ** 2, axis=-1))
@@ -301,11 +397,23 @@ def box_bounds(mean, var, k):
     return lower, upper
 
 
-def near_probability(mean, var, r):
+def near_probability(mean: ArrayLike, var: ArrayLike, r: float) -> np.ndarray:
     """P(|r| < r) upper estimate under the Gaussian model with independent coordinates (the seed's K = 0).
 
     The sphere lies inside the cube |x|, |y|, |z| < r, whose probability for independent coordinates is the product
     of Phi((r - E)/sd) - Phi((-r - E)/sd) (a zero-variance coordinate contributes 1 if |E| < r, else 0).
+
+    Parameters
+    ----------
+    mean, var : array_like, shape (..., 3)
+        Mean [m] and variance [m^2] of the coordinates.
+    r : float
+        The radius [m].
+
+    Returns
+    -------
+    numpy.ndarray, shape (...)
+        The probability estimate.
     """
     sd = np.sqrt(var)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -314,17 +422,47 @@ def near_probability(mean, var, r):
     return np.prod(p, axis=-1)
 
 
-def deterministic_bound(tau, v, p_x, n):
-    """|r(tau)| >= s_min(M(tau)) V - |D(tau)| for every separation direction (fixed speed V)."""
+def deterministic_bound(tau: ArrayLike, v: ArrayLike, p_x: ArrayLike, n: float) -> np.ndarray:
+    """|r(tau)| >= s_min(M(tau)) V - |D(tau)| for every separation direction (fixed speed V).
+
+    Parameters
+    ----------
+    tau : array_like, shape (T,)
+        Times since the separation [s].
+    v : array_like, shape (...)
+        Separation speed [m/s].
+    p_x : array_like, shape (...)
+        Drag acceleration [m/s^2].
+    n : float
+        Mean motion [rad/s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., T)
+        The lower bound of the distance [m].
+    """
     smin, _ = singular_values(hcw_matrix(tau, n))
     return smin * np.asarray(v)[..., None] - np.linalg.norm(drag_offset(tau, n, np.asarray(p_x)[..., None]), axis=-1)
 
 
-def deterministic_pair_bound(t, vi, dti, pi, vj, dtj, pj, n):
+def deterministic_pair_bound(t: ArrayLike, vi: ArrayLike, dti: ArrayLike, pi: ArrayLike, vj: ArrayLike,
+                             dtj: ArrayLike, pj: ArrayLike, n: float) -> np.ndarray:
     """|r_i - r_j| >= s_min(M_a) V_a - s_max(M_b) V_b - |D_i - D_j| for all directions, a = earlier separation.
 
     |M_a V_a e_a - M_b V_b e_b| >= s_min(M_a) V_a - s_max(M_b) V_b for unit e_a, e_b; in the straight-line phase
     right after the later separation (M ~ tau I) it is V delta: the earlier NS leads by its head start.
+
+    Parameters
+    ----------
+    t, vi, dti, pi, vj, dtj, pj
+        As for :func:`pair_moments`.
+    n : float
+        Mean motion [rad/s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., T)
+        The lower bound of the pair distance [m].
     """
     ti = np.asarray(t) - np.asarray(dti)[..., None]
     tj = np.asarray(t) - np.asarray(dtj)[..., None]
@@ -344,10 +482,22 @@ def _time_grid(cfg, start, length):
     return start + np.arange(0.0, length + 0.5 * cfg.time_step, cfg.time_step)
 
 
-def platform_safe(cfg: ClusterConfig, sat: Nanosatellite, delays=None):
+def platform_safe(cfg: ClusterConfig, sat: Nanosatellite, delays: ArrayLike | None = None) -> np.ndarray:
     """Analytical condition (3) for each delay: r_i(t) >= r* with P* at every t in [dt + t_dep, dt + horizon].
 
-    Returns a boolean array over ``delays`` (default: the configured grid).
+    Parameters
+    ----------
+    cfg : ClusterConfig
+        The problem (orbit, density, r*, P*, method).
+    sat : Nanosatellite
+        The NS.
+    delays : array_like, shape (D,), optional
+        Delays [s]; default the configured grid.
+
+    Returns
+    -------
+    numpy.ndarray, shape (D,)
+        True where the delay is safe from the OS.
     """
     delays = cfg.delays if delays is None else np.asarray(delays, dtype=float)
     n = cfg.n
@@ -387,15 +537,49 @@ def _pair_conditions(cfg, si, di, sj, dj, within=True):
     return safe, np.all(upper <= cfg.r_max, axis=-1) & distinct, np.max(upper, axis=-1)
 
 
-def pair_tables(cfg: ClusterConfig, si: Nanosatellite, sj: Nanosatellite, delays=None):
-    """Over the delay grid (dt_i, dt_j): (safe, within r**, max distance bound) of the pair, Eqs. (4)-(5)."""
+def pair_tables(cfg: ClusterConfig, si: Nanosatellite, sj: Nanosatellite,
+                delays: ArrayLike | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Over the delay grid (dt_i, dt_j): (safe, within r**, max distance bound) of the pair, Eqs. (4)-(5).
+
+    Parameters
+    ----------
+    cfg : ClusterConfig
+        The problem.
+    si, sj : Nanosatellite
+        The pair.
+    delays : array_like, shape (D,), optional
+        Delays [s]; default the configured grid.
+
+    Returns
+    -------
+    (safe, within, upper), each shape (D, D)
+        Booleans over (dt_i, dt_j) and the largest distance bound [m].
+    """
     d = cfg.delays if delays is None else np.asarray(delays, dtype=float)
     di, dj = np.meshgrid(d, d, indexing="ij")
     return _pair_conditions(cfg, si, di, sj, dj)
 
 
-def pair_distance_bound(cfg: ClusterConfig, si: Nanosatellite, dt_i, sj: Nanosatellite, dt_j, t):
-    """P* upper bound [m] of |r_i - r_j| at each time of ``t`` ``(T,)`` by ``cfg.method`` (the minimax quantity)."""
+def pair_distance_bound(cfg: ClusterConfig, si: Nanosatellite, dt_i: float, sj: Nanosatellite, dt_j: float,
+                        t: ArrayLike) -> np.ndarray:
+    """P* upper bound [m] of |r_i - r_j| at each time of ``t`` ``(T,)`` by ``cfg.method`` (the minimax quantity).
+
+    Parameters
+    ----------
+    cfg : ClusterConfig
+        The problem.
+    si, sj : Nanosatellite
+        The pair.
+    dt_i, dt_j : float
+        Their delays [s].
+    t : array_like, shape (T,)
+        Times [s from the program start].
+
+    Returns
+    -------
+    numpy.ndarray, shape (T,)
+        The bound [m].
+    """
     t = np.asarray(t, dtype=float)
     pi = drag_acceleration(-si.delta_q, cfg.density, cfg.a)
     pj = drag_acceleration(-sj.delta_q, cfg.density, cfg.a)
@@ -407,8 +591,28 @@ def pair_distance_bound(cfg: ClusterConfig, si: Nanosatellite, dt_i, sj: Nanosat
     return box_bounds(mean, var, quantile_factor(cfg.p_required))[1]
 
 
-def pair_safe_row(cfg: ClusterConfig, s_new: Nanosatellite, candidates, s_old: Nanosatellite, dt_old):
-    """Condition (4), lower part, for NS ``s_new`` at each candidate delay against ``s_old`` at ``dt_old``."""
+def pair_safe_row(cfg: ClusterConfig, s_new: Nanosatellite, candidates: ArrayLike, s_old: Nanosatellite,
+                  dt_old: float) -> np.ndarray:
+    """Condition (4), lower part, for NS ``s_new`` at each candidate delay against ``s_old`` at ``dt_old``.
+
+    Parameters
+    ----------
+    cfg : ClusterConfig
+        The problem.
+    s_new : Nanosatellite
+        The NS to place.
+    candidates : array_like, shape (D,)
+        Its candidate delays [s].
+    s_old : Nanosatellite
+        An NS already placed.
+    dt_old : float
+        Its delay [s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (D,)
+        True where the pair is safe.
+    """
     c = np.asarray(candidates, dtype=float)
     return _pair_conditions(cfg, s_new, c, s_old, np.full_like(c, float(dt_old)), within=False)[0]
 
@@ -434,7 +638,7 @@ def _contiguous_max(delays, ok):
     return float(delays[-1] if bad.size == 0 else delays[bad[0] - 1])
 
 
-def select_program(cfg: ClusterConfig = None) -> ClusterProgram:
+def select_program(cfg: ClusterConfig | None = None) -> ClusterProgram:
     """Feasible regions of the delays and the minimax selection (seed 004 Eq. 5), exhaustive over the delay grid.
 
     Cluster members: delays on the grid, each safe from the OS (3), every pair safe and within r** (4); among those,
@@ -516,21 +720,70 @@ class Draws:
     psi: np.ndarray
 
 
-def draw(cfg: ClusterConfig, samples, seed=0) -> Draws:
-    """The two transverse angular-velocity components, independent N(0, sigma^2)."""
+def draw(cfg: ClusterConfig, samples: int, seed: int | None = 0) -> Draws:
+    """The two transverse angular-velocity components, independent N(0, sigma^2).
+
+    Parameters
+    ----------
+    cfg : ClusterConfig
+        sigma.
+    samples : int
+        How many.
+    seed : int or None
+        The generator's seed.
+
+    Returns
+    -------
+    Draws
+        Tumbling rates Omega [rad/s] and axis azimuths psi [rad], each ``(samples,)``.
+    """
     rng = np.random.default_rng(seed)
     w = rng.normal(0.0, cfg.sigma, size=(2, int(samples)))
     return Draws(np.hypot(w[0], w[1]), np.arctan2(w[1], w[0]))
 
 
-def separation_velocity(draws: Draws, v, dt):
-    """V (cos theta, sin theta sin psi, -sin theta cos psi), theta = Omega dt: ``(samples, 3)`` [m/s]."""
+def separation_velocity(draws: Draws, v: float, dt: float) -> np.ndarray:
+    """V (cos theta, sin theta sin psi, -sin theta cos psi), theta = Omega dt.
+
+    Parameters
+    ----------
+    draws : Draws
+        The tumbling samples.
+    v : float
+        Separation speed [m/s].
+    dt : float
+        Delay [s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (samples, 3)
+        The separation velocity [m/s] (x along-track, y radial, z normal).
+    """
     th = draws.omega * dt
     return v * np.stack([np.cos(th), np.sin(th) * np.sin(draws.psi), -np.sin(th) * np.cos(draws.psi)], axis=-1)
 
 
-def simulated_positions(cfg, draws, sat, dt, t):
-    """Positions ``(samples, len(t), 3)`` of NS ``sat`` separated at ``dt`` w.r.t. the OS at times ``t``."""
+def simulated_positions(cfg: ClusterConfig, draws: Draws, sat: Nanosatellite, dt: float, t: ArrayLike) -> np.ndarray:
+    """Positions of NS ``sat`` separated at ``dt`` w.r.t. the OS at times ``t``.
+
+    Parameters
+    ----------
+    cfg : ClusterConfig
+        The problem.
+    draws : Draws
+        The tumbling samples.
+    sat : Nanosatellite
+        The NS.
+    dt : float
+        Its delay [s].
+    t : array_like, shape (T,)
+        Times [s from the program start].
+
+    Returns
+    -------
+    numpy.ndarray, shape (samples, T, 3)
+        Positions [m].
+    """
     v = separation_velocity(draws, sat.velocity, dt)
     tau = np.asarray(t, dtype=float) - dt
     p_x = drag_acceleration(-sat.delta_q, cfg.density, cfg.a)
@@ -548,8 +801,25 @@ def _min_distance(r):
     return np.sqrt(np.maximum(np.minimum(y1 - 0.25 * (y0 - y2) * off, np.min(d2, axis=-1)), 0.0))
 
 
-def simulated_platform_safety(cfg, draws, sat, delays):
-    """Statistical condition (3): fraction of samples with |r_i(t)| >= r* over the whole window, per delay."""
+def simulated_platform_safety(cfg: ClusterConfig, draws: Draws, sat: Nanosatellite, delays: ArrayLike) -> np.ndarray:
+    """Statistical condition (3): fraction of samples with |r_i(t)| >= r* over the whole window, per delay.
+
+    Parameters
+    ----------
+    cfg : ClusterConfig
+        The problem.
+    draws : Draws
+        The tumbling samples.
+    sat : Nanosatellite
+        The NS.
+    delays : array_like, shape (D,)
+        Delays [s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (D,)
+        The fraction of safe samples per delay.
+    """
     tau = _time_grid(cfg, cfg.departure_time, cfg.horizon - cfg.departure_time)
     out = np.empty(len(delays))
     for k, dt in enumerate(np.asarray(delays, dtype=float)):  # loop over cases; samples are vectorized
@@ -558,11 +828,25 @@ def simulated_platform_safety(cfg, draws, sat, delays):
     return out
 
 
-def simulate_program(cfg: ClusterConfig, delays, draws: Draws):
+def simulate_program(cfg: ClusterConfig, delays: ArrayLike, draws: Draws) -> dict:
     """Statistical check of a program: per-sample outcomes of every condition, vectorized over samples.
 
     Returns dict with ``p_safe`` (all conditions at once), ``p_platform`` per NS, ``p_pairs`` (safe, within r**)
     per pair, and ``max_pair_distance_quantile`` (the P* quantile of the largest cluster pair distance).
+
+    Parameters
+    ----------
+    cfg : ClusterConfig
+        The problem.
+    delays : array_like, shape (n_sats,)
+        The program's delay of each NS [s], finite.
+    draws : Draws
+        The tumbling samples.
+
+    Returns
+    -------
+    dict
+        The probabilities and the distance quantile [m].
     """
     sats, d = cfg.sats, np.asarray(delays, dtype=float)
     if not np.all(np.isfinite(d)) or len(d) != len(sats):
@@ -596,8 +880,28 @@ def simulate_program(cfg: ClusterConfig, delays, draws: Draws):
             "max_pair_distance_quantile": float(np.quantile(worst, cfg.p_required))}
 
 
-def statistical_min_delay_difference(cfg, draws, si, sj, dt_i, differences):
-    """Smallest delay difference dt_j - dt_i (from ``differences``) with P(r_ij >= r* throughout) >= P*."""
+def statistical_min_delay_difference(cfg: ClusterConfig, draws: Draws, si: Nanosatellite, sj: Nanosatellite,
+                                     dt_i: float, differences: ArrayLike) -> float | None:
+    """Smallest delay difference dt_j - dt_i (from ``differences``) with P(r_ij >= r* throughout) >= P*.
+
+    Parameters
+    ----------
+    cfg : ClusterConfig
+        The problem.
+    draws : Draws
+        The tumbling samples.
+    si, sj : Nanosatellite
+        The pair.
+    dt_i : float
+        The delay of NS i [s].
+    differences : array_like
+        Candidate differences [s], tried in order.
+
+    Returns
+    -------
+    float or None
+        The first difference [s] that meets P*, None if none does.
+    """
     t_len = cfg.horizon
     for dd in np.asarray(differences, dtype=float):  # loop over cases; samples are vectorized
         dt_j = dt_i + dd

@@ -40,6 +40,7 @@ bound clears it is done. Other cells split, down to a depth limit after which th
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .cluster_dynamics import drag_offset, hcw_terms, singular_values
 
@@ -48,16 +49,32 @@ MAX_DEPTH = 14  # halvings of a cell before an undecided case counts as failed (
 CHUNK_CASES = 64  # cases decided together: the working arrays stay in cache (bench/bench_cluster.py)
 
 
-def omega_bound(sigma, p_required):
-    """Omega* [rad/s] with P(Omega <= Omega*) = P* for Omega ~ Rayleigh(sigma): sigma sqrt(-2 ln(1 - P*))."""
+def omega_bound(sigma: float, p_required: float) -> float:
+    """Omega* [rad/s] with P(Omega <= Omega*) = P* for Omega ~ Rayleigh(``sigma`` [rad/s]): sigma sqrt(-2 ln(1 - P*)),
+    P* = ``p_required`` in [0, 1)."""
     return float(sigma * np.sqrt(-2.0 * np.log1p(-p_required)))
 
 
-def psi_extrema(ux, uy, wx, wy, h):
+def psi_extrema(ux: ArrayLike, uy: ArrayLike, wx: ArrayLike, wy: ArrayLike,
+                h: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """(min, max) over psi of |r|^2 = |u + s w|^2 + (1 - s^2) h^2, s = sin psi in [-1, 1] (module docstring).
 
     The quadratic alpha + 2 beta s + gamma s^2 takes its extrema at s = +-1 or at its vertex s0 = -beta/gamma when
     that lies inside: a minimum there if gamma > 0, a maximum if gamma < 0.
+
+    Parameters
+    ----------
+    ux, uy : array_like
+        In-plane components of u [m].
+    wx, wy : array_like
+        In-plane components of w [m].
+    h : array_like
+        The normal amplitude [m]; all five broadcast.
+
+    Returns
+    -------
+    (lo, hi) : numpy.ndarray
+        The extrema of |r|^2 [m^2] (lo >= 0).
     """
     alpha = ux * ux + uy * uy + h * h
     beta = ux * wx + uy * wy
@@ -138,7 +155,9 @@ def _split(k, omega, delta):
     return np.repeat(k, 2), np.stack([omega - half, omega + half], axis=-1).ravel(), half
 
 
-def conditions(vi, dti, pi, vj, dtj, pj, t, n, omega_star, r_min, r_max=None):
+def conditions(vi: ArrayLike, dti: ArrayLike, pi: ArrayLike, vj: ArrayLike, dtj: ArrayLike, pj: ArrayLike,
+               t: ArrayLike, n: float, omega_star: float, r_min: float,
+               r_max: float | None = None) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
     """Conditions (3)-(5) on S* for NS i against NS j: arrays over cases ``(C,)`` (speeds [m/s], delays [s], drag
     accelerations [m/s^2]), times ``t`` ``(C, T)`` [s from the program start]; against the OS: V_j = 0, p_j = 0.
 
@@ -146,6 +165,30 @@ def conditions(vi, dti, pi, vj, dtj, pj, t, n, omega_star, r_min, r_max=None):
     (|r| <= ``r_max``) and upper, an upper bound of max |r| [m] over the times and S*, tight to r_max / 1000 where
     the case is within (the minimax cost). Returns (clear, within, upper); the last two None without ``r_max``.
     :data:`CHUNK_CASES` cases are decided together (bench/bench_cluster.py measures the choice).
+
+    Parameters
+    ----------
+    vi, vj : array_like, shape (C,)
+        Ejection speeds of NS i and j [m/s].
+    dti, dtj : array_like, shape (C,)
+        Their ejection delays [s from the program start].
+    pi, pj : array_like, shape (C,)
+        Their drag accelerations [m/s^2].
+    t : array_like, shape (C, T)
+        Sample times [s from the program start].
+    n : float
+        The platform's mean motion [rad/s].
+    omega_star : float
+        The bound of the angular rate Omega [rad/s] (:func:`omega_bound`).
+    r_min : float
+        The least allowed distance [m].
+    r_max : float, optional
+        The largest allowed distance [m].
+
+    Returns
+    -------
+    (clear, within, upper)
+        Boolean ``(C,)``, boolean ``(C,)`` and the upper bound ``(C,)`` [m] (the last two None without ``r_max``).
     """
     args = [np.asarray(x, dtype=float) for x in (vi, dti, pi, vj, dtj, pj)]
     t = np.asarray(t, dtype=float)

@@ -36,7 +36,9 @@ at the deployment altitude.
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from ...errors import show
 from ..constants import SECONDS_PER_DAY
 from ..relmotion.dynamics import arg_latitude_rate, ballistic_coefficient, drag_da_dot, propagate
 from ..relmotion.maneuvers import delta_roe
@@ -63,7 +65,7 @@ class CubeSat:
     mass: float = 24.0  # kg
 
     @property
-    def ballistic(self):
+    def ballistic(self) -> float:
         """B = c_d A / m [m^2/kg]."""
         return ballistic_coefficient(self.cd, self.area, self.mass)
 
@@ -86,19 +88,19 @@ class DeploymentConfig:
     j2: bool = True  # linear model only: the nonlinear model always carries J2-J4
     model: str = "nonlinear"  # "nonlinear" (heyoka, J2-J4 + drag) or "linear" (secular ROE model)
 
-    def validate(self):
-        """Raise ValueError naming the first bad field."""
+    def validate(self) -> "DeploymentConfig":
+        """Raise ValueError naming the first bad field; ``self`` otherwise."""
         if not (np.isfinite(self.altitude) and 100e3 <= self.altitude <= 5000e3):
             raise ValueError(f"altitude must be between 100 km and 5000 km [m], got {self.altitude}")
         for name in ("inclinations_deg", "dv", "angles_deg"):
             v = np.asarray(getattr(self, name), dtype=float)
             if v.ndim != 1 or v.size == 0 or not np.all(np.isfinite(v)):
-                raise ValueError(f"{name} must be a non-empty list of finite numbers, got {getattr(self, name)!r}")
+                raise ValueError(f"{name} must be a non-empty list of finite numbers, got {show(getattr(self, name))}")
         inc = np.asarray(self.inclinations_deg, dtype=float)
         if np.any((inc <= 0.0) | (inc >= 180.0)):
-            raise ValueError(f"inclinations_deg must lie in (0, 180) deg, got {list(inc)}")
+            raise ValueError(f"inclinations_deg must lie in (0, 180) deg, got {show(inc)}")
         if np.any(np.asarray(self.dv, dtype=float) <= 0.0):
-            raise ValueError(f"dv must be positive [m/s], got {list(self.dv)}")
+            raise ValueError(f"dv must be positive [m/s], got {show(list(self.dv))}")
         if not (np.isfinite(self.days) and 0.0 < self.days <= 60.0):
             raise ValueError(f"days must be in (0, 60], got {self.days}")
         if not (np.isfinite(self.step) and 1.0 <= self.step <= 0.25 * self.days * SECONDS_PER_DAY):
@@ -107,7 +109,7 @@ class DeploymentConfig:
             raise ValueError(f"density must be finite and non-negative [kg/m^3], got {self.density}")
         c = self.cubesat
         if not all(np.isfinite(x) and x > 0 for x in (c.cd, c.area, c.mass)):
-            raise ValueError(f"cubesat: cd, area and mass must be finite and positive, got {c}")
+            raise ValueError(f"cubesat: cd, area and mass must be finite and positive, got {show(c)}")
         if not (np.isfinite(self.mother_ballistic) and self.mother_ballistic >= 0.0):
             raise ValueError(f"mother_ballistic must be finite and non-negative [m^2/kg], got {self.mother_ballistic}")
         if not np.isfinite(self.u0_deg):
@@ -123,16 +125,17 @@ class DeploymentConfig:
         return self
 
     @property
-    def a(self):
+    def a(self) -> float:
+        """Semi-major axis [m] of the mother craft's circular orbit."""
         return float(semi_major_axis(self.altitude))
 
     @property
-    def delta_b(self):
+    def delta_b(self) -> float:
         """Differential ballistic coefficient B_cubesat - B_mother [m^2/kg]."""
         return self.cubesat.ballistic - self.mother_ballistic
 
 
-def deployment_dv_rtn(angle, dv):
+def deployment_dv_rtn(angle: ArrayLike, dv: ArrayLike) -> np.ndarray:
     """Deployer impulse in RTN [m/s] for the in-plane angle [rad] from +V-bar, clockwise (seed 003 Sec. 4.2).
 
     dv_RTN = dv [-sin(angle), cos(angle), 0]: 90 deg is +R-bar (towards the Earth, -R), 180 deg is -V-bar.
@@ -142,26 +145,76 @@ def deployment_dv_rtn(angle, dv):
     return np.stack([-dv * np.sin(angle), dv * np.cos(angle), np.zeros_like(dv)], axis=-1)
 
 
-def deployment_roe(dv_rtn, u0, a):
-    """ROE right after the deployment from a zero relative state: seed 002 Eq. (2), Delta(da) = G(u0) dv / (n a)."""
+def deployment_roe(dv_rtn: ArrayLike, u0: ArrayLike, a: float) -> np.ndarray:
+    """ROE right after the deployment from a zero relative state: seed 002 Eq. (2), Delta(da) = G(u0) dv / (n a).
+
+    Parameters
+    ----------
+    dv_rtn : array_like, shape (..., 3)
+        The deployer impulse [m/s] in RTN.
+    u0 : array_like
+        The mean argument of latitude of the deployment [rad].
+    a : float
+        The mother craft's semi-major axis [m].
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 6)
+        Dimensionless ROE.
+    """
     return delta_roe(dv_rtn, u0, a, mean_motion(a))
 
 
-def relative_motion(roe0, t, a, inc, da_dot=0.0, j2=True):
+def relative_motion(roe0: ArrayLike, t: ArrayLike, a: float, inc: ArrayLike, da_dot: ArrayLike = 0.0,
+                    j2: bool = True) -> np.ndarray:
     """Linear model: ROE ``(..., len(t), 6)`` at times ``t`` [s] after the deployment.
 
     The core's secular ROE model (:func:`~roe_sep.core.relmotion.dynamics.propagate`: Keplerian, J2, constant
-    differential-drag d(da)/dt; seed 002 Eqs. 23-24). ``roe0`` ``(..., 6)``; ``inc`` and ``da_dot`` broadcast
-    against ``roe0[..., 0]``.
+    differential-drag d(da)/dt; seed 002 Eqs. 23-24).
+
+    Parameters
+    ----------
+    roe0 : array_like, shape (..., 6)
+        Dimensionless ROE at the deployment.
+    t : array_like, shape (nt,)
+        Times after the deployment [s].
+    a : float
+        The mother craft's semi-major axis [m].
+    inc : array_like, shape (...)
+        Inclination [rad], broadcast against ``roe0[..., 0]``.
+    da_dot : array_like, shape (...)
+        Differential-drag rate of da [1/s].
+    j2 : bool
+        With the J2 secular rates.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., nt, 6)
+        Dimensionless ROE.
     """
     r0 = np.asarray(roe0, dtype=float)[..., None, :]
     inc = np.asarray(inc, dtype=float)[..., None]
     return propagate(r0, np.asarray(t, dtype=float), a, inc, j2, np.asarray(da_dot, dtype=float)[..., None])
 
 
-def relative_distance(roe, u, a):
+def relative_distance(roe: ArrayLike, u: ArrayLike, a: float) -> np.ndarray:
     """Distance [m] between CubeSat and mother craft: a |r/a| of :func:`~roe_sep.core.relmotion.roe.roe_to_rtn` at
-    ``u``."""
+    ``u``.
+
+    Parameters
+    ----------
+    roe : array_like, shape (..., 6)
+        Dimensionless ROE.
+    u : array_like, shape (...)
+        The mother craft's mean argument of latitude [rad].
+    a : float
+        Its semi-major axis [m].
+
+    Returns
+    -------
+    numpy.ndarray, shape (...)
+        The distance [m].
+    """
     pos, _ = roe_to_rtn(roe, u)
     return a * np.linalg.norm(pos, axis=-1)
 
@@ -187,11 +240,24 @@ def _nonlinear_distances(cfg, dv_rtn, inc, times):
     return np.linalg.norm(states[..., 6:9] - states[..., 0:3], axis=-1).reshape(shape + (len(times),))
 
 
-def distance_curves(cfg, dv_rtn, inc, times):
+def distance_curves(cfg: DeploymentConfig, dv_rtn: ArrayLike, inc: ArrayLike, times: ArrayLike) -> np.ndarray:
     """THE propagation of the deployment analysis: CubeSat-mother craft distance [m] ``(..., len(times))``.
 
-    ``dv_rtn`` ``(..., 3)`` deployer impulses [m/s] at ``cfg.u0_deg``, ``inc`` ``(...)`` inclinations [rad],
-    ``times`` sorted [s] after the deployment; the model is ``cfg.model`` (module docstring).
+    Parameters
+    ----------
+    cfg : DeploymentConfig
+        Altitude, u0, drag and the model (``cfg.model``, module docstring).
+    dv_rtn : array_like, shape (..., 3)
+        Deployer impulses [m/s] at ``cfg.u0_deg``.
+    inc : array_like, shape (...)
+        Inclinations [rad].
+    times : array_like, shape (nt,)
+        Sorted times after the deployment [s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., nt)
+        The distance [m].
     """
     dv_rtn = np.asarray(dv_rtn, dtype=float)
     inc = np.broadcast_to(np.asarray(inc, dtype=float), dv_rtn.shape[:-1])
@@ -201,7 +267,7 @@ def distance_curves(cfg, dv_rtn, inc, times):
     return _nonlinear_distances(cfg, dv_rtn, inc, times)
 
 
-def first_orbit_window(a, step=FIRST_ORBIT_STEP):
+def first_orbit_window(a: float, step: float = FIRST_ORBIT_STEP) -> np.ndarray:
     """Sample times [s] of the first return, t in [T/2, 3T/2] with T = 2 pi / n the Keplerian period."""
     period = 2.0 * np.pi / mean_motion(a)
     return np.arange(0.5 * period, 1.5 * period + step, step)
@@ -221,7 +287,7 @@ def _parabolic_min(t, d2):
     return t_min, np.minimum(np.maximum(d2_min, 0.0), np.min(d2, axis=-1))
 
 
-def first_orbit_min_distance(t, distance):
+def first_orbit_min_distance(t: ArrayLike, distance: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Closest approach [m] to the mother craft around the first return and its time [s], from the distances
     ``(..., len(t))`` sampled on :func:`first_orbit_window` ``t``.
 
@@ -247,10 +313,11 @@ class DeploymentSweep:
     t_min_first_orbit: np.ndarray  # (ni, nd, na)
 
     @property
-    def distance_end(self):
+    def distance_end(self) -> np.ndarray:
+        """Distance ``(ni, nd, na)`` [m] at the end of the drift."""
         return self.distance[..., -1]
 
-    def to_dict(self, curves=False):
+    def to_dict(self, curves: bool = False) -> dict:
         """The machine-readable sweep (the documented keys): cases, per-(inclination, dv) summary, config."""
         cfg = self.config
         cases, summary = [], []
@@ -289,7 +356,7 @@ class DeploymentSweep:
         return out
 
 
-def sweep(config: DeploymentConfig = None) -> DeploymentSweep:
+def sweep(config: DeploymentConfig | None = None) -> DeploymentSweep:
     """The deployment sweep of seed 003 Sec. 4.2, vectorized over inclinations x dv x angles (no Python loop):
     one propagation per case on the union of the output grid and the first-orbit window."""
     cfg = (config or DeploymentConfig()).validate()

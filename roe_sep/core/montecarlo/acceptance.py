@@ -28,13 +28,30 @@ from .sweep import Draws, MonteCarloConfig, draw
 AC2_DISTANCE = 2000.0  # m, seed 001 AC2
 
 
-def drift_free_threshold(a_dl_min, n, horizon):
-    """|a da| [m] below which a sample counts as 'almost no drift' for AC3: 1.5 n |a da| horizon < a_dl_min."""
+def drift_free_threshold(a_dl_min: float, n: float, horizon: float) -> float:
+    """|a da| [m] below which a sample counts as 'almost no drift' for AC3: 1.5 n |a da| horizon < a_dl_min.
+
+    Parameters
+    ----------
+    a_dl_min : float
+        The least along-track separation [m].
+    n : float
+        The carrier's mean motion [rad/s].
+    horizon : float
+        The time after the drift reduction [s].
+
+    Returns
+    -------
+    float
+        The threshold of |a da| [m].
+    """
     return a_dl_min / (1.5 * n * horizon)
 
 
 @dataclass
 class AcceptanceResult:
+    """Per-sample states and acceptance criteria AC1-AC3 of the multi-impulse Monte Carlo (seed 001)."""
+
     design: MultiImpulseDesign
     mc: MonteCarloConfig
     draws: Draws
@@ -49,7 +66,8 @@ class AcceptanceResult:
     ac2: np.ndarray
     ac3: np.ndarray  # True where satisfied or not applicable
 
-    def to_dict(self):
+    def to_dict(self) -> dict:
+        """Fractions and counts of AC1-AC3, the drift-free threshold and extremes (distances in m)."""
         a = self.design.a
         n_free = int(np.count_nonzero(self.drift_free))
         return {

@@ -38,17 +38,20 @@ Estimators of P(d_min <= R):
 
 import dataclasses
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..constants import ARCSEC
 from ..relmotion.dynamics import arg_latitude_rate, eccentricity_vector_rotation_rate, j2_kappa, propagate
 from ..relmotion.orbit import mean_motion
 from ..relmotion.roe import roe_to_rtn
+from ..separation.double_impulse import DoubleImpulseDesign
 from .stats import normal_interval, wilson_interval
 from .streaming import BLOCK_SIZE, ExactSum, block_draws
-from .sweep import Draws, after_stop, pre_stop
+from .sweep import Draws, MonteCarloConfig, after_stop, pre_stop
 
 DIMENSIONS = ("f1", "f2", "eps1_x", "eps1_y", "eps1_z", "eps2_x", "eps2_y", "eps2_z", "dB")
 N_DIM = len(DIMENSIONS)
@@ -66,7 +69,8 @@ class CollisionConfig:
     tol_abs: float = 1e-4  # m
     tol_rel: float = 1e-5
 
-    def validate(self):
+    def validate(self) -> None:
+        """Raise ValueError naming the first bad setting (the radius as its command-line option)."""
         r, dep = self.hard_body_radius, self.departure_distance
         if not (math.isfinite(dep) and dep > 0):
             raise ValueError(f"departure_distance must be a positive number of meters, got {dep}")
@@ -90,15 +94,43 @@ def _loc_scale(design, mc):
     return loc, scale
 
 
-def draws_from_normal(design, mc, z) -> Draws:
-    """Draws of :func:`.sweep.draw` from standard normals ``z`` (n, 9): x = loc + scale z, as numpy's normal()."""
+def draws_from_normal(design: DoubleImpulseDesign, mc: MonteCarloConfig, z: ArrayLike) -> Draws:
+    """Draws of :func:`.sweep.draw` from standard normals ``z`` (n, 9): x = loc + scale z, as numpy's normal().
+
+    Parameters
+    ----------
+    design : DoubleImpulseDesign
+        The nominal design.
+    mc : MonteCarloConfig
+        Dispersions, drag, J2, horizon.
+    z : array_like, shape (n, 9)
+        Standard normals in the order of ``DIMENSIONS``.
+
+    Returns
+    -------
+    Draws
+        n samples.
+    """
     loc, scale = _loc_scale(design, mc)
     x = loc + scale * np.asarray(z, dtype=float)
     return Draws(f1=x[:, 0], f2=x[:, 1], eps1=x[:, 2:5], eps2=x[:, 5:8], db_factor=x[:, 8])
 
 
-def normal_from_draws(design, mc, d: Draws):
-    """Inverse of :func:`draws_from_normal`."""
+def normal_from_draws(design: DoubleImpulseDesign, mc: MonteCarloConfig, d: Draws) -> np.ndarray:
+    """Inverse of :func:`draws_from_normal`.
+
+    Parameters
+    ----------
+    design, mc
+        As for :func:`draws_from_normal`.
+    d : Draws
+        n samples.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, 9)
+        Their standard normals.
+    """
     loc, scale = _loc_scale(design, mc)
     x = np.column_stack([d.f1, d.f2, d.eps1, d.eps2, d.db_factor])
     return (x - loc) / scale
@@ -151,7 +183,24 @@ def _bounds(roe, da_dot, a, inc, j2, duration):
     return 1.05 * a * np.hypot(v_rt, v_n), 1.05 * a * np.sqrt(acc_r**2 + acc_t**2 + acc_n**2)
 
 
-def arcs(design, mc, d: Draws, p: float) -> Arcs:
+def arcs(design: DoubleImpulseDesign, mc: MonteCarloConfig, d: Draws, p: float) -> Arcs:
+    """The two arcs of every sample (ejection to drift-stop, drift-stop to the horizon) with the speed and
+    acceleration bounds of the branch and bound.
+
+    Parameters
+    ----------
+    design, mc
+        As for :func:`draws_from_normal`.
+    d : Draws
+        n samples.
+    p : float
+        The drift-stop reduction [m/s].
+
+    Returns
+    -------
+    Arcs
+        Per-sample ROE ``(2, n, 6)`` at the drift-stop and the bounds ``(2, n)`` [m/s, m/s^2].
+    """
     pre = pre_stop(design, mc, d)
     out = after_stop(design, mc, d, pre, p)
     a, inc = design.a, design.inc
@@ -174,7 +223,7 @@ def _dist2(arc: Arcs, idx, t):
     return np.sum(pos * pos, axis=-1) * arc.a**2
 
 
-def time_grid(arc: Arcs, steps_per_orbit):
+def time_grid(arc: Arcs, steps_per_orbit: int) -> np.ndarray:
     """Grid times [s]: both arcs at about ``steps_per_orbit`` points per orbit, the drift-stop epoch included."""
     h = 2.0 * math.pi / arc.u_rate / steps_per_orbit
     ta = np.linspace(0.0, arc.t_stop, int(math.ceil(arc.t_stop / h)) + 1)
@@ -208,9 +257,24 @@ def _branch_and_bound(arc, idx, t0, t1, f0, f1, best, tol_abs, tol_rel, max_leve
     raise RuntimeError("minimum distance: the branch and bound did not converge")
 
 
-def min_distance(design, mc, d: Draws, cfg: CollisionConfig):
+def min_distance(design: DoubleImpulseDesign, mc: MonteCarloConfig, d: Draws, cfg: CollisionConfig) -> np.ndarray:
     """Closest approach [m] after the departure for every sample (``inf``: never left the departure sphere or never
-    came back towards the carrier), certified to ``tol`` (module docstring)."""
+    came back towards the carrier), certified to ``tol`` (module docstring).
+
+    Parameters
+    ----------
+    design, mc
+        As for :func:`draws_from_normal`.
+    d : Draws
+        n samples.
+    cfg : CollisionConfig
+        Reduction, departure distance, grid and tolerances.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n,)
+        The closest approach of each sample [m].
+    """
     n = d.f1.shape[0]
     out = np.empty(n)
     for lo in range(0, n, SUB_BATCH):
@@ -274,7 +338,8 @@ class CollisionStats:
         self.sum_h = self.sum_h or ExactSum()
         self.sum_h2 = self.sum_h2 or ExactSum()
 
-    def merge(self, o: "CollisionStats"):
+    def merge(self, o: "CollisionStats") -> "CollisionStats":
+        """Add the sums of ``o`` (other samples of the same estimator); returns ``self``."""
         self.n += o.n
         self.hits += o.hits
         self.departed_never += o.departed_never
@@ -291,14 +356,16 @@ class Proposal:
     mean: np.ndarray
     cov: np.ndarray
 
-    def chol(self):
+    def chol(self) -> np.ndarray:
+        """The lower Cholesky factor ``(9, 9)`` of the covariance."""
         return np.linalg.cholesky(self.cov)
 
-    def sample(self, rng, n):
+    def sample(self, rng: np.random.Generator, n: int) -> np.ndarray:
+        """``n`` points ``(n, 9)`` of the proposal."""
         return self.mean + rng.standard_normal((n, self.mean.size)) @ self.chol().T
 
-    def log_weight(self, z):
-        """log phi(z) - log q(z)."""
+    def log_weight(self, z: np.ndarray) -> np.ndarray:
+        """log phi(z) - log q(z) ``(n,)`` of points ``z`` ``(n, 9)``."""
         c = self.chol()
         y = np.linalg.solve(c, (z - self.mean).T).T
         return -0.5 * np.sum(z * z, axis=1) + 0.5 * np.sum(y * y, axis=1) + np.sum(np.log(np.diag(c)))
@@ -324,8 +391,28 @@ def _chunk_draws(chunk, design, mc, proposal, block):
     return d, (np.concatenate(logw) if logw else None), [x.f1.shape[0] for x in parts]
 
 
-def evaluate_chunk(chunk, design, mc, cfg: CollisionConfig, proposal=None, block=BLOCK_SIZE) -> CollisionStats:
-    """Collision statistics of one chunk ``(first block, number of blocks)``; ``proposal`` None: brute force."""
+def evaluate_chunk(chunk: tuple[int, int], design: DoubleImpulseDesign, mc: MonteCarloConfig, cfg: CollisionConfig,
+                   proposal: Proposal | None = None, block: int = BLOCK_SIZE) -> CollisionStats:
+    """Collision statistics of one chunk ``(first block, number of blocks)``; ``proposal`` None: brute force.
+
+    Parameters
+    ----------
+    chunk : (int, int)
+        ``(first block, number of blocks)``.
+    design, mc
+        As for :func:`draws_from_normal`.
+    cfg : CollisionConfig
+        Hard-body radius, reduction, tolerances.
+    proposal : Proposal, optional
+        The importance density (its own random streams); None: the Monte Carlo blocks of ``mc``.
+    block : int
+        Samples per random-number block.
+
+    Returns
+    -------
+    CollisionStats
+        Counts and the exact sums of the chunk.
+    """
     d, logw, sizes = _chunk_draws(chunk, design, mc, proposal, block)
     dist = min_distance(design, mc, d, cfg)
     hit = dist <= cfg.hard_body_radius
@@ -351,8 +438,10 @@ def _fit(z, w, min_std):
     return Proposal(mean, (vec * np.maximum(lam, min_std**2)) @ vec.T)
 
 
-def cross_entropy(design, mc, cfg: CollisionConfig, samples_per_level=2000, rho=0.1, max_levels=25, progress=None,
-                  min_std=1.0, patience=4):
+def cross_entropy(design: DoubleImpulseDesign, mc: MonteCarloConfig, cfg: CollisionConfig,
+                  samples_per_level: int = 2000, rho: float = 0.1, max_levels: int = 25,
+                  progress: Callable[[int, float], object] | None = None, min_std: float = 1.0,
+                  patience: int = 4) -> tuple[Proposal, list, bool]:
     """Multilevel cross-entropy tuning of the Gaussian proposal (module docstring).
 
     Level t samples ``samples_per_level`` points of the current proposal; gamma_t = max(R, rho-quantile of d_min);
@@ -363,6 +452,30 @@ def cross_entropy(design, mc, cfg: CollisionConfig, samples_per_level=2000, rho=
     gamma stopped decreasing for ``patience`` levels or ``max_levels`` ran out before R (a failure set too thin for
     one Gaussian; the caller then bounds P(d <= R) by P(d <= the smallest gamma)). ValueError when fewer than
     max(10, rho n) samples of a level come back after the departure: nothing to steer by.
+
+    Parameters
+    ----------
+    design, mc
+        As for :func:`draws_from_normal`.
+    cfg : CollisionConfig
+        The hard-body radius R [m] the levels aim at.
+    samples_per_level : int
+        Points per level.
+    rho : float
+        The elite quantile, in (0, 1).
+    max_levels : int
+        The most levels.
+    progress : callable, optional
+        Called with (level, gamma [m]) after each level.
+    min_std : float
+        The least principal standard deviation of a proposal (standard-normal units).
+    patience : int
+        Levels without a lower gamma before giving up.
+
+    Returns
+    -------
+    (Proposal, list of dict, bool)
+        The proposal, the levels and whether gamma reached R.
     """
     dim = N_DIM
     prop = Proposal(np.zeros(dim), np.eye(dim))
@@ -400,7 +513,24 @@ def cross_entropy(design, mc, cfg: CollisionConfig, samples_per_level=2000, rho=
 
 
 def estimate(stats: CollisionStats, cfg: CollisionConfig, method: str) -> dict:
-    """p, its 95 % interval, the samples behind it and the effective sample size (module docstring)."""
+    """p, its 95 % interval, the samples behind it and the effective sample size (module docstring).
+
+    Parameters
+    ----------
+    stats : CollisionStats
+        The merged statistics of every chunk.
+    cfg : CollisionConfig
+        Radius [m], reduction [m/s] and departure distance [m], reported.
+    method : str
+        ``mc`` (brute force: Wilson interval) or an importance-sampling method (normal interval of the weighted
+        mean).
+
+    Returns
+    -------
+    dict
+        ``p``, ``ci95``, ``relative_half_width``, ``samples``, ``ess``, ``hits``, the closest approach [m] and the
+        settings.
+    """
     n = stats.n
     if method == "mc":
         p = stats.hits / n
@@ -433,14 +563,30 @@ def estimate(stats: CollisionStats, cfg: CollisionConfig, method: str) -> dict:
 # design point: the most probable collision (FORM), and the bound it gives
 
 
-def closest_approach(design, mc, cfg: CollisionConfig, z):
+def closest_approach(design: DoubleImpulseDesign, mc: MonteCarloConfig, cfg: CollisionConfig, z: ArrayLike) -> float:
     """Certified closest approach [m] of one point ``z`` (9,) of the standard-normal dispersion space (``1e4`` for
-    a sample that never comes back: finite, for an optimizer)."""
+    a sample that never comes back: finite, for an optimizer).
+
+    Parameters
+    ----------
+    design, mc
+        As for :func:`draws_from_normal`.
+    cfg : CollisionConfig
+        Reduction, departure distance, tolerances.
+    z : array_like, shape (9,)
+        The point.
+
+    Returns
+    -------
+    float
+        The closest approach [m].
+    """
     v = float(min_distance(design, mc, draws_from_normal(design, mc, np.atleast_2d(z)), cfg)[0])
     return v if math.isfinite(v) else 1e4
 
 
-def design_point(design, mc, cfg: CollisionConfig, starts, maxiter=60):
+def design_point(design: DoubleImpulseDesign, mc: MonteCarloConfig, cfg: CollisionConfig, starts: ArrayLike,
+                 maxiter: int = 60) -> tuple[np.ndarray | None, float | None, list]:
     """The design point of reliability analysis (Hasofer-Lind): the point of the failure set {d(z) <= R} nearest
     to the origin of the standard-normal space, i.e. the most probable collision, by SLSQP (min |z|^2 subject to
     d(z) <= R, forward-difference constraint gradient) from each start (e.g. the closest samples of a stalled
@@ -450,7 +596,24 @@ def design_point(design, mc, cfg: CollisionConfig, starts, maxiter=60):
     Meaning: every z with |z| < rho_true (the true minimum) is collision-free, so P(d <= R) <=
     P(chi2_9 >= rho_true^2). A local optimizer from several starts finds a feasible z with |z| >= rho_true, so
     the bound computed from the rho* found is as good as the search: it is exact if the runs found the global
-    minimum (they are independent starts; their spread is reported), not a certificate."""
+    minimum (they are independent starts; their spread is reported), not a certificate.
+
+    Parameters
+    ----------
+    design, mc
+        As for :func:`draws_from_normal`.
+    cfg : CollisionConfig
+        The hard-body radius R [m].
+    starts : array_like, shape (k, 9)
+        Start points in the standard-normal space.
+    maxiter : int
+        SLSQP iterations per start.
+
+    Returns
+    -------
+    (numpy.ndarray or None, float or None, list of dict)
+        z* ``(9,)``, rho* = |z*| and the runs.
+    """
     from scipy.optimize import minimize  # only here: scipy.optimize is not needed by the sampling
 
     r = cfg.hard_body_radius
@@ -470,7 +633,7 @@ def design_point(design, mc, cfg: CollisionConfig, starts, maxiter=60):
     return best[0], best[1], runs
 
 
-def ball_bound(rho, dim=N_DIM):
+def ball_bound(rho: float, dim: int = N_DIM) -> float:
     """P(|z| >= rho) for z ~ N(0, I_dim): the Gaussian mass outside the ball of radius ``rho`` (chi-square tail)."""
     from scipy.stats import chi2
 

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ...errors import show
 from ..relmotion.dynamics import drag_da_dot, propagate
 from ..separation.double_impulse import DoubleImpulseDesign
 from .sweep import Draws, MonteCarloConfig, drift_stop_delta_roe, ejection_roe, time_to_stop
@@ -41,12 +42,13 @@ class EvaporationModel:
     db_factor: np.ndarray  # (N,) the drawn dB factors
 
     @property
-    def samples(self):
+    def samples(self) -> int:
+        """N, the number of draws."""
         return self.db_factor.shape[0]
 
-    def along_track(self, horizon=None, db=None):
-        """a dl [m] ``horizon`` [s] after the drift-stop (default ``mc.horizon``) with dB factors ``db``
-        (default: the drawn ones)."""
+    def along_track(self, horizon: float | None = None, db: np.ndarray | None = None) -> np.ndarray:
+        """a dl ``(N,)`` [m] ``horizon`` [s] after the drift-stop (default ``mc.horizon``) with dB factors ``db``
+        ``(N,)`` (default: the drawn ones)."""
         d, mc = self.design, self.mc
         h = mc.horizon if horizon is None else float(horizon)
         db = self.db_factor if db is None else db
@@ -55,8 +57,9 @@ class EvaporationModel:
                 + propagate(np.zeros(6), h, d.a, d.inc, mc.j2, self.unit_da_dot))[1]
         return (free + db * drag) * d.a
 
-    def db(self, ballistic_sigma=None, db_scale=1.0):
-        """dB factors with another relative 1-sigma (the same deviates) and a scale of the nominal dB."""
+    def db(self, ballistic_sigma: float | None = None, db_scale: float = 1.0) -> np.ndarray:
+        """dB factors ``(N,)`` with another relative 1-sigma (the same deviates; None: the drawn one) and a scale of
+        the nominal dB."""
         if ballistic_sigma is None:
             return db_scale * self.db_factor
         sigma = self.mc.ballistic_sigma
@@ -64,20 +67,53 @@ class EvaporationModel:
             raise ValueError("ballistic_sigma of the draws is 0: no deviates to rescale")
         return db_scale * (1.0 + (float(ballistic_sigma) / sigma) * (self.db_factor - 1.0))
 
-    def count(self, horizon=None, ballistic_sigma=None, db_scale=1.0):
-        """Number of samples with |a dl| > ``mc.evaporation_distance`` (seed 002 Table 3's evaporation)."""
+    def count(self, horizon: float | None = None, ballistic_sigma: float | None = None, db_scale: float = 1.0) -> int:
+        """Number of samples with |a dl| > ``mc.evaporation_distance`` (seed 002 Table 3's evaporation).
+
+        Parameters
+        ----------
+        horizon : float, optional
+            After the drift-stop [s] (default ``mc.horizon``).
+        ballistic_sigma : float, optional
+            Relative 1-sigma of dB (default the drawn one).
+        db_scale : float
+            Factor on the nominal dB.
+
+        Returns
+        -------
+        int
+            The count among the N samples.
+        """
         dl = self.along_track(horizon, self.db(ballistic_sigma, db_scale))
         return int(np.count_nonzero(np.abs(dl) > self.mc.evaporation_distance))
 
-    def fraction(self, **kw):
+    def fraction(self, **kw) -> float:
+        """:meth:`count` over the number of samples (the keywords of :meth:`count`)."""
         return self.count(**kw) / self.samples
 
-    def solve(self, target, parameter, lo, hi, rel_tol=1e-4):
+    def solve(self, target: float, parameter: str, lo: float, hi: float, rel_tol: float = 1e-4) -> float | None:
         """The smallest value of ``parameter`` (one of ``PARAMETERS``) in [lo, hi] at which the evaporation fraction
         reaches ``target``, by bisection (the fraction grows with each of them); ``None`` when it stays below
-        ``target`` at ``hi``. The other two keep the set-up's values."""
+        ``target`` at ``hi``. The other two keep the set-up's values.
+
+        Parameters
+        ----------
+        target : float
+            The evaporation fraction, in [0, 1].
+        parameter : str
+            ``horizon`` [s], ``ballistic_sigma`` (relative) or ``db_scale``.
+        lo, hi : float
+            The bracket, in the parameter's unit.
+        rel_tol : float
+            The bisection stops at a bracket narrower than ``rel_tol * hi``.
+
+        Returns
+        -------
+        float or None
+            The value (the upper end of the final bracket), or None.
+        """
         if parameter not in PARAMETERS:
-            raise ValueError(f"parameter must be one of {PARAMETERS}, got {parameter!r}")
+            raise ValueError(f"parameter must be one of {PARAMETERS}, got {show(parameter)}")
 
         def frac(x):
             return self.fraction(**{parameter: x})
@@ -94,7 +130,24 @@ class EvaporationModel:
 
 def evaporation_model(design: DoubleImpulseDesign, mc: MonteCarloConfig, d: Draws, p: float) -> EvaporationModel:
     """The affine evaporation model of reduction ``p`` [m/s] on the draws ``d`` (the sweep's functions for the
-    ejection and the Eq. 18 drift-stop)."""
+    ejection and the Eq. 18 drift-stop).
+
+    Parameters
+    ----------
+    design : DoubleImpulseDesign
+        The nominal design.
+    mc : MonteCarloConfig
+        Drag, density, J2, horizon and evaporation distance.
+    d : Draws
+        The dispersions of N samples.
+    p : float
+        The reduction [m/s].
+
+    Returns
+    -------
+    EvaporationModel
+        a dl = L + dB s per sample, evaluated by its methods.
+    """
     a, inc = design.a, design.inc
     dt_stop = time_to_stop(design, mc)
     roe_stop = propagate(ejection_roe(design, d), dt_stop, a, inc, mc.j2, 0.0) + drift_stop_delta_roe(design, d, p)

@@ -13,10 +13,12 @@ No Python loop runs over samples: every quantity is an array over the sample axi
 """
 
 import functools
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from ...errors import show
 from ..constants import ARCSEC, SECONDS_PER_DAY
 from ..relmotion.dynamics import arg_latitude_rate, ballistic_coefficient, drag_da_dot, propagate
 from ..relmotion.maneuvers import delta_roe, dispersed_dv
@@ -36,7 +38,7 @@ class Spacecraft:
     mass: float  # kg
 
     @property
-    def ballistic(self):
+    def ballistic(self) -> float:
         """B = c_d A / m [m^2/kg]."""
         return ballistic_coefficient(self.cd, self.area, self.mass)
 
@@ -58,13 +60,14 @@ class MonteCarloConfig:
     evaporation_distance: float = 50e3  # m
 
     @property
-    def delta_b(self):
+    def delta_b(self) -> float:
         """Nominal differential ballistic coefficient B_picosat - B_carrier [m^2/kg] (0.0151 in seed 002)."""
         return self.picosat.ballistic - self.carrier.ballistic
 
-    def validate(self):
+    def validate(self) -> None:
+        """Raise ValueError naming the first bad setting."""
         if isinstance(self.samples, bool) or not isinstance(self.samples, (int, np.integer)) or self.samples < 1:
-            raise ValueError(f"samples must be a positive integer, got {self.samples!r}")
+            raise ValueError(f"samples must be a positive integer, got {show(self.samples)}")
         for name in ("attitude_sigma_arcsec", "ballistic_sigma", "density", "horizon", "evaporation_distance"):
             v = getattr(self, name)
             if not np.isfinite(v) or v < 0:
@@ -72,7 +75,7 @@ class MonteCarloConfig:
         for who in ("carrier", "picosat"):
             sc = getattr(self, who)
             if not all(np.isfinite(x) and x > 0 for x in (sc.cd, sc.area, sc.mass)):
-                raise ValueError(f"{who}: cd, area and mass must be finite and positive, got {sc}")
+                raise ValueError(f"{who}: cd, area and mass must be finite and positive, got {show(sc)}")
 
 
 @dataclass(frozen=True)
@@ -119,24 +122,50 @@ class Outcome:
     min_rn: np.ndarray  # m, Eq. (25) after the drift-stop
 
 
-def ejection_roe(design: DoubleImpulseDesign, d: Draws):
-    """Dimensionless ROE right after the dispersed ejection (Eq. 2 of the burn of Eq. 22, f1 and eps1)."""
+def ejection_roe(design: DoubleImpulseDesign, d: Draws) -> np.ndarray:
+    """Dimensionless ROE ``(N, 6)`` right after the dispersed ejection (Eq. 2 of the burn of Eq. 22, f1 and eps1)."""
     return delta_roe(dispersed_dv(design.dv1_rtn, d.f1, d.eps1), design.u1, design.a, design.n)
 
 
-def drift_stop_delta_roe(design: DoubleImpulseDesign, d: Draws, p: float):
+def drift_stop_delta_roe(design: DoubleImpulseDesign, d: Draws, p: float) -> np.ndarray:
     """ROE change of the drift-stop commanded with reduction ``p`` and executed as Eq. (18): the thruster error f2
-    on the unreduced burn, |p| subtracted after it, attitude errors of Eq. (22)."""
+    on the unreduced burn, |p| subtracted after it, attitude errors of Eq. (22).
+
+    Parameters
+    ----------
+    design : DoubleImpulseDesign
+        The nominal design (the commanded ejection, u2, a, n).
+    d : Draws
+        The dispersions of N samples (f2, eps2 used).
+    p : float
+        The reduction [m/s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, 6)
+        The dimensionless ROE change of each sample.
+    """
     dv2 = dispersed_dv(design.drift_stop_dv(p), d.f2, d.eps2, design.drift_stop_dv(0.0))
     return delta_roe(dv2, design.u2, design.a, design.n)
 
 
-def drift_stop_delta_roe_fast(design: DoubleImpulseDesign, d: Draws, p: float):
+def drift_stop_delta_roe_fast(design: DoubleImpulseDesign, d: Draws, p: float) -> tuple[np.ndarray, ...]:
     """:func:`drift_stop_delta_roe` to the bit (``test_montecarlo``), written out element by element on the
     sample axis: the same products and sums as :func:`~..relmotion.maneuvers.dispersed_dv` with a reference
     burn and :func:`~..relmotion.maneuvers.delta_roe` at the scalar u2 (every row of G(u) has at most two non-zero
     entries, so its contraction is one rounded sum in any order), without the (N, 3) and (N, 6, 3) temporaries;
-    the hot loop of the p sweep. Returns the six ROE changes apart, each (N,)."""
+    the hot loop of the p sweep.
+
+    Parameters
+    ----------
+    design, d, p
+        As for :func:`drift_stop_delta_roe`.
+
+    Returns
+    -------
+    tuple of six numpy.ndarray, each shape (N,)
+        The dimensionless changes of da, dl, dex, dey, dix, diy.
+    """
     dv, ref = design.drift_stop_dv(p), design.drift_stop_dv(0.0)
     g = d.f2 - 1.0
     r, t, nn = dv[0] + g * ref[0], dv[1] + g * ref[1], dv[2] + g * ref[2]
@@ -149,13 +178,28 @@ def drift_stop_delta_roe_fast(design: DoubleImpulseDesign, d: Draws, p: float):
             (c * nn) / na, (s * nn) / na)
 
 
-def time_to_stop(design: DoubleImpulseDesign, mc: MonteCarloConfig):
+def time_to_stop(design: DoubleImpulseDesign, mc: MonteCarloConfig) -> float:
     """s from the ejection to the drift-stop, k pi of argument of latitude (with J2 when ``mc.j2``)."""
     return (design.u2 - design.u1) / arg_latitude_rate(design.a, design.inc, mc.j2)
 
 
 def pre_stop(design: DoubleImpulseDesign, mc: MonteCarloConfig, d: Draws) -> PreStop:
-    """Ejection with its dispersion, propagation to the drift-stop and the nearest R = 0 transit in between."""
+    """Ejection with its dispersion, propagation to the drift-stop and the nearest R = 0 transit in between.
+
+    Parameters
+    ----------
+    design : DoubleImpulseDesign
+        The nominal design.
+    mc : MonteCarloConfig
+        Drag, density, J2.
+    d : Draws
+        The dispersions of N samples.
+
+    Returns
+    -------
+    PreStop
+        Per-sample ROE ``(N, 6)`` before the drift-stop, da_dot ``(N,)`` [1/s] and nearest transit ``(N,)`` [m].
+    """
     a, inc = design.a, design.inc
     roe1 = ejection_roe(design, d)
     da_dot = drag_da_dot(mc.delta_b * d.db_factor, mc.density, a) if mc.drag else np.zeros_like(d.f1)
@@ -166,7 +210,22 @@ def pre_stop(design: DoubleImpulseDesign, mc: MonteCarloConfig, d: Draws) -> Pre
 
 def after_stop(design: DoubleImpulseDesign, mc: MonteCarloConfig, d: Draws, pre: PreStop, p: float) -> Outcome:
     """Drift-stop commanded with reduction ``p`` (:func:`drift_stop_delta_roe`, Eq. 18), then ``horizon`` of
-    drift."""
+    drift.
+
+    Parameters
+    ----------
+    design, mc, d
+        As for :func:`pre_stop`.
+    pre : PreStop
+        :func:`pre_stop` of the same draws.
+    p : float
+        The reduction [m/s].
+
+    Returns
+    -------
+    Outcome
+        Per-sample ROE after the drift-stop and at the horizon ``(N, 6)``, Eq. (25) distance ``(N,)`` [m].
+    """
     roe2 = np.empty_like(pre.roe_before_stop)  # pre.roe_before_stop + drift_stop_delta_roe(design, d, p)
     for k, change in enumerate(drift_stop_delta_roe_fast(design, d, p)):
         np.add(pre.roe_before_stop[:, k], change, out=roe2[:, k])
@@ -180,6 +239,23 @@ def summarize(design: DoubleImpulseDesign, mc: MonteCarloConfig, p: float, out: 
     Visibility is reported twice: ``p_fov_violation`` applies Eq. (11) at each sample's own a dl after the
     drift-stop (the camera check proper); ``p_table2_violation`` uses the fixed Table 2 sizes (Eq. 11 at the
     smallest admissible a dl = 5 km, the design's worst case).
+
+    Parameters
+    ----------
+    design : DoubleImpulseDesign
+        The nominal design (its configuration's limits and the Table 2 bounds).
+    mc : MonteCarloConfig
+        The evaporation distance.
+    p : float
+        The reduction [m/s] of ``out``.
+    out : Outcome
+        :func:`after_stop` for ``p``.
+
+    Returns
+    -------
+    dict
+        ``p`` [m/s], fractions ``p_*`` and counts ``n_*`` of samples per event, means ``a_*_mean`` [m] and
+        ``min_rn_min`` [m].
     """
     a, cfg = design.a, design.config
     b = design.bounds
@@ -222,7 +298,8 @@ class SweepResult:
     outcomes: dict  # p -> Outcome
     p_best: float
 
-    def to_dict(self):
+    def to_dict(self) -> dict:
+        """The rows and the settings as ``roe-sep mc --json`` prints them (SI)."""
         return {
             "samples": self.mc.samples,
             "seed": self.mc.seed,
@@ -236,16 +313,33 @@ class SweepResult:
         }
 
 
-def sweep(design: DoubleImpulseDesign, mc: MonteCarloConfig, p_values=DEFAULT_P_VALUES, progress=iter):
+def sweep(design: DoubleImpulseDesign, mc: MonteCarloConfig, p_values: Iterable[float] = DEFAULT_P_VALUES,
+          progress: Callable = iter) -> SweepResult:
     """Run the Monte Carlo for every p in ``p_values`` on one shared set of draws.
 
     ``p_best`` minimises P(approaching drift) + P(evaporation) (seed 002 Table 3); ties go to the smaller p.
-    ``progress`` wraps the iteration over p (e.g. ``tqdm``).
+
+    Parameters
+    ----------
+    design : DoubleImpulseDesign
+        The nominal design.
+    mc : MonteCarloConfig
+        Samples, seed, dispersions, drag.
+    p_values : iterable of float
+        The reductions [m/s], finite and non-negative.
+    progress : callable
+        Wraps the iteration over p (e.g. ``tqdm``).
+
+    Returns
+    -------
+    SweepResult
+        One summary row per p, the per-sample outcomes and ``p_best``.
     """
     mc.validate()
     ps = [float(p) for p in p_values]
     if not ps or not all(np.isfinite(p) and p >= 0 for p in ps):
-        raise ValueError(f"p values must be a non-empty list of finite non-negative numbers [m/s], got {p_values!r}")
+        raise ValueError(f"p values must be a non-empty list of finite non-negative numbers [m/s], "
+                         f"got {show(p_values)}")
     d = draw(design, mc)
     pre = pre_stop(design, mc, d)
     rows, outcomes = [], {}

@@ -24,14 +24,24 @@ import datetime as _dt
 import math
 import sys
 from dataclasses import dataclass, replace
+from os import PathLike
 from pathlib import Path
+from typing import TYPE_CHECKING, TextIO
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from ...errors import ConfigError, show
 from ..constants import MU_EARTH, R_EARTH
 from ..od.radar import raan_from_sun
 from ..relmotion.dynamics import sun_synchronous_inclination
 from ..relmotion.orbit import mean_motion, orbital_period, semi_major_axis
+
+if TYPE_CHECKING:  # skyfield is imported where it is used (it loads ephemeris data)
+    from skyfield.jpllib import SpiceKernel
+    from skyfield.sgp4lib import EarthSatellite
+    from skyfield.timelib import Time, Timescale
+    from skyfield.toposlib import GeographicPosition
 
 
 def config_file(name: str) -> Path:
@@ -76,7 +86,6 @@ _ORBIT_KEYS = {"altitude_m": (150e3, 2000e3, False, False, "m"), "inclination_de
 def _check_section(where, section, keys, required=(), other=()):
     """Refuse unknown keys and numbers out of range in one mapping of the ops configuration (ConfigError)."""
     from ...checks import check_number
-    from ..config import ConfigError
 
     unknown = sorted(set(section) - set(keys) - set(other))
     if unknown:
@@ -92,10 +101,8 @@ def _check_section(where, section, keys, required=(), other=()):
                 raise ConfigError(str(exc)) from None
 
 
-def ops_config_from_dict(data) -> OpsConfig:
+def ops_config_from_dict(data: dict) -> OpsConfig:
     """Validate a parsed ops YAML: every section, key and number is checked (ConfigError naming the key)."""
-    from ..config import ConfigError
-
     if not isinstance(data, dict):
         raise ConfigError(f"expected a mapping at the top level, got {type(data).__name__}")
     sections = ("stations", "radar", "camera", "rules", "orbit")
@@ -119,7 +126,7 @@ def ops_config_from_dict(data) -> OpsConfig:
         if vec is None or any(isinstance(x, bool) or not isinstance(x, (int, float)) for x in vec) \
                 or not np.all(np.isfinite(vec)) or np.linalg.norm(vec) == 0:
             raise ConfigError(f"camera.boresight_rtn: expected 'ejection' or three finite numbers [R, T, N] not all "
-                              f"zero, got {b!r}")
+                              f"zero, got {show(b)}")
     _check_section("rules", data["rules"], _RULE_KEYS)
     rules = data["rules"]
     if rules.get("confirm_before_h", 16.0) <= rules.get("confirm_after_h", 11.0):
@@ -129,14 +136,14 @@ def ops_config_from_dict(data) -> OpsConfig:
     return OpsConfig(data["stations"], data["radar"], data["camera"], data["rules"], data["orbit"])
 
 
-def load_ops_config(path=None) -> OpsConfig:
+def load_ops_config(path: str | PathLike | None = None) -> OpsConfig:
     """Read ``config/ops.yaml`` (or ``path``); every missing or unknown section, key or bad number is named."""
     from ..config import load_yaml_config
 
     return load_yaml_config(Path(path) if path else DEFAULT_OPS_CONFIG, ops_config_from_dict, "ops configuration")
 
 
-def check_tle_checksum(path, number, line):
+def check_tle_checksum(path: str | PathLike, number: int, line: str) -> None:
     """ValueError naming ``line`` ``number`` (1 or 2) of the TLE in ``path`` unless its column 69 holds the
     modulo-10 checksum of columns 1-68 (digits count their value, each minus sign 1; sgp4's ``compute_checksum``)."""
     from sgp4.io import compute_checksum
@@ -150,7 +157,7 @@ def check_tle_checksum(path, number, line):
                          f"{compute_checksum(line)} modulo 10)")
 
 
-def read_tle(path):
+def read_tle(path: str | PathLike) -> tuple[str, str]:
     """The two element lines of a TLE file (an optional name line is skipped); each line's checksum checked, then
     the elements by SGP4's parser."""
     from sgp4.api import Satrec
@@ -191,7 +198,8 @@ def tle_epoch(cfg: OpsConfig) -> _dt.datetime:
     return sat_epoch_datetime(Satrec.twoline2rv(*cfg.tle))
 
 
-def with_tle(cfg: OpsConfig, path) -> OpsConfig:
+def with_tle(cfg: OpsConfig, path: str | PathLike) -> OpsConfig:
+    """``cfg`` with the TLE of the file ``path`` (:func:`read_tle`)."""
     return replace(cfg, tle=read_tle(path))
 
 
@@ -211,8 +219,25 @@ def _skyfield():
     return ts, eph
 
 
-def carrier_satellite(cfg: OpsConfig, epoch: _dt.datetime, ts, eph):
-    """skyfield EarthSatellite of the carrier: from the TLE, or mean elements via ``sgp4init`` at ``epoch``."""
+def carrier_satellite(cfg: OpsConfig, epoch: _dt.datetime, ts: "Timescale", eph: "SpiceKernel") -> "EarthSatellite":
+    """skyfield EarthSatellite of the carrier: from the TLE, or mean elements via ``sgp4init`` at ``epoch``.
+
+    Parameters
+    ----------
+    cfg : OpsConfig
+        The TLE, or the orbit (altitude, LTAN) of the mean elements.
+    epoch : datetime.datetime
+        The epoch (UTC) of the mean elements without a TLE.
+    ts : skyfield.timelib.Timescale
+        The time scale.
+    eph : skyfield.jpllib.SpiceKernel
+        The ephemeris (the Sun's position sets the node of the LTAN).
+
+    Returns
+    -------
+    skyfield.sgp4lib.EarthSatellite
+        The carrier, propagated by SGP4.
+    """
     from sgp4.api import WGS72, Satrec
     from skyfield.api import EarthSatellite
 
@@ -233,7 +258,7 @@ def carrier_satellite(cfg: OpsConfig, epoch: _dt.datetime, ts, eph):
     return EarthSatellite.from_satrec(sat, ts)
 
 
-def intervals(mask, times):
+def intervals(mask: ArrayLike, times: list) -> list[tuple]:
     """[start, end] pairs of the runs where boolean ``mask`` is true on the grid ``times`` (datetimes)."""
     m = np.asarray(mask, dtype=bool)
     edges = np.flatnonzero(np.diff(m.astype(int)))
@@ -242,8 +267,9 @@ def intervals(mask, times):
     return [(times[s], times[e]) for s, e in zip(starts, ends)]
 
 
-def argument_of_latitude(r, v):
-    """Osculating argument of latitude [rad] from inertial position/velocity ``(3, N)``: angle of r from the node."""
+def argument_of_latitude(r: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Osculating argument of latitude ``(N,)`` [rad] from inertial position/velocity ``(3, N)`` (any consistent
+    units): angle of r from the node."""
     h = np.cross(r, v, axis=0)
     node = np.array([-h[1], h[0], np.zeros_like(h[0])])
     node = node / np.linalg.norm(node, axis=0)
@@ -252,8 +278,21 @@ def argument_of_latitude(r, v):
     return np.arctan2(np.sum(r * y, axis=0), np.sum(r * node, axis=0)) % (2.0 * math.pi)
 
 
-def rtn_to_inertial(r, v, vec_rtn):
-    """Inertial direction ``(3, N)`` of an RTN vector (R = r/|r|, N = h/|h|, T = N x R)."""
+def rtn_to_inertial(r: np.ndarray, v: np.ndarray, vec_rtn: ArrayLike) -> np.ndarray:
+    """Inertial direction ``(3, N)`` of an RTN vector (R = r/|r|, N = h/|h|, T = N x R).
+
+    Parameters
+    ----------
+    r, v : numpy.ndarray, shape (3, N)
+        Inertial position and velocity (any consistent units).
+    vec_rtn : array_like, shape (3,)
+        The vector's R, T, N components.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3, N)
+        The vector in the inertial frame, in the unit of ``vec_rtn``.
+    """
     rh = r / np.linalg.norm(r, axis=0)
     h = np.cross(r, v, axis=0)
     nh = h / np.linalg.norm(h, axis=0)
@@ -261,14 +300,31 @@ def rtn_to_inertial(r, v, vec_rtn):
     return vec_rtn[0] * rh + vec_rtn[1] * th + vec_rtn[2] * nh
 
 
-def angle_between(x, y):
-    """Angle [deg] between column vectors ``(3, N)``."""
+def angle_between(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Angle ``(N,)`` [deg] between column vectors ``(3, N)``."""
     c = np.sum(x * y, axis=0) / (np.linalg.norm(x, axis=0) * np.linalg.norm(y, axis=0))
     return np.degrees(np.arccos(np.clip(c, -1.0, 1.0)))
 
 
-def passes(sat, site, t0, t1, min_el):
-    """Visibility passes (rise, set, max elevation [deg]) of ``sat`` above ``min_el`` at ``site``."""
+def passes(sat: "EarthSatellite", site: "GeographicPosition", t0: "Time", t1: "Time", min_el: float) -> list[tuple]:
+    """Visibility passes (rise, set, max elevation [deg]) of ``sat`` above ``min_el`` at ``site``.
+
+    Parameters
+    ----------
+    sat : skyfield.sgp4lib.EarthSatellite
+        The satellite.
+    site : skyfield.toposlib.GeographicPosition
+        The ground station.
+    t0, t1 : skyfield.timelib.Time
+        The window.
+    min_el : float
+        The least elevation [deg].
+
+    Returns
+    -------
+    list of (Time, Time, float)
+        Rise, set and maximum elevation [deg] of each pass; one in progress at ``t0`` or ``t1`` is cut there.
+    """
     t, ev = sat.find_events(site, t0, t1, altitude_degrees=min_el)
     out, rise, peak = [], t0 if len(ev) and ev[0] != 0 else None, 0.0
     for ti, e in zip(t, ev):
@@ -288,12 +344,29 @@ def _iso(t):
     return t.utc_strftime("%Y-%m-%dT%H:%M:%SZ") if hasattr(t, "utc_strftime") else t.strftime("%Y-%m-%dT%H:%M:%SZ")
 
 
-def plan(cfg: OpsConfig, date: _dt.date, days: float = 2.0, boresight_rtn=None) -> dict:
-    """The operational plan from 00:00 UTC of ``date`` for ``days``: contacts, radar passes, eclipses, windows."""
+def plan(cfg: OpsConfig, date: _dt.date, days: float = 2.0, boresight_rtn: ArrayLike | None = None) -> dict:
+    """The operational plan from 00:00 UTC of ``date`` for ``days``: contacts, radar passes, eclipses, windows.
+
+    Parameters
+    ----------
+    cfg : OpsConfig
+        Sites, camera, rules and the carrier's orbit or TLE.
+    date : datetime.date
+        The first day (UTC).
+    days : float
+        The length of the plan [day], in (0, 7].
+    boresight_rtn : array_like, shape (3,), optional
+        The camera boresight in RTN (any length); default the configured one (the ejection direction).
+
+    Returns
+    -------
+    dict
+        The plan (times ISO-8601 UTC, angles in deg, durations in s), as ``roe-sep ops --json`` prints it.
+    """
     from skyfield.api import wgs84
 
     if not (isinstance(days, (int, float)) and 0 < days <= 7):
-        raise ValueError(f"days must be in (0, 7], got {days!r}")
+        raise ValueError(f"days must be in (0, 7], got {show(days)}")
     start = _dt.datetime(date.year, date.month, date.day, tzinfo=_dt.timezone.utc)
     if cfg.tle:
         age = (start - tle_epoch(cfg)).total_seconds() / 86400.0
@@ -380,7 +453,7 @@ def _boresight(cfg: OpsConfig):
         return dv / np.linalg.norm(dv)
     vec = np.asarray(b, dtype=float)
     if vec.shape != (3,) or not np.all(np.isfinite(vec)) or np.linalg.norm(vec) == 0:
-        raise ValueError(f"camera.boresight_rtn must be 'ejection' or three finite numbers, got {b!r}")
+        raise ValueError(f"camera.boresight_rtn must be 'ejection' or three finite numbers, got {show(b)}")
     return vec / np.linalg.norm(vec)
 
 
@@ -436,7 +509,8 @@ def _judge(tt, pole, inside, radar, sunlit, sun_angle, period, rules, camera, ts
     }
 
 
-def print_plan(rep: dict, out):
+def print_plan(rep: dict, out: TextIO) -> None:
+    """Write the plan of :func:`plan` to ``out`` as the human table of ``roe-sep ops``."""
     w = out.write
     w(f"Operational plan {rep['date']} (+{rep['days']:g} d), orbit period {rep['period_s'] / 60:.1f} min, "
       f"{rep['ephemeris']}\n")

@@ -14,24 +14,29 @@ With da(t) = da0 + da_dot t the integrals are closed form; with J2 off and drag 
 Eqs. (23)-(24): a dl = 3/(4 n^2) dB rho v^2 (u - u0)^2 and a da = -(1/n^2) dB rho v^2 (u - u0).
 """
 
+from collections.abc import Sequence
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..constants import J2, R_EARTH, SECONDS_PER_DAY
 from .orbit import circular_speed, mean_motion
 
 
-def j2_kappa(a):
+def j2_kappa(a: ArrayLike) -> np.ndarray:
     """kappa = 3/4 n J2 (R_E/a)^2 [rad/s], the J2 secular rate scale of a circular orbit of semi-major axis ``a``."""
     return 0.75 * mean_motion(a) * J2 * (R_EARTH / np.asarray(a, dtype=float)) ** 2
 
 
-def raan_rate(a, inc):
-    """Secular J2 drift of the ascending node d(raan)/dt = -2 kappa cos i [rad/s]."""
+def raan_rate(a: ArrayLike, inc: ArrayLike) -> np.ndarray:
+    """Secular J2 drift of the ascending node d(raan)/dt = -2 kappa cos i [rad/s] of a circular orbit of semi-major
+    axis ``a`` [m] and inclination ``inc`` [rad] (broadcast)."""
     return -2.0 * j2_kappa(a) * np.cos(inc)
 
 
-def sun_synchronous_inclination(a):
-    """Inclination [rad] of the circular sun-synchronous orbit: :func:`raan_rate` equals the mean Sun rate.
+def sun_synchronous_inclination(a: ArrayLike) -> np.ndarray:
+    """Inclination [rad] of the circular sun-synchronous orbit of semi-major axis ``a`` [m]: :func:`raan_rate`
+    equals the mean Sun rate.
 
     -2 kappa cos i = 2 pi / (365.2422 days)  =>  cos i = -(2 pi / year) / (2 kappa).
     """
@@ -41,16 +46,32 @@ def sun_synchronous_inclination(a):
     return np.arccos(cos_i)
 
 
-def eccentricity_vector_rotation_rate(a, inc):
-    """d(phi)/dt = kappa (5 cos^2 i - 1) [rad/s]: secular J2 rotation of the relative eccentricity vector.
+def eccentricity_vector_rotation_rate(a: ArrayLike, inc: ArrayLike) -> np.ndarray:
+    """d(phi)/dt = kappa (5 cos^2 i - 1) [rad/s]: secular J2 rotation of the relative eccentricity vector (chief
+    semi-major axis ``a`` [m], inclination ``inc`` [rad], broadcast).
 
     Negative (clockwise) for sun-synchronous inclinations: about -3.5 deg/day at 500 km (seed 001 Sec. 3.3).
     """
     return j2_kappa(a) * (5.0 * np.cos(inc) ** 2 - 1.0)
 
 
-def arg_latitude_rate(a, inc, j2=True):
-    """Secular rate of the mean argument of latitude du/dt = n + kappa (P + Q) [rad/s] (n without J2)."""
+def arg_latitude_rate(a: ArrayLike, inc: ArrayLike, j2: bool = True) -> np.ndarray:
+    """Secular rate of the mean argument of latitude du/dt = n + kappa (P + Q) [rad/s] (n without J2).
+
+    Parameters
+    ----------
+    a : array_like
+        Semi-major axis [m] of the circular orbit.
+    inc : array_like
+        Inclination [rad]; broadcast with ``a``.
+    j2 : bool
+        With the J2 secular terms; False: the Keplerian mean motion n.
+
+    Returns
+    -------
+    numpy.ndarray
+        du/dt [rad/s], the broadcast shape of ``a`` and ``inc``.
+    """
     n = mean_motion(a)
     if not j2:
         return n
@@ -58,35 +79,105 @@ def arg_latitude_rate(a, inc, j2=True):
     return n + j2_kappa(a) * ((3.0 * c2 - 1.0) + (5.0 * c2 - 1.0))
 
 
-def ballistic_coefficient(cd, area, mass):
-    """Ballistic drag coefficient B = c_d A / m [m^2/kg] (seed 000 uses B, the inverse of the ballistic coefficient)."""
+def ballistic_coefficient(cd: ArrayLike, area: ArrayLike, mass: ArrayLike) -> np.ndarray | float:
+    """Ballistic drag coefficient B = c_d A / m [m^2/kg] (seed 000 uses B, the inverse of the ballistic coefficient).
+
+    Parameters
+    ----------
+    cd : array_like
+        Drag coefficient (dimensionless).
+    area : array_like
+        Cross-section [m^2].
+    mass : array_like
+        Mass [kg].
+
+    Returns
+    -------
+    float or numpy.ndarray
+        B [m^2/kg], the broadcast shape of the inputs (a float for floats).
+    """
     return cd * area / mass
 
 
-def drag_da_dot(delta_b, rho, a):
+def drag_da_dot(delta_b: ArrayLike, rho: ArrayLike, a: ArrayLike) -> np.ndarray:
     """Rate of the dimensionless relative semi-major axis under differential drag [1/s].
 
-    Time derivative of seed 002 Eq. (24) with u - u0 = n t: d(da)/dt = -dB rho v^2 / (n a), ``delta_b`` = B_deputy -
-    B_chief [m^2/kg], ``rho`` [kg/m^3], ``a`` [m]. Positive dB (picosatellite decays faster) lowers da.
+    Time derivative of seed 002 Eq. (24) with u - u0 = n t: d(da)/dt = -dB rho v^2 / (n a). Positive dB
+    (picosatellite decays faster) lowers da.
+
+    Parameters
+    ----------
+    delta_b : array_like
+        Differential ballistic coefficient B_deputy - B_chief [m^2/kg].
+    rho : array_like
+        Atmospheric density [kg/m^3].
+    a : array_like
+        The chief's semi-major axis [m].
+
+    Returns
+    -------
+    numpy.ndarray
+        d(da)/dt [1/s], the broadcast shape of the inputs.
     """
     return -np.asarray(delta_b, dtype=float) * rho * circular_speed(a) ** 2 / (mean_motion(a) * a)
 
 
-def propagate(roe, dt, a, inc, j2=True, da_dot=0.0):
-    """Propagate dimensionless ROE over ``dt`` [s] with the secular model above.
+def propagate(roe: ArrayLike, dt: ArrayLike, a: float, inc: float, j2: bool = True,
+              da_dot: ArrayLike = 0.0) -> np.ndarray:
+    """Propagate dimensionless ROE over ``dt`` [s] with the secular model above (Keplerian alone: ``j2=False,
+    da_dot=0``).
 
-    ``roe`` ``(..., 6)``; ``dt`` and ``da_dot`` [1/s] broadcast against ``roe[..., 0]``; ``a`` [m] and ``inc`` [rad]
-    are the chief's. Keplerian alone is ``j2=False, da_dot=0``.
+    Parameters
+    ----------
+    roe : array_like, shape (..., 6)
+        Dimensionless ROE ``[da, dl, dex, dey, dix, diy]`` at the start.
+    dt : array_like
+        Propagation time [s]; broadcast against ``roe[..., 0]``.
+    a : float
+        The chief's semi-major axis [m].
+    inc : float
+        The chief's inclination [rad].
+    j2 : bool
+        With the J2 secular rates.
+    da_dot : array_like
+        Constant differential-drag rate of da [1/s] (:func:`drag_da_dot`); broadcast like ``dt``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 6)
+        The propagated ROE, the broadcast shape of ``roe``, ``dt`` and ``da_dot``.
     """
     r = np.asarray(roe, dtype=float)
     return np.stack(propagate_elements(np.moveaxis(r, -1, 0), dt, a, inc, j2, da_dot), axis=-1)
 
 
-def propagate_elements(elements, dt, a, inc, j2=True, da_dot=0.0):
+def propagate_elements(elements: Sequence[ArrayLike], dt: ArrayLike, a: float, inc: float, j2: bool = True,
+                       da_dot: ArrayLike = 0.0) -> tuple:
     """:func:`propagate` on the six ROE given apart, ``(da, dl, dex, dey, dix, diy)`` (arrays that broadcast with
     ``dt`` and ``da_dot``); returns the six propagated elements apart. The same arithmetic as :func:`propagate`
     (which is this function plus a stack), for vectorized callers that need only some elements: contiguous
-    element arrays avoid the strided ``(..., 6)`` views and the stack."""
+    element arrays avoid the strided ``(..., 6)`` views and the stack.
+
+    Parameters
+    ----------
+    elements : sequence of six array_like
+        ``(da, dl, dex, dey, dix, diy)``, dimensionless, each of a shape that broadcasts with ``dt``.
+    dt : array_like
+        Propagation time [s].
+    a : float
+        The chief's semi-major axis [m].
+    inc : float
+        The chief's inclination [rad].
+    j2 : bool
+        With the J2 secular rates.
+    da_dot : array_like
+        Constant differential-drag rate of da [1/s].
+
+    Returns
+    -------
+    tuple of six numpy.ndarray
+        The propagated ``(da, dl, dex, dey, dix, diy)``, each of the broadcast shape.
+    """
     dt = np.asarray(dt, dtype=float)
     da_dot = np.asarray(da_dot, dtype=float)
     da, dl, dex, dey, dix, diy = elements
@@ -109,10 +200,24 @@ def propagate_elements(elements, dt, a, inc, j2=True, da_dot=0.0):
     return da + da_dot * dt, dl_new, dex_new, dey_new, dix + 0.0 * dt, diy_new
 
 
-def propagate_chief(kep, dt, j2=True):
+def propagate_chief(kep: ArrayLike, dt: ArrayLike, j2: bool = True) -> np.ndarray:
     """Secular propagation of the chief's mean Keplerian elements ``[a, e, i, raan, argp, M]`` over ``dt`` [s].
 
     raan and argp drift at the J2 rates above, M at n + kappa P (all frozen at the initial a, i; near-circular).
+
+    Parameters
+    ----------
+    kep : array_like, shape (..., 6)
+        Mean Keplerian elements ``[a, e, i, raan, argp, M]`` (m, 1, rad, rad, rad, rad).
+    dt : array_like
+        Propagation time [s]; ``dt.shape + (6,)`` broadcasts with ``kep``.
+    j2 : bool
+        With the J2 secular rates (False: M advances at n, the rest stays).
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 6)
+        The propagated elements (angles not wrapped), the broadcast shape of ``kep`` and ``dt.shape + (6,)``.
     """
     k = np.array(kep, dtype=float)
     dt = np.asarray(dt, dtype=float)

@@ -1,9 +1,10 @@
 """Impulsive maneuvers in ROE: the Gauss-equation control matrix (seed 002 Eq. 2) and execution errors (Eqs. 18, 22)."""
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 
-def control_matrix(u):
+def control_matrix(u: ArrayLike) -> np.ndarray:
     """The 6x3 matrix G(u) of seed 002 Eq. (2): n a * Delta(delta alpha) = G(u) dv_RTN.
 
     Rows: da: +2 dvT;  dl: -2 dvR;  dex: dvR sin u + 2 dvT cos u;  dey: -dvR cos u + 2 dvT sin u;
@@ -23,29 +24,61 @@ def control_matrix(u):
     return np.stack([np.stack(row, axis=-1) for row in rows], axis=-2)
 
 
-def delta_roe(dv_rtn, u, a, n):
+def delta_roe(dv_rtn: ArrayLike, u: ArrayLike, a: ArrayLike, n: ArrayLike) -> np.ndarray:
     """Dimensionless ROE change from an impulsive velocity change of the picosatellite relative to the carrier.
 
-    seed 002 Eq. (2): Delta(delta alpha) = G(u) dv / (n a). ``dv_rtn`` is ``(..., 3)`` [m/s] in the carrier RTN
-    frame, ``u`` the mean argument of latitude [rad], ``a`` [m] and ``n`` [rad/s] the carrier's. A burn of the
-    *carrier* changes the relative state by ``delta_roe(-dv_carrier, ...)``.
+    seed 002 Eq. (2): Delta(delta alpha) = G(u) dv / (n a). A burn of the *carrier* changes the relative state by
+    ``delta_roe(-dv_carrier, ...)``.
+
+    Parameters
+    ----------
+    dv_rtn : array_like, shape (..., 3)
+        The impulse [m/s] in the carrier RTN frame.
+    u : array_like, shape (...)
+        The carrier's mean argument of latitude at the burn [rad].
+    a : array_like
+        The carrier's semi-major axis [m].
+    n : array_like
+        The carrier's mean motion [rad/s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 6)
+        The change of the dimensionless ROE.
     """
     g = control_matrix(u)
     return np.einsum("...ij,...j->...i", g, np.asarray(dv_rtn, dtype=float)) / (n * a)
 
 
-def dv_for_delta_roe(droe, u, a, n):
+def dv_for_delta_roe(droe: ArrayLike, u: ArrayLike, a: ArrayLike, n: ArrayLike) -> np.ndarray:
     """Inverse of :func:`delta_roe`: the single impulse at ``u`` that best produces ``droe`` (least squares).
 
     G(u) has orthogonal columns (G^T G = diag(5, 8, 1)), so the pseudo-inverse is diag(1/5, 1/8, 1) G^T. It is exact
     for any ROE change a single impulse at ``u`` can produce; otherwise it returns the least-squares impulse.
+
+    Parameters
+    ----------
+    droe : array_like, shape (..., 6)
+        The wanted change of the dimensionless ROE.
+    u : array_like, shape (...)
+        The carrier's mean argument of latitude at the burn [rad].
+    a : array_like
+        The carrier's semi-major axis [m].
+    n : array_like
+        The carrier's mean motion [rad/s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+        The impulse [m/s] in the carrier RTN frame.
     """
     g = control_matrix(u)
     gt = np.swapaxes(g, -1, -2) * np.array([1.0 / 5.0, 1.0 / 8.0, 1.0])[:, None]
     return np.einsum("...ij,...j->...i", gt, np.asarray(droe, dtype=float)) * (n * a)
 
 
-def dispersed_dv(dv_rtn, factor, eps, reference=None):
+def dispersed_dv(dv_rtn: ArrayLike, factor: ArrayLike, eps: ArrayLike,
+                 reference: ArrayLike | None = None) -> np.ndarray:
     """The executed impulse: the one dispersed-burn function of the project (seed 002 Eqs. 18 and 22).
 
     dv_s = R(eps) [dv + (f - 1) dv_ref],  R(eps) = [[1, ez, -ey], [-ez, 1, ex], [ey, -ex, 1]],
@@ -63,6 +96,22 @@ def dispersed_dv(dv_rtn, factor, eps, reference=None):
     same unreduced δv_T2, and Eq. (22) multiplies "the second maneuver" of Eq. (16) by f2. Seed 000 (Eqs. 19, 21
     and Sec. IV) says the same. The attitude error rotates the whole commanded burn (the reduction included: the
     thruster points once); it is linear, so R(eps) commutes with f.
+
+    Parameters
+    ----------
+    dv_rtn : array_like, shape (..., 3)
+        The commanded burn [m/s] in RTN.
+    factor : array_like, shape (...)
+        The magnitude factor f (1 + the magnitude error as a fraction).
+    eps : array_like, shape (..., 3)
+        The attitude error angles ``(ex, ey, ez)`` [rad].
+    reference : array_like, shape (..., 3), optional
+        The burn dv_ref [m/s] the magnitude error is a fraction of; None: ``dv_rtn`` itself.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+        The executed burn [m/s] in RTN.
     """
     dv = np.asarray(dv_rtn, dtype=float)
     if reference is not None:
@@ -75,7 +124,7 @@ def dispersed_dv(dv_rtn, factor, eps, reference=None):
     return np.asarray(factor, dtype=float)[..., None] * rotated
 
 
-def unreduced_burns(dv_parts, p):
+def unreduced_burns(dv_parts: ArrayLike, p: float) -> np.ndarray:
     """The burns a thruster's magnitude error acts on for a drift-stop commanded with reduction |p| (Eq. 18).
 
     ``dv_parts`` ``(k, 3)`` [m/s]: the commanded drift-stop, one burn or split into k burns (the multi-impulse
@@ -84,7 +133,7 @@ def unreduced_burns(dv_parts, p):
     proportion to each part's tangential size (one burn: exactly the unreduced dv_T2 of Eqs. 9/16); radial and
     normal parts unchanged. The reference of :func:`dispersed_dv`. Valid for |p| below the unreduced tangential
     burn (Eq. 20, first line: the commanded burn keeps its sign); parts without a tangential component are
-    returned unchanged.
+    returned unchanged. ``p`` [m/s]; the result is a new ``(k, 3)`` array [m/s].
     """
     parts = np.array(dv_parts, dtype=float, ndmin=2)
     t = parts[:, 1]

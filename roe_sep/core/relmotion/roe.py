@@ -7,17 +7,18 @@ Element arrays are ``(..., 6)``:
 """
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 ROE_NAMES = ("da", "dl", "dex", "dey", "dix", "diy")
 
 
-def wrap_angle(x):
-    """Wrap angles [rad] to [-pi, pi)."""
+def wrap_angle(x: ArrayLike) -> np.ndarray:
+    """Wrap angles [rad] to [-pi, pi) (any shape)."""
     return (np.asarray(x, dtype=float) + np.pi) % (2.0 * np.pi) - np.pi
 
 
-def kepler_to_roe(chief, deputy):
-    """ROE of ``deputy`` w.r.t. ``chief`` from mean Keplerian elements, seed 002 Eq. (1).
+def kepler_to_roe(chief: ArrayLike, deputy: ArrayLike) -> np.ndarray:
+    """ROE ``(..., 6)`` of ``deputy`` w.r.t. ``chief`` from mean Keplerian elements ``(..., 6)``, seed 002 Eq. (1).
 
     da = (a - a_c)/a_c,  dl = (u - u_c) + (raan - raan_c) cos i_c,  de = e_vec - e_vec_c,
     dix = i - i_c,  diy = (raan - raan_c) sin i_c,  with u = M + argp.
@@ -40,8 +41,8 @@ def kepler_to_roe(chief, deputy):
     )
 
 
-def roe_to_kepler(chief, roe):
-    """Inverse of :func:`kepler_to_roe`: the deputy's mean Keplerian elements.
+def roe_to_kepler(chief: ArrayLike, roe: ArrayLike) -> np.ndarray:
+    """Inverse of :func:`kepler_to_roe`: the deputy's mean Keplerian elements ``(..., 6)``.
 
     For a deputy with zero eccentricity the argument of perigee is undefined; it is returned as 0 and the mean
     argument of latitude is carried entirely by M.
@@ -61,7 +62,7 @@ def roe_to_kepler(chief, roe):
     )
 
 
-def roe_to_rtn(roe, u):
+def roe_to_rtn(roe: ArrayLike, u: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Relative position and velocity in the chief RTN frame from ROE, linear (HCW-equivalent) model.
 
     Near-circular chief at mean argument of latitude ``u`` [rad]; D'Amico (2010), the mapping behind seed 002
@@ -81,11 +82,25 @@ def roe_to_rtn(roe, u):
     return pos, vel
 
 
-def rtn_to_roe(pos, vel, u):
+def rtn_to_roe(pos: ArrayLike, vel: ArrayLike, u: ArrayLike) -> np.ndarray:
     """Inverse of :func:`roe_to_rtn`: ROE from dimensionless RTN position r/a and velocity v/(a n).
 
     Closed form: da = 2 vT + 4 rR,  dl = rT - 2 vR,  with A = 2 vT + 3 rR and B = vR the in-plane components
     dex = A cos u + B sin u, dey = A sin u - B cos u; dix = rN sin u + vN cos u, diy = -rN cos u + vN sin u.
+
+    Parameters
+    ----------
+    pos : array_like, shape (..., 3)
+        Relative position r/a in the chief RTN frame (dimensionless: meters divided by the chief's a).
+    vel : array_like, shape (..., 3)
+        Relative velocity v/(a n) in the chief RTN frame (dimensionless: m/s divided by a n).
+    u : array_like, shape (...)
+        The chief's mean argument of latitude [rad].
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 6)
+        The dimensionless ROE ``[da, dl, dex, dey, dix, diy]``.
     """
     p = np.asarray(pos, dtype=float)
     v = np.asarray(vel, dtype=float)
@@ -99,13 +114,15 @@ def rtn_to_roe(pos, vel, u):
     )
 
 
-def e_vector_polar(roe):
-    """Magnitude and phase of the relative eccentricity vector: (de, phi) with de = |(dex, dey)|, seed 002 Eq. (1)."""
+def e_vector_polar(roe: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """Magnitude and phase [rad] of the relative eccentricity vector of ROE ``(..., 6)``: (de, phi), each ``(...)``,
+    with de = |(dex, dey)|, seed 002 Eq. (1)."""
     r = np.asarray(roe, dtype=float)
     return np.hypot(r[..., 2], r[..., 3]), np.arctan2(r[..., 3], r[..., 2])
 
 
-def i_vector_polar(roe):
-    """Magnitude and phase of the relative inclination vector: (di, theta), seed 002 Eq. (1)."""
+def i_vector_polar(roe: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """Magnitude and phase [rad] of the relative inclination vector of ROE ``(..., 6)``: (di, theta), each ``(...)``,
+    seed 002 Eq. (1)."""
     r = np.asarray(roe, dtype=float)
     return np.hypot(r[..., 4], r[..., 5]), np.arctan2(r[..., 5], r[..., 4])

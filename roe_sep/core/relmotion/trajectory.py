@@ -6,9 +6,11 @@ burn ``dv`` enters as ``-dv``). Between burns the secular model of :func:`~roe_s
 at a burn seed 002 Eq. (2) at the chief's mean argument of latitude of that instant.
 """
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .dynamics import arg_latitude_rate, propagate
 from .maneuvers import delta_roe
@@ -17,7 +19,7 @@ from .orbit import mean_motion
 
 @dataclass(frozen=True)
 class Burn:
-    """One impulsive burn: epoch [s] and relative impulse [m/s] in RTN."""
+    """One impulsive burn: epoch [s] and relative impulse ``(dv_R, dv_T, dv_N)`` [m/s] in RTN."""
 
     epoch: float
     dv_rel: tuple
@@ -32,15 +34,39 @@ class Chief:
     u0: float
     t0: float
 
-    def u_at(self, t, j2=True):
-        """Mean argument of latitude at ``t`` [s] (secular rate with or without J2)."""
+    def u_at(self, t: ArrayLike, j2: bool = True) -> np.ndarray:
+        """Mean argument of latitude [rad], not wrapped, at ``t`` [s] (any shape; secular rate with or without J2)."""
         return self.u0 + arg_latitude_rate(self.a, self.inc, j2) * (np.asarray(t, dtype=float) - self.t0)
 
 
-def trajectory(roe0, t0, burns, times, chief: Chief, j2=True, da_dot=0.0):
+def trajectory(roe0: ArrayLike, t0: float, burns: Iterable[Burn], times: ArrayLike, chief: Chief, j2: bool = True,
+               da_dot: float = 0.0) -> np.ndarray:
     """ROE ``(len(times), 6)`` at ``times`` [s] (any order, all >= t0) from ``roe0`` at ``t0`` under ``burns``.
 
-    A burn at epoch t_b acts on states at t >= t_b (a sample exactly at t_b sees the post-burn state).
+    A burn at epoch t_b acts on states at t >= t_b (a sample exactly at t_b sees the post-burn state); burns before
+    ``t0`` are ignored.
+
+    Parameters
+    ----------
+    roe0 : array_like, shape (6,)
+        Dimensionless ROE at ``t0``.
+    t0 : float
+        Epoch of ``roe0`` [s].
+    burns : iterable of Burn
+        Relative impulses, any order.
+    times : array_like, shape (m,)
+        Epochs [s] of the output, each >= ``t0`` (ValueError otherwise).
+    chief : Chief
+        The chief's a, i and argument of latitude.
+    j2 : bool
+        With the J2 secular rates (:func:`~roe_sep.core.relmotion.dynamics.propagate`).
+    da_dot : float
+        Differential-drag rate of da [1/s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (m, 6)
+        Dimensionless ROE at ``times``.
     """
     times = np.asarray(times, dtype=float)
     if np.any(times < t0):
@@ -64,6 +90,20 @@ def trajectory(roe0, t0, burns, times, chief: Chief, j2=True, da_dot=0.0):
     return out
 
 
-def state_at(roe0, t0, burns, t, chief: Chief, j2=True, da_dot=0.0):
-    """ROE at one time ``t`` under ``burns`` (see :func:`trajectory`)."""
+def state_at(roe0: ArrayLike, t0: float, burns: Iterable[Burn], t: float, chief: Chief, j2: bool = True,
+             da_dot: float = 0.0) -> np.ndarray:
+    """The ROE at one time under ``burns``: :func:`trajectory` at ``times = [t]``.
+
+    Parameters
+    ----------
+    roe0, t0, burns, chief, j2, da_dot
+        As for :func:`trajectory`.
+    t : float
+        The epoch [s], >= ``t0``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (6,)
+        Dimensionless ROE at ``t``.
+    """
     return trajectory(roe0, t0, burns, np.array([t]), chief, j2, da_dot)[0]

@@ -1,17 +1,19 @@
 """Passive-safety and visibility metrics of a relative orbit (seeds 000/002)."""
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..relmotion.dynamics import arg_latitude_rate, propagate, propagate_elements
 from ..relmotion.orbit import mean_motion
 from ..relmotion.roe import roe_to_rtn, wrap_angle
 
 
-def min_rn_distance(roe):
-    """Minimum distance in the plane normal to the flight direction (R-N), dimensionless, seed 002 Eq. (25).
+def min_rn_distance(roe: ArrayLike) -> np.ndarray:
+    """Minimum distance in the plane normal to the flight direction (R-N), seed 002 Eq. (25), of ROE ``(..., 6)``:
+    ``(...)``, in the unit of the ROE (dimensionless ROE: multiply by a for meters; a*ROE in m: meters).
 
     dr_min = sqrt(2) |de . di| / (de^2 + di^2 + |de + di| |de - di|)^(1/2), valid for da = 0; (anti-)parallel
-    e/i vectors give min(de, di), perpendicular ones give 0. Multiply by a for meters.
+    e/i vectors give min(de, di), perpendicular ones give 0.
     """
     r = np.asarray(roe, dtype=float)
     dex, dey, dix, diy = r[..., 2], r[..., 3], r[..., 4], r[..., 5]
@@ -25,16 +27,18 @@ def min_rn_distance(roe):
         return np.where(denom > 0.0, np.sqrt(2.0) * np.abs(dot) / denom, 0.0)
 
 
-def fov_limit(dl, half_angle):
+def fov_limit(dl: ArrayLike, half_angle: ArrayLike) -> np.ndarray:
     """Largest oscillation amplitude that stays in a camera half field of view: tan(half) |dl|, seed 002 Eq. (11).
 
-    Curvature neglected, as in the seed. Same unit as ``dl``.
+    Curvature neglected, as in the seed. ``half_angle`` [rad]; the result has the unit of ``dl`` and the broadcast
+    shape.
     """
     return np.tan(half_angle) * np.abs(np.asarray(dl, dtype=float))
 
 
-def approaching(roe):
-    """True where the mean along-track separation shrinks: d(dl)/dt = -3/2 n da has the opposite sign of dl.
+def approaching(roe: ArrayLike) -> np.ndarray:
+    """True where the mean along-track separation shrinks: d(dl)/dt = -3/2 n da has the opposite sign of dl; ROE
+    ``(..., 6)`` (dimensionless or in m), a boolean ``(...)``.
 
     Equivalent to da * dl > 0 (seed 002: 'approaching drift' is a da > 0 with the picosatellite leading).
     """
@@ -42,7 +46,9 @@ def approaching(roe):
     return r[..., 0] * r[..., 1] > 0.0
 
 
-def nearest_crossing(roe0, u0, duration, a, inc, j2=True, da_dot=0.0, t_min=None, iterations=3):
+def nearest_crossing(roe0: ArrayLike, u0: ArrayLike, duration: float, a: float, inc: float, j2: bool = True,
+                     da_dot: ArrayLike = 0.0, t_min: float | None = None,
+                     iterations: int = 3) -> tuple[np.ndarray, np.ndarray]:
     """Smallest along-track distance |T| at a transit through the R = 0 plane in ``(t_min, duration]`` seconds.
 
     Seed 002 Fig. 8 / seed 001 AC2. ``roe0`` ``(..., 6)`` is the dimensionless state at t = 0, when the chief is at
@@ -53,8 +59,33 @@ def nearest_crossing(roe0, u0, duration, a, inc, j2=True, da_dot=0.0, t_min=None
     excludes the trivial transit at t = 0 right after an ejection. An orbit without radial motion (da = de = 0)
     lies in the R = 0 plane: its distance is |T| at ``t_min``.
 
-    Returns ``(t_abs, t)``: the dimensionless |T|/a (``inf`` where no transit occurs in the window) and the
-    transit time [s] (``nan`` there).
+    Parameters
+    ----------
+    roe0 : array_like, shape (..., 6)
+        Dimensionless ROE at t = 0.
+    u0 : array_like, shape (...)
+        The chief's mean argument of latitude at t = 0 [rad].
+    duration : float
+        End of the window [s].
+    a : float
+        The chief's semi-major axis [m].
+    inc : float
+        The chief's inclination [rad].
+    j2 : bool
+        With the J2 secular rates.
+    da_dot : array_like, shape (...)
+        Differential-drag rate of da [1/s].
+    t_min : float, optional
+        Start of the window [s] (exclusive); default a tenth of an orbit.
+    iterations : int
+        Newton iterations per transit candidate.
+
+    Returns
+    -------
+    t_abs : numpy.ndarray, shape (...)
+        The dimensionless |T|/a of the nearest transit (``inf`` where no transit occurs in the window).
+    t : numpy.ndarray, shape (...)
+        Its time [s] (``nan`` there).
     """
     r0 = np.asarray(roe0, dtype=float)
     batch = r0.shape[:-1]

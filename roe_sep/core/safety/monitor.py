@@ -14,13 +14,15 @@ Criteria (each a named pass/fail; ``ERROR`` ones decide ``safe``):
 * ``fov`` (WARN): inside the camera field of view and range (seed 002 Eq. 11, |a dl| <= ``a_dl_max``).
 """
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..relmotion.orbit import orbital_period
 from ..relmotion.roe import roe_to_rtn
-from ..relmotion.trajectory import Chief, trajectory
+from ..relmotion.trajectory import Burn, Chief, trajectory
 from .metrics import approaching, fov_limit, min_rn_distance, nearest_crossing
 
 ERROR_CRITERIA = ("keep_out", "passive_safety", "evaporation")
@@ -59,32 +61,59 @@ class Assessment:
     failed: list = field(default_factory=list)  # names of failed criteria
 
     @property
-    def safe(self):
+    def safe(self) -> bool:
+        """No ERROR criterion failed."""
         return not any(name in ERROR_CRITERIA for name in self.failed)
 
     @property
-    def level(self):
+    def level(self) -> int:
         """0 OK, 1 WARN, 2 ERROR (diagnostic_msgs levels)."""
         if not self.safe:
             return 2
         return 1 if self.failed else 0
 
 
-def in_fov(roe, limits: MonitorLimits):
-    """Seed 002 Eq. (11) at the state's own separation and the camera range (a dl within a_dl_max). ROE in m."""
+def in_fov(roe: ArrayLike, limits: MonitorLimits) -> np.ndarray:
+    """Seed 002 Eq. (11) at the state's own separation and the camera range (a dl within a_dl_max): a*ROE
+    ``(..., 6)`` in m -> a boolean ``(...)``."""
     r = np.asarray(roe, dtype=float)
     dl = np.abs(r[..., 1])
     de, di = np.hypot(r[..., 2], r[..., 3]), np.hypot(r[..., 4], r[..., 5])
     return (dl <= limits.a_dl_max) & (de <= fov_limit(dl, limits.fov_half_r)) & (di <= fov_limit(dl, limits.fov_half_n))
 
 
-def assess(roe0, t0, chief: Chief, limits: MonitorLimits, burns=(), t_end=None, j2=True, da_dot=0.0):
+def assess(roe0: ArrayLike, t0: float, chief: Chief, limits: MonitorLimits, burns: Iterable[Burn] = (),
+           t_end: float | None = None, j2: bool = True, da_dot: float = 0.0) -> Assessment:
     """Assess the trajectory from dimensionless ``roe0`` at ``t0`` [s] under ``burns`` up to ``t_end``.
 
     ``t_end`` defaults to ``t0 + limits.window`` (a state), a plan check passes its last burn + ``plan_horizon``.
     The passive-safety, drift and evaporation criteria use the end state; keep-out covers the whole window and the
     R = 0 transits the part after the last burn (from a tenth of an orbit on, so that a state taken right at an
     ejection does not count its own starting point).
+
+    Parameters
+    ----------
+    roe0 : array_like, shape (6,)
+        Dimensionless ROE at ``t0``.
+    t0 : float
+        Epoch of ``roe0`` [s].
+    chief : Chief
+        The chief's a, i and argument of latitude.
+    limits : MonitorLimits
+        The thresholds.
+    burns : iterable of Burn
+        Relative impulses (a plan's, or none for a state).
+    t_end : float, optional
+        End of the window [s]; default ``t0 + limits.window``.
+    j2 : bool
+        With the J2 secular rates.
+    da_dot : float
+        Differential-drag rate of da [1/s].
+
+    Returns
+    -------
+    Assessment
+        The distances [m] and the failed criteria.
     """
     a = chief.a
     t_end = t0 + limits.window if t_end is None else t_end

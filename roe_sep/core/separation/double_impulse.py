@@ -18,14 +18,12 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from ...errors import InfeasibleDesignError, show
 from ..relmotion.dynamics import arg_latitude_rate, propagate, sun_synchronous_inclination
 from ..relmotion.maneuvers import delta_roe
 from ..relmotion.orbit import mean_motion, semi_major_axis
-
-
-class InfeasibleDesignError(ValueError):
-    """The requested separation violates a constraint of seed 002 Table 1 (named in the message)."""
 
 
 @dataclass(frozen=True)
@@ -86,18 +84,20 @@ class DoubleImpulseDesign:
     p_min: float = 0.0  # m/s, e1 + e2 at ``p_sigma_level`` sigma, Eq. (21)
     p_max: float = 0.0  # m/s, n a de_F / 4 - e2, Eq. (21)
 
-    def drift_stop_dv(self, p=0.0):
-        """Relative drift-stop impulse with the tangential part reduced by |p| [m/s], seed 002 Eq. (18)."""
+    def drift_stop_dv(self, p: float = 0.0) -> np.ndarray:
+        """Relative drift-stop impulse ``(3,)`` [m/s] RTN with the tangential part reduced by |p| [m/s], seed 002
+        Eq. (18)."""
         return drift_stop_dv(self.dv1_rtn, p)
 
-    def final_roe(self, p=0.0, j2=False):
-        """Dimensionless ROE right after a nominally executed drift-stop with reduction ``p`` (Eq. 2; Keplerian
-        unless ``j2``)."""
+    def final_roe(self, p: float = 0.0, j2: bool = False) -> np.ndarray:
+        """Dimensionless ROE ``(6,)`` right after a nominally executed drift-stop with reduction ``p`` [m/s] (Eq. 2;
+        Keplerian unless ``j2``)."""
         return plan_drift_stop(self.dv1_rtn, self.u1, 0.0, self.a, self.inc, self.k, p, j2).aimed_roe
 
 
-def drift_stop_dv(dv1_rtn, p=0.0):
-    """The blind drift-stop from the *commanded* ejection alone, seed 002 Eqs. (9) and (18).
+def drift_stop_dv(dv1_rtn: ArrayLike, p: float = 0.0) -> np.ndarray:
+    """The blind drift-stop ``(..., 3)`` [m/s] from the *commanded* ejection ``(..., 3)`` [m/s] alone and the
+    reduction ``p`` [m/s], seed 002 Eqs. (9) and (18).
 
     dvR2 = dvR1, dvT2 = -dvT1 reduced in magnitude by |p|, dvN2 = 0 (relative impulse; the carrier burns the
     opposite). Executed k pi after the ejection it cancels the commanded drift whatever the aimed de_F, di_F were.
@@ -107,8 +107,9 @@ def drift_stop_dv(dv1_rtn, p=0.0):
     return np.stack([dv1[..., 0], t2 - np.copysign(abs(p), t2), np.zeros_like(t2)], axis=-1)
 
 
-def reduction_bounds(dv_t1, cfg: SeparationConfig):
-    """Design range of the drift-stop reduction, seed 002 Eq. (21): e1 + e2 <= |p| < |dvT1| - e2 [m/s].
+def reduction_bounds(dv_t1: float, cfg: SeparationConfig) -> tuple[float, float]:
+    """Design range ``(lo, hi)`` of the drift-stop reduction for the tangential ejection ``dv_t1`` [m/s], seed 002
+    Eq. (21): e1 + e2 <= |p| < |dvT1| - e2 [m/s].
 
     e1, e2: ``p_sigma_level``-sigma under-/over-performance of the two tangential impulses (|dvT2| = |dvT1|).
     """
@@ -119,14 +120,14 @@ def reduction_bounds(dv_t1, cfg: SeparationConfig):
 
 def _require_finite(name, value, positive=True):
     if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
-        raise ValueError(f"{name} must be a number, got {value!r}")
+        raise ValueError(f"{name} must be a number, got {show(value)}")
     if not math.isfinite(value):
         raise ValueError(f"{name} must be finite, got {value}")
     if positive and value <= 0:
         raise ValueError(f"{name} must be positive, got {value}")
 
 
-def validate_config(cfg: SeparationConfig):
+def validate_config(cfg: SeparationConfig) -> None:
     """Reject malformed input (NaN, negative, wrong type) with the offending field named."""
     for name in ("altitude", "spl_dv", "a_de_f", "a_di_f", "spl_sigma", "thruster_sigma", "p_sigma_level",
                  "a_dl_min", "a_dl_max", "min_rn_distance", "fov_half_r_deg", "fov_half_n_deg"):
@@ -135,9 +136,9 @@ def validate_config(cfg: SeparationConfig):
     if cfg.inclination_deg is not None:
         _require_finite("inclination_deg", cfg.inclination_deg, positive=False)
     if not isinstance(cfg.leading, bool):
-        raise ValueError(f"leading must be true or false, got {cfg.leading!r}")
+        raise ValueError(f"leading must be true or false, got {show(cfg.leading)}")
     if isinstance(cfg.k, bool) or not isinstance(cfg.k, (int, np.integer)) or cfg.k < 1 or cfg.k % 2 == 0:
-        raise ValueError(f"k must be an odd natural number (half revolutions to the drift-stop), got {cfg.k!r}")
+        raise ValueError(f"k must be an odd natural number (half revolutions to the drift-stop), got {show(cfg.k)}")
     if cfg.a_dl_min >= cfg.a_dl_max:
         raise ValueError(f"a_dl_min ({cfg.a_dl_min} m) must be below a_dl_max ({cfg.a_dl_max} m)")
     if cfg.eta_deg is not None:
@@ -166,8 +167,23 @@ def admissible_bounds(cfg: SeparationConfig, n: float) -> Bounds:
     )
 
 
-def admissible_k(a_dl_star, a_da1, a_dl_min, a_dl_max):
-    """Odd k with a dl_F = -3/2 k pi a da1 + a Delta dl* inside [a_dl_min, a_dl_max] in magnitude, Eq. (13)-(14)."""
+def admissible_k(a_dl_star: float, a_da1: float, a_dl_min: float, a_dl_max: float) -> tuple[int, ...]:
+    """Odd k with a dl_F = -3/2 k pi a da1 + a Delta dl* inside [a_dl_min, a_dl_max] in magnitude, Eq. (13)-(14).
+
+    Parameters
+    ----------
+    a_dl_star : float
+        a Delta dl* of Eq. (9) [m].
+    a_da1 : float
+        a da after the ejection [m].
+    a_dl_min, a_dl_max : float
+        The band of the final |a dl| [m].
+
+    Returns
+    -------
+    tuple of int
+        The admissible k, ascending (empty when none).
+    """
     step = 1.5 * math.pi * abs(a_da1)
     lo = (a_dl_min - abs(a_dl_star)) / step
     hi = (a_dl_max - abs(a_dl_star)) / step
@@ -255,17 +271,47 @@ class DriftStopPlan:
     p: float  # m/s
 
 
-def plan_drift_stop(dv1_rtn, u1, epoch1, a, inc, k, p, j2=True):
+def plan_drift_stop(dv1_rtn: ArrayLike, u1: float, epoch1: float, a: float, inc: float, k: int, p: float,
+                    j2: bool = True) -> DriftStopPlan:
     """Plan the drift-stop k pi after a commanded ejection ``dv1_rtn`` at ``u1`` [rad] and ``epoch1`` [s].
 
     Eqs. (9)/(18) via :func:`drift_stop_dv`; the epoch follows from the secular rate of the argument of latitude
     (with J2 when ``j2``); the aimed ROE apply Eq. (2) to both commanded impulses with the secular propagation.
+
+    Parameters
+    ----------
+    dv1_rtn : array_like, shape (3,)
+        The commanded ejection [m/s], relative, RTN.
+    u1 : float
+        The carrier's mean argument of latitude at the ejection [rad].
+    epoch1 : float
+        The ejection epoch [s].
+    a : float
+        The carrier's semi-major axis [m].
+    inc : float
+        The carrier's inclination [rad].
+    k : int
+        Odd number of half revolutions from the ejection to the drift-stop.
+    p : float
+        The reduction of the tangential drift-stop [m/s] (its magnitude counts).
+    j2 : bool
+        With the J2 secular rates.
+
+    Returns
+    -------
+    DriftStopPlan
+        Epoch, argument of latitude, relative and carrier impulses and the aimed ROE.
+
+    Raises
+    ------
+    ValueError
+        For a k that is not an odd natural number or a non-finite input, naming it.
     """
     if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1 or k % 2 == 0:
-        raise ValueError(f"k must be an odd natural number, got {k!r}")
+        raise ValueError(f"k must be an odd natural number, got {show(k)}")
     dv1 = np.asarray(dv1_rtn, dtype=float)
     if dv1.shape != (3,) or not np.all(np.isfinite(dv1)):
-        raise ValueError(f"ejection dv must be three finite numbers [m/s], got {dv1_rtn!r}")
+        raise ValueError(f"ejection dv must be three finite numbers [m/s], got {show(dv1_rtn)}")
     for name, value in (("u1", u1), ("epoch1", epoch1), ("a", a), ("inc", inc), ("p", p)):
         _require_finite(name, float(value), positive=name == "a")
     n = float(mean_motion(a))

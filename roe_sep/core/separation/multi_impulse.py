@@ -35,7 +35,9 @@ import math
 from dataclasses import dataclass, replace
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from ...errors import show
 from ..constants import SECONDS_PER_DAY
 from ..montecarlo.sweep import MonteCarloConfig
 from ..relmotion.dynamics import (
@@ -73,15 +75,16 @@ class MultiImpulseConfig:
     min_stop_delay_rev: float = 0.5  # revolutions from the ejection to the earliest drift reduction
     pair_delay: float = SECONDS_PER_DAY  # s, ejection to the earliest burn of the tangential pair (after OD)
 
-    def validate(self):
+    def validate(self) -> None:
+        """Raise ValueError naming the first field that is not finite and positive (``a_di_f``: or None)."""
         for name in ("spl_dv", "max_burn", "dv_quantum", "min_stop_delay_rev", "pair_delay"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
-                raise ValueError(f"{name} must be a finite positive number, got {v!r}")
+                raise ValueError(f"{name} must be a finite positive number, got {show(v)}")
         if not math.isfinite(self.u1_deg):
-            raise ValueError(f"u1_deg must be finite, got {self.u1_deg!r}")
+            raise ValueError(f"u1_deg must be finite, got {show(self.u1_deg)}")
         if self.a_di_f is not None and (not math.isfinite(self.a_di_f) or self.a_di_f <= 0):
-            raise ValueError(f"a_di_f must be a finite positive number [m] or null, got {self.a_di_f!r}")
+            raise ValueError(f"a_di_f must be a finite positive number [m] or null, got {show(self.a_di_f)}")
         if self.dv_quantum > self.max_burn:
             raise ValueError(f"dv_quantum ({self.dv_quantum} m/s) must not exceed max_burn ({self.max_burn} m/s)")
 
@@ -90,26 +93,48 @@ class MultiImpulseConfig:
 # one function per formula
 
 
-def spl_error(spl_dv, spl_sigma):
+def spl_error(spl_dv: float, spl_sigma: float) -> float:
     """e~ = spl_sigma |dv| [m/s]: the SPL execution error of seed 002 Eq. (10) (10 % of the SPL size)."""
     return spl_sigma * spl_dv
 
 
-def spl_tangential(e_tilde, leading=True):
+def spl_tangential(e_tilde: float, leading: bool = True) -> float:
     """Least tangential SPL component with an outward drift under the error e~, seed 002 Eq. (10): |dvT1| = e~.
 
-    Leading picosatellite: dvT1 < 0 (da < 0, drift towards positive along-track separation, safety #2).
+    Leading picosatellite: dvT1 < 0 (da < 0, drift towards positive along-track separation, safety #2). ``e_tilde``
+    and the result in m/s.
     """
     return -e_tilde if leading else e_tilde
 
 
-def spl_normal(a_di, n):
-    """Normal SPL component establishing |a di| = a_di at the ejection, seed 002 Eq. (2): n a |di| = |dvN| [m/s]."""
+def spl_normal(a_di: float, n: float) -> float:
+    """Normal SPL component establishing |a di| = ``a_di`` [m] at the ejection, seed 002 Eq. (2): n a |di| = |dvN|
+    [m/s], ``n`` [rad/s]."""
     return n * a_di
 
 
-def spl_radial(spl_dv, dv_t, dv_n, leading=True):
-    """The radial SPL component absorbing the rest of the fixed SPL size, seed 002 Eq. (12) (sign: safety #2)."""
+def spl_radial(spl_dv: float, dv_t: float, dv_n: float, leading: bool = True) -> float:
+    """The radial SPL component absorbing the rest of the fixed SPL size, seed 002 Eq. (12) (sign: safety #2).
+
+    Parameters
+    ----------
+    spl_dv : float
+        The SPL ejection magnitude [m/s].
+    dv_t, dv_n : float
+        Its tangential and normal components [m/s].
+    leading : bool
+        A leading picosatellite (negative radial component).
+
+    Returns
+    -------
+    float
+        The radial component [m/s].
+
+    Raises
+    ------
+    InfeasibleDesignError
+        When the tangential and normal components alone exceed ``spl_dv``.
+    """
     rest = spl_dv**2 - dv_t**2 - dv_n**2
     if rest < 0:
         raise InfeasibleDesignError(
@@ -118,27 +143,72 @@ def spl_radial(spl_dv, dv_t, dv_n, leading=True):
     return (-1.0 if leading else 1.0) * math.sqrt(rest)
 
 
-def inclination_vector_drift_rate(a, inc, dix):
+def inclination_vector_drift_rate(a: ArrayLike, inc: ArrayLike, dix: ArrayLike) -> np.ndarray:
     """Secular J2 drift of the relative inclination vector's y component, d(diy)/dt = 2 kappa sin^2(i) dix [1/s].
 
     The da-free part of the diy rate of :func:`~roe_sep.core.relmotion.dynamics.propagate` (seed 001 Sec. 2.2 item 3:
     'the J2 effect on the relative inclination vector affects only its y-component', driven by dix). Per orbit it
     is 3 pi J2 (R_E/a)^2 sin^2(i) dix. Belongs in ``dynamics.py`` (kept here: that module is not ours).
+
+    Parameters
+    ----------
+    a : array_like
+        The chief's semi-major axis [m].
+    inc : array_like
+        The chief's inclination [rad].
+    dix : array_like
+        The dimensionless relative inclination vector's x component.
+
+    Returns
+    -------
+    numpy.ndarray
+        d(diy)/dt [1/s], the broadcast shape.
     """
     return 2.0 * j2_kappa(a) * np.sin(inc) ** 2 * np.asarray(dix, dtype=float)
 
 
-def ejection_dix(dv_n, u, a, n):
-    """dix = dvN cos(u) / (n a), seed 002 Eq. (2): zero for an ejection at the poles u = 90/270 deg."""
+def ejection_dix(dv_n: ArrayLike, u: ArrayLike, a: ArrayLike, n: ArrayLike) -> np.ndarray | float:
+    """dix = dvN cos(u) / (n a), seed 002 Eq. (2): zero for an ejection at the poles u = 90/270 deg.
+
+    Parameters
+    ----------
+    dv_n : array_like
+        The normal ejection component [m/s].
+    u : array_like
+        The mean argument of latitude of the ejection [rad].
+    a : array_like
+        The carrier's semi-major axis [m].
+    n : array_like
+        The carrier's mean motion [rad/s].
+
+    Returns
+    -------
+    float or numpy.ndarray
+        The dimensionless dix, the broadcast shape.
+    """
     return dv_n * np.cos(u) / (n * a)
 
 
-def anti_parallel_target(de, di, de_min, parallel=False):
+def anti_parallel_target(de: ArrayLike, di: ArrayLike, de_min: ArrayLike, parallel: bool = False) -> np.ndarray:
     """Closest point to ``de`` on the ray anti-parallel to ``di`` with |de| >= de_min (dimensionless 2-vectors).
 
     The target of the minimum-delta-v e-vector correction (seed 001 Sec. 3: 'shortest change towards the final
     configuration'): the projection of de onto -di_hat, clamped to at least de_min. ``parallel``: the ray along
     +di_hat instead (a following picosatellite, eta = 0, seed 002 safety #2).
+
+    Parameters
+    ----------
+    de, di : array_like, shape (..., 2)
+        The dimensionless relative eccentricity and inclination vectors.
+    de_min : array_like, shape (...)
+        The least |de| of the target (dimensionless).
+    parallel : bool
+        The ray along +di_hat instead of -di_hat.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 2)
+        The target relative eccentricity vector (dimensionless).
     """
     de = np.asarray(de, dtype=float)
     di = np.asarray(di, dtype=float)
@@ -147,13 +217,30 @@ def anti_parallel_target(de, di, de_min, parallel=False):
     return s[..., None] * d_hat
 
 
-def tangential_pair(da, dde, n, a):
+def tangential_pair(da: float, dde: ArrayLike, n: float, a: float) -> tuple[float, float, float]:
     """Two tangential impulses x1 at u_a, x2 at u_a + pi giving Delta da = -da and Delta de = dde (Eq. 2).
 
     Eq. (2): Delta da = 2 (x1 + x2)/(n a), Delta de = 2 (x1 - x2)(cos u_a, sin u_a)/(n a). With u_a = phase(dde)
     + pi (first burn lowers da: outward for a leading picosatellite): x1 - x2 = -D, x1 + x2 = S with
-    D = n a |dde| / 2, S = -n a da / 2. Returns (u_a [rad, wrapped], x1, x2) [m/s]. Minimum delta-v when
-    |dde| >= |da| (then |x1| + |x2| = D).
+    D = n a |dde| / 2, S = -n a da / 2. Minimum delta-v when |dde| >= |da| (then |x1| + |x2| = D).
+
+    Parameters
+    ----------
+    da : float
+        The dimensionless relative semi-major axis to cancel.
+    dde : array_like, shape (2,)
+        The wanted change of the dimensionless relative eccentricity vector.
+    n : float
+        The carrier's mean motion [rad/s].
+    a : float
+        The carrier's semi-major axis [m].
+
+    Returns
+    -------
+    u_a : float
+        Mean argument of latitude of the first burn [rad], wrapped to [-pi, pi).
+    x1, x2 : float
+        The tangential relative impulses at u_a and u_a + pi [m/s].
     """
     dde = np.asarray(dde, dtype=float)
     big_d = n * a * float(np.hypot(dde[0], dde[1])) / 2.0
@@ -162,23 +249,52 @@ def tangential_pair(da, dde, n, a):
     return u_a, (big_s - big_d) / 2.0, (big_s + big_d) / 2.0
 
 
-def tangential_pair_following(da, dde, n, a):
+def tangential_pair_following(da: float, dde: ArrayLike, n: float, a: float) -> tuple[float, float, float]:
     """:func:`tangential_pair` for a following picosatellite: the first burn raises da (outward behind the carrier):
-    u_a = phase(dde), x1 = (S + D)/2 > 0, x2 = (S - D)/2."""
+    u_a = phase(dde), x1 = (S + D)/2 > 0, x2 = (S - D)/2.
+
+    Parameters
+    ----------
+    da, dde, n, a
+        As for :func:`tangential_pair`.
+
+    Returns
+    -------
+    u_a : float
+        Mean argument of latitude of the first burn [rad], wrapped to [-pi, pi).
+    x1, x2 : float
+        The tangential relative impulses at u_a and u_a + pi [m/s].
+    """
     dde = np.asarray(dde, dtype=float)
     big_d = n * a * float(np.hypot(dde[0], dde[1])) / 2.0
     big_s = -n * a * float(da) / 2.0
     return float(wrap_angle(math.atan2(dde[1], dde[0]))), (big_s + big_d) / 2.0, (big_s - big_d) / 2.0
 
 
-def quantize(dv, quantum):
-    """Round an impulse to the thruster discretization ``quantum`` [m/s] (seed 001 Sec. 2.1 constraint 2)."""
+def quantize(dv: ArrayLike, quantum: float) -> np.ndarray:
+    """Round an impulse [m/s] (any shape) to the thruster discretization ``quantum`` [m/s] (seed 001 Sec. 2.1
+    constraint 2)."""
     return np.round(np.asarray(dv, dtype=float) / quantum) * quantum
 
 
-def split_burn(dv, max_burn, quantum):
-    """Split a (quantized) scalar impulse [m/s] into the fewest near-equal parts, each <= ``max_burn`` and an integer
-    multiple of ``quantum`` (seed 001 Sec. 2.1: 0.3 m/s per burn, 1 mm/s pulses). Returns a list (empty for 0)."""
+def split_burn(dv: float, max_burn: float, quantum: float) -> list[float]:
+    """Split a (quantized) scalar impulse into the fewest near-equal parts, each <= ``max_burn`` and an integer
+    multiple of ``quantum`` (seed 001 Sec. 2.1: 0.3 m/s per burn, 1 mm/s pulses).
+
+    Parameters
+    ----------
+    dv : float
+        The impulse [m/s], signed.
+    max_burn : float
+        The largest part [m/s].
+    quantum : float
+        The thruster discretization [m/s].
+
+    Returns
+    -------
+    list of float
+        The parts [m/s], each with the sign of ``dv`` (empty for an impulse below half a quantum).
+    """
     q = int(round(abs(float(dv)) / quantum))
     per = int(math.floor(max_burn / quantum + 1e-9))
     if q == 0:
@@ -188,7 +304,7 @@ def split_burn(dv, max_burn, quantum):
     return [sign * (q // m + (1 if i < q % m else 0)) * quantum for i in range(m)]
 
 
-def first_u_after(target, u_from):
+def first_u_after(target: float, u_from: float) -> float:
     """Smallest unwrapped argument of latitude >= ``u_from`` congruent to ``target`` mod 2 pi [rad]."""
     return u_from + (target - u_from) % (2.0 * math.pi)
 
@@ -218,18 +334,44 @@ class CarrierPlan:
     ic_epoch: float  # s
 
 
-def plan_carrier_burns(dv1_rtn, u1, epoch1, a, inc, sep: SeparationConfig, mcfg: MultiImpulseConfig, j2=True,
-                       da_dot=0.0) -> CarrierPlan:
+def plan_carrier_burns(dv1_rtn: ArrayLike, u1: float, epoch1: float, a: float, inc: float, sep: SeparationConfig,
+                       mcfg: MultiImpulseConfig, j2: bool = True, da_dot: float = 0.0) -> CarrierPlan:
     """Blind drift reduction and the tangential e-vector pair for a commanded ejection ``dv1_rtn`` at ``u1``.
 
     Seed 001 Sec. 3 (see the module docstring): the drift reduction is |dvT1| - |p| with |p| = e1 + e2 (seed 002
     Eq. 21) at the phase where it helps the e-vector correction; the pair is planned on the nominal prediction
     (secular J2 when ``j2``, nominal drag ``da_dot`` [1/s]) ``pair_delay`` after the ejection. All burns are
     quantized and split (``max_burn``).
+
+    Parameters
+    ----------
+    dv1_rtn : array_like, shape (3,)
+        The commanded ejection [m/s], relative, RTN.
+    u1 : float
+        The carrier's mean argument of latitude at the ejection [rad].
+    epoch1 : float
+        The ejection epoch [s].
+    a : float
+        The carrier's semi-major axis [m].
+    inc : float
+        The carrier's inclination [rad].
+    sep : SeparationConfig
+        Reduction sizing (Eq. 21), the minimum R-N distance and the side (leading/following).
+    mcfg : MultiImpulseConfig
+        Burn size limit, quantum and delays.
+    j2 : bool
+        With the J2 secular rates.
+    da_dot : float
+        Nominal differential-drag rate of da [1/s].
+
+    Returns
+    -------
+    CarrierPlan
+        The carrier burns in time order and the predicted ROE.
     """
     dv1 = np.asarray(dv1_rtn, dtype=float)
     if dv1.shape != (3,) or not np.all(np.isfinite(dv1)):
-        raise ValueError(f"ejection dv must be three finite numbers [m/s], got {dv1_rtn!r}")
+        raise ValueError(f"ejection dv must be three finite numbers [m/s], got {show(dv1_rtn)}")
     mcfg.validate()
     n = float(mean_motion(a))
     u_rate = float(arg_latitude_rate(a, inc, j2))
@@ -291,13 +433,38 @@ def plan_carrier_burns(dv1_rtn, u1, epoch1, a, inc, sep: SeparationConfig, mcfg:
     return CarrierPlan(tuple(plan), float(p_eff), roe_red, roe_f, t_ic)
 
 
-def drift_free_state(dv1, u1, a, inc, plan: CarrierPlan, sep: SeparationConfig, j2=True, da_dot=0.0):
+def drift_free_state(dv1: ArrayLike, u1: float, a: float, inc: float, plan: CarrierPlan, sep: SeparationConfig,
+                     j2: bool = True, da_dot: float = 0.0) -> np.ndarray:
     """ROE right after the nominal drift reduction for the SPL under-performance that leaves no drift.
 
     The commanded reduction is |dvT1| - |p| with |p| = e1 + e2 (Eq. 21): an SPL factor f1 = 1 - |p|/|dvT1| makes
     the residual da zero. Seed 001 AC3 asks this nearly drift-free orbit for a minimum R-N distance (Eq. 25) above
     the limit: that (not Eq. 10 alone) bounds the tangential SPL component from below, because only the tangential
     part builds the de component anti-parallel to di (at u1 = 90 deg the radial part gives de perpendicular to di).
+
+    Parameters
+    ----------
+    dv1 : array_like, shape (3,)
+        The commanded ejection [m/s], relative, RTN.
+    u1 : float
+        The carrier's mean argument of latitude at the ejection [rad].
+    a : float
+        The carrier's semi-major axis [m].
+    inc : float
+        The carrier's inclination [rad].
+    plan : CarrierPlan
+        The plan of :func:`plan_carrier_burns` (its drift-reduction burns, epochs from the ejection at 0).
+    sep : SeparationConfig
+        The separation configuration (unused by the arithmetic; the plan carries its result).
+    j2 : bool
+        With the J2 secular rates.
+    da_dot : float
+        Differential-drag rate of da [1/s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (6,)
+        Dimensionless ROE right after the last drift-reduction burn.
     """
     dv1 = np.asarray(dv1, dtype=float)
     f1 = 1.0 - plan.p / abs(dv1[1])
@@ -327,17 +494,18 @@ class MultiImpulseDesign:
     dv_t_ac3: float = 0.0  # m/s, least |dvT1| with AC3 for the drift-free sample
 
     @property
-    def thrusted_dv_total(self):
+    def thrusted_dv_total(self) -> float:
         """Sum of the carrier burn magnitudes [m/s]."""
         return float(sum(np.linalg.norm(b.dv_carrier_rtn) for b in self.plan.burns))
 
     @property
-    def thrusted_to_ejection_ratio(self):
+    def thrusted_to_ejection_ratio(self) -> float:
         """Thrusted / ejection delta-v (seed 001 Sec. 3 figure of merit; 95 % for the double impulse)."""
         return self.thrusted_dv_total / float(np.linalg.norm(self.dv1_rtn))
 
-    def j2_effects(self):
-        """Secular J2 where it matters (seed 001 Sec. 2.2 item 3)."""
+    def j2_effects(self) -> dict:
+        """Secular J2 where it matters (seed 001 Sec. 2.2 item 3): e-vector rotation [deg/day], a dix at the
+        ejection [m] and the a diy drift [m/day] it drives (also for an ejection at u1 = 88 deg and per m of a dix)."""
         a, inc, n = self.a, self.inc, self.n
         rot = float(eccentricity_vector_rotation_rate(a, inc)) * SECONDS_PER_DAY
         dix = ejection_dix(self.dv1_rtn[2], self.u1, a, n)
@@ -358,8 +526,30 @@ def multi_config(sep: SeparationConfig, mcfg: MultiImpulseConfig) -> SeparationC
 
 
 def design(sep: SeparationConfig = SeparationConfig(), mcfg: MultiImpulseConfig = MultiImpulseConfig(),
-           mc: MonteCarloConfig | None = None, j2=True) -> MultiImpulseDesign:
-    """Nominal multi-impulse plan (seed 001 Sec. 3) at epoch 0; nominal drag from ``mc`` (default settings)."""
+           mc: MonteCarloConfig | None = None, j2: bool = True) -> MultiImpulseDesign:
+    """Nominal multi-impulse plan (seed 001 Sec. 3) at epoch 0; nominal drag from ``mc`` (default settings).
+
+    Parameters
+    ----------
+    sep : SeparationConfig
+        The scenario's separation configuration (its SPL size and u1 replaced by ``mcfg``'s).
+    mcfg : MultiImpulseConfig
+        The multi-impulse inputs.
+    mc : MonteCarloConfig, optional
+        The drag of the nominal prediction (``delta_b``, ``density``, ``drag``); default settings when None.
+    j2 : bool
+        With the J2 secular rates.
+
+    Returns
+    -------
+    MultiImpulseDesign
+        The ejection, the carrier plan and the design quantities.
+
+    Raises
+    ------
+    InfeasibleDesignError
+        When safety #7 or AC3 cannot be met; ValueError for a malformed configuration.
+    """
     mcfg.validate()
     cfg = multi_config(sep, mcfg)
     validate_config(cfg)

@@ -18,13 +18,29 @@ Element arrays are ``(..., 6)`` ``[a, e, i, raan, argp, M]`` (m, 1, rad); all fu
 """
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..constants import J2, MU_EARTH, R_EARTH
 
 
-def solve_kepler(m, e, iterations=8):
+def solve_kepler(m: ArrayLike, e: ArrayLike, iterations: int = 8) -> np.ndarray:
     """Eccentric anomaly E from Kepler's equation M = E - e sin E (Newton, start E = M; quadratic convergence,
-    8 iterations exhaust double precision for e < 0.1)."""
+    8 iterations exhaust double precision for e < 0.1).
+
+    Parameters
+    ----------
+    m : array_like
+        Mean anomaly [rad].
+    e : array_like
+        Eccentricity, broadcast with ``m``.
+    iterations : int
+        Newton steps.
+
+    Returns
+    -------
+    numpy.ndarray
+        E [rad], the broadcast shape.
+    """
     m, e = np.asarray(m, dtype=float), np.asarray(e, dtype=float)
     big_e = m + 0.0 * e
     for _ in range(iterations):
@@ -32,20 +48,20 @@ def solve_kepler(m, e, iterations=8):
     return big_e
 
 
-def true_from_mean(m, e):
+def true_from_mean(m: ArrayLike, e: ArrayLike) -> np.ndarray:
     """True anomaly f from mean anomaly M: tan(f/2) = sqrt((1+e)/(1-e)) tan(E/2) (Vallado Alg. 2 / Eq. 2-14)."""
     big_e = solve_kepler(m, e)
     return 2.0 * np.arctan2(np.sqrt(1.0 + e) * np.sin(big_e / 2.0), np.sqrt(1.0 - e) * np.cos(big_e / 2.0))
 
 
-def mean_from_true(f, e):
+def mean_from_true(f: ArrayLike, e: ArrayLike) -> np.ndarray:
     """Mean anomaly M from true anomaly f: E = 2 atan(sqrt((1-e)/(1+e)) tan(f/2)), M = E - e sin E."""
     f, e = np.asarray(f, dtype=float), np.asarray(e, dtype=float)
     big_e = 2.0 * np.arctan2(np.sqrt(1.0 - e) * np.sin(f / 2.0), np.sqrt(1.0 + e) * np.cos(f / 2.0))
     return big_e - e * np.sin(big_e)
 
 
-def kepler_to_cartesian(kep, mu=MU_EARTH):
+def kepler_to_cartesian(kep: ArrayLike, mu: float = MU_EARTH) -> tuple[np.ndarray, np.ndarray]:
     """Inertial position [m] and velocity [m/s] from osculating ``[a, e, i, raan, argp, M]`` (Vallado Alg. 10).
 
     r = p / (1 + e cos f) (cos u P + sin u Q),  v = sqrt(mu/p) (-(sin u + e sin argp) P + (cos u + e cos argp) Q),
@@ -69,12 +85,26 @@ def kepler_to_cartesian(kep, mu=MU_EARTH):
     return pos, vp[..., None] * big_p + vq[..., None] * big_q
 
 
-def cartesian_to_kepler(pos, vel, mu=MU_EARTH):
+def cartesian_to_kepler(pos: ArrayLike, vel: ArrayLike, mu: float = MU_EARTH) -> np.ndarray:
     """Osculating ``[a, e, i, raan, argp, M]`` from inertial position/velocity (Vallado Alg. 9, nodal-frame form).
 
     h = r x v, i = acos(h_z/|h|), raan = atan2(h_x, -h_y); e_vec = ((v^2 - mu/r) r - (r.v) v)/mu; a from the vis-viva
     energy. The argument of latitude u and the components of e_vec along the node (e cos argp) and normal to it in
     the plane (e sin argp) are computed directly, so a circular orbit gives argp = 0, M = u without a singularity.
+
+    Parameters
+    ----------
+    pos : array_like, shape (..., 3)
+        Inertial position [m].
+    vel : array_like, shape (..., 3)
+        Inertial velocity [m/s].
+    mu : float
+        Gravitational parameter [m^3/s^2].
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 6)
+        ``[a, e, i, raan, argp, M]`` (m, 1, rad, rad, rad, rad), raan and argp in [0, 2 pi).
     """
     r = np.asarray(pos, dtype=float)
     v = np.asarray(vel, dtype=float)
@@ -96,12 +126,12 @@ def cartesian_to_kepler(pos, vel, mu=MU_EARTH):
                      np.mod(mean_from_true(u - argp, e), two_pi)], axis=-1)
 
 
-def j2_gamma(a, sign):
+def j2_gamma(a: ArrayLike, sign: float) -> np.ndarray:
     """gamma_2 = sign (J2/2) (R_E/a)^2, Schaub & Junkins Eq. (F.1)/(F.2): sign +1 mean -> osculating, -1 back."""
     return sign * 0.5 * J2 * (R_EARTH / np.asarray(a, dtype=float)) ** 2
 
 
-def brouwer_lyddane(kep, sign):
+def brouwer_lyddane(kep: ArrayLike, sign: float) -> np.ndarray:
     """Schaub & Junkins Appendix F, Eqs. (F.3)-(F.22): the first-order J2 map of ``[a, e, i, raan, argp, M]``.
 
     ``sign`` = +1: mean -> osculating; -1: osculating -> mean. Singular only at the critical inclination
@@ -166,22 +196,22 @@ def brouwer_lyddane(kep, sign):
                      np.mod(m_new, two_pi)], axis=-1)
 
 
-def mean_to_osculating(kep_mean):
+def mean_to_osculating(kep_mean: ArrayLike) -> np.ndarray:
     """Osculating elements of mean ``[a, e, i, raan, argp, M]``: :func:`brouwer_lyddane` with gamma_2 > 0."""
     return brouwer_lyddane(kep_mean, +1.0)
 
 
-def osculating_to_mean(kep_osc):
+def osculating_to_mean(kep_osc: ArrayLike) -> np.ndarray:
     """Mean elements of osculating ``[a, e, i, raan, argp, M]``: :func:`brouwer_lyddane` with gamma_2 < 0 (first
     order; the residual is O(J2^2), a few meters in a, common to two close spacecraft)."""
     return brouwer_lyddane(kep_osc, -1.0)
 
 
-def mean_to_cartesian(kep_mean):
+def mean_to_cartesian(kep_mean: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Inertial position/velocity of mean elements: :func:`mean_to_osculating` then :func:`kepler_to_cartesian`."""
     return kepler_to_cartesian(mean_to_osculating(kep_mean))
 
 
-def cartesian_to_mean(pos, vel):
+def cartesian_to_mean(pos: ArrayLike, vel: ArrayLike) -> np.ndarray:
     """Mean elements of an inertial state: :func:`cartesian_to_kepler` then :func:`osculating_to_mean`."""
     return osculating_to_mean(cartesian_to_kepler(pos, vel))

@@ -39,11 +39,15 @@ import copy
 import functools
 import math
 import os
+from collections.abc import Iterable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from ...errors import show
 from ..constants import EARTH_ROTATION, J2, J3, J4, MU_EARTH, R_EARTH, SECONDS_PER_DAY
 from ..od.radar import (
     DEFAULT_EPOCH_UTC,
@@ -56,6 +60,9 @@ from ..od.radar import (
 from ..relmotion.dynamics import propagate_chief
 from ..relmotion.roe import kepler_to_roe
 from .mean_osc import cartesian_to_mean, mean_to_cartesian
+
+if TYPE_CHECKING:  # heyoka is imported where it is used (it loads LLVM)
+    import heyoka as hy
 
 ZONALS = {2: (J2,), 3: (J2, J3), 4: (J2, J3, J4)}
 
@@ -76,7 +83,7 @@ VALLADO_EXPONENTIAL = (
 )
 
 
-def vallado_band(h):
+def vallado_band(h: float) -> tuple[float, float, float]:
     """Row ``(h0 [m], rho0 [kg/m^3], H [m])`` of Vallado Table 8-4 whose band [h0, next h0) contains ``h`` [m]."""
     h_km = float(h) / 1e3
     if not VALLADO_EXPONENTIAL[0][0] <= h_km < 1100.0:
@@ -85,7 +92,7 @@ def vallado_band(h):
     return row[0] * 1e3, row[1], row[2] * 1e3
 
 
-def vallado_density(h):
+def vallado_density(h: ArrayLike) -> np.ndarray:
     """Vallado Table 8-4 density [kg/m^3] at altitude ``h`` [m]: rho = rho0 exp(-(h - h0)/H) (Vallado Eq. 8-33)."""
     h0, rho0, big_h = vallado_band(h)
     return rho0 * np.exp(-(float(h) - h0) / big_h)
@@ -101,18 +108,18 @@ class Atmosphere:
     kind = "exponential"
 
     @classmethod
-    def vallado(cls, h_ref):
+    def vallado(cls, h_ref: float) -> "Atmosphere":
         """Vallado Table 8-4 unscaled, referenced at ``h_ref`` [m]."""
         return cls(float(vallado_density(h_ref)), float(h_ref), vallado_band(h_ref)[2])
 
     @classmethod
-    def scaled(cls, rho_ref, h_ref):
+    def scaled(cls, rho_ref: float, h_ref: float) -> "Atmosphere":
         """Vallado's scale height for the band of ``h_ref``, scaled so that rho(h_ref) = ``rho_ref`` (the seeds'
         1 g/km^3 at 515 km: Vallado's 0.551 g/km^3 times 1.82)."""
         return cls(float(rho_ref), float(h_ref), vallado_band(h_ref)[2])
 
     @classmethod
-    def normalised(cls, rho_mean, chief_mean):
+    def normalised(cls, rho_mean: float, chief_mean: ArrayLike) -> "Atmosphere":
         """The ``normalised`` truth atmosphere: Vallado's scale height at the mean altitude a - R_E of
         ``chief_mean`` (mean ``[a, e, i, raan, argp, M]``), scaled so that the orbit-mean drag of that orbit equals
         that of the constant density ``rho_mean`` [kg/m^3] (:func:`effective_density`), as seed 002 Eq. (24)
@@ -120,18 +127,20 @@ class Atmosphere:
         base = cls.scaled(1.0, float(chief_mean[0]) - R_EARTH)
         return cls(float(rho_mean) / effective_density(base, chief_mean), base.h_ref, base.scale_height)
 
-    def density(self, h):
-        """rho(h) [kg/m^3]."""
+    def density(self, h: ArrayLike) -> np.ndarray:
+        """rho(h) [kg/m^3] at spherical altitudes ``h`` [m] (any shape)."""
         return self.rho_ref * np.exp(-(np.asarray(h, dtype=float) - self.h_ref) / self.scale_height)
 
-    def density_at(self, pos, t=0.0):
-        """rho [kg/m^3] at inertial positions ``pos`` ``(..., 3)`` [m] (time-independent)."""
+    def density_at(self, pos: ArrayLike, t: ArrayLike = 0.0) -> np.ndarray:
+        """rho [kg/m^3] ``(...)`` at inertial positions ``pos`` ``(..., 3)`` [m] (time-independent: ``t`` unused)."""
         return self.density(np.linalg.norm(np.asarray(pos, dtype=float), axis=-1) - R_EARTH)
 
-    def pars(self):
+    def pars(self) -> list[float]:
+        """The integrator's density parameters: rho_ref [kg/m^3], h_ref [m], H [m]."""
         return [self.rho_ref, self.h_ref, self.scale_height]
 
-    def describe(self):
+    def describe(self) -> dict:
+        """The model and its parameters (SI), for reports."""
         return {"model": self.kind, "rho_ref": self.rho_ref, "h_ref": self.h_ref, "scale_height": self.scale_height}
 
 
@@ -158,11 +167,25 @@ def _monomials(x, y, z, degree):
     return out
 
 
-def msis_basis(x, y, z, dh):
+def msis_basis(x: "np.ndarray | hy.expression", y: "np.ndarray | hy.expression", z: "np.ndarray | hy.expression",
+               dh: "np.ndarray | hy.expression") -> list:
     """The 46 basis functions of the NRLMSIS fit: monomials X^i Y^j Z^k of degree <= 4 of the unit position
     vector in the frame (X towards the Sun's right ascension, Z the Earth's axis) (35), ``dh`` times those of
     degree <= 2 (10) and dh^2, with dh = (|r| - R_E - h_0) / ``MSIS_SCALE``. Products and sums only, so the same
-    code builds numpy arrays and heyoka expressions."""
+    code builds numpy arrays and heyoka expressions.
+
+    Parameters
+    ----------
+    x, y, z : numpy.ndarray or heyoka.expression
+        The unit position vector's components in the Sun-fixed frame.
+    dh : numpy.ndarray or heyoka.expression
+        The scaled altitude offset (|r| - R_E - h_0) / ``MSIS_SCALE``.
+
+    Returns
+    -------
+    list
+        The 46 basis functions, of the inputs' kind.
+    """
     terms = _monomials(x, y, z, 4)
     terms += [dh * m for m in _monomials(x, y, z, 2)]
     return terms + [dh * dh]
@@ -176,7 +199,7 @@ def _sun_frame(pos_x, pos_y, pos_z, r, alpha, cos=np.cos, sin=np.sin):
     return (pos_x * ca + pos_y * sa) / r, (pos_y * ca - pos_x * sa) / r, pos_z / r
 
 
-def ecef_to_geodetic(r_ef):
+def ecef_to_geodetic(r_ef: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """WGS-84 geodetic latitude [rad], longitude [rad] and ellipsoidal height [m] of Earth-fixed positions
     ``(..., 3)`` (fixed-point iteration on the latitude, converged to < 1e-12 rad in 6 steps in LEO)."""
     x, y, z = (np.asarray(r_ef, dtype=float)[..., k] for k in range(3))
@@ -190,11 +213,33 @@ def ecef_to_geodetic(r_ef):
     return lat, np.arctan2(y, x), p / np.cos(lat) - big_n
 
 
-def nrlmsis_density(pos, t, epoch_utc=DEFAULT_EPOCH_UTC, f107=140.0, f107a=140.0, ap=15.0):
+def nrlmsis_density(pos: ArrayLike, t: ArrayLike, epoch_utc: str = DEFAULT_EPOCH_UTC, f107: float = 140.0,
+                    f107a: float = 140.0, ap: float = 15.0) -> np.ndarray:
     """NRLMSIS 2.0 total mass density [kg/m^3] (``pymsis``, version 2.0) at inertial positions ``pos`` ``(N, 3)``
     [m] and times ``t`` ``(N,)`` [s after ``epoch_utc``]: Earth-fixed by the GMST rotation (the frame of
     :mod:`roe_sep.core.od.radar`), WGS-84 geodetic coordinates, the given F10.7 (previous day), its 81-day mean
-    and daily Ap (every 3-h ap equal to it)."""
+    and daily Ap (every 3-h ap equal to it).
+
+    Parameters
+    ----------
+    pos : array_like, shape (N, 3)
+        Inertial positions [m].
+    t : array_like, shape (N,)
+        Times [s after ``epoch_utc``].
+    epoch_utc : str
+        ISO-8601 UTC epoch of t = 0.
+    f107 : float
+        F10.7 of the previous day [sfu].
+    f107a : float
+        Its 81-day mean [sfu].
+    ap : float
+        Daily Ap.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N,)
+        Total mass density [kg/m^3].
+    """
     from pymsis import msis
 
     pos = np.asarray(pos, dtype=float).reshape(-1, 3)
@@ -229,10 +274,28 @@ class MsisAtmosphere:
     kind = "msis"
 
     @classmethod
-    def fit(cls, chief_mean, span, epoch_utc=DEFAULT_EPOCH_UTC, f107=140.0, f107a=140.0, ap=15.0, step=60.0):
+    def fit(cls, chief_mean: ArrayLike, span: float, epoch_utc: str = DEFAULT_EPOCH_UTC, f107: float = 140.0,
+            f107a: float = 140.0, ap: float = 15.0, step: float = 60.0) -> "MsisAtmosphere":
         """Fit to NRLMSIS 2.0 (:func:`nrlmsis_density`) along the nominal orbit of ``chief_mean`` (mean elements at
         t = 0, secular J2, osculating positions) every ``step`` s over [0, ``span``] s, at radial offsets of
-        0, +-``MSIS_SPAN``/2 and +-``MSIS_SPAN``."""
+        0, +-``MSIS_SPAN``/2 and +-``MSIS_SPAN``.
+
+        Parameters
+        ----------
+        chief_mean : array_like, shape (6,)
+            The carrier's mean elements ``[a, e, i, raan, argp, M]`` at t = 0.
+        span : float
+            The fitted time span [s].
+        epoch_utc, f107, f107a, ap
+            As for :func:`nrlmsis_density`.
+        step : float
+            Sampling of the orbit [s].
+
+        Returns
+        -------
+        MsisAtmosphere
+            The fit, with its RMS and largest error in ln rho.
+        """
         for name, v in (("f107", f107), ("f107a", f107a), ("ap", ap), ("span", span), ("step", step)):
             if not np.isfinite(v) or v < 0 or (name in ("span", "step") and v <= 0):
                 raise ValueError(f"{name} must be a finite {'positive' if name in ('span', 'step') else 'non-negative'}"
@@ -252,16 +315,18 @@ class MsisAtmosphere:
         return cls(tuple(float(c) for c in coef), alpha0, h0, str(epoch_utc), float(f107), float(f107a), float(ap),
                    float(np.sqrt(np.mean(res**2))), float(np.max(np.abs(res))))
 
-    def density_at(self, pos, t=0.0):
-        """The fitted rho [kg/m^3] at inertial positions ``(..., 3)`` [m] and times ``t`` [s]."""
+    def density_at(self, pos: ArrayLike, t: ArrayLike = 0.0) -> np.ndarray:
+        """The fitted rho [kg/m^3] ``(...)`` at inertial positions ``(..., 3)`` [m] and times ``t`` [s]."""
         pos = np.asarray(pos, dtype=float)
         basis = np.stack(_basis_numpy(pos, np.asarray(t, dtype=float), self.alpha0, self.h0), axis=-1)
         return np.exp(basis @ np.asarray(self.coefficients))
 
-    def pars(self):
+    def pars(self) -> list[float]:
+        """The integrator's density parameters: alpha_0 [rad], h_0 [m] and the fit's coefficients."""
         return [self.alpha0, self.h0, *self.coefficients]
 
-    def describe(self):
+    def describe(self) -> dict:
+        """The model, its space-weather inputs and the fit's quality, for reports."""
         return {"model": self.kind, "epoch_utc": self.epoch_utc, "f107": self.f107, "f107a": self.f107a,
                 "ap": self.ap, "fit_rms_ln_rho": self.fit_rms, "fit_max_ln_rho": self.fit_max}
 
@@ -274,7 +339,8 @@ def _basis_numpy(pos, t, alpha0, h0):
     return [np.broadcast_to(np.asarray(b, dtype=float), r.shape) for b in terms]
 
 
-def effective_density(atmosphere, chief_mean, t0=0.0, span=None, samples=720):
+def effective_density(atmosphere: "Atmosphere | MsisAtmosphere", chief_mean: ArrayLike, t0: float = 0.0,
+                      span: float | None = None, samples: int = 720) -> float:
     """Orbit-mean drag of ``atmosphere`` as a constant density [kg/m^3]: <rho |v_r| (v_r . v)> / (mu / a)^(3/2).
 
     Averaged over the osculating states of the nominal orbit of ``chief_mean`` (mean elements at ``t0``, secular J2)
@@ -282,6 +348,24 @@ def effective_density(atmosphere, chief_mean, t0=0.0, span=None, samples=720):
     The secular drift of a is <da/dt> = (2 a^2 / mu) <v . a_drag> = -(a^2 / mu) B <rho |v_r| (v_r . v)>, which is
     seed 002 Eq. (24), da/dt = -B rho v^2 / n = -(a^2 / mu) B rho v^3 with v^2 = mu / a, for rho = rho_eff: the
     constant density the linear model needs to reproduce this atmosphere's orbit-mean drag.
+
+    Parameters
+    ----------
+    atmosphere : Atmosphere or MsisAtmosphere
+        The density model.
+    chief_mean : array_like, shape (6,)
+        Mean elements ``[a, e, i, raan, argp, M]`` at ``t0``.
+    t0 : float
+        Start of the average [s].
+    span : float, optional
+        Its length [s]; default one orbit.
+    samples : int
+        Points of the average.
+
+    Returns
+    -------
+    float
+        The effective density [kg/m^3].
     """
     from ..relmotion.orbit import mean_motion
 
@@ -299,15 +383,35 @@ ATMOSPHERES = ("normalised", "msis")
 """The truth's density models (see the module docstring)."""
 
 
-def truth_atmosphere(model, density, chief_mean, span=3.0 * SECONDS_PER_DAY, epoch_utc=DEFAULT_EPOCH_UTC,
-                     f107=140.0, f107a=140.0, ap=15.0):
+def truth_atmosphere(model: str, density: float, chief_mean: ArrayLike, span: float = 3.0 * SECONDS_PER_DAY,
+                     epoch_utc: str = DEFAULT_EPOCH_UTC, f107: float = 140.0, f107a: float = 140.0,
+                     ap: float = 15.0) -> "Atmosphere | MsisAtmosphere":
     """The truth's atmosphere by name: ``normalised`` (:meth:`Atmosphere.normalised` to ``density``, the default)
-    or ``msis`` (:meth:`MsisAtmosphere.fit` over ``span`` s from ``epoch_utc``; ``density`` unused)."""
+    or ``msis`` (:meth:`MsisAtmosphere.fit` over ``span`` s from ``epoch_utc``; ``density`` unused).
+
+    Parameters
+    ----------
+    model : str
+        ``normalised`` or ``msis`` (ValueError otherwise).
+    density : float
+        The scenario density [kg/m^3] (``normalised`` only).
+    chief_mean : array_like, shape (6,)
+        The carrier's mean elements at t = 0.
+    span : float
+        The span of the ``msis`` fit [s].
+    epoch_utc, f107, f107a, ap
+        As for :func:`nrlmsis_density`.
+
+    Returns
+    -------
+    Atmosphere or MsisAtmosphere
+        The density model.
+    """
     if model == "normalised":
         return Atmosphere.normalised(density, chief_mean)
     if model == "msis":
         return MsisAtmosphere.fit(chief_mean, span, epoch_utc, f107, f107a, ap)
-    raise ValueError(f"atmosphere must be one of {ATMOSPHERES}, got {model!r}")
+    raise ValueError(f"atmosphere must be one of {ATMOSPHERES}, got {show(model)}")
 
 
 @dataclass(frozen=True)
@@ -319,14 +423,14 @@ class Maneuver:
     dv_rtn: tuple
     deputy: bool
 
-    def relative(self):
+    def relative(self) -> np.ndarray:
         """The relative impulse of the seed convention (picosatellite w.r.t. carrier): +dv or -dv."""
         dv = np.asarray(self.dv_rtn, dtype=float)
         return dv if self.deputy else -dv
 
 
 # ---------------------------------------------------------------- dynamics (heyoka expressions)
-def legendre(n, s):
+def legendre(n: int, s: "hy.expression") -> "hy.expression":
     """Legendre polynomial P_n(s), n = 2..4, written with products only (heyoka's pow(s, k) recursion divides by
     s, which is 0 on the equator)."""
     s2 = s * s
@@ -339,8 +443,21 @@ def legendre(n, s):
     raise ValueError(f"zonal degree {n} not implemented")
 
 
-def zonal_potential(x, y, z, zonals):
-    """U = mu/r [1 - sum_n J_n (R_E/r)^n P_n(z/r)] (Vallado Eq. 8-19, zonal terms), heyoka expression."""
+def zonal_potential(x: "hy.expression", y: "hy.expression", z: "hy.expression", zonals: int) -> "hy.expression":
+    """U = mu/r [1 - sum_n J_n (R_E/r)^n P_n(z/r)] (Vallado Eq. 8-19, zonal terms), heyoka expression.
+
+    Parameters
+    ----------
+    x, y, z : heyoka.expression
+        Inertial position [m].
+    zonals : int
+        Highest zonal harmonic, 2 to 4.
+
+    Returns
+    -------
+    heyoka.expression
+        U [m^2/s^2].
+    """
     import heyoka as hy
 
     r = hy.sqrt(x * x + y * y + z * z)
@@ -353,9 +470,22 @@ def zonal_potential(x, y, z, zonals):
     return MU_EARTH / r * (1.0 - pert)
 
 
-def density_expression(kind, x, y, z):
+def density_expression(kind: str, x: "hy.expression", y: "hy.expression", z: "hy.expression") -> "hy.expression":
     """rho as a heyoka expression of the inertial position (and time, ``msis``), parameters from ``hy.par[2]``:
-    ``exponential``: rho_ref exp((h_ref + R_E - r) / H); ``msis``: exp(sum_k c_k phi_k) (:func:`msis_basis`)."""
+    ``exponential``: rho_ref exp((h_ref + R_E - r) / H); ``msis``: exp(sum_k c_k phi_k) (:func:`msis_basis`).
+
+    Parameters
+    ----------
+    kind : str
+        ``exponential`` or ``msis``.
+    x, y, z : heyoka.expression
+        Inertial position [m].
+
+    Returns
+    -------
+    heyoka.expression
+        rho [kg/m^3].
+    """
     import heyoka as hy
 
     r = hy.sqrt(x * x + y * y + z * z)
@@ -371,8 +501,24 @@ def density_expression(kind, x, y, z):
     raise ValueError(f"unknown density model {kind!r}")
 
 
-def drag_acceleration(pos, vel, b, rho):
-    """a = -1/2 B rho |v_r| v_r, v_r = v - omega_E x r (Vallado Eq. 8-28), heyoka expressions."""
+def drag_acceleration(pos: Sequence["hy.expression"], vel: Sequence["hy.expression"], b: "hy.expression",
+                      rho: "hy.expression") -> tuple:
+    """a = -1/2 B rho |v_r| v_r, v_r = v - omega_E x r (Vallado Eq. 8-28), heyoka expressions.
+
+    Parameters
+    ----------
+    pos, vel : sequence of three heyoka.expression
+        Inertial position [m] and velocity [m/s].
+    b : heyoka.expression
+        Ballistic coefficient B [m^2/kg] (a runtime parameter).
+    rho : heyoka.expression
+        Density [kg/m^3].
+
+    Returns
+    -------
+    tuple of three heyoka.expression
+        The acceleration [m/s^2].
+    """
     import heyoka as hy
 
     x, y, z = pos
@@ -381,7 +527,7 @@ def drag_acceleration(pos, vel, b, rho):
     return k * vrx, k * vry, k * vrz
 
 
-def pair_equations(zonals=4, density="exponential"):
+def pair_equations(zonals: int = 4, density: str = "exponential") -> list[tuple]:
     """The 12 first-order ODEs of chief and deputy (heyoka ``(var, rhs)`` pairs), parameters as in the module doc."""
     import heyoka as hy
 
@@ -395,7 +541,7 @@ def pair_equations(zonals=4, density="exponential"):
     return sys
 
 
-def n_pars(density="exponential"):
+def n_pars(density: str = "exponential") -> int:
     """Number of runtime parameters of the pair system with ``density``."""
     return 2 + (3 if density == "exponential" else 2 + N_MSIS_BASIS)
 
@@ -406,13 +552,30 @@ SEGMENT = 3600.0  # s, the simulator truth integrates in segments ending on this
 
 
 @functools.lru_cache(maxsize=None)
-def pair_integrator(zonals=4, batch_size=None, tol=DEFAULT_TOL, density="exponential"):
+def pair_integrator(zonals: int = 4, batch_size: int | None = None, tol: float = DEFAULT_TOL,
+                    density: str = "exponential") -> "hy.taylor_adaptive | hy.taylor_adaptive_batch":
     """The compiled Taylor integrator for one pair (``batch_size`` None) or ``batch_size`` pairs (SIMD lanes).
 
     Cached per process; callers get a template and :func:`copy.deepcopy` it (no recompilation). Measured LLVM
     compile times on this machine: single pair in heyoka's compact mode ~1 s (it runs 1.4x slower per step, which
     does not matter for one pair); the batch integrator of the Monte Carlo in full (non-compact) mode ~2-5 s for
     degree 2 and ~10 s for degree 4 (3x the cost per step of degree 2, hence ``MC_ZONALS`` = 2).
+
+    Parameters
+    ----------
+    zonals : int
+        Highest zonal harmonic.
+    batch_size : int, optional
+        SIMD lanes; None: one pair.
+    tol : float
+        Taylor integrator tolerance.
+    density : str
+        ``exponential`` or ``msis``.
+
+    Returns
+    -------
+    heyoka.taylor_adaptive or heyoka.taylor_adaptive_batch
+        The cached template (deep-copy it before use).
     """
     import heyoka as hy
 
@@ -424,7 +587,7 @@ def pair_integrator(zonals=4, batch_size=None, tol=DEFAULT_TOL, density="exponen
                                     compact_mode=density != "exponential")
 
 
-def simd_size():
+def simd_size() -> int:
     """Recommended heyoka batch size (SIMD width in doubles: 4 with AVX2)."""
     import heyoka as hy
 
@@ -432,7 +595,7 @@ def simd_size():
 
 
 # ---------------------------------------------------------------- states, burns, relative quantities
-def pair_state(chief_mean, deputy_mean):
+def pair_state(chief_mean: ArrayLike, deputy_mean: ArrayLike) -> np.ndarray:
     """Initial inertial state ``(..., 12)`` of two spacecraft from their *mean* elements (mean -> osculating, first
     order J2, then Cartesian)."""
     rc, vc = mean_to_cartesian(chief_mean)
@@ -440,11 +603,25 @@ def pair_state(chief_mean, deputy_mean):
     return np.concatenate([rc, vc, rd, vd], axis=-1)
 
 
-def apply_impulse(state, dv_rtn, deputy):
+def apply_impulse(state: ArrayLike, dv_rtn: ArrayLike, deputy: ArrayLike) -> np.ndarray:
     """Add an impulse [m/s] given in the executing spacecraft's own RTN frame to its inertial velocity.
 
     dv_inertial = [R T N] dv_rtn with R = r/|r|, T = N x R, N = h/|h| (:func:`~roe_sep.core.od.radar.rtn_matrix`).
     Vectorized over ``state`` ``(..., 12)``, ``dv_rtn`` ``(..., 3)`` and the boolean ``deputy`` ``(...)``.
+
+    Parameters
+    ----------
+    state : array_like, shape (..., 12)
+        Pair states (positions [m], velocities [m/s]; chief first).
+    dv_rtn : array_like, shape (..., 3)
+        The impulse [m/s] in the executing spacecraft's RTN frame.
+    deputy : array_like of bool, shape (...)
+        True where the deputy burns, False for the chief.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 12)
+        A new array of the states after the burn.
     """
     s = np.array(state, dtype=float, copy=True)
     dv = np.asarray(dv_rtn, dtype=float)
@@ -456,7 +633,7 @@ def apply_impulse(state, dv_rtn, deputy):
     return s
 
 
-def mean_elements(state):
+def mean_elements(state: ArrayLike) -> np.ndarray:
     """Mean Keplerian elements ``(..., 2, 6)`` (chief, deputy) of pair states (osculating -> mean, first order J2)."""
     s = np.asarray(state, dtype=float)
     pos = np.stack([s[..., 0:3], s[..., 6:9]], axis=-2)
@@ -464,14 +641,14 @@ def mean_elements(state):
     return cartesian_to_mean(pos, vel)
 
 
-def mean_roe(state):
+def mean_roe(state: ArrayLike) -> np.ndarray:
     """Dimensionless mean ROE ``(..., 6)`` of the deputy w.r.t. the chief from pair states: each spacecraft is
     converted to mean elements separately, then seed 002 Eq. (1) (:func:`~roe_sep.core.relmotion.roe.kepler_to_roe`)."""
     kep = mean_elements(state)
     return kepler_to_roe(kep[..., 0, :], kep[..., 1, :])
 
 
-def relative_rtn(state):
+def relative_rtn(state: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Deputy position [m] and velocity [m/s] relative to the chief in the chief's rotating RTN frame.
 
     r_rel = M^T (r_d - r_c),  v_rel = M^T (v_d - v_c) - omega x r_rel,  omega = (0, 0, |h_c| / |r_c|^2) in RTN.
@@ -490,12 +667,36 @@ def _pars(b_chief, b_deputy, atmosphere):
     return np.array([b_chief, b_deputy, *atmosphere.pars()], dtype=float)
 
 
-def propagate_pair(state0, t0, times, maneuvers, b_chief, b_deputy, atmosphere: Atmosphere, zonals=4,
-                   tol=DEFAULT_TOL):
+def propagate_pair(state0: ArrayLike, t0: float, times: ArrayLike, maneuvers: Iterable[Maneuver], b_chief: float,
+                   b_deputy: float, atmosphere: Atmosphere, zonals: int = 4, tol: float = DEFAULT_TOL) -> np.ndarray:
     """Integrate one pair from ``state0`` at ``t0`` and return the states ``(len(times), 12)`` at ``times``.
 
     ``maneuvers`` (:class:`Maneuver`, epochs >= t0) are applied at their epochs; a sample exactly at a burn epoch
     sees the post-burn state (as :func:`roe_sep.core.relmotion.trajectory.trajectory`).
+
+    Parameters
+    ----------
+    state0 : array_like, shape (12,)
+        The pair's state at ``t0``.
+    t0 : float
+        Its epoch [s].
+    times : array_like, shape (T,)
+        Output epochs [s], >= ``t0``.
+    maneuvers : iterable of Maneuver
+        The burns.
+    b_chief, b_deputy : float
+        Ballistic coefficients [m^2/kg].
+    atmosphere : Atmosphere or MsisAtmosphere
+        The truth's density.
+    zonals : int
+        Highest zonal harmonic.
+    tol : float
+        Taylor integrator tolerance.
+
+    Returns
+    -------
+    numpy.ndarray, shape (T, 12)
+        The states.
     """
     times = np.asarray(times, dtype=float)
     if np.any(times < t0):
@@ -591,21 +792,63 @@ def _run_lanes(states0, t0, grid, b_chief, b_deputy, atmosphere, zonals, tol, wo
     return states, out
 
 
-def propagate_pairs(states0, t0, t1, b_chief, b_deputy, atmosphere: Atmosphere, zonals=4, tol=DEFAULT_TOL,
-                    workers=None):
+def propagate_pairs(states0: ArrayLike, t0: float, t1: float, b_chief: ArrayLike, b_deputy: ArrayLike,
+                    atmosphere: Atmosphere, zonals: int = 4, tol: float = DEFAULT_TOL,
+                    workers: int | None = None) -> np.ndarray:
     """Propagate N pairs ``(N, 12)`` from ``t0`` to ``t1`` [s]: heyoka batch mode (``simd_size`` pairs per
     integrator call, each lane with its own adaptive steps) over a thread pool of ``workers`` (default: the
     cores available), the sample axis padded to a multiple of the batch size. ``b_chief``/``b_deputy`` broadcast
-    to ``(N,)``. Returns ``(N, 12)``."""
+    to ``(N,)``. Returns ``(N, 12)``.
+
+    Parameters
+    ----------
+    states0 : array_like, shape (N, 12)
+        States at ``t0``.
+    t0, t1 : float
+        Start and end [s].
+    b_chief, b_deputy : array_like
+        Ballistic coefficients B = c_d A / m [m^2/kg], broadcast to ``(N,)``.
+    atmosphere : Atmosphere or MsisAtmosphere
+        The truth's density.
+    zonals : int
+        Highest zonal harmonic (2: J2 only, 4: J2-J4).
+    tol : float
+        Taylor integrator tolerance.
+    workers : int, optional
+        Threads (None: every CPU this process may use).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, 12)
+        The states at ``t1``.
+    """
     n = np.shape(states0)[0]
     states, _ = _run_lanes(states0, t0, float(t1), b_chief, b_deputy, atmosphere, zonals, tol, workers)
     return states[:, :n].T.copy()
 
 
-def propagate_pairs_grid(states0, t0, times, b_chief, b_deputy, atmosphere: Atmosphere, zonals=4, tol=DEFAULT_TOL,
-                         workers=None):
+def propagate_pairs_grid(states0: ArrayLike, t0: float, times: ArrayLike, b_chief: ArrayLike, b_deputy: ArrayLike,
+                         atmosphere: Atmosphere, zonals: int = 4, tol: float = DEFAULT_TOL,
+                         workers: int | None = None) -> np.ndarray:
     """As :func:`propagate_pairs`, but the states of every pair at the sorted ``times`` >= ``t0`` [s] (heyoka's
-    dense output, exact to the integrator tolerance between steps). Returns ``(N, len(times), 12)``."""
+    dense output, exact to the integrator tolerance between steps). Returns ``(N, len(times), 12)``.
+
+    Parameters
+    ----------
+    states0 : array_like, shape (N, 12)
+        States at ``t0``.
+    t0 : float
+        Start [s].
+    times : array_like, shape (T,)
+        Sorted output epochs [s], >= ``t0``.
+    b_chief, b_deputy, atmosphere, zonals, tol, workers
+        As for :func:`propagate_pairs`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, T, 12)
+        The states.
+    """
     times = np.asarray(times, dtype=float)
     if times.ndim != 1 or times.size == 0 or times[0] < t0 or np.any(np.diff(times) < 0.0):
         raise ValueError("times must be a non-empty sorted 1-D array starting at or after t0")
@@ -615,7 +858,7 @@ def propagate_pairs_grid(states0, t0, times, b_chief, b_deputy, atmosphere: Atmo
 
 
 # ---------------------------------------------------------------- numpy reference (cross-check and benchmark)
-def zonal_acceleration(pos, zonals=2):
+def zonal_acceleration(pos: ArrayLike, zonals: int = 2) -> np.ndarray:
     """Closed-form zonal accelerations [m/s^2] (Vallado Eq. 8-30 style expansions of grad U), numpy, ``(..., 3)``.
 
     J2: -3/2 J2 mu R^2/r^4 [x/r (1 - 5 s^2), y/r (1 - 5 s^2), z/r (3 - 5 s^2)]
@@ -640,9 +883,26 @@ def zonal_acceleration(pos, zonals=2):
     return acc - (MU_EARTH / r**3)[..., None] * p
 
 
-def pair_rhs(t, y, pars, zonals=2):
+def pair_rhs(t: float, y: np.ndarray, pars: Sequence[float], zonals: int = 2) -> np.ndarray:
     """d/dt of pair states ``(12,)`` or ``(12, N)`` with the same force model as :func:`pair_equations`, numpy
-    (for ``scipy.integrate.solve_ivp``). ``pars`` = ``[B_chief, B_deputy, rho_ref, h_ref, H]``."""
+    (for ``scipy.integrate.solve_ivp``). ``pars`` = ``[B_chief, B_deputy, rho_ref, h_ref, H]``.
+
+    Parameters
+    ----------
+    t : float
+        Time [s] (the model is autonomous).
+    y : numpy.ndarray, shape (12,) or (12, N)
+        Pair states.
+    pars : sequence of float
+        ``[B_chief, B_deputy, rho_ref, h_ref, H]`` (m^2/kg, m^2/kg, kg/m^3, m, m).
+    zonals : int
+        Highest zonal harmonic.
+
+    Returns
+    -------
+    numpy.ndarray, shape of ``y``
+        The derivative (velocities [m/s], accelerations [m/s^2]).
+    """
     y = np.asarray(y, dtype=float)
     out = np.empty_like(y)
     rho_ref, h_ref, big_h = pars[2], pars[3], pars[4]
@@ -670,7 +930,8 @@ class NonlinearTruth:
     ``da_dot`` is the secular model's value, reported in diagnostics only.
     """
 
-    def __init__(self, chief0, t0, b_chief, b_deputy, atmosphere: Atmosphere, zonals=4, da_dot=0.0):
+    def __init__(self, chief0: ArrayLike, t0: float, b_chief: float, b_deputy: float, atmosphere: Atmosphere,
+                 zonals: int = 4, da_dot: float = 0.0):
         self.chief0 = np.asarray(chief0, dtype=float)
         self.t0 = float(t0)
         self.da_dot = float(da_dot)
@@ -683,11 +944,13 @@ class NonlinearTruth:
         self._segments = []  # (t_from, t_to, heyoka continuous output)
 
     @property
-    def a(self):
+    def a(self) -> float:
+        """The carrier's mean semi-major axis [m] at ``t0``."""
         return float(self.chief0[0])
 
     @property
-    def inc(self):
+    def inc(self) -> float:
+        """The carrier's mean inclination [rad] at ``t0``."""
         return float(self.chief0[2])
 
     def _extend(self, t):
@@ -702,7 +965,7 @@ class NonlinearTruth:
             _check(res[0])
             self._segments.append((t_from, t_to, res[4]))
 
-    def states(self, times):
+    def states(self, times: ArrayLike) -> np.ndarray:
         """Pair states ``(..., 12)`` at ``times`` [s] (scalar or array, each >= the previous query's earliest)."""
         t = np.asarray(times, dtype=float)
         flat = t.reshape(-1)
@@ -722,37 +985,65 @@ class NonlinearTruth:
             raise ValueError(f"nonlinear truth queried before its dense output: t = {flat[~done].min():.3f} s")
         return out.reshape(t.shape + (12,))
 
-    def chief_elements(self, t):
-        """The carrier's mean Keplerian elements at ``t``."""
+    def chief_elements(self, t: ArrayLike) -> np.ndarray:
+        """The carrier's mean Keplerian elements ``(..., 6)`` at ``t`` [s]."""
         return mean_elements(self.states(t))[..., 0, :]
 
-    def u_at(self, t):
+    def u_at(self, t: ArrayLike) -> np.ndarray:
         """The carrier's mean argument of latitude [rad, 0..2pi) at ``t``."""
         k = self.chief_elements(t)
         return np.mod(k[..., 4] + k[..., 5], 2.0 * np.pi)
 
-    def roe_at(self, t):
-        """Dimensionless mean ROE at ``t``."""
+    def roe_at(self, t: ArrayLike) -> np.ndarray:
+        """Dimensionless mean ROE ``(..., 6)`` at ``t`` [s]."""
         return mean_roe(self.states(t))
 
-    def rtn_at(self, t):
-        """True relative position [m] and velocity [m/s] in the carrier's RTN frame at ``t``."""
+    def rtn_at(self, t: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+        """True relative position [m] and velocity [m/s], each ``(..., 3)``, in the carrier's RTN frame at ``t``
+        [s]."""
         return relative_rtn(self.states(t))
 
-    def samples(self, t):
+    def samples(self, t: ArrayLike) -> tuple:
         """Carrier mean elements, mean ROE and the true RTN state at the times ``t`` (an array), in one pass."""
         st = self.states(np.asarray(t, dtype=float))
         mean = mean_elements(st)
         return mean[..., 0, :], kepler_to_roe(mean[..., 0, :], mean[..., 1, :]), relative_rtn(st)
 
-    def distances(self, t_from, t_to, step):
-        """Times and |r| [m] over ``[t_from, t_to]`` every ``step`` seconds (and at both ends)."""
+    def distances(self, t_from: float, t_to: float, step: float) -> tuple[np.ndarray, np.ndarray]:
+        """Times and |r| [m] over ``[t_from, t_to]`` every ``step`` seconds (and at both ends).
+
+        Parameters
+        ----------
+        t_from, t_to : float
+            The window [s].
+        step : float
+            The sampling [s].
+
+        Returns
+        -------
+        (numpy.ndarray, numpy.ndarray), each shape (T,)
+            Times [s] and distances [m].
+        """
         times = np.append(np.arange(t_from, t_to, step), t_to)
         return times, np.linalg.norm(self.rtn_at(times)[0], axis=-1)
 
-    def apply(self, t, dv_rel, spacecraft="picosatellite"):
+    def apply(self, t: float, dv_rel: ArrayLike, spacecraft: str = "picosatellite") -> None:
         """Execute a burn at ``t``: ``dv_rel`` is the relative impulse of the seed convention (the picosatellite's
-        own dv; minus the carrier's own dv), ``spacecraft`` who burns, in its own RTN frame."""
+        own dv; minus the carrier's own dv), ``spacecraft`` who burns, in its own RTN frame.
+
+        Parameters
+        ----------
+        t : float
+            The epoch [s].
+        dv_rel : array_like, shape (3,)
+            The relative impulse [m/s] of the seed convention.
+        spacecraft : str
+            ``picosatellite`` or ``carrier``.
+
+        Returns
+        -------
+        None
+        """
         if spacecraft not in ("picosatellite", "carrier"):
             raise ValueError(f"unknown spacecraft {spacecraft!r}")
         deputy = spacecraft == "picosatellite"

@@ -6,9 +6,11 @@ and the *true* differential drag ``da_dot``) and each executed burn adds seed 00
 latitude of that instant.
 """
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..relmotion.dynamics import arg_latitude_rate, propagate, propagate_chief
 from ..relmotion.maneuvers import delta_roe, dispersed_dv, unreduced_burns
@@ -34,49 +36,68 @@ class TruthModel:
         self.t_state = self.t0
 
     @property
-    def a(self):
+    def a(self) -> float:
+        """The chief's semi-major axis [m]."""
         return float(self.chief0[0])
 
     @property
-    def inc(self):
+    def inc(self) -> float:
+        """The chief's inclination [rad]."""
         return float(self.chief0[2])
 
     def chief(self) -> Chief:
+        """The chief as the relative dynamics need it (u at ``t0`` = argp + M)."""
         return Chief(self.a, self.inc, float(self.chief0[4] + self.chief0[5]), self.t0)
 
-    def chief_elements(self, t):
-        """Chief mean Keplerian elements at ``t``."""
+    def chief_elements(self, t: ArrayLike) -> np.ndarray:
+        """Chief mean Keplerian elements ``(..., 6)`` at ``t`` [s] (any shape)."""
         return propagate_chief(self.chief0, np.asarray(t, dtype=float) - self.t0, self.j2)
 
-    def u_at(self, t):
+    def u_at(self, t: ArrayLike) -> np.ndarray:
+        """The chief's mean argument of latitude [rad], not wrapped, at ``t`` [s]."""
         return self.chief().u_at(t, self.j2)
 
-    def roe_at(self, t):
-        """Dimensionless ROE at ``t`` >= the last event (scalar or array of times)."""
+    def roe_at(self, t: ArrayLike) -> np.ndarray:
+        """Dimensionless ROE ``(..., 6)`` at ``t`` [s] >= the last event (scalar or array of times)."""
         dt = np.asarray(t, dtype=float) - self.t_state
         if not self.separated:
             return np.zeros(np.shape(dt) + (6,))
         return propagate(self.roe if np.ndim(dt) == 0 else self.roe[None, :], dt, self.a, self.inc, self.j2,
                          self.da_dot)
 
-    def samples(self, t):
-        """Carrier mean elements, ROE and the RTN state at the times ``t`` (an array), as the nonlinear truth's."""
+    def samples(self, t: ArrayLike) -> tuple:
+        """Carrier mean elements ``(T, 6)``, ROE ``(T, 6)`` and the RTN state (position [m], velocity [m/s], each
+        ``(T, 3)``) at the times ``t`` ``(T,)`` [s], as the nonlinear truth's."""
         t = np.asarray(t, dtype=float)
         return self.chief_elements(t), self.roe_at(t), self.rtn_at(t)
 
-    def rtn_at(self, t):
-        """Relative position [m] and velocity [m/s] in the carrier RTN frame at ``t``."""
+    def rtn_at(self, t: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+        """Relative position [m] and velocity [m/s], each ``(..., 3)``, in the carrier RTN frame at ``t`` [s]."""
         pos, vel = roe_to_rtn(self.roe_at(t), self.u_at(t))
         return pos * self.a, vel * self.a * mean_motion(self.a)
 
-    def distances(self, t_from, t_to, step):
-        """Times and |r| [m] over ``[t_from, t_to]`` sampled every ``step`` seconds (and at both ends)."""
+    def distances(self, t_from: float, t_to: float, step: float) -> tuple[np.ndarray, np.ndarray]:
+        """Times and |r| [m] over ``[t_from, t_to]`` sampled every ``step`` seconds (and at both ends).
+
+        Parameters
+        ----------
+        t_from, t_to : float
+            The window [s], ``t_from`` >= the last event.
+        step : float
+            The sampling [s].
+
+        Returns
+        -------
+        (numpy.ndarray, numpy.ndarray), each shape (T,)
+            Times [s] and distances [m].
+        """
         times = np.append(np.arange(t_from, t_to, step), t_to)
         return times, np.linalg.norm(self.rtn_at(times)[0], axis=-1)
 
-    def apply(self, t, dv_rel, spacecraft=None):
-        """Execute a relative impulse [m/s] (the ejection: the picosatellite's; a carrier burn: minus its own);
-        ``spacecraft`` (which one burnt) changes nothing here: the relative orbit is all this model has."""
+    def apply(self, t: float, dv_rel: ArrayLike, spacecraft: str | None = None) -> None:
+        """Execute a relative impulse ``(3,)`` [m/s] RTN at ``t`` [s] (the ejection: the picosatellite's; a carrier
+        burn: minus its own); ``spacecraft`` (which one burnt) changes nothing here: the relative orbit is all this
+        model has."""
         state = self.roe_at(t)
         self.roe = state + delta_roe(np.asarray(dv_rel, dtype=float), self.u_at(t), self.a, mean_motion(self.a))
         self.t_state = float(t)
@@ -88,11 +109,26 @@ REDUCED_PURPOSES = ("drift_stop", "drift_reduction")
 drift-stop, the multi-impulse scheme's drift-reduction burns)."""
 
 
-def error_references(purposes, dvs, p):
+def error_references(purposes: Sequence[str], dvs: Sequence[ArrayLike], p: float) -> list:
     """Per burn of one plan, the burn its magnitude error acts on (the ``reference`` of
     :func:`~roe_sep.core.relmotion.maneuvers.dispersed_dv`): for the burns of ``REDUCED_PURPOSES`` together the
     unreduced drift-stop (:func:`~roe_sep.core.relmotion.maneuvers.unreduced_burns` with the plan's |p|, seed 002
-    Eq. 18), ``None`` (the commanded burn itself, Eq. 22) for every other burn."""
+    Eq. 18), ``None`` (the commanded burn itself, Eq. 22) for every other burn.
+
+    Parameters
+    ----------
+    purposes : sequence of str
+        Each burn's purpose.
+    dvs : sequence of array_like, each shape (3,)
+        Each burn as commanded [m/s].
+    p : float
+        The plan's reduction |p| [m/s], finite and non-negative.
+
+    Returns
+    -------
+    list of numpy.ndarray or None
+        Per burn, the reference burn ``(3,)`` [m/s] or None.
+    """
     if not np.isfinite(p) or p < 0:
         raise ValueError(f"p_reduction must be a finite non-negative number [m/s], got {p}")
     idx = [k for k, purpose in enumerate(purposes) if purpose in REDUCED_PURPOSES]
@@ -112,21 +148,66 @@ class ExecutionErrors:
     thruster_sigma: float
     attitude_sigma: float  # rad, per axis
 
-    def executed(self, dv_own, spacecraft, reference=None):
+    def executed(self, dv_own: ArrayLike, spacecraft: str, reference: ArrayLike | None = None) -> np.ndarray:
         """The burn as executed: :func:`~roe_sep.core.relmotion.maneuvers.dispersed_dv` with f ~ N(1, sigma of the SPL
         or of the carrier thruster); ``reference`` the unreduced burn of a reduced drift-stop
-        (:func:`error_references`), ``None``: the error is a fraction of ``dv_own`` itself."""
+        (:func:`error_references`), ``None``: the error is a fraction of ``dv_own`` itself.
+
+        Parameters
+        ----------
+        dv_own : array_like, shape (3,)
+            The commanded burn [m/s], RTN, of the spacecraft itself.
+        spacecraft : str
+            ``picosatellite`` (the SPL's sigma) or the carrier.
+        reference : array_like, shape (3,), optional
+            The burn the magnitude error is a fraction of [m/s].
+
+        Returns
+        -------
+        numpy.ndarray, shape (3,)
+            The executed burn [m/s].
+        """
         sigma = self.spl_sigma if spacecraft == "picosatellite" else self.thruster_sigma
         factor = self.rng.normal(1.0, sigma)
         eps = self.rng.normal(0.0, self.attitude_sigma, 3)
         return dispersed_dv(dv_own, factor, eps, reference)
 
 
-def chief_from_u(a, inc, raan, u):
-    """Circular chief mean elements ``[a, 0, i, raan, 0, u]`` (argument of perigee 0, M = u)."""
+def chief_from_u(a: float, inc: float, raan: float, u: float) -> np.ndarray:
+    """Circular chief mean elements ``[a, 0, i, raan, 0, u]`` (argument of perigee 0, M = u).
+
+    Parameters
+    ----------
+    a : float
+        Semi-major axis [m].
+    inc, raan, u : float
+        Inclination, right ascension of the ascending node and mean argument of latitude [rad].
+
+    Returns
+    -------
+    numpy.ndarray, shape (6,)
+        ``[a, e, i, raan, argp, M]`` (m, 1, rad, rad, rad, rad).
+    """
     return np.array([a, 0.0, inc, raan, 0.0, u], dtype=float)
 
 
-def time_to_arg_latitude(u_now, u_target, a, inc, j2=True):
-    """Seconds until the chief's mean argument of latitude next reaches ``u_target`` (in [0, one period))."""
+def time_to_arg_latitude(u_now: float, u_target: float, a: float, inc: float, j2: bool = True) -> float:
+    """Seconds until the chief's mean argument of latitude next reaches ``u_target`` (in [0, one period)).
+
+    Parameters
+    ----------
+    u_now, u_target : float
+        Mean arguments of latitude [rad].
+    a : float
+        Semi-major axis [m].
+    inc : float
+        Inclination [rad].
+    j2 : bool
+        With the J2 secular rate.
+
+    Returns
+    -------
+    float
+        The time [s].
+    """
     return float(np.mod(u_target - u_now, 2.0 * np.pi) / arg_latitude_rate(a, inc, j2))

@@ -15,10 +15,13 @@ numerically (batched, :func:`~roe_sep.core.truth.nonlinear.propagate_pairs`), th
 """
 
 import math
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from ...errors import show
 from ..constants import SECONDS_PER_DAY
 from ..montecarlo.sweep import MonteCarloConfig, Outcome, draw, summarize, sweep
 from ..od.radar import DEFAULT_EPOCH_UTC, julian_date, raan_from_ltan
@@ -28,6 +31,7 @@ from ..relmotion.roe import ROE_NAMES, roe_to_rtn
 from ..relmotion.trajectory import Burn, Chief, trajectory
 from ..safety.metrics import min_rn_distance
 from ..separation.double_impulse import DoubleImpulseDesign
+from ..separation.multi_impulse import MultiImpulseDesign
 from .nonlinear import (
     Atmosphere,
     Maneuver,
@@ -67,66 +71,130 @@ class Case:
     truth_atmosphere: object = None
 
     @property
-    def a(self):
+    def a(self) -> float:
+        """The chief's semi-major axis [m]."""
         return float(self.chief_mean[0])
 
     @property
-    def inc(self):
+    def inc(self) -> float:
+        """The chief's inclination [rad]."""
         return float(self.chief_mean[2])
 
     @property
     def chief(self) -> Chief:
+        """The chief as the relative dynamics need it (u at t = 0 = argp + M)."""
         return Chief(self.a, self.inc, float(self.chief_mean[4] + self.chief_mean[5]), 0.0)
 
     @property
-    def atmosphere(self):
-        """The truth's density model."""
+    def atmosphere(self) -> object:
+        """The truth's density model (:class:`~roe_sep.core.truth.nonlinear.Atmosphere` or another model)."""
         if self.truth_atmosphere is not None:
             return self.truth_atmosphere
         return Atmosphere.normalised(self.density, self.chief_mean)
 
-    def burns(self):
+    def burns(self) -> list[Burn]:
         """The maneuvers as the core's relative burns (seed convention)."""
         return [Burn(m.epoch, tuple(m.relative())) for m in self.maneuvers]
 
 
-def sso_raan(ltan_hours=9.5, epoch_utc=DEFAULT_EPOCH_UTC):
+def sso_raan(ltan_hours: float = 9.5, epoch_utc: str = DEFAULT_EPOCH_UTC) -> float:
     """RAAN [rad] of the carrier's orbit at ``epoch_utc`` for a local time of the ascending node (BIROS: 09:30):
     where the Sun is relative to the orbit, which the empirical atmosphere's diurnal bulge depends on."""
     return float(raan_from_ltan(ltan_hours, julian_date(epoch_utc)))
 
 
-def double_impulse_case(d: DoubleImpulseDesign, mc: MonteCarloConfig = MonteCarloConfig(), raan=0.0) -> Case:
+def double_impulse_case(d: DoubleImpulseDesign, mc: MonteCarloConfig = MonteCarloConfig(), raan: float = 0.0) -> Case:
     """The nominal double impulse: SPL ejection (picosatellite, ``dv1``) at u1, t = 0; the carrier's drift-stop
-    (its own burn -dv2, Eq. 9) k pi later at the secular J2 rate of u (as the planner node schedules it)."""
+    (its own burn -dv2, Eq. 9) k pi later at the secular J2 rate of u (as the planner node schedules it).
+
+    Parameters
+    ----------
+    d : DoubleImpulseDesign
+        The nominal design.
+    mc : MonteCarloConfig
+        The spacecraft's drag properties and the density.
+    raan : float
+        The chief's right ascension of the ascending node [rad] (:func:`sso_raan`).
+
+    Returns
+    -------
+    Case
+        The case named ``double_impulse``.
+    """
     dt = d.k * math.pi / float(arg_latitude_rate(d.a, d.inc, True))
     chief = np.array([d.a, 0.0, d.inc, raan, 0.0, d.u1])
     burns = (Maneuver(0.0, tuple(d.dv1_rtn), True), Maneuver(dt, tuple(0.0 - d.dv2_rtn), False))
     return Case("double_impulse", chief, burns, mc.carrier.ballistic, mc.picosat.ballistic, mc.density)
 
 
-def multi_impulse_case(md, mc: MonteCarloConfig = MonteCarloConfig(), raan=0.0) -> Case:
+def multi_impulse_case(md: MultiImpulseDesign, mc: MonteCarloConfig = MonteCarloConfig(), raan: float = 0.0) -> Case:
     """The nominal multi-impulse plan of :mod:`roe_sep.core.separation.multi_impulse` (ejection at t = 0, carrier
-    burns)."""
+    burns).
+
+    Parameters
+    ----------
+    md : MultiImpulseDesign
+        The nominal design.
+    mc : MonteCarloConfig
+        The spacecraft's drag properties and the density.
+    raan : float
+        The chief's right ascension of the ascending node [rad].
+
+    Returns
+    -------
+    Case
+        The case named ``multi_impulse``.
+    """
     chief = np.array([md.a, 0.0, md.inc, raan, 0.0, md.u1])
     burns = [Maneuver(0.0, tuple(md.dv1_rtn), True)]
     burns += [Maneuver(float(b.epoch), tuple(b.dv_carrier_rtn), False) for b in md.plan.burns]
     return Case("multi_impulse", chief, tuple(burns), mc.carrier.ballistic, mc.picosat.ballistic, mc.density)
 
 
-def model_trajectory(case: Case, times, model="j2drag", density=None):
-    """The core's secular model along ``times`` [s]: dimensionless ROE ``(T, 6)``; ``density`` [kg/m^3] of the
-    drag model (default ``case.density``)."""
+def model_trajectory(case: Case, times: ArrayLike, model: str = "j2drag", density: float | None = None) -> np.ndarray:
+    """The core's secular model along ``times`` [s]: dimensionless ROE ``(T, 6)``.
+
+    Parameters
+    ----------
+    case : Case
+        The case (its burns, chief and drag).
+    times : array_like, shape (T,)
+        Times after the ejection [s], >= 0.
+    model : str
+        One of ``MODELS``: ``keplerian``, ``j2`` or ``j2drag``.
+    density : float, optional
+        The drag model's density [kg/m^3]; default ``case.density``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (T, 6)
+        Dimensionless ROE.
+    """
     if model not in MODELS:
-        raise ValueError(f"model must be one of {MODELS}, got {model!r}")
+        raise ValueError(f"model must be one of {MODELS}, got {show(model)}")
     j2 = model != "keplerian"
     rho = case.density if density is None else density
     da_dot = float(drag_da_dot(case.b_deputy - case.b_chief, rho, case.a)) if model == "j2drag" else 0.0
     return trajectory(np.zeros(6), 0.0, case.burns(), times, case.chief, j2, da_dot)
 
 
-def truth_states(case: Case, times, zonals=4):
-    """Nonlinear pair states ``(T, 12)`` along ``times`` [s] (both spacecraft start on the chief's state)."""
+def truth_states(case: Case, times: ArrayLike, zonals: int = 4) -> np.ndarray:
+    """Nonlinear pair states ``(T, 12)`` along ``times`` [s] (both spacecraft start on the chief's state).
+
+    Parameters
+    ----------
+    case : Case
+        The case.
+    times : array_like, shape (T,)
+        Times after the ejection [s].
+    zonals : int
+        Highest zonal harmonic of the gravity field (2: J2 only, 4: J2-J4).
+
+    Returns
+    -------
+    numpy.ndarray, shape (T, 12)
+        Inertial position [m] and velocity [m/s] of the carrier, then of the picosatellite.
+    """
     s0 = pair_state(case.chief_mean, case.chief_mean)
     return propagate_pair(s0, 0.0, times, case.maneuvers, case.b_chief, case.b_deputy, case.atmosphere, zonals)
 
@@ -143,20 +211,42 @@ class ModelError:
     distance_error_max: np.ndarray  # (len(days),) m, max ||r_model| - |r_truth|| over the same interval
     truth_roe: np.ndarray  # (len(days), 6) m
 
-    def to_dict(self):
+    def to_dict(self) -> dict:
+        """The errors as JSON (m; ROE errors per element)."""
         return {"case": self.case, "model": self.model, "days": self.days,
                 "roe_error": {n: self.roe_error[:, k].tolist() for k, n in enumerate(ROE_NAMES)},
                 "rtn_error_max": self.rtn_error_max.tolist(), "distance_error_max": self.distance_error_max.tolist(),
                 "truth_roe": self.truth_roe.tolist()}
 
 
-def model_errors(case: Case, days=(1, 2, 3), step=60.0, models=MODELS, zonals=4, effective=False):
+def model_errors(case: Case, days: Sequence[float] = (1, 2, 3), step: float = 60.0, models: Iterable[str] = MODELS,
+                 zonals: int = 4, effective: bool = False) -> list[ModelError]:
     """Model error of each of ``models`` against the nonlinear truth (see the module docstring).
 
     One truth integration serves every model. The RTN comparison samples every ``step`` seconds. ``effective``
     adds the row ``j2drag_eff``: the j2drag model with the truth atmosphere's orbit-mean drag as its density
     (:func:`~roe_sep.core.truth.nonlinear.effective_density` over the span), what a perfectly known mean density
     would leave.
+
+    Parameters
+    ----------
+    case : Case
+        The case.
+    days : sequence of float
+        Whole days after the ejection at which the errors are taken.
+    step : float
+        Sampling of the RTN comparison [s].
+    models : iterable of str
+        Models of ``MODELS``.
+    zonals : int
+        Highest zonal harmonic of the truth.
+    effective : bool
+        Add the ``j2drag_eff`` row.
+
+    Returns
+    -------
+    list of ModelError
+        One per model, errors in m.
     """
     t_end = max(days) * SECONDS_PER_DAY
     times = np.arange(0.0, t_end + step / 2, step)
@@ -180,14 +270,14 @@ def model_errors(case: Case, days=(1, 2, 3), step=60.0, models=MODELS, zonals=4,
     return out
 
 
-def truth_effective_density(case: Case, span):
+def truth_effective_density(case: Case, span: float) -> float:
     """Orbit-mean drag of the case's truth atmosphere over [0, ``span``] s as a constant density [kg/m^3]."""
     return effective_density(case.atmosphere, case.chief_mean, 0.0, span, samples=max(720, int(span / 60.0)))
 
 
-def zonal_effect(case: Case, days=(1, 2, 3)):
+def zonal_effect(case: Case, days: Sequence[float] = (1, 2, 3)) -> np.ndarray:
     """a*(ROE with J2-J4 truth - ROE with J2-only truth) [m] at ``days``: what the Monte Carlo's J2-only truth
-    (``MC_ZONALS``) leaves out."""
+    (``MC_ZONALS``) leaves out; ``(len(days), 6)``."""
     t = np.asarray(days, dtype=float) * SECONDS_PER_DAY
     return (mean_roe(truth_states(case, t, 4)) - mean_roe(truth_states(case, t, 2))) * case.a
 
@@ -204,14 +294,15 @@ class NonlinearSweep:
     seconds: float  # wall time of the sweep (nonlinear propagation and the linear sweep)
     roe_diff_after_stop: dict = field(default_factory=dict)  # p -> per-ROE RMS a*(linear - nonlinear) [m]
 
-    def to_dict(self):
+    def to_dict(self) -> dict:
+        """The sweep as JSON (rows as :func:`~roe_sep.core.montecarlo.sweep.summarize`, RMS in m)."""
         return {"samples": self.samples, "seconds": self.seconds, "rows": self.rows, "linear_rows": self.linear_rows,
                 "agreement": self.agreement,
                 "roe_rms_linear_minus_nonlinear_after_stop": {str(p): v for p, v in self.roe_diff_after_stop.items()}}
 
 
-def nonlinear_sweep(d: DoubleImpulseDesign, mc: MonteCarloConfig, p_values, zonals=MC_ZONALS, tol=MC_TOL,
-                    workers=None):
+def nonlinear_sweep(d: DoubleImpulseDesign, mc: MonteCarloConfig, p_values: Iterable[float], zonals: int = MC_ZONALS,
+                    tol: float = MC_TOL, workers: int | None = None) -> NonlinearSweep:
     """The Monte Carlo p sweep with nonlinear propagation, every array over the sample axis (no per-sample loop).
 
     Per sample: the dispersed ejection (Eq. 22, f1, eps1) applied to the picosatellite at u1; both spacecraft
@@ -220,6 +311,26 @@ def nonlinear_sweep(d: DoubleImpulseDesign, mc: MonteCarloConfig, p_values, zona
     Differential drag: the carrier keeps its nominal B, the picosatellite gets B_c + dB_nominal * db_factor (the
     linear model's dB), the atmosphere is :meth:`Atmosphere.normalised` to ``mc.density`` (the default truth).
     Without ``mc.drag`` both B are 0.
+
+    Parameters
+    ----------
+    d : DoubleImpulseDesign
+        The nominal design.
+    mc : MonteCarloConfig
+        Samples, seed, dispersions, drag, horizon.
+    p_values : iterable of float
+        The reductions [m/s].
+    zonals : int
+        Highest zonal harmonic of the truth.
+    tol : float
+        Taylor integrator tolerance.
+    workers : int, optional
+        Threads of the batch integration (None: every CPU this process may use).
+
+    Returns
+    -------
+    NonlinearSweep
+        Nonlinear and linear rows on the same draws and their agreement.
     """
     import time
 

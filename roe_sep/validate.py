@@ -1,27 +1,27 @@
-"""Validation of every message a node reads, before it is buffered, counted or used.
+"""Validation of every message a node reads, before it is buffered, counted or used, and of every message the run
+report reads from a bag.
 
 A bad message (not finite, an impossible orbit, an implausible impulse, an unknown spacecraft, a negative epoch, a
 wrong array size) raises :class:`BadMessage` naming the field; :class:`roe_sep.nodes.lockstep.Lockstep` drops it with
 an ERROR on ``/diagnostics`` naming the topic and the field, and the node goes on. Dropped before it is counted, a
-bad message cannot take the place of a good one in a lockstep round.
+bad message cannot take the place of a good one in a lockstep round. The report (:mod:`roe_sep.report`) drops the
+same messages from a bag, which records every message on a topic, also a foreign publisher's garbage.
+
+Below the nodes, next to :mod:`roe_sep.interfaces` (core <- interfaces, validate <- nodes <- run/report): messages
+are read by their fields only, so the offline tools validate a decoded bag without importing a node; rclpy is
+imported only by :func:`validator_for`, which maps the generated message classes.
 """
 
 import math
 
-from ..core.constants import R_EARTH
+from .core.constants import R_EARTH
+from .errors import BadMessage
+from .stamps import NANOSECONDS_PER_SECOND, time_to_sec
 
 MAX_DV = 10.0  # m/s: far above any impulse of the scenario (SPL 1.4-1.5 m/s, carrier burns <= 1.4 m/s)
 MAX_ROE_M = 1.0e7  # m: a*delta alpha of a relative orbit still worth the name
 MAX_BURNS = 1000
 SPACECRAFT = ("carrier", "picosatellite")
-
-
-class BadMessage(ValueError):
-    """A message that fails validation; ``field`` names what is wrong."""
-
-    def __init__(self, field, value, must):
-        super().__init__(f"{field} = {value!r}: must be {must}")
-        self.field = field
 
 
 def _join(field, name):
@@ -35,9 +35,9 @@ def _finite(field, value, lo=-math.inf, hi=math.inf, must=None):
 
 def time_of(field, t):
     """A builtin_interfaces/Time: a non-negative sim time [s]."""
-    if t.sec < 0 or not 0 <= t.nanosec < 1_000_000_000:
+    if t.sec < 0 or not 0 <= t.nanosec < NANOSECONDS_PER_SECOND:
         raise BadMessage(field, (t.sec, t.nanosec), "a non-negative time")
-    return t.sec + t.nanosec * 1e-9
+    return time_to_sec(t)
 
 
 def elements(field, el):
