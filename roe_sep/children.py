@@ -25,20 +25,14 @@ import subprocess
 import sys
 import time
 
+from .errors import Interrupted  # noqa: F401  (re-exported: a stop signal, raised by guarded())
+
 SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)  # what stops a parent under guarded()
 GRACE = 20.0  # s from SIGTERM to SIGKILL for a child left running when the parent leaves guarded()
 PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
 
 _prctl = ctypes.CDLL(None, use_errno=True).prctl if sys.platform.startswith("linux") else None
 _started = []  # the children spawn() started in this process (Popen), the finished ones dropped on the next spawn
-
-
-class Interrupted(KeyboardInterrupt):
-    """A stop signal to a :func:`guarded` parent; ``signum`` says which (exit status ``128 + signum``)."""
-
-    def __init__(self, signum):
-        super().__init__(signal.Signals(signum).name)
-        self.signum = signum
 
 
 def die_with(parent, death_signal):

@@ -11,6 +11,10 @@ catches it for its one-line message and exit status 2. One subclass per kind of 
 * :class:`BagError`, :class:`DefinitionNotFound`: a bag that cannot be read or written, a message type without an
   installed ``.msg`` file (also a ``LookupError``).
 * :class:`NdmError`: a CCSDS navigation data message that cannot be read or is not what roe_sep expects.
+* :class:`RosArgumentsError`: ROS arguments a node cannot use (a missing or malformed ``--params-file``).
+
+Not an error and not under the root: :class:`Interrupted`, the ``KeyboardInterrupt`` a stop signal raises in a
+parent of child processes.
 
 :func:`show` writes a value into a message as plain Python (``0.0``, ``[1.0, 2.0]``), never as a NumPy repr
 (``np.float64(0.0)``).
@@ -20,6 +24,7 @@ modules that raised these exceptions before re-export them (``roe_sep.core.confi
 """
 
 import dataclasses
+import signal
 
 
 def plain(value):
@@ -94,6 +99,20 @@ class NdmError(RoeSepError):
     """A navigation data message that cannot be read or is not what roe_sep expects (the message says why)."""
 
 
+class RosArgumentsError(RoeSepError):
+    """The ROS arguments cannot be used: a ``--params-file`` missing or not a ROS parameter YAML, a malformed ``-p``."""
+
+
+class Interrupted(KeyboardInterrupt):
+    """Not an error: a stop signal (SIGINT, SIGTERM, SIGHUP) to a parent of child processes
+    (:func:`roe_sep.children.guarded`), raised as a KeyboardInterrupt so that the Ctrl-C path stops its children in
+    order; ``signum`` says which (exit status ``128 + signum``)."""
+
+    def __init__(self, signum):
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+
 __all__ = ["AcquisitionInfeasible", "BadMessage", "BagError", "ConfigError", "DefinitionNotFound",
-           "InfeasibleDesignError", "InvalidAcquisitionConfig", "NdmError", "ParameterError", "RoeSepError", "plain",
-           "show"]
+           "InfeasibleDesignError", "Interrupted", "InvalidAcquisitionConfig", "NdmError", "ParameterError",
+           "RoeSepError", "RosArgumentsError", "plain", "show"]

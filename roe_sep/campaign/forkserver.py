@@ -139,10 +139,6 @@ def serve():
 
 
 # ----------------------------------------------------------------------------------------------------- worker side
-class ServerGone(RuntimeError):
-    """The fork server exited or answered something unexpected."""
-
-
 class ForkServer:
     """The worker's handle on its fork server (started on first use; one per worker thread, see :func:`server`)."""
 
@@ -162,7 +158,7 @@ class ForkServer:
                 return None
             chunk = os.read(self.proc.stdout.fileno(), 65536)
             if not chunk:
-                raise ServerGone(f"the fork server exited (status {self.proc.wait()})")
+                raise RuntimeError(f"the fork server exited (status {self.proc.wait()})")
             self.buf += chunk
         line, self.buf = self.buf.split(b"\n", 1)
         return json.loads(line)
@@ -172,18 +168,18 @@ class ForkServer:
             self.proc.stdin.write(json.dumps(req).encode("utf-8") + b"\n")
             self.proc.stdin.flush()
         except (BrokenPipeError, OSError) as exc:
-            raise ServerGone(f"the fork server is gone ({exc})") from None
+            raise RuntimeError(f"the fork server is gone ({exc})") from None
 
     def _expect(self, key, timeout=None):
         while True:
             msg = self._line(timeout)
             if msg is None:
-                raise ServerGone(f"no '{key}' from the fork server within {timeout} s")
+                raise RuntimeError(f"no '{key}' from the fork server within {timeout} s")
             if "exit" in msg and key != "exit":
                 self.exits[msg["exit"]] = msg["code"]
                 continue
             if key not in msg:
-                raise ServerGone(f"the fork server answered {msg}")
+                raise RuntimeError(f"the fork server answered {msg}")
             return msg
 
     def warm(self, config, params):
@@ -231,7 +227,7 @@ class Run:
             if msg is None:
                 continue
             if "exit" not in msg:
-                raise ServerGone(f"the fork server answered {msg} while a run was under way")
+                raise RuntimeError(f"the fork server answered {msg} while a run was under way")
             self.srv.exits[msg["exit"]] = msg["code"]
         self.returncode = self.srv.exits.pop(self.pid)
         return self.returncode

@@ -27,14 +27,11 @@ import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.signals import SignalHandlerOptions
 
+from ..errors import RosArgumentsError
 from .params import ParameterError, help_requested, node_table, print_usage
 
 DRAIN_IDLE = 0.3  # s (wall) without a new message that ends the drain
 DRAIN_MAX = 10.0  # s (wall), at most
-
-
-class RosArgumentsError(ValueError):
-    """The ROS arguments cannot be used: a ``--params-file`` missing or not a ROS parameter YAML, a malformed ``-p``."""
 
 
 def ros_arguments_error(exc, args=None) -> str:
