@@ -12,7 +12,8 @@ determination needs several passes over about 12 h. This stub simulates those me
 * A pass is a run of consecutive measurement epochs of one station; it counts once closed with >=
   ``min_pass_measurements`` measurements. When >= ``passes_required`` counted passes since the latest executed
   maneuver span >= ``min_arc`` (first measurement of the first to last of the last), the batch least squares of
-  :mod:`roe_sep.core.od.batch` runs on their measurements and ``roe_sep_msgs/OrbitDetermination`` is published on
+  :mod:`roe_sep.core.od.batch` runs on their measurements (with the drift rate of the last solution before that
+  maneuver as a priori information) and ``roe_sep_msgs/OrbitDetermination`` is published on
   ``/od/estimate`` (latched); it runs again after every further counted pass.
 * ``/sim/executed_maneuvers`` (latched history): measurements before the latest burn, and those simulated from a
   truth message older than the burn, are not used.
@@ -35,7 +36,7 @@ from rosgraph_msgs.msg import Clock
 
 from .. import interfaces
 from ..core.constants import R_EARTH, SECONDS_PER_DAY
-from ..core.od.batch import RadarBatch, batch_least_squares
+from ..core.od.batch import DragModel, DriftPrior, RadarBatch, batch_least_squares
 from ..core.od.radar import (
     DEFAULT_EPOCH_UTC,
     Station,
@@ -48,6 +49,7 @@ from ..core.od.radar import (
 )
 from ..core.relmotion.dynamics import propagate, propagate_chief
 from ..core.relmotion.roe import wrap_angle
+from ..core.truth.nonlinear import vallado_band
 from .convert import array_to_elements, elements_to_array, msg_to_roe, roe_to_msg, sec_to_time, time_to_sec
 from .diagnostics import ERROR, OK, WARN, publish_status
 from .lockstep import Lockstep
@@ -67,6 +69,10 @@ class RadarODNode(ManagedNode):
     * ``sample_interval`` 10.0 s; ``min_separation`` 5000.0 m; ``passes_required`` 2; ``min_arc`` 36000.0 s;
       ``min_pass_measurements`` 5; ``seed`` 0 (measurement noise); ``epoch_utc`` "2016-07-01T00:00:00" (UTC
       calendar epoch of sim time 0, as the simulator's).
+    * ``drift_prior`` true: the last solution before a burn gives the batches after it a priori information on
+      the drift rate (:class:`~roe_sep.core.od.batch.DriftPrior`), with ``density_scale_height_m`` 0.0 (Vallado
+      Table 8-4 at the carrier's altitude), ``drag_ballistic_ratio`` 1.5217 (B_d / (B_d - B_c)) and
+      ``density_walk`` 0.0 per sqrt(day) (relative random walk of the orbit-mean density).
     """
 
     def __init__(self):
@@ -91,6 +97,14 @@ class RadarODNode(ManagedNode):
         self.min_arc = declare(self, "min_arc", 36000.0, "s, smallest span of the passes of an estimate")
         self.min_pass = declare(self, "min_pass_measurements", 5, "measurements for a pass to count")
         seed = declare(self, "seed", 0, "seed of the measurement noise")
+        self.use_prior = declare(self, "drift_prior", True, "carry the drift rate of the last solution before a "
+                                 "burn into the batches after it (core.od.batch.DriftPrior)")
+        scale_height = declare(self, "density_scale_height_m", 0.0, "m, density scale height of the drift prior "
+                               "(0: Vallado Table 8-4 at the carrier's altitude)")
+        # B_picosat / (B_picosat - B_carrier) of the default scenario: 0.0230 / 0.0151 m^2/kg
+        ratio = declare(self, "drag_ballistic_ratio", 1.5217, "B_d / (B_d - B_c) of the drift prior's drag model")
+        self.density_walk = declare(self, "density_walk", 0.0, "relative 1-sigma random walk of the orbit-mean "
+                                    "density per sqrt(day) between a drift prior and its batch")
         epoch = declare(self, "epoch_utc", DEFAULT_EPOCH_UTC, "ISO-8601 UTC calendar epoch of sim time 0")
 
         n = len(names)
@@ -112,6 +126,13 @@ class RadarODNode(ManagedNode):
         require("min_arc", finite(self.min_arc) and self.min_arc >= 0.0, self.min_arc, "a non-negative number [s]")
         require("min_pass_measurements", self.min_pass >= 1, self.min_pass, "a positive integer")
         require("seed", seed >= 0, seed, "a non-negative integer")
+        require("drift_prior", isinstance(self.use_prior, bool), self.use_prior, "true or false")
+        require("density_scale_height_m", finite(scale_height) and 0.0 <= scale_height <= 1e6, scale_height,
+                "in [0, 1e6] m (0: Vallado's for the carrier's altitude)")
+        require("drag_ballistic_ratio", finite(ratio) and ratio >= 1.0, ratio, "a number >= 1")
+        require("density_walk", finite(self.density_walk) and 0.0 <= self.density_walk <= 10.0, self.density_walk,
+                "in [0, 10] per sqrt(day)")
+        self.drag = (scale_height, ratio)
         try:
             self.jd0 = julian_date(epoch)
         except (ValueError, TypeError) as exc:
@@ -136,6 +157,8 @@ class RadarODNode(ManagedNode):
         self.records = []  # (t, station, pass_id, z, chief, theta, truth_t)
         self.estimates = 0
         self.published = 0
+        self.last_solution = None  # (ODResult, carrier a [m]) of the latest estimate
+        self.prior = None  # DriftPrior from the last solution before the latest burn
         # track() calls of the current lockstep round, run together when the round's messages are done
         # (flush_tracks): one vectorized geometry pass per round instead of one per truth sample
         self.deferred = []
@@ -204,6 +227,8 @@ class RadarODNode(ManagedNode):
         t = time_to_sec(msg.epoch)
         if t > self.last_burn:
             self.last_burn = t
+            if self.last_solution is not None and self.last_solution[0].t_est <= t:
+                self.prior = self.drift_prior(*self.last_solution)
             self.get_logger().info(f"{msg.spacecraft} {msg.purpose} burn at t = {t:.1f} s: earlier measurements "
                                    "are no longer used")
 
@@ -232,6 +257,7 @@ class RadarODNode(ManagedNode):
         self.open_pass = [False] * len(self.stations)
         self.records.clear()
         self.history_t, self.history_kep = [], []
+        self.last_solution, self.prior = None, None
 
     # --- measurements --------------------------------------------------------------------------------------
     def track(self, epochs):
@@ -386,8 +412,10 @@ class RadarODNode(ManagedNode):
                            sigma=np.tile(self.sigma, (len(recs), 1)), chief=np.array([r[4] for r in recs]),
                            theta=np.array([r[5] for r in recs]), site_ef=np.array([self.site_ef[s] for s in s_idx]),
                            site_enu=np.array([self.site_enu[s] for s in s_idx]))
+        prior = (self.prior.carried(float(np.max(batch.t)), self.density_walk)
+                 if self.prior is not None and self.use_prior else None)
         try:
-            result = batch_least_squares(batch)
+            result = batch_least_squares(batch, prior=prior)
         except ValueError as exc:
             self.get_logger().error(f"orbit determination failed: {exc}")
             publish_status(self, self.diag_pub, ERROR, f"orbit determination failed: {exc}", self._values())
@@ -395,11 +423,20 @@ class RadarODNode(ManagedNode):
         self.od_pub.publish(self.od_msg(result, batch.chief[-1], len(passes), now))
         self.estimates += 1
         a = batch.chief[-1, 0]
+        self.last_solution = (result, a)
         self.get_logger().info(
             f"OD #{self.estimates} at t = {result.t_est:.0f} s from {len(passes)} passes / {result.measurements} "
             f"measurements: a*ROE = {np.array2string(result.x[:6] * a, precision=1)} m, a*da_dot = "
-            f"{result.x[6] * a:.3e} m/s, residual RMS {result.residual_rms:.2f}")
+            f"{result.x[6] * a:.3e} m/s, residual RMS {result.residual_rms:.2f}"
+            + ("" if prior is None else f", drift prior from t = {self.prior.t:.0f} s"))
         publish_status(self, self.diag_pub, OK, f"estimate {self.estimates} published", self._values())
+
+    def drift_prior(self, result, a_chief):
+        """The a priori information of a solution for the batches after the next burn (its drag model: the
+        configured scale height, else Vallado's for the carrier's altitude)."""
+        scale_height, ratio = self.drag
+        h = scale_height or vallado_band(a_chief - R_EARTH)[2]
+        return DriftPrior.from_result(result, a_chief, DragModel(h, ratio))
 
     def od_msg(self, result, chief_kep, passes, now):
         kep = np.array(chief_kep, dtype=float)

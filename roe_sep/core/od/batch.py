@@ -18,12 +18,45 @@ than rounded away). Azimuth residuals are wrapped to [-pi, pi). Formal covarianc
 The secular ROE model is linear in x and the look angles are almost linear over the estimate's uncertainty
 (hundreds of meters at ~1000 km range), so the estimate is unbiased and P is its actual covariance: the normalized
 estimation error squared (:func:`nees`) is chi-square with 7 degrees of freedom.
+
+Drift rate across burns (:class:`DragModel`, :class:`DriftPrior`). A burn changes the ROE by its executed (not its
+commanded) impulse, so every batch starts after the latest burn. The drift rate does not jump at a burn: it is the
+differential drag of the pair, seed 002 Eq. (24) differentiated in time,
+
+    da_dot = -(v^2 / (n a)) (B_d rho(h_d) - B_c rho(h_c)),   rho(h) = rho_0 exp(-(h - h_0) / H)  (Vallado Eq. 8-33),
+
+with constant ballistic coefficients B and the deputy's height h_d = h_c + a da. Linear in a da / H (a few hundred
+meters against H = 64 km at 515 km): da_dot = beta g, with the drag model's factor
+
+    g(a_c, da) = exp(-(a_c - a_ref) / H) (1 - R a da / H),   R = B_d / (B_d - B_c),
+
+and beta = -(v^2 / (n a)) (B_d - B_c) rho(a_ref - R_E) a constant of the pair (differential ballistic coefficient
+times the density at a reference height). g is known: the carrier's mean a_c (its own GPS orbit, an input of the
+batch) gives the density ratio as it decays (165 m/day at 515 km: +0.26 %/day of drift rate) and the estimate's
+own da the deputy's height (R = 1.52 in the default scenario: 0.43 % of drift rate per 180 m of a da, what a
+0.1 m/s acquisition burn changes). The last solution before a burn therefore gives a priori information on beta
+for every batch after it: its marginal (beta, sigma_beta^2) = (x[6] / g, P[6, 6] / g^2) is an a priori
+pseudo-measurement of x[6] / g(x) (Tapley, Schutz, Born 2004, Sec. 4.6, Eq. 4.6.1: the batch with a priori
+information, J = (z - h)^T W (z - h) + (x - x_bar)^T P_bar^-1 (x - x_bar)), one more whitened row of the design
+matrix. Its measurements precede the burn, those of the new batch follow it: the two are independent, and each
+batch carries forward only the marginal of the solution before it, so no measurement is used twice. The density
+of the truth atmospheres of this project (:mod:`roe_sep.core.truth.nonlinear`: the normalised exponential model,
+and NRLMSIS 2.0 at constant solar and geomagnetic activity) is a function of position alone, so the orbit mean at
+the carrier's height is fixed by that height: no process noise is needed, and none is added by default. A real
+atmosphere changes with solar and geomagnetic activity: ``density_walk`` (relative 1-sigma of the orbit-mean
+density per sqrt(day), a random walk: state noise compensation, Tapley et al. Sec. 6.9) widens the a priori
+variance by (beta density_walk)^2 dt / 1 day between the two epochs. Measured on the nonlinear truth (the OD
+ensemble of :mod:`roe_sep.core.od.ensemble`): the secular model with one constant drift rate over a batch recovers
+the truth's own drift rate from noise-free measurements to < 0.1 sigma, and the carried beta keeps the later
+solutions consistent (7-state NEES and drift-rate z^2 in their chi-square bands) with their drift-rate sigma about
+halved.
 """
 
 from dataclasses import dataclass
 
 import numpy as np
 
+from ..constants import SECONDS_PER_DAY
 from ..relmotion.dynamics import propagate
 from ..relmotion.roe import roe_to_rtn, wrap_angle
 from .radar import chief_from_kepler, chief_position_velocity, earth_rotation_matrix, look_position, observe, rtn_matrix
@@ -62,6 +95,59 @@ class ODResult:
     residual_rms: float
     iterations: int
     measurements: int
+
+
+@dataclass(frozen=True)
+class DragModel:
+    """The drift rate's dependence on the carrier's height and the deputy's (module docstring): density scale
+    height ``scale_height`` H [m] and ballistic ratio ``ballistic_ratio`` R = B_d / (B_d - B_c)."""
+
+    scale_height: float
+    ballistic_ratio: float
+
+    def factor(self, a_chief, a_ref, da):
+        """g = exp(-(a_c - a_ref) / H) (1 - R a_c da / H): da_dot over beta at carrier mean semi-major axis
+        ``a_chief`` [m] and dimensionless ``da`` (broadcasts)."""
+        a_chief = np.asarray(a_chief, dtype=float)
+        return (np.exp(-(a_chief - a_ref) / self.scale_height)
+                * (1.0 - self.ballistic_ratio * a_chief * np.asarray(da, dtype=float) / self.scale_height))
+
+
+@dataclass(frozen=True)
+class DriftPrior:
+    """A priori information on the drag constant beta = da_dot / g [1/s] (module docstring): its value, variance
+    [1/s^2], the reference carrier semi-major axis ``a_ref`` [m] of g, the epoch ``t`` [s] of the solution it comes
+    from and the drag model."""
+
+    beta: float
+    variance: float
+    a_ref: float
+    t: float
+    model: DragModel
+
+    @classmethod
+    def from_result(cls, result, a_chief, model: DragModel):
+        """The marginal of a solution's drift rate as beta (reference: its own carrier ``a_chief`` [m])."""
+        g = float(model.factor(a_chief, a_chief, result.x[0]))
+        return cls(float(result.x[6]) / g, float(result.cov[6, 6]) / g**2, float(a_chief), float(result.t_est), model)
+
+    def carried(self, t, density_walk=0.0):
+        """The same information at epoch ``t`` [s]: the variance grows by (beta density_walk)^2 |t - t0| / 1 day
+        (``density_walk``: relative 1-sigma of the orbit-mean density per sqrt(day), a random walk)."""
+        walk = (self.beta * density_walk) ** 2 * abs(float(t) - self.t) / SECONDS_PER_DAY
+        return DriftPrior(self.beta, self.variance + walk, self.a_ref, float(t), self.model)
+
+    def residual_row(self, x, a_chief):
+        """Whitened a priori residual (beta - x[6] / g(x)) / sigma_beta and its partials d(x[6] / g) / dx over
+        sigma_beta ``(7,)`` at state ``x`` and carrier ``a_chief`` [m]."""
+        m = self.model
+        g = float(m.factor(a_chief, self.a_ref, x[0]))
+        dg_dda = -float(np.exp(-(a_chief - self.a_ref) / m.scale_height)) * m.ballistic_ratio * a_chief / m.scale_height
+        sigma = np.sqrt(self.variance)
+        row = np.zeros(STATE_SIZE)
+        row[6] = 1.0 / g
+        row[0] = -x[6] * dg_dda / g**2
+        return (self.beta - x[6] / g) / sigma, row / sigma
 
 
 def measurement_residual(z, z_model):
@@ -142,10 +228,12 @@ def _check(batch: RadarBatch):
         raise ValueError("measurement sigmas must be positive")
 
 
-def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_iterations=20, tol=1e-6):
+def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_iterations=20, tol=1e-6, prior=None):
     """Gauss-Newton weighted least squares of x = [ROE at t_est (6), da_dot] (module docstring).
 
-    ``t_est`` defaults to the last measurement epoch; ``x0`` to :func:`initial_guess`. Converged when the step's
+    ``t_est`` defaults to the last measurement epoch; ``x0`` to :func:`initial_guess`; ``prior`` (a
+    :class:`DriftPrior`, already carried to ``t_est``) adds its a priori row at the carrier's semi-major axis of the
+    batch's latest epoch. Converged when the step's
     Mahalanobis length sqrt(dx^T H^T W H dx) is below ``tol`` (a fraction of one sigma). Raises ValueError with the
     reason for too few or non-finite measurements, an unobservable state (singular normal matrix) or no
     convergence.
@@ -154,9 +242,20 @@ def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_ite
     t_est = float(np.max(batch.t)) if t_est is None else float(t_est)
     x = initial_guess(batch, t_est, j2) if x0 is None else np.array(x0, dtype=float)
     w = 1.0 / np.asarray(batch.sigma, dtype=float).reshape(-1)
-    for iteration in range(1, max_iterations + 1):
+    a_chief = _chief_a_inc(batch)[0]
+
+    def whitened(x):
         r = measurement_residual(batch.z, predict(x, batch, t_est, j2)).reshape(-1) * w
+        if prior is None:
+            return r, None
+        r_p, h_p = prior.residual_row(x, a_chief)
+        return np.append(r, r_p), h_p
+
+    for iteration in range(1, max_iterations + 1):
+        r, h_p = whitened(x)
         h = jacobian(x, batch, t_est, j2).reshape(-1, STATE_SIZE) * w[:, None]
+        if h_p is not None:
+            h = np.vstack([h, h_p])
         scale = np.linalg.norm(h, axis=0)
         if not np.all(scale > 0.0):
             raise ValueError(f"singular normal matrix: state component(s) {np.nonzero(~(scale > 0.0))[0].tolist()}"
@@ -173,7 +272,7 @@ def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_ite
     else:
         raise ValueError(f"Gauss-Newton did not converge in {max_iterations} iterations")
     r = measurement_residual(batch.z, predict(x, batch, t_est, j2)).reshape(-1) * w
-    cov = (vt.T / sv**2) @ vt / np.outer(scale, scale)
+    cov = (vt.T / sv**2) @ vt / np.outer(scale, scale)  # at the last step's Jacobian (a priori row included)
     return ODResult(x=x, cov=0.5 * (cov + cov.T), t_est=t_est, residual_rms=float(np.sqrt(np.mean(r * r))),
                     iterations=iteration, measurements=int(np.shape(batch.t)[0]))
 
