@@ -16,7 +16,7 @@ Eqs. (23)-(24): a dl = 3/(4 n^2) dB rho v^2 (u - u0)^2 and a da = -(1/n^2) dB rh
 
 import numpy as np
 
-from ..constants import J2, R_EARTH, SECONDS_PER_DAY
+from ..constants import EARTH_ROTATION, J2, R_EARTH, SECONDS_PER_DAY
 from .orbit import circular_speed, mean_motion
 
 
@@ -70,6 +70,21 @@ def drag_da_dot(delta_b, rho, a):
     B_chief [m^2/kg], ``rho`` [kg/m^3], ``a`` [m]. Positive dB (picosatellite decays faster) lowers da.
     """
     return -np.asarray(delta_b, dtype=float) * rho * circular_speed(a) ** 2 / (mean_motion(a) * a)
+
+
+def drag_dix_dot(da_dot, a, inc):
+    """Rate of the relative inclination vector's x-component [1/s] that differential drag drives through the
+    atmosphere's rotation: d(dix)/dt = (omega_E a sin i / (4 v)) da_dot.
+
+    The co-rotating atmosphere gives the drag a cross-track component proportional to omega_E r sin i cos u;
+    Gauss's equation for di/dt (r cos u f_N / h) averaged over an orbit (<cos^2 u> = 1/2) lowers the inclination
+    at di/dt = -B rho v omega_E sin i / (4 n) (King-Hele, *Theory of Satellite Orbits in an Atmosphere*, 1964,
+    Ch. 5), and the difference of two spacecraft against d(da)/dt = -dB rho v^2 / (n a) (:func:`drag_da_dot`) is
+    this ratio: 0.0164 at 515 km sun-synchronous (-1.3 m/day of a dix at a da_dot of -81 m/day, as the nonlinear
+    truth shows). ``da_dot`` [1/s], ``a`` [m], ``inc`` [rad]; broadcasts.
+    """
+    return (EARTH_ROTATION * np.asarray(a, dtype=float) * np.sin(inc) / (4.0 * circular_speed(a))
+            * np.asarray(da_dot, dtype=float))
 
 
 def propagate(roe, dt, a, inc, j2=True, da_dot=0.0):
