@@ -62,7 +62,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..constants import SECONDS_PER_DAY
-from ..relmotion.dynamics import drag_dix_dot, propagate
+from ..relmotion.dynamics import drag_dix_dot, j2_kappa, propagate
 from ..relmotion.roe import roe_to_rtn, wrap_angle
 from .radar import chief_from_kepler, chief_position_velocity, earth_rotation_matrix, look_position, observe, rtn_matrix
 
@@ -170,10 +170,18 @@ def _chief_a_inc(batch: RadarBatch):
 
 def propagate_state(x, dt, a, inc, j2=True):
     """ROE ``(..., 6)`` of states ``x`` ``(..., 7)`` after ``dt`` [s]: :func:`propagate` with da_dot = x[6], and
-    the relative inclination drift that the same differential drag drives (:func:`drag_dix_dot`)."""
+    the relative inclination drift that the same differential drag drives (:func:`drag_dix_dot`), dix_dot, with
+    its J2 couplings into dl (d dl/dt = ... - 7 kappa sin 2i dix: - 7/2 kappa sin 2i dix_dot dt^2) and diy
+    (d diy/dt = ... + 2 kappa sin^2 i dix: + kappa sin^2 i dix_dot dt^2)."""
     x = np.asarray(x, dtype=float)
+    dt = np.asarray(dt, dtype=float)
     roe = propagate(x[..., :6], dt, a, inc, j2, x[..., 6])
-    roe[..., 4] += drag_dix_dot(x[..., 6], a, inc) * dt
+    dix_dot = drag_dix_dot(x[..., 6], a, inc)
+    roe[..., 4] += dix_dot * dt
+    if j2:
+        kappa = j2_kappa(a)
+        roe[..., 1] -= 3.5 * kappa * np.sin(2.0 * inc) * dix_dot * dt * dt
+        roe[..., 5] += kappa * np.sin(inc) ** 2 * dix_dot * dt * dt
     return roe
 
 
