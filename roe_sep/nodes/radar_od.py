@@ -448,7 +448,8 @@ class RadarODNode(ManagedNode):
                                  a_da_dot_sigma=float(math.sqrt(result.cov[6, 6]) * a))
         msg.header.stamp = sec_to_time(now)
         msg.header.frame_id = interfaces.CARRIER_RTN_FRAME
-        msg.estimate = roe_to_msg(result.x[:6], chief, sec_to_time(result.t_est), covariance=result.cov[:6, :6])
+        mean, cov = result.mean_state()  # the mean ROE as the project defines them (with drag's short-period de)
+        msg.estimate = roe_to_msg(mean[:6], chief, sec_to_time(result.t_est), covariance=cov[:6, :6])
         return msg
 
 

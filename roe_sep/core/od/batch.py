@@ -62,7 +62,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..constants import SECONDS_PER_DAY
-from ..relmotion.dynamics import drag_dix_dot, j2_kappa, propagate
+from ..relmotion.dynamics import drag_dix_dot, drag_short_period_de, j2_kappa, propagate, propagate_chief
 from ..relmotion.roe import roe_to_rtn, wrap_angle
 from .radar import chief_from_kepler, chief_position_velocity, earth_rotation_matrix, look_position, observe, rtn_matrix
 
@@ -91,8 +91,10 @@ class RadarBatch:
 
 @dataclass(frozen=True)
 class ODResult:
-    """Estimate ``x`` (7,) at ``t_est`` [s] with covariance ``cov`` (7, 7) (dimensionless ROE, 1/s), the post-fit
-    normalized residual RMS, Gauss-Newton ``iterations`` and the number of measurement triplets used."""
+    """Estimate ``x`` (7,) at ``t_est`` [s] with covariance ``cov`` (7, 7) (secular ROE, dimensionless, and da_dot
+    [1/s]), the post-fit normalized residual RMS, Gauss-Newton ``iterations``, the number of measurement triplets
+    used, and the carrier's mean semi-major axis ``a_est`` [m] and argument of latitude ``u_est`` [rad] at
+    ``t_est``."""
 
     x: np.ndarray
     cov: np.ndarray
@@ -100,6 +102,14 @@ class ODResult:
     residual_rms: float
     iterations: int
     measurements: int
+    a_est: float = 0.0
+    u_est: float = 0.0
+
+    def mean_state(self):
+        """(state, covariance) of the mean ROE at ``t_est`` as the project defines them (first-order J2 mean
+        elements, which keep drag's short-periodic de: :func:`mean_roe_map`) and da_dot: J x, J P J^T."""
+        jac = mean_roe_map(self.a_est, self.u_est)
+        return jac @ self.x, jac @ self.cov @ jac.T
 
 
 @dataclass(frozen=True)
@@ -185,15 +195,31 @@ def propagate_state(x, dt, a, inc, j2=True):
     return roe
 
 
-def predict(x, batch: RadarBatch, t_est, j2=True):
-    """h(x): modeled [range, az, el] ``(..., m, 3)`` for states ``x`` ``(..., 7)`` at epoch ``t_est``.
+def mean_roe_map(a, u):
+    """J ``(7, 7)``: secular state -> mean ROE and da_dot of a carrier at semi-major axis ``a`` [m] and mean
+    argument of latitude ``u`` [rad]: the identity plus the da_dot column of drag's short-periodic de
+    (:func:`drag_short_period_de` is linear in da_dot: (sin u, -cos u) / n)."""
+    jac = np.eye(STATE_SIZE)
+    jac[2:4, 6] = drag_short_period_de(1.0, a, u)
+    return jac
 
-    The state is propagated with :func:`propagate_state` (a, i of the chief at the batch's latest epoch; J2) to
-    each measurement epoch and observed with :func:`observe`.
-    """
+
+def model_roe(x, batch: RadarBatch, t_est, j2=True):
+    """Mean ROE ``(..., m, 6)`` at the measurement epochs of states ``x`` ``(..., 7)`` at ``t_est``:
+    :func:`propagate_state` (a, i of the chief at the batch's latest epoch; J2) plus drag's short-periodic de at
+    each epoch's mean argument of latitude (:func:`drag_short_period_de`)."""
     x = np.asarray(x, dtype=float)
     a, inc = _chief_a_inc(batch)
     roe = propagate_state(x[..., None, :], batch.t - t_est, a, inc, j2)
+    u = batch.chief[:, 4] + batch.chief[:, 5]
+    roe[..., 2:4] += drag_short_period_de(x[..., None, 6], a, u)
+    return roe
+
+
+def predict(x, batch: RadarBatch, t_est, j2=True):
+    """h(x): modeled [range, az, el] ``(..., m, 3)`` for states ``x`` ``(..., 7)`` at epoch ``t_est``: the mean ROE
+    of :func:`model_roe` observed with :func:`observe`."""
+    roe = model_roe(x, batch, t_est, j2)
     return observe(roe, batch.chief, batch.theta, batch.site_ef, batch.site_enu)
 
 
@@ -224,7 +250,7 @@ def initial_guess(batch: RadarBatch, t_est, j2=True):
                       look_position(batch.z, batch.site_ef, batch.site_enu))
     rel = np.einsum("...ji,...j->...i", rtn_matrix(rc, vc), r_eci - rc) / a[:, None]
     unit = np.eye(STATE_SIZE)
-    roe = propagate_state(unit[:, None, :], batch.t - t_est, *_chief_a_inc(batch), j2)
+    roe = model_roe(unit, batch, t_est, j2)
     design = np.moveaxis(roe_to_rtn(roe, u)[0], 0, -1).reshape(-1, STATE_SIZE)  # (3m, 7)
     scale = np.linalg.norm(design, axis=0)
     scale[scale == 0.0] = 1.0  # an unobservable component stays 0 here; batch_least_squares reports it
@@ -295,8 +321,11 @@ def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_ite
         raise ValueError(f"Gauss-Newton did not converge in {max_iterations} iterations")
     r = measurement_residual(batch.z, predict(x, batch, t_est, j2)).reshape(-1) * w
     cov = (vt.T / sv**2) @ vt / np.outer(scale, scale)  # at the last step's Jacobian (a priori row included)
+    k = np.argmax(batch.t)
+    chief_est = propagate_chief(batch.chief[k], t_est - batch.t[k])
     return ODResult(x=x, cov=0.5 * (cov + cov.T), t_est=t_est, residual_rms=float(np.sqrt(np.mean(r * r))),
-                    iterations=iteration, measurements=int(np.shape(batch.t)[0]))
+                    iterations=iteration, measurements=int(np.shape(batch.t)[0]), a_est=float(chief_est[0]),
+                    u_est=float(chief_est[4] + chief_est[5]))
 
 
 def nees(x_est, x_true, cov):

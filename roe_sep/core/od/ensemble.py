@@ -197,9 +197,10 @@ def run_ensemble(members=8, draws=4, seed=0, prior=True, sample_interval=10.0, m
                 rate = line[0] / a  # 1/s
                 truth7 = np.append(roe[m, rows[-1]], rate)
                 truth7[0] = line[1] / a  # the line's a da at t_est: the drift without its short-periodic cm
+                mean, mean_cov = res.mean_state()
                 out.append(Solution(m, d, k, int(seg), t_est, res.x[6] * a * SECONDS_PER_DAY,
                                     rate * a * SECONDS_PER_DAY, math.sqrt(res.cov[6, 6]) * a * SECONDS_PER_DAY,
-                                    nees(res.x, truth7, res.cov), nees(res.x[:6], roe[m, rows[-1]], res.cov[:6, :6]),
+                                    nees(mean, truth7, mean_cov), nees(mean[:6], roe[m, rows[-1]], mean_cov[:6, :6]),
                                     carried is not None))
                 k += 1
     return out
