@@ -17,7 +17,8 @@ short-periodic drag terms that the first-order mean elements keep and that the s
 batch would weigh).
 For a consistent estimator the 7-state NEES is chi-square with 7 degrees of freedom and the drift-rate z standard
 normal (Bar-Shalom, Li, Kirubarajan 2001, Sec. 5.4): over N solutions the mean NEES lies in
-chi2(7N, 0.025..0.975) / N and the mean z^2 in chi2(N, ...) / N with 95 % probability (:func:`chi2_band`).
+chi2(7N, 0.025..0.975) / N and the mean z^2 in chi2(N, ...) / N with 95 % probability
+(:func:`~roe_sep.core.montecarlo.stats.nees_bounds`).
 """
 
 import math
@@ -27,6 +28,7 @@ import numpy as np
 from scipy.stats import chi2
 
 from ..constants import R_EARTH, SECONDS_PER_DAY
+from ..montecarlo.stats import nees_bounds
 from ..relmotion.dynamics import propagate_chief
 from .batch import DragModel, DriftPrior, RadarBatch, batch_least_squares, nees
 from .radar import DEFAULT_EPOCH_UTC, TIRA, gmst, julian_date, observe, raan_from_ltan, relative_distance
@@ -67,12 +69,6 @@ class Solution:
     @property
     def z(self):
         return (self.a_da_dot - self.a_da_dot_truth) / self.a_da_dot_sigma
-
-
-def chi2_band(dof, n, p=0.95):
-    """Two-sided ``p`` band of the mean of ``n`` chi-square(``dof``) values: chi2(n dof, (1 -+ p) / 2) / n."""
-    lo, hi = chi2.ppf([(1.0 - p) / 2.0, (1.0 + p) / 2.0], dof * n)
-    return float(lo / n), float(hi / n)
 
 
 def scenario_pairs(members, seed):
@@ -218,9 +214,9 @@ def consistency(solutions, which):
     n = len(sel)
     nees7 = np.array([s.nees7 for s in sel])
     z = np.array([s.z for s in sel])
-    return {"n": n, "nees7": float(nees7.mean()), "nees7_band": chi2_band(7, n),
-            "nees6": float(np.mean([s.nees6 for s in sel])), "nees6_band": chi2_band(6, n),
-            "z2": float(np.mean(z * z)), "z2_band": chi2_band(1, n),
+    return {"n": n, "nees7": float(nees7.mean()), "nees7_band": nees_bounds(7, n),
+            "nees6": float(np.mean([s.nees6 for s in sel])), "nees6_band": nees_bounds(6, n),
+            "z2": float(np.mean(z * z)), "z2_band": nees_bounds(1, n),
             "inside95_nees7": float(np.mean(nees7 <= chi2.ppf(0.95, 7))),
             "inside95_z": float(np.mean(np.abs(z) <= 1.96)),
             "sigma_m_per_day": float(np.mean([s.a_da_dot_sigma for s in sel])),
