@@ -69,7 +69,8 @@ an error that is not there. The drift rate's optimism of the 100-run campaign (m
 with the simulator's Eq. (24) value, which is smaller in magnitude than the nonlinear truth's own rate by
 0.51 +- 0.09 m/day at the first and 0.58 +- 0.14 m/day at the last solution (20 recorded runs, seeds 1000-1019):
 against the truth's own rate the same recorded last solutions have mean z^2 0.95 (1.96 against Eq. 24). The
-remaining lever is information: the drift rate is a property of the pair, so the carried beta shrinks the last solution's drift-rate sigma from 2.3 to 0.79 m/day with z^2 1.03 (256 chains).
+remaining lever is information: the drift rate is a property of the pair, so the carried beta shrinks the last
+solution's drift-rate sigma from 2.3 to 0.79 m/day with z^2 1.03 (256 chains).
 """
 
 from dataclasses import dataclass
