@@ -73,6 +73,8 @@ class RadarODNode(ManagedNode):
       the drift rate (:class:`~roe_sep.core.od.batch.DriftPrior`), with ``density_scale_height_m`` 0.0 (Vallado
       Table 8-4 at the carrier's altitude), ``drag_ballistic_ratio`` 1.5217 (B_d / (B_d - B_c)) and
       ``density_walk`` 0.0 per sqrt(day) (relative random walk of the orbit-mean density).
+    * ``od_drag_terms`` true: the OD model's drag-driven dix drift and short-periodic de
+      (:mod:`roe_sep.core.od.batch`); false: the secular drift model alone.
     """
 
     def __init__(self):
@@ -105,6 +107,8 @@ class RadarODNode(ManagedNode):
         ratio = declare(self, "drag_ballistic_ratio", 1.5217, "B_d / (B_d - B_c) of the drift prior's drag model")
         self.density_walk = declare(self, "density_walk", 0.0, "relative 1-sigma random walk of the orbit-mean "
                                     "density per sqrt(day) between a drift prior and its batch")
+        self.drag_terms = declare(self, "od_drag_terms", True, "the OD model's drag-driven dix drift and "
+                                  "short-periodic de (false: the secular drift model alone)")
         epoch = declare(self, "epoch_utc", DEFAULT_EPOCH_UTC, "ISO-8601 UTC calendar epoch of sim time 0")
 
         n = len(names)
@@ -127,6 +131,7 @@ class RadarODNode(ManagedNode):
         require("min_pass_measurements", self.min_pass >= 1, self.min_pass, "a positive integer")
         require("seed", seed >= 0, seed, "a non-negative integer")
         require("drift_prior", isinstance(self.use_prior, bool), self.use_prior, "true or false")
+        require("od_drag_terms", isinstance(self.drag_terms, bool), self.drag_terms, "true or false")
         require("density_scale_height_m", finite(scale_height) and 0.0 <= scale_height <= 1e6, scale_height,
                 "in [0, 1e6] m (0: Vallado's for the carrier's altitude)")
         require("drag_ballistic_ratio", finite(ratio) and ratio >= 1.0, ratio, "a number >= 1")
@@ -415,7 +420,7 @@ class RadarODNode(ManagedNode):
         prior = (self.prior.carried(float(np.max(batch.t)), self.density_walk)
                  if self.prior is not None and self.use_prior else None)
         try:
-            result = batch_least_squares(batch, prior=prior)
+            result = batch_least_squares(batch, prior=prior, drag=self.drag_terms)
         except ValueError as exc:
             self.get_logger().error(f"orbit determination failed: {exc}")
             publish_status(self, self.diag_pub, ERROR, f"orbit determination failed: {exc}", self._values())

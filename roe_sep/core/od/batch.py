@@ -120,11 +120,12 @@ class ODResult:
     measurements: int
     a_est: float = 0.0
     u_est: float = 0.0
+    drag: bool = True
 
     def mean_state(self):
         """(state, covariance) of the mean ROE at ``t_est`` as the project defines them (first-order J2 mean
         elements, which keep drag's short-periodic de: :func:`mean_roe_map`) and da_dot: J x, J P J^T."""
-        jac = mean_roe_map(self.a_est, self.u_est)
+        jac = mean_roe_map(self.a_est, self.u_est) if self.drag else np.eye(STATE_SIZE)
         return jac @ self.x, jac @ self.cov @ jac.T
 
 
@@ -194,14 +195,17 @@ def _chief_a_inc(batch: RadarBatch):
     return batch.chief[k, 0], batch.chief[k, 2]
 
 
-def propagate_state(x, dt, a, inc, j2=True):
+def propagate_state(x, dt, a, inc, j2=True, drag=True):
     """ROE ``(..., 6)`` of states ``x`` ``(..., 7)`` after ``dt`` [s]: :func:`propagate` with da_dot = x[6], and
     the relative inclination drift that the same differential drag drives (:func:`drag_dix_dot`), dix_dot, with
     its J2 couplings into dl (d dl/dt = ... - 7 kappa sin 2i dix: - 7/2 kappa sin 2i dix_dot dt^2) and diy
-    (d diy/dt = ... + 2 kappa sin^2 i dix: + kappa sin^2 i dix_dot dt^2)."""
+    (d diy/dt = ... + 2 kappa sin^2 i dix: + kappa sin^2 i dix_dot dt^2); ``drag`` False: :func:`propagate` alone
+    (the secular model without the drag terms, e.g. to reproduce solutions recorded with it)."""
     x = np.asarray(x, dtype=float)
     dt = np.asarray(dt, dtype=float)
     roe = propagate(x[..., :6], dt, a, inc, j2, x[..., 6])
+    if not drag:
+        return roe
     dix_dot = drag_dix_dot(x[..., 6], a, inc)
     roe[..., 4] += dix_dot * dt
     if j2:
@@ -220,22 +224,24 @@ def mean_roe_map(a, u):
     return jac
 
 
-def model_roe(x, batch: RadarBatch, t_est, j2=True):
+def model_roe(x, batch: RadarBatch, t_est, j2=True, drag=True):
     """Mean ROE ``(..., m, 6)`` at the measurement epochs of states ``x`` ``(..., 7)`` at ``t_est``:
     :func:`propagate_state` (a, i of the chief at the batch's latest epoch; J2) plus drag's short-periodic de at
-    each epoch's mean argument of latitude (:func:`drag_short_period_de`)."""
+    each epoch's mean argument of latitude (:func:`drag_short_period_de`); ``drag`` False: neither drag term."""
     x = np.asarray(x, dtype=float)
     a, inc = _chief_a_inc(batch)
-    roe = propagate_state(x[..., None, :], batch.t - t_est, a, inc, j2)
+    roe = propagate_state(x[..., None, :], batch.t - t_est, a, inc, j2, drag)
+    if not drag:
+        return roe
     u = batch.chief[:, 4] + batch.chief[:, 5]
     roe[..., 2:4] += drag_short_period_de(x[..., None, 6], a, u)
     return roe
 
 
-def predict(x, batch: RadarBatch, t_est, j2=True):
+def predict(x, batch: RadarBatch, t_est, j2=True, drag=True):
     """h(x): modeled [range, az, el] ``(..., m, 3)`` for states ``x`` ``(..., 7)`` at epoch ``t_est``: the mean ROE
     of :func:`model_roe` observed with :func:`observe`."""
-    roe = model_roe(x, batch, t_est, j2)
+    roe = model_roe(x, batch, t_est, j2, drag)
     return observe(roe, batch.chief, batch.theta, batch.site_ef, batch.site_enu)
 
 
@@ -245,16 +251,16 @@ def state_steps(a):
     return np.array([1.0] * 6 + [1e-6]) / a
 
 
-def jacobian(x, batch: RadarBatch, t_est, j2=True):
+def jacobian(x, batch: RadarBatch, t_est, j2=True, drag=True):
     """H = dh/dx ``(m, 3, 7)`` by central differences (h(x + s e_j) - h(x - s e_j)) / 2 s, azimuth wrapped."""
     s = state_steps(_chief_a_inc(batch)[0])
     pert = np.concatenate([np.diag(s), -np.diag(s)]) + np.asarray(x, dtype=float)
-    z = predict(pert, batch, t_est, j2)  # (14, m, 3)
+    z = predict(pert, batch, t_est, j2, drag)  # (14, m, 3)
     diff = measurement_residual(z[:STATE_SIZE], z[STATE_SIZE:])  # (7, m, 3)
     return np.moveaxis(diff / (2.0 * s[:, None, None]), 0, -1)
 
 
-def initial_guess(batch: RadarBatch, t_est, j2=True):
+def initial_guess(batch: RadarBatch, t_est, j2=True, drag=True):
     """Linear starting point: every measurement inverted to a relative RTN position, then unweighted least squares.
 
     r_rel/a = [R T N]^T (R3(theta)^T look_position(z) - r_chief) / a is linear in x, exactly: the secular
@@ -266,7 +272,7 @@ def initial_guess(batch: RadarBatch, t_est, j2=True):
                       look_position(batch.z, batch.site_ef, batch.site_enu))
     rel = np.einsum("...ji,...j->...i", rtn_matrix(rc, vc), r_eci - rc) / a[:, None]
     unit = np.eye(STATE_SIZE)
-    roe = model_roe(unit, batch, t_est, j2)
+    roe = model_roe(unit, batch, t_est, j2, drag)
     design = np.moveaxis(roe_to_rtn(roe, u)[0], 0, -1).reshape(-1, STATE_SIZE)  # (3m, 7)
     scale = np.linalg.norm(design, axis=0)
     scale[scale == 0.0] = 1.0  # an unobservable component stays 0 here; batch_least_squares reports it
@@ -292,24 +298,25 @@ def _check(batch: RadarBatch):
         raise ValueError("measurement sigmas must be positive")
 
 
-def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_iterations=20, tol=1e-6, prior=None):
+def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_iterations=20, tol=1e-6, prior=None,
+                        drag=True):
     """Gauss-Newton weighted least squares of x = [ROE at t_est (6), da_dot] (module docstring).
 
     ``t_est`` defaults to the last measurement epoch; ``x0`` to :func:`initial_guess`; ``prior`` (a
     :class:`DriftPrior`, already carried to ``t_est``) adds its a priori row at the carrier's semi-major axis of the
-    batch's latest epoch. Converged when the step's
-    Mahalanobis length sqrt(dx^T H^T W H dx) is below ``tol`` (a fraction of one sigma). Raises ValueError with the
-    reason for too few or non-finite measurements, an unobservable state (singular normal matrix) or no
-    convergence.
+    batch's latest epoch; ``drag`` False leaves out the model's two drag terms (module docstring). Converged when
+    the step's Mahalanobis length sqrt(dx^T H^T W H dx) is below ``tol`` (a fraction of one sigma). Raises
+    ValueError with the reason for too few or non-finite measurements, an unobservable state (singular normal
+    matrix) or no convergence.
     """
     _check(batch)
     t_est = float(np.max(batch.t)) if t_est is None else float(t_est)
-    x = initial_guess(batch, t_est, j2) if x0 is None else np.array(x0, dtype=float)
+    x = initial_guess(batch, t_est, j2, drag) if x0 is None else np.array(x0, dtype=float)
     w = 1.0 / np.asarray(batch.sigma, dtype=float).reshape(-1)
     a_chief = _chief_a_inc(batch)[0]
 
     def whitened(x):
-        r = measurement_residual(batch.z, predict(x, batch, t_est, j2)).reshape(-1) * w
+        r = measurement_residual(batch.z, predict(x, batch, t_est, j2, drag)).reshape(-1) * w
         if prior is None:
             return r, None
         r_p, h_p = prior.residual_row(x, a_chief)
@@ -317,7 +324,7 @@ def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_ite
 
     for iteration in range(1, max_iterations + 1):
         r, h_p = whitened(x)
-        h = jacobian(x, batch, t_est, j2).reshape(-1, STATE_SIZE) * w[:, None]
+        h = jacobian(x, batch, t_est, j2, drag).reshape(-1, STATE_SIZE) * w[:, None]
         if h_p is not None:
             h = np.vstack([h, h_p])
         scale = np.linalg.norm(h, axis=0)
@@ -335,13 +342,13 @@ def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_ite
             break
     else:
         raise ValueError(f"Gauss-Newton did not converge in {max_iterations} iterations")
-    r = measurement_residual(batch.z, predict(x, batch, t_est, j2)).reshape(-1) * w
+    r = measurement_residual(batch.z, predict(x, batch, t_est, j2, drag)).reshape(-1) * w
     cov = (vt.T / sv**2) @ vt / np.outer(scale, scale)  # at the last step's Jacobian (a priori row included)
     k = np.argmax(batch.t)
     chief_est = propagate_chief(batch.chief[k], t_est - batch.t[k])
     return ODResult(x=x, cov=0.5 * (cov + cov.T), t_est=t_est, residual_rms=float(np.sqrt(np.mean(r * r))),
                     iterations=iteration, measurements=int(np.shape(batch.t)[0]), a_est=float(chief_est[0]),
-                    u_est=float(chief_est[4] + chief_est[5]))
+                    u_est=float(chief_est[4] + chief_est[5]), drag=drag)
 
 
 def nees(x_est, x_true, cov):
