@@ -42,6 +42,9 @@ def test_default_run_is_safe_and_reaches_the_initial_conditions(scenario):
     od = rep["od"]
     assert od["passes"] >= 2 and 0.5 < od["residual_rms"] < 1.5
     assert od["nees"] < CHI2_6_999
+    # the drift prior carried across the acquisition burns: the last solution knows the drift rate far better
+    assert od["solutions"] >= 3 and od["last"]["a_da_dot_sigma"] < 0.5 * od["a_da_dot_sigma"], od
+    assert abs(od["last"]["a_da_dot_z"]) < 4.0 and od["last"]["nees"] < CHI2_6_999
     # the drift-stop is the big one (seed 002: a consistent radial burn), the acquisition is cheap
     assert rep["dv_by_purpose"]["drift_stop"] == pytest.approx(1.33, rel=0.1)
     assert rep["dv_by_purpose"]["ic_acquisition"] < 0.5
