@@ -116,13 +116,6 @@ def truth_samples(states0, b_c, b_d, dv, atmosphere, times):
     return out
 
 
-def _passes(visible):
-    """(start, stop) index pairs of the runs of True in ``visible``."""
-    v = np.concatenate([[False], visible, [False]]).astype(int)
-    d = np.diff(v)
-    return list(zip(np.nonzero(d == 1)[0], np.nonzero(d == -1)[0]))
-
-
 def run_ensemble(members=8, draws=4, seed=0, prior=True, sample_interval=10.0, mask_deg=10.0,
                  min_separation=5000.0, min_pass=5, min_arc=36000.0, sigma_range=10.0, sigma_angle_deg=0.01,
                  density_walk=0.0, noise_scale=1.0):
@@ -184,8 +177,8 @@ def run_ensemble(members=8, draws=4, seed=0, prior=True, sample_interval=10.0, m
                 t_est = float(times[rows[-1]])
                 res = batch_least_squares(batch, prior=None if carried is None else
                                           carried.carried(t_est, density_walk))
-                last = (res, float(chief[m, rows[-1], 0]))
                 a = float(chief[m, rows[-1], 0])
+                last = (res, a)
                 start = burn_t[seg - 1] if seg > 0 else T0
                 # the uniform grid (the passes see the same orbital phases), after the burn (its sample is pre-burn)
                 span = uniform & (times > start) & (times <= t_est)
