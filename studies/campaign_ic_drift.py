@@ -9,7 +9,7 @@ a da there is the acquisition planner's prediction error (its last plan's aimed 
   of the relative impulse ``-(executed - planned)``: a carrier burn moves the relative state the other way);
 * **estimate**: the error of the last OD solution before that plan (the estimate it was made from) carried to the
   IC epoch: its a da error against the truth at the solution's epoch plus its drift-rate error (estimated
-  differential drag ``a_da_dot`` against the simulator's) times the time to the IC epoch
+  differential drag ``a_da_dot`` against the truth's own drift rate) times the time to the IC epoch
   (:func:`roe_sep.report.od_solution`).
 
 What neither explains (the planners' secular model against the nonlinear truth) is the remainder. Strict JSON on
@@ -59,7 +59,8 @@ def run_budget(run_dir: Path):
     ods = [od for _, od in data[interfaces.OD_TOPIC] if time_to_sec(od.estimate.header.stamp) <= t_plan]
     estimate = estimate_a_da = rate_z = lead_days = None
     if ods:  # the report's own comparison of a solution with the truth at its epoch
-        sol = od_solution(ods[-1], data[interfaces.TRUTH_ROE_TOPIC], rep["truth_drag_a_da_dot_m_per_day"])
+        sol = od_solution(ods[-1], data[interfaces.TRUTH_ROE_TOPIC], rep["truth_drag_a_da_dot_m_per_day"],
+                          [stamp(m.epoch) for _, m in data[interfaces.EXECUTED_TOPIC]])
         if "error" in sol:
             lead = rep["ic"]["epoch"] - sol["epoch"]
             estimate_a_da = sol["error"][0]

@@ -14,7 +14,8 @@ determination needs several passes over about 12 h. This stub simulates those me
 * A pass is a run of consecutive measurement epochs of one station; it counts once closed with >=
   ``min_pass_measurements`` measurements. When >= ``passes_required`` counted passes since the latest executed
   maneuver span >= ``min_arc`` (first measurement of the first to last of the last), the batch least squares of
-  :mod:`roe_sep.core.od.batch` runs on their measurements and ``roe_sep_msgs/OrbitDetermination`` is published on
+  :mod:`roe_sep.core.od.batch` runs on their measurements (with the drift rate of the last solution before that
+  maneuver as a priori information) and ``roe_sep_msgs/OrbitDetermination`` is published on
   ``/od/estimate`` (latched); it runs again after every further counted pass.
 * ``/sim/executed_maneuvers`` (latched history): measurements before the latest burn, and those simulated from a
   truth message older than the burn, are not used.
@@ -37,7 +38,7 @@ from rosgraph_msgs.msg import Clock
 
 from .. import interfaces
 from ..core.constants import R_EARTH, SECONDS_PER_DAY
-from ..core.od.batch import RadarBatch, batch_least_squares
+from ..core.od.batch import DragModel, DriftPrior, RadarBatch, batch_least_squares
 from ..core.od.radar import (
     Station,
     add_noise,
@@ -49,6 +50,7 @@ from ..core.od.radar import (
 )
 from ..core.relmotion.dynamics import propagate, propagate_chief
 from ..core.relmotion.roe import wrap_angle
+from ..core.truth.nonlinear import vallado_band
 from .convert import array_to_elements, elements_to_array, msg_to_roe, roe_to_msg, sec_to_time, time_to_sec
 from .diagnostics import ERROR, OK, WARN, publish_status
 from .lockstep import Lockstep
@@ -77,9 +79,15 @@ class RadarODNode(ManagedNode):
         self.min_arc = declare(self, "min_arc")
         self.min_pass = declare(self, "min_pass_measurements")
         seed = declare(self, "seed")
+        self.use_prior = declare(self, "drift_prior")
+        scale_height = declare(self, "density_scale_height_m")
+        ratio = declare(self, "drag_ballistic_ratio")
+        self.density_walk = declare(self, "density_walk")
+        self.drag_terms = declare(self, "od_drag_terms")
         epoch = declare(self, "epoch_utc")
 
         self._check(names, lats, lons, alts)
+        self.drag = (scale_height, ratio)
         try:
             self.jd0 = julian_date(epoch)
         except (ValueError, TypeError) as exc:
@@ -119,6 +127,8 @@ class RadarODNode(ManagedNode):
         self.last_burn = -math.inf
         self.open_pass = [False] * len(self.stations)
         self.records = []  # (t, station, pass_id, z, chief, theta, truth_t)
+        self.last_solution = None  # (ODResult, carrier a [m]) of the latest estimate
+        self.prior = None  # DriftPrior from the last solution before the latest burn
 
     def activate(self):
         """Publishers, subscriptions, services (the ``activate`` transition)."""
@@ -187,6 +197,8 @@ class RadarODNode(ManagedNode):
         t = time_to_sec(msg.epoch)
         if t > self.last_burn:
             self.last_burn = t
+            if self.last_solution is not None and self.last_solution[0].t_est <= t:
+                self.prior = self.drift_prior(*self.last_solution)
             self.get_logger().info(f"{msg.spacecraft} {msg.purpose} burn at t = {t:.1f} s: earlier measurements "
                                    "are no longer used")
 
@@ -391,8 +403,10 @@ class RadarODNode(ManagedNode):
                            sigma=np.tile(self.sigma, (len(recs), 1)), chief=np.array([r[4] for r in recs]),
                            theta=np.array([r[5] for r in recs]), site_ef=np.array([self.site_ef[s] for s in s_idx]),
                            site_enu=np.array([self.site_enu[s] for s in s_idx]))
+        prior = (self.prior.carried(float(np.max(batch.t)), self.density_walk)
+                 if self.prior is not None and self.use_prior else None)
         try:
-            result = batch_least_squares(batch)
+            result = batch_least_squares(batch, prior=prior, drag=self.drag_terms)
         except ValueError as exc:
             self.get_logger().error(f"orbit determination failed: {exc}")
             publish_status(self, self.diag_pub, ERROR, f"orbit determination failed: {exc}", self._values())
@@ -400,11 +414,20 @@ class RadarODNode(ManagedNode):
         self.od_pub.publish(self.od_msg(result, batch.chief[-1], len(passes), now))
         self.estimates += 1
         a = batch.chief[-1, 0]
+        self.last_solution = (result, a)
         self.get_logger().info(
             f"OD #{self.estimates} at t = {result.t_est:.0f} s from {len(passes)} passes / {result.measurements} "
             f"measurements: a*ROE = {np.array2string(result.x[:6] * a, precision=1)} m, a*da_dot = "
-            f"{result.x[6] * a:.3e} m/s, residual RMS {result.residual_rms:.2f}")
+            f"{result.x[6] * a:.3e} m/s, residual RMS {result.residual_rms:.2f}"
+            + ("" if prior is None else f", drift prior from t = {self.prior.t:.0f} s"))
         publish_status(self, self.diag_pub, OK, f"estimate {self.estimates} published", self._values())
+
+    def drift_prior(self, result, a_chief):
+        """The a priori information of a solution for the batches after the next burn (its drag model: the
+        configured scale height, else Vallado's for the carrier's altitude)."""
+        scale_height, ratio = self.drag
+        h = scale_height or vallado_band(a_chief - R_EARTH)[2]
+        return DriftPrior.from_result(result, a_chief, DragModel(h, ratio))
 
     def od_msg(self, result, chief_kep, passes, now):
         kep = np.array(chief_kep, dtype=float)
@@ -416,7 +439,8 @@ class RadarODNode(ManagedNode):
                                  a_da_dot_sigma=float(math.sqrt(result.cov[6, 6]) * a))
         msg.header.stamp = sec_to_time(now)
         msg.header.frame_id = interfaces.CARRIER_RTN_FRAME
-        msg.estimate = roe_to_msg(result.x[:6], chief, sec_to_time(result.t_est), covariance=result.cov[:6, :6])
+        mean, cov = result.mean_state()  # the mean ROE as the project defines them (with drag's short-period de)
+        msg.estimate = roe_to_msg(mean[:6], chief, sec_to_time(result.t_est), covariance=cov[:6, :6])
         return msg
 
 

@@ -7,7 +7,17 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from roe_sep.core.od.batch import RadarBatch, batch_least_squares, initial_guess, jacobian, nees, predict
+from roe_sep.core.od.batch import (
+    DragModel,
+    DriftPrior,
+    RadarBatch,
+    batch_least_squares,
+    initial_guess,
+    jacobian,
+    nees,
+    predict,
+    propagate_state,
+)
 from roe_sep.core.od.radar import (
     TIRA,
     add_noise,
@@ -18,7 +28,13 @@ from roe_sep.core.od.radar import (
     relative_distance,
     visible,
 )
-from roe_sep.core.relmotion.dynamics import drag_da_dot, propagate, propagate_chief, sun_synchronous_inclination
+from roe_sep.core.relmotion.dynamics import (
+    drag_da_dot,
+    drag_dix_dot,
+    drag_short_period_de,
+    propagate_chief,
+    sun_synchronous_inclination,
+)
 from roe_sep.core.relmotion.orbit import semi_major_axis
 
 A = float(semi_major_axis(515e3))
@@ -37,13 +53,15 @@ def scenario():
     t = np.arange(0.0, 26 * 3600.0, 10.0)
     chief = propagate_chief(kep0, t)
     theta = gmst(JD0 + t / 86400.0)
-    roe = propagate(ROE0, t, A, INC, True, DA_DOT)
+    secular = propagate_state(np.append(ROE0, DA_DOT), t, A, INC)  # the OD's model: secular J2, drag, dix drift
+    roe = secular.copy()  # mean ROE: with drag's short-periodic de
+    roe[:, 2:4] += drag_short_period_de(DA_DOT, A, chief[:, 4] + chief[:, 5])
     z = observe(roe, chief, theta, TIRA.ecef, TIRA.enu)
     ok = visible(z[:, 2], math.radians(10.0)) & (relative_distance(roe, A, chief[:, 4] + chief[:, 5]) >= 5000.0)
     m = int(ok.sum())
     batch = RadarBatch(t=t[ok], z=z[ok], sigma=np.tile(SIGMA, (m, 1)), chief=chief[ok], theta=theta[ok],
                        site_ef=np.tile(TIRA.ecef, (m, 1)), site_enu=np.tile(TIRA.enu, (m, 1, 1)))
-    x_true = np.append(roe[ok][-1], DA_DOT)
+    x_true = np.append(secular[ok][-1], DA_DOT)
     return batch, x_true
 
 
@@ -67,12 +85,17 @@ def test_noise_free_fit_recovers_the_truth(scenario):
     np.testing.assert_allclose(result.x[:6] * A, x_true[:6] * A, atol=1e-5)
     assert result.x[6] * A == pytest.approx(x_true[6] * A, abs=1e-10)
     assert result.residual_rms < 1e-5 and result.iterations <= 4
+    # the mean ROE (the project's first-order J2 mean elements) carry drag's short-periodic de: 1.4 m of a de here
+    mean, _ = result.mean_state()
+    sp = drag_short_period_de(DA_DOT, A, result.u_est)
+    np.testing.assert_allclose((mean - x_true)[2:4] * A, sp * A, atol=1e-5)
+    assert np.linalg.norm(sp * A) == pytest.approx(abs(DA_DOT) * A / math.sqrt(3.986004418e14 / A**3), rel=1e-6)
     # from a poor start too: the picosatellite at the carrier, no drift
     np.testing.assert_allclose(batch_least_squares(batch, x0=np.zeros(7)).x * A, x_true * A, atol=1e-5)
     # another estimate epoch: the state propagated there
     t_mid = batch.t[0] + 3600.0
     mid = batch_least_squares(batch, t_est=t_mid)
-    expected = propagate(x_true[:6], t_mid - batch.t[-1], A, INC, True, DA_DOT)
+    expected = propagate_state(x_true, t_mid - batch.t[-1], A, INC)
     np.testing.assert_allclose(mid.x[:6] * A, expected * A, atol=1e-5)
 
 
@@ -114,7 +137,7 @@ def test_two_passes_twelve_hours_apart(scenario):
     gaps = np.nonzero(np.diff(batch.t) > 1800.0)[0]
     keep = np.r_[0:gaps[0] + 1, gaps[1] + 1:gaps[2] + 1]  # passes 1 and 3 (about 13 h apart)
     sub = RadarBatch(**{k: v[keep] for k, v in batch.__dict__.items()})
-    t_roe = propagate(ROE0, sub.t[-1], A, INC, True, DA_DOT)
+    t_roe = propagate_state(np.append(ROE0, DA_DOT), sub.t[-1], A, INC)
     x_true = np.append(t_roe, DA_DOT)
     values = [nees(r.x, x_true, r.cov) for r in (batch_least_squares(noisy(sub, s)) for s in range(RUNS))]
     lo, hi = chi2.ppf([0.025, 0.975], 7 * RUNS) / RUNS
@@ -145,3 +168,31 @@ def test_bad_inputs_raise_clear_errors(scenario):
 def test_nees_definition():
     cov = np.diag([4.0, 1.0])
     assert nees([2.0, 1.0], [0.0, 0.0], cov) == pytest.approx(2.0)
+
+
+def test_drag_dix_dot_is_the_co_rotating_atmosphere_ratio():
+    """d(dix)/dt = omega_E a sin i / (4 v) da_dot: 0.0164 of the drift rate at 515 km sun-synchronous (King-Hele)."""
+    ratio = drag_dix_dot(DA_DOT, A, INC) / DA_DOT
+    assert ratio == pytest.approx(7.292115e-5 * A * math.sin(INC) / (4.0 * math.sqrt(3.986004418e14 / A)), rel=1e-6)
+    assert ratio == pytest.approx(0.0164, abs=5e-4)
+
+
+def test_drift_prior_shrinks_the_drift_sigma_as_information_adds(scenario):
+    """A priori information on the drift rate combines with the batch's as information adds (Tapley Sec. 4.6):
+    1 / sigma^2 = 1 / sigma_batch^2 + 1 / sigma_prior^2 for the linear model (noise-free here, so the estimate
+    stays at the truth when the prior is the truth); carried without a density walk, the variance stays."""
+    batch, x_true = scenario
+    alone = batch_least_squares(batch)
+    model = DragModel(63822.0, 1.5217)
+    a = batch.chief[-1, 0]
+    prior = DriftPrior.from_result(alone, a, model)  # the same information again (a test of the algebra only)
+    assert prior.beta * model.factor(a, a, alone.x[0]) == pytest.approx(alone.x[6], rel=1e-12)
+    both = batch_least_squares(batch, prior=prior.carried(batch.t[-1]))
+    assert both.cov[6, 6] == pytest.approx(alone.cov[6, 6] / 2.0, rel=1e-3)
+    np.testing.assert_allclose(both.x * A, x_true * A, atol=1e-5)
+    assert both.residual_rms == pytest.approx(alone.residual_rms, abs=1e-6)  # measurement residuals only
+    walked = prior.carried(prior.t + 86400.0, density_walk=0.1)
+    assert walked.variance == pytest.approx(prior.variance + (0.1 * prior.beta) ** 2)
+    assert prior.carried(prior.t + 86400.0).variance == prior.variance
+    # a lower carrier (denser air) and a lower picosatellite: a larger drift rate expected from the same beta
+    assert model.factor(a - 100.0, a, -50.0 / a) > model.factor(a, a, 0.0) == 1.0

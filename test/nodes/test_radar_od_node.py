@@ -195,7 +195,9 @@ def test_tracks_passes_after_separation_and_estimates_consistently(sim, lockstep
     [(["-p", "sigma_range_m:=-1.0"], "'sigma_range_m'"),
      (["-p", "station_latitudes_deg:=[50.6, 48.1]"], "'station_latitudes_deg'"),
      (["-p", "epoch_utc:=yesterday"], "'epoch_utc'"),
-     (["-p", "min_separation:=5000"], "'min_separation'")],
+     (["-p", "min_separation:=5000"], "'min_separation'"),
+     (["-p", "density_walk:=-0.1"], "'density_walk'"),
+     (["-p", "drag_ballistic_ratio:=0.5"], "'drag_ballistic_ratio'")],
 )
 def test_bad_parameter_refused_at_startup(args, name):
     code, out = wait_exit(start_node("radar_od", *args))

@@ -7,9 +7,23 @@ known (it carries GPS): its mean elements at each measurement epoch are inputs.
 Model (Tapley, Schutz, Born, *Statistical Orbit Determination*, 2004, Ch. 4): z_k = h_k(x) + v_k, v_k ~ N(0, R_k),
 R_k = diag(sigma_range^2, sigma_angle^2, sigma_angle^2), with
 
-    h_k(x) = observe(propagate(x[:6], t_k - t_est, a, i, J2, da_dot = x[6]), chief_k, theta_k, station_k)
+    h_k(x) = observe(model_roe(x, t_k), chief_k, theta_k, station_k)      (:func:`model_roe`, :func:`observe`)
 
-(:func:`~roe_sep.core.relmotion.dynamics.propagate`, :func:`~roe_sep.core.od.radar.observe`). Gauss-Newton iterations
+and the mean ROE at t_k: the secular propagation (:func:`~roe_sep.core.relmotion.dynamics.propagate`: J2 and the
+constant drift rate x[6] of da) plus two terms of the same differential drag that the nonlinear truth shows and the
+secular model lacked (:func:`propagate_state`, :func:`model_roe`):
+
+* the drift of dix through the co-rotating atmosphere, d dix/dt = (omega_E a sin i / (4 v)) x[6]
+  (:func:`~roe_sep.core.relmotion.dynamics.drag_dix_dot`, King-Hele 1964): 0.0164 x[6], -1.3 m/day of a dix at a
+  drift rate of -81 m/day, with its J2 couplings into dl and diy;
+* the short-periodic relative e vector (x[6] / n)(sin u_k, -cos u_k)
+  (:func:`~roe_sep.core.relmotion.dynamics.drag_short_period_de`): the project's mean ROE are first-order J2 mean
+  elements (:mod:`roe_sep.core.truth.mean_osc`), which keep drag's orbit-periodic terms, 0.85 m of a de at
+  -81 m/day; in the relative position a constant along-track offset 2 a x[6] / n.
+
+The state x is secular; :meth:`ODResult.mean_state` gives the mean ROE at t_est with the short-periodic de (what the
+truth and the reports call the ROE). Without the two terms, noise-free solutions on the nonlinear truth miss it by
+7-state NEES 0.4-1.6 (the mean 0.9 of an expected 7 for noise alone); with them by 0.04-0.27. Gauss-Newton iterations
 
     dx = (H^T W H)^-1 H^T W (z - h(x)),   W = R^-1,   H = dh/dx by central finite differences,
 
@@ -18,13 +32,53 @@ than rounded away). Azimuth residuals are wrapped to [-pi, pi). Formal covarianc
 The secular ROE model is linear in x and the look angles are almost linear over the estimate's uncertainty
 (hundreds of meters at ~1000 km range), so the estimate is unbiased and P is its actual covariance: the normalized
 estimation error squared (:func:`nees`) is chi-square with 7 degrees of freedom.
+
+Drift rate across burns (:class:`DragModel`, :class:`DriftPrior`). A burn changes the ROE by its executed (not its
+commanded) impulse, so every batch starts after the latest burn. The drift rate does not jump at a burn: it is the
+differential drag of the pair, seed 002 Eq. (24) differentiated in time,
+
+    da_dot = -(v^2 / (n a)) (B_d rho(h_d) - B_c rho(h_c)),   rho(h) = rho_0 exp(-(h - h_0) / H)  (Vallado Eq. 8-33),
+
+with constant ballistic coefficients B and the deputy's height h_d = h_c + a da. Linear in a da / H (a few hundred
+meters against H = 64 km at 515 km): da_dot = beta g, with the drag model's factor
+
+    g(a_c, da) = exp(-(a_c - a_ref) / H) (1 - R a da / H),   R = B_d / (B_d - B_c),
+
+and beta = -(v^2 / (n a)) (B_d - B_c) rho(a_ref - R_E) a constant of the pair (differential ballistic coefficient
+times the density at a reference height). g is known: the carrier's mean a_c (its own GPS orbit, an input of the
+batch) gives the density ratio as it decays (165 m/day at 515 km: +0.26 %/day of drift rate) and the estimate's
+own da the deputy's height (R = 1.52 in the default scenario: 0.43 % of drift rate per 180 m of a da, what a
+0.1 m/s acquisition burn changes). The last solution before a burn therefore gives a priori information on beta
+for every batch after it: its marginal (beta, sigma_beta^2) = (x[6] / g, P[6, 6] / g^2) is an a priori
+pseudo-measurement of x[6] / g(x) (Tapley, Schutz, Born 2004, Sec. 4.6, Eq. 4.6.1: the batch with a priori
+information, J = (z - h)^T W (z - h) + (x - x_bar)^T P_bar^-1 (x - x_bar)), one more whitened row of the design
+matrix. Its measurements precede the burn, those of the new batch follow it: the two are independent, and each
+batch carries forward only the marginal of the solution before it, so no measurement is used twice. The density
+of the truth atmospheres of this project (:mod:`roe_sep.core.truth.nonlinear`: the normalised exponential model,
+and NRLMSIS 2.0 at constant solar and geomagnetic activity) is a function of position (and, for NRLMSIS, of the
+Sun's direction, which turns 1 deg/day), so the orbit mean at the carrier's height is fixed by that height: no
+process noise is needed, and none is added by default. A real atmosphere changes with solar and geomagnetic
+activity: ``density_walk`` (relative 1-sigma of the orbit-mean density per sqrt(day), a random walk: state noise
+compensation, Tapley et al. Sec. 6.9) widens the a priori variance by (beta density_walk)^2 dt / 1 day between the
+two epochs.
+
+Why these choices, measured (the OD ensemble of :mod:`roe_sep.core.od.ensemble` on the nonlinear truth, and the
+recorded runs): the secular model with one constant drift rate over a batch recovers the truth's own drift rate
+from noise-free measurements to < 0.1 sigma, so a piecewise drift rate or process noise inside a batch would model
+an error that is not there. The drift rate's optimism of the 100-run campaign (mean z^2 1.42) came from comparing
+with the simulator's Eq. (24) value, which is smaller in magnitude than the nonlinear truth's own rate by
+0.51 +- 0.09 m/day at the first and 0.58 +- 0.14 m/day at the last solution (20 recorded runs, seeds 1000-1019):
+against the truth's own rate the same recorded last solutions have mean z^2 0.95 (1.96 against Eq. 24). The
+remaining lever is information: the drift rate is a property of the pair, so the carried beta shrinks the last
+solution's drift-rate sigma from 2.3 to 0.79 m/day with z^2 1.03 (256 chains).
 """
 
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..relmotion.dynamics import propagate
+from ..constants import SECONDS_PER_DAY
+from ..relmotion.dynamics import drag_dix_dot, drag_short_period_de, j2_kappa, propagate, propagate_chief
 from ..relmotion.roe import roe_to_rtn, wrap_angle
 from .radar import chief_from_kepler, chief_position_velocity, earth_rotation_matrix, look_position, observe, rtn_matrix
 
@@ -53,8 +107,10 @@ class RadarBatch:
 
 @dataclass(frozen=True)
 class ODResult:
-    """Estimate ``x`` (7,) at ``t_est`` [s] with covariance ``cov`` (7, 7) (dimensionless ROE, 1/s), the post-fit
-    normalized residual RMS, Gauss-Newton ``iterations`` and the number of measurement triplets used."""
+    """Estimate ``x`` (7,) at ``t_est`` [s] with covariance ``cov`` (7, 7) (secular ROE, dimensionless, and da_dot
+    [1/s]), the post-fit normalized residual RMS, Gauss-Newton ``iterations``, the number of measurement triplets
+    used, and the carrier's mean semi-major axis ``a_est`` [m] and argument of latitude ``u_est`` [rad] at
+    ``t_est``."""
 
     x: np.ndarray
     cov: np.ndarray
@@ -62,6 +118,68 @@ class ODResult:
     residual_rms: float
     iterations: int
     measurements: int
+    a_est: float = 0.0
+    u_est: float = 0.0
+    drag: bool = True
+
+    def mean_state(self):
+        """(state, covariance) of the mean ROE at ``t_est`` as the project defines them (first-order J2 mean
+        elements, which keep drag's short-periodic de: :func:`mean_roe_map`) and da_dot: J x, J P J^T."""
+        jac = mean_roe_map(self.a_est, self.u_est) if self.drag else np.eye(STATE_SIZE)
+        return jac @ self.x, jac @ self.cov @ jac.T
+
+
+@dataclass(frozen=True)
+class DragModel:
+    """The drift rate's dependence on the carrier's height and the deputy's (module docstring): density scale
+    height ``scale_height`` H [m] and ballistic ratio ``ballistic_ratio`` R = B_d / (B_d - B_c)."""
+
+    scale_height: float
+    ballistic_ratio: float
+
+    def factor(self, a_chief, a_ref, da):
+        """g = exp(-(a_c - a_ref) / H) (1 - R a_c da / H): da_dot over beta at carrier mean semi-major axis
+        ``a_chief`` [m] and dimensionless ``da`` (broadcasts)."""
+        a_chief = np.asarray(a_chief, dtype=float)
+        return (np.exp(-(a_chief - a_ref) / self.scale_height)
+                * (1.0 - self.ballistic_ratio * a_chief * np.asarray(da, dtype=float) / self.scale_height))
+
+
+@dataclass(frozen=True)
+class DriftPrior:
+    """A priori information on the drag constant beta = da_dot / g [1/s] (module docstring): its value, variance
+    [1/s^2], the reference carrier semi-major axis ``a_ref`` [m] of g, the epoch ``t`` [s] of the solution it comes
+    from and the drag model."""
+
+    beta: float
+    variance: float
+    a_ref: float
+    t: float
+    model: DragModel
+
+    @classmethod
+    def from_result(cls, result, a_chief, model: DragModel):
+        """The marginal of a solution's drift rate as beta (reference: its own carrier ``a_chief`` [m])."""
+        g = float(model.factor(a_chief, a_chief, result.x[0]))
+        return cls(float(result.x[6]) / g, float(result.cov[6, 6]) / g**2, float(a_chief), float(result.t_est), model)
+
+    def carried(self, t, density_walk=0.0):
+        """The same information at epoch ``t`` [s]: the variance grows by (beta density_walk)^2 |t - t0| / 1 day
+        (``density_walk``: relative 1-sigma of the orbit-mean density per sqrt(day), a random walk)."""
+        walk = (self.beta * density_walk) ** 2 * abs(float(t) - self.t) / SECONDS_PER_DAY
+        return DriftPrior(self.beta, self.variance + walk, self.a_ref, float(t), self.model)
+
+    def residual_row(self, x, a_chief):
+        """Whitened a priori residual (beta - x[6] / g(x)) / sigma_beta and its partials d(x[6] / g) / dx over
+        sigma_beta ``(7,)`` at state ``x`` and carrier ``a_chief`` [m]."""
+        m = self.model
+        g = float(m.factor(a_chief, self.a_ref, x[0]))
+        dg_dda = -float(np.exp(-(a_chief - self.a_ref) / m.scale_height)) * m.ballistic_ratio * a_chief / m.scale_height
+        sigma = np.sqrt(self.variance)
+        row = np.zeros(STATE_SIZE)
+        row[6] = 1.0 / g
+        row[0] = -x[6] * dg_dda / g**2
+        return (self.beta - x[6] / g) / sigma, row / sigma
 
 
 def measurement_residual(z, z_model):
@@ -77,15 +195,53 @@ def _chief_a_inc(batch: RadarBatch):
     return batch.chief[k, 0], batch.chief[k, 2]
 
 
-def predict(x, batch: RadarBatch, t_est, j2=True):
-    """h(x): modeled [range, az, el] ``(..., m, 3)`` for states ``x`` ``(..., 7)`` at epoch ``t_est``.
+def propagate_state(x, dt, a, inc, j2=True, drag=True):
+    """ROE ``(..., 6)`` of states ``x`` ``(..., 7)`` after ``dt`` [s]: :func:`propagate` with da_dot = x[6], and
+    the relative inclination drift that the same differential drag drives (:func:`drag_dix_dot`), dix_dot, with
+    its J2 couplings into dl (d dl/dt = ... - 7 kappa sin 2i dix: - 7/2 kappa sin 2i dix_dot dt^2) and diy
+    (d diy/dt = ... + 2 kappa sin^2 i dix: + kappa sin^2 i dix_dot dt^2); ``drag`` False: :func:`propagate` alone
+    (the secular model without the drag terms, e.g. to reproduce solutions recorded with it)."""
+    x = np.asarray(x, dtype=float)
+    dt = np.asarray(dt, dtype=float)
+    roe = propagate(x[..., :6], dt, a, inc, j2, x[..., 6])
+    if not drag:
+        return roe
+    dix_dot = drag_dix_dot(x[..., 6], a, inc)
+    roe[..., 4] += dix_dot * dt
+    if j2:
+        kappa = j2_kappa(a)
+        roe[..., 1] -= 3.5 * kappa * np.sin(2.0 * inc) * dix_dot * dt * dt
+        roe[..., 5] += kappa * np.sin(inc) ** 2 * dix_dot * dt * dt
+    return roe
 
-    The ROE are propagated with :func:`propagate` (a, i of the chief at the batch's latest epoch; J2;
-    da_dot = x[6]) to each measurement epoch and observed with :func:`observe`.
-    """
+
+def mean_roe_map(a, u):
+    """J ``(7, 7)``: secular state -> mean ROE and da_dot of a carrier at semi-major axis ``a`` [m] and mean
+    argument of latitude ``u`` [rad]: the identity plus the da_dot column of drag's short-periodic de
+    (:func:`drag_short_period_de` is linear in da_dot: (sin u, -cos u) / n)."""
+    jac = np.eye(STATE_SIZE)
+    jac[2:4, 6] = drag_short_period_de(1.0, a, u)
+    return jac
+
+
+def model_roe(x, batch: RadarBatch, t_est, j2=True, drag=True):
+    """Mean ROE ``(..., m, 6)`` at the measurement epochs of states ``x`` ``(..., 7)`` at ``t_est``:
+    :func:`propagate_state` (a, i of the chief at the batch's latest epoch; J2) plus drag's short-periodic de at
+    each epoch's mean argument of latitude (:func:`drag_short_period_de`); ``drag`` False: neither drag term."""
     x = np.asarray(x, dtype=float)
     a, inc = _chief_a_inc(batch)
-    roe = propagate(x[..., None, :6], batch.t - t_est, a, inc, j2, x[..., None, 6])
+    roe = propagate_state(x[..., None, :], batch.t - t_est, a, inc, j2, drag)
+    if not drag:
+        return roe
+    u = batch.chief[:, 4] + batch.chief[:, 5]
+    roe[..., 2:4] += drag_short_period_de(x[..., None, 6], a, u)
+    return roe
+
+
+def predict(x, batch: RadarBatch, t_est, j2=True, drag=True):
+    """h(x): modeled [range, az, el] ``(..., m, 3)`` for states ``x`` ``(..., 7)`` at epoch ``t_est``: the mean ROE
+    of :func:`model_roe` observed with :func:`observe`."""
+    roe = model_roe(x, batch, t_est, j2, drag)
     return observe(roe, batch.chief, batch.theta, batch.site_ef, batch.site_enu)
 
 
@@ -95,16 +251,16 @@ def state_steps(a):
     return np.array([1.0] * 6 + [1e-6]) / a
 
 
-def jacobian(x, batch: RadarBatch, t_est, j2=True):
+def jacobian(x, batch: RadarBatch, t_est, j2=True, drag=True):
     """H = dh/dx ``(m, 3, 7)`` by central differences (h(x + s e_j) - h(x - s e_j)) / 2 s, azimuth wrapped."""
     s = state_steps(_chief_a_inc(batch)[0])
     pert = np.concatenate([np.diag(s), -np.diag(s)]) + np.asarray(x, dtype=float)
-    z = predict(pert, batch, t_est, j2)  # (14, m, 3)
+    z = predict(pert, batch, t_est, j2, drag)  # (14, m, 3)
     diff = measurement_residual(z[:STATE_SIZE], z[STATE_SIZE:])  # (7, m, 3)
     return np.moveaxis(diff / (2.0 * s[:, None, None]), 0, -1)
 
 
-def initial_guess(batch: RadarBatch, t_est, j2=True):
+def initial_guess(batch: RadarBatch, t_est, j2=True, drag=True):
     """Linear starting point: every measurement inverted to a relative RTN position, then unweighted least squares.
 
     r_rel/a = [R T N]^T (R3(theta)^T look_position(z) - r_chief) / a is linear in x, exactly: the secular
@@ -116,7 +272,7 @@ def initial_guess(batch: RadarBatch, t_est, j2=True):
                       look_position(batch.z, batch.site_ef, batch.site_enu))
     rel = np.einsum("...ji,...j->...i", rtn_matrix(rc, vc), r_eci - rc) / a[:, None]
     unit = np.eye(STATE_SIZE)
-    roe = propagate(unit[:, None, :6], batch.t - t_est, *_chief_a_inc(batch), j2, unit[:, None, 6])
+    roe = model_roe(unit, batch, t_est, j2, drag)
     design = np.moveaxis(roe_to_rtn(roe, u)[0], 0, -1).reshape(-1, STATE_SIZE)  # (3m, 7)
     scale = np.linalg.norm(design, axis=0)
     scale[scale == 0.0] = 1.0  # an unobservable component stays 0 here; batch_least_squares reports it
@@ -142,21 +298,35 @@ def _check(batch: RadarBatch):
         raise ValueError("measurement sigmas must be positive")
 
 
-def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_iterations=20, tol=1e-6):
+def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_iterations=20, tol=1e-6, prior=None,
+                        drag=True):
     """Gauss-Newton weighted least squares of x = [ROE at t_est (6), da_dot] (module docstring).
 
-    ``t_est`` defaults to the last measurement epoch; ``x0`` to :func:`initial_guess`. Converged when the step's
-    Mahalanobis length sqrt(dx^T H^T W H dx) is below ``tol`` (a fraction of one sigma). Raises ValueError with the
-    reason for too few or non-finite measurements, an unobservable state (singular normal matrix) or no
-    convergence.
+    ``t_est`` defaults to the last measurement epoch; ``x0`` to :func:`initial_guess`; ``prior`` (a
+    :class:`DriftPrior`, already carried to ``t_est``) adds its a priori row at the carrier's semi-major axis of the
+    batch's latest epoch; ``drag`` False leaves out the model's two drag terms (module docstring). Converged when
+    the step's Mahalanobis length sqrt(dx^T H^T W H dx) is below ``tol`` (a fraction of one sigma). Raises
+    ValueError with the reason for too few or non-finite measurements, an unobservable state (singular normal
+    matrix) or no convergence.
     """
     _check(batch)
     t_est = float(np.max(batch.t)) if t_est is None else float(t_est)
-    x = initial_guess(batch, t_est, j2) if x0 is None else np.array(x0, dtype=float)
+    x = initial_guess(batch, t_est, j2, drag) if x0 is None else np.array(x0, dtype=float)
     w = 1.0 / np.asarray(batch.sigma, dtype=float).reshape(-1)
+    a_chief = _chief_a_inc(batch)[0]
+
+    def whitened(x):
+        r = measurement_residual(batch.z, predict(x, batch, t_est, j2, drag)).reshape(-1) * w
+        if prior is None:
+            return r, None
+        r_p, h_p = prior.residual_row(x, a_chief)
+        return np.append(r, r_p), h_p
+
     for iteration in range(1, max_iterations + 1):
-        r = measurement_residual(batch.z, predict(x, batch, t_est, j2)).reshape(-1) * w
-        h = jacobian(x, batch, t_est, j2).reshape(-1, STATE_SIZE) * w[:, None]
+        r, h_p = whitened(x)
+        h = jacobian(x, batch, t_est, j2, drag).reshape(-1, STATE_SIZE) * w[:, None]
+        if h_p is not None:
+            h = np.vstack([h, h_p])
         scale = np.linalg.norm(h, axis=0)
         if not np.all(scale > 0.0):
             raise ValueError(f"singular normal matrix: state component(s) {np.nonzero(~(scale > 0.0))[0].tolist()}"
@@ -172,10 +342,13 @@ def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_ite
             break
     else:
         raise ValueError(f"Gauss-Newton did not converge in {max_iterations} iterations")
-    r = measurement_residual(batch.z, predict(x, batch, t_est, j2)).reshape(-1) * w
-    cov = (vt.T / sv**2) @ vt / np.outer(scale, scale)
+    r = measurement_residual(batch.z, predict(x, batch, t_est, j2, drag)).reshape(-1) * w
+    cov = (vt.T / sv**2) @ vt / np.outer(scale, scale)  # at the last step's Jacobian (a priori row included)
+    k = np.argmax(batch.t)
+    chief_est = propagate_chief(batch.chief[k], t_est - batch.t[k])
     return ODResult(x=x, cov=0.5 * (cov + cov.T), t_est=t_est, residual_rms=float(np.sqrt(np.mean(r * r))),
-                    iterations=iteration, measurements=int(np.shape(batch.t)[0]))
+                    iterations=iteration, measurements=int(np.shape(batch.t)[0]), a_est=float(chief_est[0]),
+                    u_est=float(chief_est[4] + chief_est[5]), drag=drag)
 
 
 def nees(x_est, x_true, cov):

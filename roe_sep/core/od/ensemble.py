@@ -1,0 +1,216 @@
+"""A deterministic OD ensemble on the nonlinear truth, without DDS: is the batch OD's covariance honest?
+
+Each member is one pair of :mod:`roe_sep.core.truth.nonlinear` (J2-J4, drag in the normalised exponential
+atmosphere of the simulator, the differential ballistic coefficient dispersed as the simulator does) from just after
+the drift-stop, with the picosatellite's along-track acquisition-sized burns at the closed loop's usual epochs
+(:data:`BURNS`). The radar is simulated as ``radar_od`` does it (TIRA, 10 deg mask, a measurement every
+``sample_interval`` from the truth's mean ROE and the carrier's mean elements, only >= ``min_separation`` apart,
+a pass counted from ``min_pass`` measurements), and the OD runs as the node runs it: after every counted pass once
+>= 2 passes since the latest burn span >= ``min_arc``, on the measurements since that burn, with the drift prior
+(:class:`~roe_sep.core.od.batch.DriftPrior`) of the last solution before the burn when ``prior`` is on. Each
+member's truth is observed with ``draws`` independent noise sequences.
+
+Every solution is compared with the truth at its epoch: its mean ROE (as the run report does), and the drift rate as
+the least-squares line of the truth's mean a da from the latest burn to the epoch (the rate a batch with one
+constant drift rate sees; for the 7-state NEES the line's a da at the epoch too, without the centimeters of
+short-periodic drag terms that the first-order mean elements keep and that the strong da / da_dot correlation of a
+batch would weigh).
+For a consistent estimator the 7-state NEES is chi-square with 7 degrees of freedom and the drift-rate z standard
+normal (Bar-Shalom, Li, Kirubarajan 2001, Sec. 5.4): over N solutions the mean NEES lies in
+chi2(7N, 0.025..0.975) / N and the mean z^2 in chi2(N, ...) / N with 95 % probability
+(:func:`~roe_sep.core.montecarlo.stats.nees_bounds`).
+"""
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.stats import chi2
+
+from ..constants import R_EARTH, SECONDS_PER_DAY
+from ..montecarlo.stats import nees_bounds
+from ..relmotion.dynamics import propagate_chief
+from .batch import DragModel, DriftPrior, RadarBatch, batch_least_squares, nees
+from .radar import DEFAULT_EPOCH_UTC, TIRA, gmst, julian_date, observe, raan_from_ltan, relative_distance
+
+T0 = 9200.0
+"""s, start of the ensemble: just after the default scenario's drift-stop (9156 s)."""
+
+INITIAL_A_ROE = (np.array([-100.0, 8800.0, 50.0, -470.0, 12.0, 390.0]),
+                 np.array([35.0, 500.0, 130.0, 25.0, 2.0, 35.0]))
+"""m, mean and 1-sigma of the truth's a*ROE just after the drift-stop (the spread of seeds 1000-1013)."""
+
+BURNS = ((87244.0, 0.065, 0.02), (90095.0, 0.095, 0.03), (172779.0, -0.010, 0.008), (175274.0, -0.004, 0.006),
+         (247978.0, 0.008, 0.010))
+"""(epoch [s], mean, 1-sigma [m/s]) of the picosatellite's along-track burns: the closed loop's acquisition burns
+(carrier burns of the opposite sign, seeds 1000-1013)."""
+
+DURATION = 280800.0
+"""s, end of the ensemble (a run's duration)."""
+
+
+@dataclass(frozen=True)
+class Solution:
+    """One OD solution against the truth: member, noise draw, index in its chain, burn segment, epoch [s], drift
+    rate estimate / truth / sigma [m/day], 7- and 6-state NEES and whether a drift prior was used."""
+
+    member: int
+    draw: int
+    index: int
+    segment: int
+    t: float
+    a_da_dot: float
+    a_da_dot_truth: float
+    a_da_dot_sigma: float
+    nees7: float
+    nees6: float
+    prior: bool
+
+    @property
+    def z(self):
+        return (self.a_da_dot - self.a_da_dot_truth) / self.a_da_dot_sigma
+
+
+def scenario_pairs(members, seed):
+    """Initial pair states ``(members, 12)`` at :data:`T0`, carrier and picosatellite ballistic coefficients
+    ``(members,)``, the atmosphere, the carrier's mean elements at T0 and the drag model (default scenario)."""
+    from ..config import load_scenario
+    from ..relmotion.roe import roe_to_kepler
+    from ..separation.double_impulse import design
+    from ..truth.nonlinear import Atmosphere, pair_state, vallado_band
+    from ..truth.secular import chief_from_u
+
+    sc = load_scenario(None)
+    carrier, mc = design(sc.separation), sc.monte_carlo
+    raan = float(raan_from_ltan(9.5, julian_date(DEFAULT_EPOCH_UTC)))
+    chief0 = chief_from_u(carrier.a, carrier.inc, raan, math.radians(50.0))
+    chief = propagate_chief(chief0, T0)
+    rng = np.random.default_rng(seed)
+    roe = (INITIAL_A_ROE[0] + INITIAL_A_ROE[1] * rng.standard_normal((members, 6))) / carrier.a
+    deputy = roe_to_kepler(np.broadcast_to(chief, (members, 6)), roe)
+    b_c = mc.carrier.ballistic
+    b_d = b_c + mc.delta_b * rng.normal(1.0, mc.ballistic_sigma, members)
+    dv = np.array([m + s * rng.standard_normal(members) for _, m, s in BURNS]).T  # (members, burns)
+    model = DragModel(vallado_band(carrier.a - R_EARTH)[2], (b_c + mc.delta_b) / mc.delta_b)
+    return (pair_state(np.broadcast_to(chief, (members, 6)), deputy), b_c, b_d, dv,
+            Atmosphere.normalised(mc.density, chief0), model)
+
+
+def truth_samples(states0, b_c, b_d, dv, atmosphere, times):
+    """Pair states ``(members, len(times), 12)`` at the sorted ``times`` (which hold every burn epoch), the
+    picosatellite's along-track burns ``dv`` ``(members, burns)`` applied at the :data:`BURNS` epochs (a sample at a
+    burn epoch is pre-burn)."""
+    from ..truth.nonlinear import apply_impulse, propagate_pairs_grid
+
+    out = np.empty((states0.shape[0], times.size, 12))
+    state, t0, lo = states0, T0, 0
+    for k, edge in enumerate([b[0] for b in BURNS] + [math.inf]):
+        hi = int(np.searchsorted(times, edge, side="right"))
+        if hi > lo:
+            out[:, lo:hi] = propagate_pairs_grid(state, t0, times[lo:hi], b_c, b_d, atmosphere)
+        if k < len(BURNS):
+            pre = out[:, hi - 1]  # the burn epoch itself
+            rtn = np.zeros((dv.shape[0], 3))
+            rtn[:, 1] = dv[:, k]
+            state, t0, lo = apply_impulse(pre, rtn, np.ones(dv.shape[0], bool)), edge, hi
+    return out
+
+
+def run_ensemble(members=8, draws=4, seed=0, prior=True, sample_interval=10.0, mask_deg=10.0,
+                 min_separation=5000.0, min_pass=5, min_arc=36000.0, sigma_range=10.0, sigma_angle_deg=0.01,
+                 density_walk=0.0, noise_scale=1.0):
+    """The ensemble (module docstring): a list of :class:`Solution`, chain by chain in time order. Deterministic in
+    ``seed`` (truth dispersions from ``seed``, noise of member m, draw d from SeedSequence([seed, m, d]))."""
+    from ..truth.nonlinear import mean_elements, mean_roe
+
+    states0, b_c, b_d, dv, atmosphere, model = scenario_pairs(members, seed)
+    jd0 = julian_date(DEFAULT_EPOCH_UTC)
+    # the carrier does not burn: its passes (padded by a minute) hold every epoch the picosatellite can be seen
+    grid = np.arange(math.ceil(T0 / sample_interval), math.floor(DURATION / sample_interval) + 1) * sample_interval
+    chief_nominal = mean_elements(states0[:1])[0, 0]
+    theta_g = gmst(jd0 + grid / SECONDS_PER_DAY)
+    el = observe(np.zeros(6), propagate_chief(chief_nominal, grid - T0), theta_g, TIRA.ecef, TIRA.enu)[:, 2]
+    near = np.convolve(el > math.radians(mask_deg) - 0.05, np.ones(13), mode="same") > 0
+    burn_t = np.array([b[0] for b in BURNS])
+    coarse = np.arange(T0, DURATION, 300.0)
+    times = np.unique(np.concatenate([grid[near], burn_t, coarse]))
+    st = truth_samples(states0, b_c, b_d, dv, atmosphere, times)
+    kep = mean_elements(st)  # (members, times, 2, 6)
+    chief, roe = kep[..., 0, :], mean_roe(st)
+    theta = gmst(jd0 + times / SECONDS_PER_DAY)
+    meas = np.isin(times, grid[near]) & ~np.isin(times, burn_t)
+    uniform = np.isin(times, coarse)
+    sigma = np.array([sigma_range, math.radians(sigma_angle_deg), math.radians(sigma_angle_deg)])
+    segment_of = np.searchsorted(burn_t, times, side="left")  # a burn-epoch sample belongs to the segment it ends
+    out = []
+    for m in range(members):
+        z_true = observe(roe[m], chief[m], theta, TIRA.ecef, TIRA.enu)
+        sep = relative_distance(roe[m], chief[m, :, 0], chief[m, :, 4] + chief[m, :, 5])
+        seen = meas & (z_true[:, 2] > math.radians(mask_deg)) & (sep >= min_separation)
+        # a pass: consecutive measurement epochs (one sample_interval apart) of one segment
+        idx = np.nonzero(seen)[0]
+        breaks = np.nonzero((np.diff(times[idx]) > 1.5 * sample_interval)
+                            | (np.diff(segment_of[idx]) != 0))[0] + 1
+        passes = [p for p in np.split(idx, breaks) if p.size >= min_pass]
+        a_da = roe[m, :, 0] * chief[m, :, 0]
+        for d in range(draws):
+            rng = np.random.default_rng(np.random.SeedSequence([seed, m, d]))
+            z = z_true + noise_scale * sigma * rng.standard_normal(z_true.shape)
+            z[:, 1] = np.mod(z[:, 1], 2.0 * np.pi)
+            carried, last, seg_prev, k = None, None, -1, 0
+            for j, p in enumerate(passes):
+                seg = segment_of[p[0]]
+                if seg != seg_prev:  # a burn since the last pass: the last solution before it becomes the prior
+                    if last is not None and prior:
+                        carried = DriftPrior.from_result(last[0], last[1], model)
+                    seg_prev = seg
+                mine = [q for q in passes[:j + 1] if segment_of[q[0]] == seg]
+                if len(mine) < 2:
+                    continue
+                rows = np.concatenate(mine)
+                if times[rows[-1]] - times[rows[0]] < min_arc:
+                    continue
+                batch = RadarBatch(t=times[rows], z=z[rows], sigma=np.tile(sigma, (rows.size, 1)),
+                                   chief=chief[m, rows], theta=theta[rows],
+                                   site_ef=np.tile(TIRA.ecef, (rows.size, 1)),
+                                   site_enu=np.tile(TIRA.enu, (rows.size, 1, 1)))
+                t_est = float(times[rows[-1]])
+                res = batch_least_squares(batch, prior=None if carried is None else
+                                          carried.carried(t_est, density_walk))
+                a = float(chief[m, rows[-1], 0])
+                last = (res, a)
+                start = burn_t[seg - 1] if seg > 0 else T0
+                # the uniform grid (the passes see the same orbital phases), after the burn (its sample is pre-burn)
+                span = uniform & (times > start) & (times <= t_est)
+                line = np.polyfit(times[span] - t_est, a_da[span], 1)
+                rate = line[0] / a  # 1/s
+                truth7 = np.append(roe[m, rows[-1]], rate)
+                truth7[0] = line[1] / a  # the line's a da at t_est: the drift without its short-periodic cm
+                mean, mean_cov = res.mean_state()
+                out.append(Solution(m, d, k, int(seg), t_est, res.x[6] * a * SECONDS_PER_DAY,
+                                    rate * a * SECONDS_PER_DAY, math.sqrt(res.cov[6, 6]) * a * SECONDS_PER_DAY,
+                                    nees(mean, truth7, mean_cov), nees(mean[:6], roe[m, rows[-1]], mean_cov[:6, :6]),
+                                    carried is not None))
+                k += 1
+    return out
+
+
+def consistency(solutions, which):
+    """Statistics of the first or last solution of every chain (``which`` 'first' | 'last' | 'all'): count, mean
+    7-state NEES with its band, mean drift-rate z^2 with its band, mean 6-state NEES, the fraction of 7-state NEES
+    inside the single-run 95 % bound chi2(7, 0.95) and of |z| inside 1.96, mean drift-rate sigma [m/day]."""
+    chains = {}
+    for s in solutions:
+        chains.setdefault((s.member, s.draw), []).append(s)
+    pick = {"first": lambda c: [c[0]], "last": lambda c: [c[-1]], "all": lambda c: c}[which]
+    sel = [s for c in chains.values() for s in pick(c)]
+    n = len(sel)
+    nees7 = np.array([s.nees7 for s in sel])
+    z = np.array([s.z for s in sel])
+    return {"n": n, "nees7": float(nees7.mean()), "nees7_band": nees_bounds(7, n),
+            "nees6": float(np.mean([s.nees6 for s in sel])), "nees6_band": nees_bounds(6, n),
+            "z2": float(np.mean(z * z)), "z2_band": nees_bounds(1, n),
+            "inside95_nees7": float(np.mean(nees7 <= chi2.ppf(0.95, 7))),
+            "inside95_z": float(np.mean(np.abs(z) <= 1.96)),
+            "sigma_m_per_day": float(np.mean([s.a_da_dot_sigma for s in sel])),
+            "with_prior": int(sum(s.prior for s in sel))}
