@@ -134,7 +134,7 @@ def truth_drift_rate(truth, t, burn_epochs):
     Eq. 24 at the nominal density) is smaller in magnitude than the nonlinear truth's own rate by 0.5-0.6 m/day
     (about 0.8 %), a bias of 0.3 sigma of a last solution."""
     start = max((b for b in burn_epochs if b <= t), default=-math.inf)
-    pts = [(_stamp(m.header.stamp), m.a_da) for _, m in truth if start < _stamp(m.header.stamp) <= t]
+    pts = [(time_to_sec(m.header.stamp), m.a_da) for _, m in truth if start < time_to_sec(m.header.stamp) <= t]
     if len(pts) < 3 or pts[-1][0] - pts[0][0] < MIN_RATE_SPAN:
         return None
     ts, ada = np.array(pts).T
