@@ -353,9 +353,22 @@ def sweep(design: DoubleImpulseDesign, mc: MonteCarloConfig, p_values: Iterable[
 
 
 @functools.lru_cache(maxsize=8)
-def p_best(separation: SeparationConfig, mc: MonteCarloConfig, p_values: tuple) -> float:
+def p_best(separation: SeparationConfig, mc: MonteCarloConfig, p_values: tuple[float, ...]) -> float:
     """``p_best`` [m/s] of :func:`sweep` for the design of ``separation`` (seed 002 Table 3), memoised: a pure
     function of frozen, hashable inputs, so the planner's start-up sweep is computed once per process (and once per
-    campaign worker, whose runs are forked from a process that computed it: :mod:`roe_sep.campaign.forkserver`)."""
+    campaign worker, whose runs are forked from a process that computed it: :mod:`roe_sep.campaign.forkserver`).
+
+    Parameters
+    ----------
+    separation : SeparationConfig
+        The separation whose double-impulse design is swept.
+    mc, p_values
+        As for :func:`sweep` (``p_values`` a tuple, hashable).
+
+    Returns
+    -------
+    float
+        The reduction |p| [m/s] of least risk.
+    """
     return float(sweep(make_design(separation), mc, tuple(float(p) for p in p_values)).p_best)
 

@@ -145,7 +145,21 @@ def load_ops_config(path: str | PathLike | None = None) -> OpsConfig:
 
 def check_tle_checksum(path: str | PathLike, number: int, line: str) -> None:
     """ValueError naming ``line`` ``number`` (1 or 2) of the TLE in ``path`` unless its column 69 holds the
-    modulo-10 checksum of columns 1-68 (digits count their value, each minus sign 1; sgp4's ``compute_checksum``)."""
+    modulo-10 checksum of columns 1-68 (digits count their value, each minus sign 1; sgp4's ``compute_checksum``).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The TLE file (named in the error).
+    number : int
+        The line's number in the TLE, 1 or 2.
+    line : str
+        The element line: 69 characters, the last its checksum digit.
+
+    Returns
+    -------
+    None
+    """
     from sgp4.io import compute_checksum
 
     given = line[68:69]

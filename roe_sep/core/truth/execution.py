@@ -7,18 +7,21 @@ never flown again (a restarted planner re-publishes the plan it made before).
 """
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .secular import error_references
 
 EJECTION = "ejection"  # the source of the ejection's burn (a plan's source: the topic it came on)
 
 
-def relative_impulse(dv_rtn, spacecraft) -> np.ndarray:
-    """The impulse's effect on the relative motion (picosatellite w.r.t. carrier) of ``dv_rtn`` [m/s] of
-    ``spacecraft``: +dv for the picosatellite's own velocity change (the ejection), -dv for a carrier burn."""
+def relative_impulse(dv_rtn: ArrayLike, spacecraft: str) -> np.ndarray:
+    """The impulse's effect ``(3,)`` [m/s] RTN on the relative motion (picosatellite w.r.t. carrier) of ``dv_rtn``
+    ``(3,)`` [m/s] of ``spacecraft``: +dv for the picosatellite's own velocity change (the ejection), -dv for a
+    carrier burn."""
     dv = np.asarray(dv_rtn, dtype=float)
     if spacecraft == "carrier":
         return -dv
@@ -38,8 +41,8 @@ class PendingBurn:
     error_reference: np.ndarray | None = None  # the unreduced drift-stop its magnitude error acts on (Eq. 18)
 
     @property
-    def key(self):
-        """What identifies a burn across re-published plans."""
+    def key(self) -> tuple[str, str, float]:
+        """What identifies a burn across re-published plans: (source, purpose, epoch [s] to the ms)."""
         return self.source, self.purpose, round(self.epoch, 3)
 
 
@@ -69,9 +72,25 @@ class BurnExecution:
         self.ejected_at = None  # s, set by the ejection (the free-running clock clears it)
 
     # ------------------------------------------------------------------ inputs
-    def eject(self, stamp, dv_rtn, spacecraft, purpose):
+    def eject(self, stamp: float, dv_rtn: ArrayLike, spacecraft: str, purpose: str) -> None:
         """The commanded ejection at ``stamp`` [s]: the spring fires ``ejection_delay`` after it (the executed
-        maneuver says when). The same event again is ignored; a bad one or a second ejection is reported."""
+        maneuver says when). The same event again is ignored; a bad one or a second ejection is reported.
+
+        Parameters
+        ----------
+        stamp : float
+            The ejection event's stamp [s] of sim time.
+        dv_rtn : array_like, shape (3,)
+            The commanded ejection [m/s] in the picosatellite's RTN frame.
+        spacecraft : str
+            Who burns: ``picosatellite`` (anything else is reported and ignored).
+        purpose : str
+            The burn's purpose (``ejection``).
+
+        Returns
+        -------
+        None
+        """
         dv = np.asarray(dv_rtn, dtype=float)
         if stamp in self.seen_ejections:
             return
@@ -85,10 +104,28 @@ class BurnExecution:
         self.seen_ejections.add(stamp)
         self.pending.append(PendingBurn(stamp + self.ejection_delay, dv, spacecraft, purpose, EJECTION, stamp))
 
-    def plan(self, source, stamp, maneuvers, p_reduction):
-        """A plan of ``maneuvers`` ((epoch [s], dv RTN [m/s], spacecraft, purpose) each) stamped ``stamp`` [s] on
-        ``source``: its burns not flown yet replace the pending ones of that source. Returns them, or None for the
-        plan in force again; ValueError (the plan is not taken) for a bad burn."""
+    def plan(self, source: str, stamp: float, maneuvers: Iterable[tuple[float, ArrayLike, str, str]],
+             p_reduction: float) -> list[PendingBurn] | None:
+        """A plan of ``maneuvers`` stamped ``stamp`` [s] on ``source``: its burns not flown yet replace the pending
+        ones of that source. ValueError (the plan is not taken) for a bad burn.
+
+        Parameters
+        ----------
+        source : str
+            The topic the plan came on.
+        stamp : float
+            The plan's stamp [s] of sim time.
+        maneuvers : iterable of (float, array_like, str, str)
+            Each burn's epoch [s], dv ``(3,)`` [m/s] in the RTN frame of the spacecraft that burns, that spacecraft
+            (``carrier`` or ``picosatellite``) and its purpose.
+        p_reduction : float
+            The plan's drift-stop reduction |p| [m/s] (:func:`~.secular.error_references`).
+
+        Returns
+        -------
+        list of PendingBurn or None
+            The plan's burns now pending, or None for the plan in force again.
+        """
         if self.plan_stamps.get(source) == stamp:
             return None
         burns = [PendingBurn(epoch, np.asarray(dv, dtype=float), spacecraft, purpose, source, stamp)
@@ -105,19 +142,35 @@ class BurnExecution:
         self.plan_stamps[source] = stamp
         return burns
 
-    def check(self, source, stamp, safe):
-        """The safety monitor's verdict on the plan of ``source`` stamped ``stamp`` [s]."""
+    def check(self, source: str, stamp: float, safe: bool) -> None:
+        """The safety monitor's verdict on the plan of ``source`` stamped ``stamp`` [s].
+
+        Parameters
+        ----------
+        source : str
+            The topic of the plan.
+        stamp : float
+            The plan's stamp [s] of sim time.
+        safe : bool
+            The verdict: True to fly the plan, False (flagged) not to.
+
+        Returns
+        -------
+        None
+        """
         self.approvals[(source, stamp)] = bool(safe)
 
     # ------------------------------------------------------------------ execution
-    def due(self, t):
+    def due(self, t: float) -> list[PendingBurn]:
         """The pending burns with an epoch up to ``t`` [s], in epoch order."""
         return sorted((b for b in self.pending if b.epoch <= t), key=lambda b: b.epoch)
 
-    def needs_check(self, burn):
+    def needs_check(self, burn: PendingBurn) -> bool:
+        """Whether ``burn`` waits for the safety monitor's verdict on its plan (a planned burn, when approval is
+        required; never the ejection)."""
         return burn.source != EJECTION and self.require_approval
 
-    def verdict(self, burn):
+    def verdict(self, burn: PendingBurn) -> bool | None:
         """True: fly it; False: the monitor flagged its plan (reported); None: its plan is not checked yet."""
         if not self.needs_check(burn):
             return True
@@ -127,15 +180,16 @@ class BurnExecution:
         return verdict
 
     @staticmethod
-    def describe(burn):
+    def describe(burn: PendingBurn) -> str:
+        """``burn`` in a report: its epoch [s] and the topic of its plan."""
         return f"burn at t = {burn.epoch:.0f} s of the plan on {burn.source}"
 
-    def take(self, burn):
+    def take(self, burn: PendingBurn) -> PendingBurn:
         """Take ``burn`` off the pending ones (to fly it or to drop it)."""
         self.pending.remove(burn)
         return burn
 
-    def execute(self, burn) -> ExecutedBurn:
+    def execute(self, burn: PendingBurn) -> ExecutedBurn:
         """Fly ``burn`` (taken) at its epoch, or now if that has passed (WARN): the truth moves there, the dispersed
         burn is applied."""
         t_exec = max(burn.epoch, self.truth.t)

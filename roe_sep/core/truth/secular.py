@@ -97,7 +97,21 @@ class TruthModel:
     def apply(self, t: float, dv_rel: ArrayLike, spacecraft: str | None = None) -> None:
         """Execute a relative impulse ``(3,)`` [m/s] RTN at ``t`` [s] (the ejection: the picosatellite's; a carrier
         burn: minus its own); ``spacecraft`` (which one burnt) changes nothing here: the relative orbit is all this
-        model has."""
+        model has.
+
+        Parameters
+        ----------
+        t : float
+            The epoch [s], >= the last event.
+        dv_rel : array_like, shape (3,)
+            The relative impulse [m/s] RTN of the seed convention.
+        spacecraft : str or None
+            Who burns (``picosatellite`` or ``carrier``); ignored.
+
+        Returns
+        -------
+        None
+        """
         state = self.roe_at(t)
         self.roe = state + delta_roe(np.asarray(dv_rel, dtype=float), self.u_at(t), self.a, mean_motion(self.a))
         self.t_state = float(t)

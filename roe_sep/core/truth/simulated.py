@@ -4,13 +4,20 @@ departure. The ``sim`` node (:mod:`roe_sep.nodes.sim`) publishes what this compu
 """
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..constants import ARCSEC
 from ..relmotion.dynamics import drag_da_dot
 from .secular import ExecutionErrors, TruthModel, chief_from_u
+
+if TYPE_CHECKING:  # for the annotations only
+    from ..config import Scenario
+    from ..separation.double_impulse import DoubleImpulseDesign
+    from ..separation.multi_impulse import MultiImpulseDesign
 
 EJECTION_TIMING_STREAM = 2  # the ejection delay's stream of a run seed (graph.RADAR_STREAM = 1: the radar noise)
 STATUS_PERIOD = 3600.0  # s of sim time between the simulator's routine reports
@@ -27,13 +34,38 @@ class Dispersed:
     da_dot: float  # 1/s, the true differential drag
 
 
-def dispersed_truth(scenario, carrier, raan, u0, seed, disperse, dynamics, j2, ejection_delay_max) -> Dispersed:
-    """The run of ``seed``: ``scenario`` (:func:`roe_sep.core.config.load_scenario`), ``carrier`` its separation design
-    (a, inc), ``raan`` and ``u0`` [rad] the carrier's node and mean argument of latitude at sim time 0, ``dynamics``
-    'secular' (:class:`~.secular.TruthModel`, with J2 if ``j2``) or 'nonlinear' (:class:`~.nonlinear.NonlinearTruth`);
-    ``disperse`` False: no drag uncertainty, no execution errors, no ejection delay. The draws are those of
-    ``numpy.random.default_rng(seed)`` in a fixed order (ballistic factor, then the execution errors) and the ejection
-    delay from its own stream of the seed, so each dispersion keeps its draws whatever the others do."""
+def dispersed_truth(scenario: "Scenario", carrier: "DoubleImpulseDesign | MultiImpulseDesign", raan: float, u0: float,
+                    seed: int, disperse: bool, dynamics: str, j2: bool, ejection_delay_max: float) -> Dispersed:
+    """The run of ``seed``. The draws are those of ``numpy.random.default_rng(seed)`` in a fixed order (ballistic
+    factor, then the execution errors) and the ejection delay from its own stream of the seed, so each dispersion
+    keeps its draws whatever the others do.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The scenario (:func:`roe_sep.core.config.load_scenario`): its dispersions, drag and execution errors.
+    carrier : DoubleImpulseDesign or MultiImpulseDesign
+        The scenario's separation design: the carrier's ``a`` [m] and ``inc`` [rad].
+    raan : float
+        The carrier's right ascension of the ascending node [rad] at sim time 0.
+    u0 : float
+        The carrier's mean argument of latitude [rad] at sim time 0.
+    seed : int
+        The run seed.
+    disperse : bool
+        False: no drag uncertainty, no execution errors, no ejection delay.
+    dynamics : str
+        'secular' (:class:`~.secular.TruthModel`) or 'nonlinear' (:class:`~.nonlinear.NonlinearTruth`).
+    j2 : bool
+        J2 in the secular truth; the nonlinear one has the zonals J2-J4 whatever ``j2`` says.
+    ejection_delay_max : float
+        The upper end [s] of the uniform delay of the release mechanism after the commanded ejection epoch.
+
+    Returns
+    -------
+    Dispersed
+        The truth model, the execution errors, the ejection delay [s] and the true differential drag [1/s].
+    """
     sep, mc = scenario.separation, scenario.monte_carlo
     a, inc = carrier.a, carrier.inc
     rng = np.random.default_rng(seed)
@@ -65,7 +97,9 @@ class ClosestApproach:
         self.min_dist = (math.inf, math.nan)  # (m, s)
         self.tail = (np.empty(0), np.empty(0))  # last samples of the previous step (local minima across steps)
 
-    def update(self, times, dist):
+    def update(self, times: np.ndarray, dist: np.ndarray) -> None:
+        """Feed one step's ``times`` ``(T,)`` [s], increasing, and distances ``dist`` ``(T,)`` [m] (a step starting at
+        the previous one's end repeats that sample)."""
         if self.tail[0].size and times.size and times[0] <= self.tail[0][-1]:  # consecutive steps share an end
             times, dist = times[1:], dist[1:]
         times = np.concatenate([self.tail[0], times])
@@ -100,7 +134,7 @@ class SimulatedTruth:
         self.next_truth = 0.0
         self.next_status = STATUS_PERIOD
 
-    def advance(self, t_to):
+    def advance(self, t_to: float) -> None:
         """Move the truth to ``t_to`` [s]."""
         while self.next_status <= t_to:
             self._advance_to(self.next_status)
@@ -121,6 +155,6 @@ class SimulatedTruth:
             self.publish(epochs)
         self.t = t_to
 
-    def publish(self, epochs):
+    def publish(self, epochs: Sequence[float]) -> None:
         """The truth samples at each of ``epochs`` [s] (evaluated in one vectorized pass) to ``on_samples``."""
         self.on_samples(epochs, self.model.samples(np.asarray(epochs, dtype=float)))
