@@ -2,13 +2,15 @@
 
 Keys: ``maneuvers`` (each executed burn: purpose, spacecraft, epoch, u, dv RTN and |dv|), ``dv_total`` and
 ``dv_by_purpose`` (carrier burns, m/s), ``final_roe`` (truth a*ROE at the end, m), ``min_distance`` (closest
-approach after the initial departure, m, with its epoch), ``time_to_ic`` (ejection to the IC epoch, s, when the
+approach after the initial departure, m, with its epoch), ``dispersions`` (what the simulator drew,
+:func:`dispersions_applied`), ``time_to_ic`` (ejection to the IC epoch, s, when the
 truth meets the initial conditions there; None when it does not), ``od`` (first solution, :func:`od_solution`:
 epoch, passes, 1-sigma, error against truth, NEES, drift rate; ``last``: the same of the last solution), ``ic``
 (truth at the IC epoch and each initial condition), ``criteria`` (each pass/fail) and ``safe`` (the safety criteria
 only: keep-out, passive safety, evaporation, closest approach, every plan approved by the monitor).
 """
 
+import json
 import math
 from pathlib import Path
 
@@ -148,6 +150,20 @@ def od_solution(msg, truth, truth_da_dot):
     return out
 
 
+def dispersions_applied(text):
+    """The simulator's dispersions as drawn (its final status value ``dispersions_applied``, JSON): ``drag_factor``
+    (differential ballistic coefficient factor), ``ejection_delay_s``, ``burns`` ([spacecraft, magnitude factor,
+    attitude errors RTN rad] per executed burn, the SPL ejection first) and the ``configured`` distributions; None
+    when the status carries none."""
+    if not text:
+        return None
+    try:
+        out = json.loads(text)
+    except ValueError:
+        return None
+    return out if isinstance(out, dict) else None
+
+
 def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()):
     topics = (interfaces.EXECUTED_TOPIC, interfaces.TRUTH_ROE_TOPIC, interfaces.DIAGNOSTICS_TOPIC,
               interfaces.SAFETY_TOPIC, interfaces.PLAN_CHECK_TOPIC, interfaces.OD_TOPIC,
@@ -217,6 +233,7 @@ def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()
         "min_distance": min_distance if math.isfinite(min_distance) else None,  # None: no approach after departure
         "min_distance_epoch": float(values.get("min_distance_time_s", "nan")),
         "truth_drag_a_da_dot_m_per_day": truth_da_dot,
+        "dispersions": dispersions_applied(values.get("dispersions_applied")),
         "od": od_report,
         "ic": ic,
         "model_error": model_error,  # planners' prediction - truth [m] at the drift-stop and at the IC epoch

@@ -13,8 +13,11 @@ When a plan is (re)computed -- what a flight-dynamics team wants from a stream o
   re-plans; a re-delivered or older one is ignored. The plan starts from the estimate propagated to now with every
   carrier burn flown since its epoch (``/sim/executed_maneuvers``, latched), so a correction never repeats a burn.
 * The first plan fixes the IC epoch t_F (the last grid epoch within OD epoch + ``window``); later solutions
-  re-plan the rest of the acquisition as corrections aimed at the same t_F, as a real campaign does. Within two
-  planning margins of t_F the acquisition is complete and further solutions are not used.
+  re-plan the rest of the acquisition as corrections aimed at the same t_F, as a real campaign does.
+* Within two planning margins of t_F (and before it) the first newer solution is the final OD: with ``trim`` it
+  predicts a da at t_F and adds one tangential trim burn at or after now + planning_margin when that prediction is
+  not safely inside ``ic_drift_tolerance`` (:mod:`roe_sep.core.acquisition.trim`; a trim past t_F moves t_F to one
+  grid step after it). The plan in force keeps its other burns; later solutions are not used.
 * A re-plan never moves a burn that is committed: one of the plan in force due within ``planning_margin`` from
   now (or executed without its record having arrived yet) keeps the plan in force (WARN on /diagnostics).
 * The first burn of a new plan is at or after max(OD epoch, now) + planning_margin; only an OD made after the
@@ -44,6 +47,7 @@ from ..core.acquisition.planner import (
     plan_acquisition,
     validate_config,
 )
+from ..core.acquisition.trim import plan_trim
 from ..core.relmotion.dynamics import propagate_chief
 from ..core.relmotion.roe import wrap_angle
 from ..core.relmotion.trajectory import Chief, state_at
@@ -60,7 +64,7 @@ from .convert import (
 from .diagnostics import ERROR, OK, WARN, publish_status
 from .lockstep import Lockstep
 from .managed import ManagedNode
-from .params import ParameterError, declare
+from .params import ParameterError, declare, finite, require
 
 
 class IcPlannerNode(ManagedNode):
@@ -81,6 +85,8 @@ class IcPlannerNode(ManagedNode):
     * ``drift_tolerance`` 1.0 m: |a da| at the ICs (>= dv_quantum / n, about 0.9 m, to be always reachable).
     * ``ei_angle_tol_deg`` 1.0 deg: e/i deviation from (anti-)parallel allowed after quantization.
     * ``j2`` true: secular J2 in the prediction.
+    * ``trim`` true: the final OD's drift trim; ``ic_drift_tolerance`` 5.0 m: the |a da| initial condition it
+      protects (the report's drift check).
     """
 
     def __init__(self):
@@ -110,6 +116,11 @@ class IcPlannerNode(ManagedNode):
                                               "deg, e/i deviation from (anti-)parallel allowed"),
             "j2": declare(self, "j2", d.j2, "secular J2 in the prediction"),
         }
+        self.trim = declare(self, "trim", True, "trim the drift at the IC epoch from the final OD")
+        self.ic_drift_tolerance = declare(self, "ic_drift_tolerance", 5.0, "m, |a da| initial condition the trim keeps")
+        require("trim", isinstance(self.trim, bool), self.trim, "true or false")
+        require("ic_drift_tolerance", finite(self.ic_drift_tolerance) and self.ic_drift_tolerance > 0,
+                self.ic_drift_tolerance, "a positive number [m]")
         try:
             self.cfg = AcquisitionConfig(**values)
             validate_config(self.cfg)
@@ -133,6 +144,8 @@ class IcPlannerNode(ManagedNode):
         self.t_final = None  # s, IC epoch of the acquisition in progress (fixed by its first plan)
         self.last_key = None  # (solution stamp, estimate epoch) of the newest OD seen
         self.burn_epochs = None  # s, burn epochs of the plan in force (None: no plan yet)
+        self.plan_in_force = None  # its ManeuverPlan (the trim keeps its other burns)
+        self.final_decided = False  # the final OD's trim decision is made: the acquisition is complete
         self.summary = {}
         self.plans = 0
         publish_status(self, self.diag_pub, OK, "waiting for an OD estimate", self._values())
@@ -155,6 +168,7 @@ class IcPlannerNode(ManagedNode):
         if self.t_final is None and plan.maneuvers:
             self.t_final = time_to_sec(plan.aimed.header.stamp)
             self.burn_epochs = [time_to_sec(m.epoch) for m in plan.maneuvers]
+            self.plan_in_force = plan
 
     def now(self):
         return self.get_clock().now().nanoseconds * 1e-9
@@ -172,6 +186,9 @@ class IcPlannerNode(ManagedNode):
                     " the acquisition starts from an OD made after it")
             self.get_logger().info(text)
             publish_status(self, self.diag_pub, OK, text, self._values())
+            return
+        if self.trim and self.t_final is not None and now < self.t_final < now + 2.0 * self.cfg.planning_margin:
+            self.final_trim(msg, t_od, now)
             return
         blocking = self._committed_burn(t_od, now)
         if blocking is not None:
@@ -191,6 +208,7 @@ class IcPlannerNode(ManagedNode):
             publish_status(self, self.diag_pub, ERROR, f"acquisition planning failed: {exc!r}", self._values())
             return
         self.plan_pub.publish(plan_msg)
+        self.plan_in_force = plan_msg
         self.burn_epochs = [float(t) for t in plan.epochs]
         if self.t_final is None:
             self.t_final = float(plan.t_final)
@@ -203,6 +221,47 @@ class IcPlannerNode(ManagedNode):
             f"{plan.total_dv:.3f} m/s (LP {plan.lp_dv:.4f}), ICs at t = {plan.t_final:.1f} s, "
             f"a dl_F = {plan.final_roe[1] * plan.a:.0f} m, min R-N = {plan.min_rn:.0f} m")
         publish_status(self, self.diag_pub, OK, "acquisition plan published", self._values())
+
+    def final_trim(self, msg: OrbitDetermination, t_od, now):
+        """The final OD's drift trim (module docstring): once, from the first newer solution within two planning
+        margins of t_F whose flown burns are all on record."""
+        if self.final_decided:
+            return
+        flown = {round(b.epoch, 3) for b in self.executed}
+        if any(t_od <= t < now and round(t, 3) not in flown for t in self.burn_epochs or ()):
+            return  # a burn flown after the OD epoch is not on record yet: the next solution decides
+        try:
+            roe0, chief, da_dot = self.start_state(msg, now)
+            kept = [m for m in (self.plan_in_force.maneuvers if self.plan_in_force else ())
+                    if time_to_sec(m.epoch) >= now and round(time_to_sec(m.epoch), 3) not in flown]
+            cov = msg.estimate.covariance
+            decision = plan_trim(roe0, chief, da_dot, plan_burns(kept), self.t_final, now + self.cfg.planning_margin,
+                                 math.sqrt(max(cov[0], 0.0)), msg.a_da_dot_sigma, self.ic_drift_tolerance, self.cfg)
+        except ValueError as exc:
+            self.get_logger().error(f"final OD rejected: {exc}")
+            publish_status(self, self.diag_pub, ERROR, f"final OD rejected: {exc}", self._values())
+            return
+        self.final_decided = True
+        self.summary.update({f"final_{k}": v for k, v in decision.summary().items()})
+        text = (f"final OD at t = {t_od:.1f} s: predicted a da at the IC epoch {decision.predicted_a_da:+.2f} m "
+                f"(1-sigma {decision.sigma_a_da:.2f} m, trim threshold {decision.threshold:.2f} m): ")
+        if not decision.trim:
+            self.get_logger().info(text + "no trim")
+            publish_status(self, self.diag_pub, OK, text + "no trim", self._values())
+            return
+        out = ManeuverPlan(strategy="ic_acquisition", p_reduction=0.0)
+        out.header.stamp = sec_to_time(now)
+        out.header.frame_id = interfaces.CARRIER_RTN_FRAME
+        out.maneuvers = [*kept, maneuver_msg(decision.epoch, float(wrap_angle(decision.u)),
+                                             (0.0, decision.dv_t, 0.0), "carrier", "ic_acquisition")]
+        out.aimed = self.aimed(msg, decision.final_roe, decision.t_final)
+        self.plan_pub.publish(out)
+        self.plan_in_force, self.t_final = out, decision.t_final
+        self.burn_epochs = [time_to_sec(m.epoch) for m in out.maneuvers]
+        self.plans += 1
+        text += f"trim of {decision.dv_t:+.3f} m/s at t = {decision.epoch:.1f} s, IC epoch t = {decision.t_final:.1f} s"
+        self.get_logger().info(text)
+        publish_status(self, self.diag_pub, OK, text, self._values())
 
     def _committed_burn(self, t_od, now):
         """A burn of the plan in force that a re-plan must not touch: due within ``planning_margin`` from now, or
@@ -218,20 +277,8 @@ class IcPlannerNode(ManagedNode):
 
     def make_plan(self, msg: OrbitDetermination, now):
         """ManeuverPlan and core plan for one OD solution; raises ValueError on a bad estimate or no solution."""
-        el = msg.estimate.chief
-        a = el.semi_major_axis
-        if not (math.isfinite(a) and a > 6.4e6):
-            raise ValueError(f"chief semi-major axis {a} m is not a valid low Earth orbit")
-        t_od = time_to_sec(msg.estimate.header.stamp)
-        od_chief = Chief(a=a, inc=el.inclination, u0=el.mean_arg_latitude, t0=t_od)
-        roe_od = msg_to_roe(msg.estimate)
-        da_dot = msg.a_da_dot / a
-        check_inputs(roe_od, od_chief, da_dot)
-        # the best knowledge now: the estimate plus every carrier burn flown since its epoch
-        t_start = max(t_od, now)
-        flown = [b for b in self.executed if t_od < b.epoch <= t_start]
-        roe0 = state_at(roe_od, t_od, flown, t_start, od_chief, self.cfg.j2, da_dot)
-        chief = Chief(a=a, inc=el.inclination, u0=float(od_chief.u_at(t_start, self.cfg.j2)), t0=t_start)
+        roe0, chief, da_dot = self.start_state(msg, now)
+        t_start = chief.t0
         # corrections of an acquisition in progress aim at its IC epoch; a first plan opens a new window
         cfg = self.cfg if self.t_final is None else dataclasses.replace(self.cfg, window=self.t_final - t_start)
         plan = plan_acquisition(roe0, chief, da_dot, cfg, t_earliest=t_start + self.cfg.planning_margin)
@@ -241,12 +288,34 @@ class IcPlannerNode(ManagedNode):
         out.header.frame_id = interfaces.CARRIER_RTN_FRAME
         out.maneuvers = [maneuver_msg(float(t), float(wrap_angle(u)), dv, "carrier", "ic_acquisition")
                          for t, u, dv in zip(plan.epochs, plan.u, plan.dv_carrier)]
-        kep = propagate_chief(elements_to_array(el), plan.t_final - t_od, self.cfg.j2)
+        out.aimed = self.aimed(msg, plan.final_roe, plan.t_final)
+        return out, plan
+
+    def start_state(self, msg: OrbitDetermination, now):
+        """The best knowledge at max(OD epoch, now): the estimate plus every carrier burn flown since its epoch, as
+        (ROE, Chief there, da_dot [1/s]); raises ValueError on a bad estimate."""
+        el = msg.estimate.chief
+        a = el.semi_major_axis
+        if not (math.isfinite(a) and a > 6.4e6):
+            raise ValueError(f"chief semi-major axis {a} m is not a valid low Earth orbit")
+        t_od = time_to_sec(msg.estimate.header.stamp)
+        od_chief = Chief(a=a, inc=el.inclination, u0=el.mean_arg_latitude, t0=t_od)
+        roe_od = msg_to_roe(msg.estimate)
+        da_dot = msg.a_da_dot / a
+        check_inputs(roe_od, od_chief, da_dot)
+        t_start = max(t_od, now)
+        flown = [b for b in self.executed if t_od < b.epoch <= t_start]
+        roe0 = state_at(roe_od, t_od, flown, t_start, od_chief, self.cfg.j2, da_dot)
+        return roe0, Chief(a=a, inc=el.inclination, u0=float(od_chief.u_at(t_start, self.cfg.j2)), t0=t_start), da_dot
+
+    def aimed(self, msg: OrbitDetermination, final_roe, t_final):
+        """The plan's ``aimed`` field: the predicted ROE at the IC epoch with the chief's elements there."""
+        el = msg.estimate.chief
+        kep = propagate_chief(elements_to_array(el), t_final - time_to_sec(msg.estimate.header.stamp), self.cfg.j2)
         kep[3:] = wrap_angle(kep[3:])
         aimed_chief = array_to_elements(kep)
         aimed_chief.mean_arg_latitude = float(wrap_angle(aimed_chief.mean_arg_latitude))
-        out.aimed = roe_to_msg(plan.final_roe, aimed_chief, sec_to_time(plan.t_final))
-        return out, plan
+        return roe_to_msg(final_roe, aimed_chief, sec_to_time(t_final))
 
 
 def main(args=None):

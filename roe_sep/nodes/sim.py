@@ -14,6 +14,7 @@ with the running minimum distance.
 """
 
 import dataclasses
+import json
 import math
 import time
 
@@ -169,6 +170,10 @@ class SimNode(Node):
         self.errors = ExecutionErrors(rng, sep.spl_sigma if self.disperse else 0.0,
                                       sep.thruster_sigma if self.disperse else 0.0,
                                       mc.attitude_sigma_arcsec * ARCSEC if self.disperse else 0.0)
+        self.dispersions = {"drag_factor": float(db_factor), "ejection_delay_s": self.ejection_delay, "configured": {
+            "disperse": self.disperse, "ballistic_sigma": mc.ballistic_sigma, "ejection_delay_max_s":
+            self.ejection_delay_max, **{k: getattr(self.errors, k) for k in ("spl_sigma", "thruster_sigma",
+                                                                             "attitude_sigma")}}}
 
         self.t = 0.0
         self.next_truth = 0.0
@@ -619,6 +624,7 @@ class SimNode(Node):
             "min_distance_m": f"{self.min_dist[0]:.3f}",
             "min_distance_time_s": f"{self.min_dist[1]:.1f}",
             "truth_a_da_dot_m_per_day": f"{self.truth.da_dot * self.truth.a * 86400:.3f}",
+            "dispersions_applied": json.dumps({**self.dispersions, "burns": self.errors.applied}),
         })
         if message.startswith(("scenario complete", "scenario aborted")) and self.final_timer is None:
             # the end of the run is repeated every wall second, as diagnostics are, until the node stops: a
