@@ -241,6 +241,10 @@ class IcPlannerNode(ManagedNode):
             self.get_logger().error(f"final OD rejected: {exc}")
             publish_status(self, self.diag_pub, ERROR, f"final OD rejected: {exc}", self._values())
             return
+        except Exception as exc:  # noqa: BLE001 -- a trim bug must not take the node down; it is reported
+            self.get_logger().error(f"drift trim failed: {exc!r}\n{traceback.format_exc()}")
+            publish_status(self, self.diag_pub, ERROR, f"drift trim failed: {exc!r}", self._values())
+            return
         self.final_decided = True
         self.summary.update({f"final_{k}": v for k, v in decision.summary().items()})
         text = (f"final OD at t = {t_od:.1f} s: predicted a da at the IC epoch {decision.predicted_a_da:+.2f} m "
