@@ -19,26 +19,16 @@ them in about 30 % of honest campaigns). A configured sigma of 0 (``disperse`` f
 when every sample equals it.
 """
 
-import json
 import math
 
 import numpy as np
 from scipy import stats
 
+from ..report import dispersions_applied
+
 ALPHA = 0.01
 OD_PARAMETERS = 7  # ROE and drift rate estimated by the batch OD (degrees of freedom taken by the fit)
 MIN_SAMPLES = 5  # below this the KS test says nothing
-
-
-def _parse(row):
-    text = row.get("dispersions")
-    if not text:
-        return None
-    try:
-        out = json.loads(text)
-    except ValueError:
-        return None
-    return out if isinstance(out, dict) else None
 
 
 def samples(rows):
@@ -48,7 +38,7 @@ def samples(rows):
                            "ejection_delay", "radar_noise")}
     configured = None
     for row in rows:
-        d = _parse(row)
+        d = dispersions_applied(row.get("dispersions"))
         if d is None:
             continue
         configured = configured or d.get("configured")

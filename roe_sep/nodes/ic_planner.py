@@ -197,16 +197,10 @@ class IcPlannerNode(ManagedNode):
             self.get_logger().warn(text)
             publish_status(self, self.diag_pub, WARN, text, self._values())
             return
-        try:
-            plan_msg, plan = self.make_plan(msg, now)
-        except ValueError as exc:
-            self.get_logger().error(f"OD estimate rejected: {exc}")
-            publish_status(self, self.diag_pub, ERROR, f"OD estimate rejected: {exc}", self._values())
+        made = self._guarded("OD estimate rejected", "acquisition planning failed", self.make_plan, msg, now)
+        if made is None:
             return
-        except Exception as exc:  # noqa: BLE001 -- a planning bug must not take the node down; it is reported
-            self.get_logger().error(f"acquisition planning failed: {exc!r}\n{traceback.format_exc()}")
-            publish_status(self, self.diag_pub, ERROR, f"acquisition planning failed: {exc!r}", self._values())
-            return
+        plan_msg, plan = made
         self.plan_pub.publish(plan_msg)
         self.plan_in_force = plan_msg
         self.burn_epochs = [float(t) for t in plan.epochs]
@@ -230,20 +224,10 @@ class IcPlannerNode(ManagedNode):
         flown = {round(b.epoch, 3) for b in self.executed}
         if any(t_od <= t < now and round(t, 3) not in flown for t in self.burn_epochs or ()):
             return  # a burn flown after the OD epoch is not on record yet: the next solution decides
-        try:
-            roe0, chief, da_dot = self.start_state(msg, now)
-            kept = [m for m in (self.plan_in_force.maneuvers if self.plan_in_force else ())
-                    if time_to_sec(m.epoch) >= now and round(time_to_sec(m.epoch), 3) not in flown]
-            cov = msg.estimate.covariance
-            decision = plan_trim(roe0, chief, da_dot, plan_burns(kept), self.t_final, now + self.cfg.planning_margin,
-                                 math.sqrt(max(cov[0], 0.0)), msg.a_da_dot_sigma, self.ic_drift_tolerance, self.cfg)
-        except ValueError as exc:
-            self.get_logger().error(f"final OD rejected: {exc}")
-            publish_status(self, self.diag_pub, ERROR, f"final OD rejected: {exc}", self._values())
-            return
-        except Exception as exc:  # noqa: BLE001 -- a trim bug must not take the node down; it is reported
-            self.get_logger().error(f"drift trim failed: {exc!r}\n{traceback.format_exc()}")
-            publish_status(self, self.diag_pub, ERROR, f"drift trim failed: {exc!r}", self._values())
+        kept = [m for m in (self.plan_in_force.maneuvers if self.plan_in_force else ())
+                if time_to_sec(m.epoch) >= now and round(time_to_sec(m.epoch), 3) not in flown]
+        decision = self._guarded("final OD rejected", "drift trim failed", self.trim_decision, msg, now, kept)
+        if decision is None:
             return
         self.final_decided = True
         self.summary.update({f"final_{k}": v for k, v in decision.summary().items()})
@@ -266,6 +250,26 @@ class IcPlannerNode(ManagedNode):
         text += f"trim of {decision.dv_t:+.3f} m/s at t = {decision.epoch:.1f} s, IC epoch t = {decision.t_final:.1f} s"
         self.get_logger().info(text)
         publish_status(self, self.diag_pub, OK, text, self._values())
+
+    def trim_decision(self, msg: OrbitDetermination, now, kept):
+        """:func:`plan_trim` from the OD with the maneuvers ``kept`` of the plan in force still to fly."""
+        roe0, chief, da_dot = self.start_state(msg, now)
+        sigma_a_da = math.sqrt(max(msg.estimate.covariance[0], 0.0))
+        return plan_trim(roe0, chief, da_dot, plan_burns(kept), self.t_final, now + self.cfg.planning_margin,
+                         sigma_a_da, msg.a_da_dot_sigma, self.ic_drift_tolerance, self.cfg)
+
+    def _guarded(self, rejected, failed, fn, *args):
+        """``fn(*args)``, or None with the reason logged and on /diagnostics: a ValueError is a bad estimate or no
+        solution (``rejected``), anything else a bug (``failed``) that must not take the node down."""
+        try:
+            return fn(*args)
+        except ValueError as exc:
+            self.get_logger().error(f"{rejected}: {exc}")
+            publish_status(self, self.diag_pub, ERROR, f"{rejected}: {exc}", self._values())
+        except Exception as exc:  # noqa: BLE001 -- reported, never fatal
+            self.get_logger().error(f"{failed}: {exc!r}\n{traceback.format_exc()}")
+            publish_status(self, self.diag_pub, ERROR, f"{failed}: {exc!r}", self._values())
+        return None
 
     def _committed_burn(self, t_od, now):
         """A burn of the plan in force that a re-plan must not touch: due within ``planning_margin`` from now, or
