@@ -64,7 +64,8 @@ def reference(test, cfg):
     if test in sig:
         mean = 0.0 if test.endswith("attitude") else 1.0
         s = float(sig[test] or 0.0)
-        return (f"N({mean:g}, {s:g})", stats.norm(mean, s)) if s > 0 else (f"= {mean:g}", mean)
+        unit = " rad" if test.endswith("attitude") else ""
+        return (f"N({mean:g}, {s:.3g}{unit})", stats.norm(mean, s)) if s > 0 else (f"= {mean:g}", mean)
     if test == "ejection_delay":
         hi = float(cfg.get("ejection_delay_max_s") or 0.0) if disperse else 0.0
         return (f"U(0, {hi:g} s)", stats.uniform(0.0, hi)) if hi > 0 else ("= 0", 0.0)

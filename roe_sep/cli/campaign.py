@@ -81,7 +81,7 @@ def print_campaign(rep):
         for name, c in rep["dispersions"].items():
             verdict = {True: "consistent", False: "INCONSISTENT", None: "too few samples"}[c["consistent"]]
             p = "" if c["p_value"] is None else f"  KS D {c['statistic']:.3f}  p {c['p_value']:.3f}"
-            print(f"    {name:18s}{c['reference']:>20s}  n {c['n']:5d}  mean {_num(c['mean'], '{:.4g}'):>10s}  "
+            print(f"    {name:18s}{c['reference']:>24s}  n {c['n']:5d}  mean {_num(c['mean'], '{:.4g}'):>10s}  "
                   f"std {_num(c['std'], '{:.4g}'):>10s}{p}  {verdict}")
     ol = rep["open_loop"]
     if ol.get("p") is not None:
