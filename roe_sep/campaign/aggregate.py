@@ -9,6 +9,8 @@ IC epoch, total dv, drift-stop and IC dv, time to IC of the runs that reached th
 p95, max, mean); ``od_nees`` / ``od_last_nees`` (the first / last OD solution's NEES against its chi-square(6)
 bounds), ``od_drift_rate`` / ``od_last_drift_rate`` (their drift rate's squared normalized error against
 chi-square(1)); ``ic_reached_lower_95`` (its one-sided Clopper-Pearson bound, :func:`one_sided_lower`);
+``ic_trims`` (the runs whose final OD flew a drift trim, of those with a final-OD decision; the trims' dv a
+distribution);
 ``dispersions`` (each applied dispersion against its configured distribution, :mod:`.dispersions`);
 ``failures`` (count per kind and per reason).
 """
@@ -75,7 +77,11 @@ def aggregate(rows):
     out["distributions"]["abs_a_da_ic"]["note"] = "truth |a da| at the IC epoch (the drift initial condition)"
     reached = sum(r["crit_ic_reached"] for r in done)
     out["ic_reached_lower_95"] = one_sided_lower(reached, n)
-    out["distributions"]["abs_a_da_ic_predicted"]["note"] = "|a da| the plan in force predicted at the IC epoch"
+    trims = [r.get("ic_trim") for r in done if r.get("ic_trim") is not None]  # runs with a final-OD decision
+    out["ic_trims"] = proportion(sum(trims), len(trims))
+    out["distributions"]["ic_trim_dv"] = {"unit": "m/s", **distribution(
+        [r.get("ic_trim_dv_m_s") for r in done if r.get("ic_trim")])}
+    out["distributions"]["abs_a_da_ic_predicted"]["note"] = "|a da| the last information predicted at the IC epoch"
     out["distributions"]["a_da_ic_prediction_error"]["note"] = "|truth - predicted a da| at the IC epoch"
     out["distributions"]["time_to_ic"]["note"] = "ejection to the IC epoch, runs that reached the ICs there"
     return out

@@ -51,6 +51,8 @@ def print_campaign(rep):
     print(f"  {'safe (failed = unsafe)':28s}{_p(rep['p_safe_failures_unsafe'])}")
     if rep.get("ic_reached_lower_95") is not None:
         print(f"  {'ic_reached, one-sided 95 % lower bound (Clopper-Pearson)':60s}{rep['ic_reached_lower_95']:.4f}")
+    if rep.get("ic_trims", {}).get("n"):
+        print(f"  {'final OD flew a drift trim':28s}{_p(rep['ic_trims'])}")
     if any(prop["n"] for prop in rep["ic_checks"].values()):
         print("  initial conditions at the IC epoch:")
         for name, prop in rep["ic_checks"].items():

@@ -198,26 +198,38 @@ def test_dispersions_as_applied_against_the_configured_distributions(tmp_path, b
 
 
 def test_ic_prediction_column_and_one_sided_bound(tmp_path):
-    """The plan in force's predicted a da at the IC epoch is a column beside the truth; their difference is a
-    distribution; ic_reached has its one-sided Clopper-Pearson lower bound (0 misses in 299 runs: 0.990)."""
+    """The a da the last information predicted at the IC epoch is a column beside the truth (the final OD's
+    prediction when it flew no trim, the trim plan's aim otherwise, :func:`roe_sep.report.predicted_ic_drift`); their
+    difference is a distribution; ic_reached has its one-sided Clopper-Pearson lower bound (0 misses in 299: 0.990)."""
     from roe_sep.campaign.aggregate import aggregate, one_sided_lower
+    from roe_sep.report import predicted_ic_drift
+
+    def final(trim, predicted):
+        return {"trim": trim, "trim_dv": 0.004 if trim else 0.0, "predicted_a_da": predicted, "sigma_a_da": 1.2,
+                "threshold": 1.4, "t_final": 2.5e5}
 
     table = Table(tmp_path / "runs.csv")
-    for seed, (pred, true) in enumerate(((0.4, 1.0), (-0.9, -3.4), (0.1, 6.2))):
+    cases = ((final(False, 0.4), 1.0), (final(True, 6.0), -3.4), (None, 6.2))
+    for seed, (fin, true) in enumerate(cases):
+        aimed = {"predicted": [-0.9 if fin else 0.1, 7400.0, 0, 0, 0, 0]}
         table.append(row_from_report(seed, {
             "run": {"completed": True}, "criteria": {"ic_reached": abs(true) <= 5.0},
             "ic": {"epoch": 2.5e5, "roe": [true, 7500.0, 0.0, -400.0, 0.0, 400.0], "checks": {}},
-            "model_error": {"ic": {"predicted": [pred, 7400.0, 0, 0, 0, 0]}}}))
+            "final_od": fin, "ic_predicted_a_da": predicted_ic_drift(fin, aimed)}))
     rows = list(table.read().values())
     assert [r["ic_pred_a_da_m"] for r in rows] == [0.4, -0.9, 0.1]
+    assert [r["ic_trim"] for r in rows] == [False, True, None] and rows[1]["ic_trim_dv_m_s"] == 0.004
+    assert rows[0]["ic_final_od_sigma_m"] == 1.2
     agg = aggregate(rows)
     err = agg["distributions"]["a_da_ic_prediction_error"]
     assert err["n"] == 3 and err["max"] == pytest.approx(6.1) and err["min"] == pytest.approx(0.6)
     assert agg["distributions"]["abs_a_da_ic_predicted"]["max"] == 0.9
+    assert agg["ic_trims"]["k"] == 1 and agg["ic_trims"]["n"] == 2
     assert agg["ic_reached_lower_95"] == pytest.approx(one_sided_lower(2, 3))
     assert one_sided_lower(299, 299) == pytest.approx(0.05 ** (1 / 299)) and 0.98999 < one_sided_lower(299, 299)
     assert one_sided_lower(472, 473) > 0.99 > one_sided_lower(471, 473)
     assert one_sided_lower(0, 5) == 0.0 and one_sided_lower(0, 0) is None
+    assert predicted_ic_drift(None, None) is None
 
 
 # ------------------------------------------------------------------------------------------------- the table

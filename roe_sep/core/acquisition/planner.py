@@ -40,6 +40,12 @@ near a bound, with no room left for the km-level dl errors of a two-day open-loo
 uncertainty. A plan's sensitivity to OD errors does not depend on its burns (the model is linear), so the remedy is
 re-planning on each newer OD, not a more conservative program.
 
+Closing on the last information. The drift at t_F is what a plan made a day earlier cannot hold: the OD's drift-rate
+error carried to t_F and the 5 % execution error of the burns flown after that OD (std 2.5 and 1.9 m, 9 % of the
+runs beyond the 5 m initial condition). The OD of the radar pass cluster just before t_F therefore decides a final
+trim, :mod:`roe_sep.core.acquisition.trim`: one quantized tangential burn uplinked with the same planning margin,
+flown only when the predicted |a da_F| is not 3 OD sigmas inside the tolerance.
+
 Quantization. The continuous optimum is then re-solved as a small mixed-integer program (HiGHS) in integer
 multiples of ``dv_quantum`` on the LP's support and its neighbouring grid epochs, with the equalities relaxed to the
 tolerances a quantized plan can meet: |a da_F| <= drift_tolerance (the da_F lattice has a spacing of
