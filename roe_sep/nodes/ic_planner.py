@@ -10,10 +10,15 @@ plan_acquisition` (linear program + quantized re-solve, verified with the shared
 When a plan is (re)computed -- what a flight-dynamics team wants from a stream of OD solutions:
 
 * Every *newer* solution (ordered by ``header.stamp``, then ``estimate.header.stamp``) is the best knowledge and
-  re-plans; a re-delivered or older one is ignored. The plan starts from the estimate propagated to now with every
-  carrier burn flown since its epoch (``/sim/executed_maneuvers``, latched), so a correction never repeats a burn.
+  re-plans; a re-delivered or older one is ignored. With ``trim``, a solution that predicts a da at t_F less well
+  (its 1-sigma from the covariance and the drift-rate sigma) than the one of the plan in force is not used either: a
+  two-pass solution after a burn can be tens of meters off. The plan starts from the estimate propagated to now
+  with every carrier burn flown since its epoch (``/sim/executed_maneuvers``, latched), so a correction never repeats
+  a burn.
 * The first plan fixes the IC epoch t_F (the last grid epoch within OD epoch + ``window``); later solutions
   re-plan the rest of the acquisition as corrections aimed at the same t_F, as a real campaign does.
+* No plan puts a burn in the final OD's radar arc (``final_od_arc``), and a solution whose re-plan would start
+  in it is not used: the radar needs that arc free of burns for the final OD.
 * Within two planning margins of t_F (and before it) the first newer solution is the final OD: with ``trim`` it
   predicts a da at t_F and adds one tangential trim burn at or after now + planning_margin when that prediction is
   not safely inside ``ic_drift_tolerance`` (:mod:`roe_sep.core.acquisition.trim`; a trim past t_F moves t_F to one
@@ -40,6 +45,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 from roe_sep_msgs.msg import ImpulsiveManeuver, ManeuverPlan, OrbitDetermination
 
 from .. import interfaces
+from ..core.acquisition.lp_transfer import grid_epochs
 from ..core.acquisition.planner import (
     AcquisitionConfig,
     InvalidAcquisitionConfig,
@@ -47,7 +53,8 @@ from ..core.acquisition.planner import (
     plan_acquisition,
     validate_config,
 )
-from ..core.acquisition.trim import plan_trim
+from ..core.acquisition.trim import final_od_arc, plan_trim, predicted_drift_sigma, radar_passes
+from ..core.od.radar import DEFAULT_EPOCH_UTC, julian_date
 from ..core.relmotion.dynamics import propagate_chief
 from ..core.relmotion.roe import wrap_angle
 from ..core.relmotion.trajectory import Chief, state_at
@@ -87,6 +94,10 @@ class IcPlannerNode(ManagedNode):
     * ``j2`` true: secular J2 in the prediction.
     * ``trim`` true: the final OD's drift trim; ``ic_drift_tolerance`` 5.0 m: the |a da| initial condition it
       protects (the report's drift check).
+    * ``final_od_arc`` 36000.0 s (radar_od's ``min_arc``): no acquisition burn between the rise of the TIRA pass
+      (10 deg mask, the default radar) that spans this with the last pass before t_F and that pass's set, so that
+      the final OD comes (radar_od restarts its arc at every burn); 0 = no such arc (with ``trim`` false: the plans
+      of an acquisition without the final OD).
     """
 
     def __init__(self):
@@ -116,9 +127,14 @@ class IcPlannerNode(ManagedNode):
                                               "deg, e/i deviation from (anti-)parallel allowed"),
             "j2": declare(self, "j2", d.j2, "secular J2 in the prediction"),
         }
+        self.jd0 = julian_date(DEFAULT_EPOCH_UTC)  # sim time 0, as the simulator's and radar_od's default
         self.trim = declare(self, "trim", True, "trim the drift at the IC epoch from the final OD")
+        self.final_od_arc = declare(self, "final_od_arc", 36000.0,
+                                    "s, burn-free radar arc kept before the IC epoch for the final OD; 0 = none")
         self.ic_drift_tolerance = declare(self, "ic_drift_tolerance", 5.0, "m, |a da| initial condition the trim keeps")
         require("trim", isinstance(self.trim, bool), self.trim, "true or false")
+        require("final_od_arc", finite(self.final_od_arc) and self.final_od_arc >= 0, self.final_od_arc,
+                "a non-negative number [s]")
         require("ic_drift_tolerance", finite(self.ic_drift_tolerance) and self.ic_drift_tolerance > 0,
                 self.ic_drift_tolerance, "a positive number [m]")
         try:
@@ -146,6 +162,7 @@ class IcPlannerNode(ManagedNode):
         self.burn_epochs = None  # s, burn epochs of the plan in force (None: no plan yet)
         self.plan_in_force = None  # its ManeuverPlan (the trim keeps its other burns)
         self.final_decided = False  # the final OD's trim decision is made: the acquisition is complete
+        self.plan_sigma = None  # m, 1-sigma of a da at t_F from the OD of the plan in force (with ``trim``)
         self.summary = {}
         self.plans = 0
         publish_status(self, self.diag_pub, OK, "waiting for an OD estimate", self._values())
@@ -190,6 +207,20 @@ class IcPlannerNode(ManagedNode):
         if self.trim and self.t_final is not None and now < self.t_final < now + 2.0 * self.cfg.planning_margin:
             self.final_trim(msg, t_od, now)
             return
+        arc = self.radar_arc(msg, self.t_final) if self.t_final is not None else None
+        if arc is not None and arc[0] <= max(t_od, now) + self.cfg.planning_margin <= arc[1]:
+            text = (f"OD at t = {t_od:.1f} s not used: its burns would fall in the final OD's radar arc "
+                    f"[{arc[0]:.0f}, {arc[1]:.0f}] s")
+            self.get_logger().info(text)
+            publish_status(self, self.diag_pub, OK, text, self._values())
+            return
+        sigma = self.drift_sigma(msg, self.t_final)
+        if sigma is not None and self.plan_sigma is not None and sigma > self.plan_sigma:
+            text = (f"OD at t = {t_od:.1f} s not used: its a da at the IC epoch is known to {sigma:.2f} m (1-sigma), "
+                    f"the plan in force's OD to {self.plan_sigma:.2f} m")
+            self.get_logger().info(text)
+            publish_status(self, self.diag_pub, OK, text, self._values())
+            return
         blocking = self._committed_burn(t_od, now)
         if blocking is not None:
             text = (f"OD at t = {t_od:.1f} s not used: the burn at t = {blocking:.1f} s of the plan in force is "
@@ -203,6 +234,7 @@ class IcPlannerNode(ManagedNode):
         plan_msg, plan = made
         self.plan_pub.publish(plan_msg)
         self.plan_in_force = plan_msg
+        self.plan_sigma = self.drift_sigma(msg, plan.t_final)
         self.burn_epochs = [float(t) for t in plan.epochs]
         if self.t_final is None:
             self.t_final = float(plan.t_final)
@@ -252,10 +284,12 @@ class IcPlannerNode(ManagedNode):
         publish_status(self, self.diag_pub, OK, text, self._values())
 
     def trim_decision(self, msg: OrbitDetermination, now, kept):
-        """:func:`plan_trim` from the OD with the maneuvers ``kept`` of the plan in force still to fly."""
+        """:func:`plan_trim` from the OD with the maneuvers ``kept`` of the plan in force still to fly and the burns
+        flown after the decision time (under lockstep the solution arrives after the burns of its step)."""
         roe0, chief, da_dot = self.start_state(msg, now)
         sigma_a_da = math.sqrt(max(msg.estimate.covariance[0], 0.0))
-        return plan_trim(roe0, chief, da_dot, plan_burns(kept), self.t_final, now + self.cfg.planning_margin,
+        burns = plan_burns(kept) + [b for b in self.executed if b.epoch > chief.t0]
+        return plan_trim(roe0, chief, da_dot, burns, self.t_final, now + self.cfg.planning_margin,
                          sigma_a_da, msg.a_da_dot_sigma, self.ic_drift_tolerance, self.cfg)
 
     def _guarded(self, rejected, failed, fn, *args):
@@ -289,7 +323,12 @@ class IcPlannerNode(ManagedNode):
         t_start = chief.t0
         # corrections of an acquisition in progress aim at its IC epoch; a first plan opens a new window
         cfg = self.cfg if self.t_final is None else dataclasses.replace(self.cfg, window=self.t_final - t_start)
-        plan = plan_acquisition(roe0, chief, da_dot, cfg, t_earliest=t_start + self.cfg.planning_margin)
+        t_f = self.t_final
+        if t_f is None:
+            t_f = float(grid_epochs(t_start, t_start + cfg.window, chief, cfg.grid_per_orbit, cfg.j2)[-1])
+        arc = self.radar_arc(msg, t_f)
+        plan = plan_acquisition(roe0, chief, da_dot, cfg, t_earliest=t_start + self.cfg.planning_margin,
+                                no_burns=[arc] if arc else ())
 
         out = ManeuverPlan(strategy="ic_acquisition", p_reduction=0.0)
         out.header.stamp = sec_to_time(t_start)  # the plan describes the burns from its start state on
@@ -298,6 +337,23 @@ class IcPlannerNode(ManagedNode):
                          for t, u, dv in zip(plan.epochs, plan.u, plan.dv_carrier)]
         out.aimed = self.aimed(msg, plan.final_roe, plan.t_final)
         return out, plan
+
+    def drift_sigma(self, msg: OrbitDetermination, t_final):
+        """1-sigma [m] of a da at ``t_final`` predicted from the OD (:func:`predicted_drift_sigma`); None without
+        ``trim`` (the plans of an acquisition without the final OD re-plan on every newer solution) or t_F."""
+        if not self.trim or t_final is None:
+            return None
+        sigma_a_da = math.sqrt(max(msg.estimate.covariance[0], 0.0))
+        return predicted_drift_sigma(sigma_a_da, msg.a_da_dot_sigma, t_final - time_to_sec(msg.estimate.header.stamp))
+
+    def radar_arc(self, msg: OrbitDetermination, t_final):
+        """``(start, end)`` [s] of the final OD's burn-free radar arc before ``t_final`` (:func:`final_od_arc` of the
+        predicted TIRA passes of the OD's chief); None with ``trim`` or ``final_od_arc`` off, or without one."""
+        if not (self.trim and self.final_od_arc):
+            return None
+        t_od = time_to_sec(msg.estimate.header.stamp)
+        passes = radar_passes(elements_to_array(msg.estimate.chief), t_od, t_od, t_final, self.jd0, j2=self.cfg.j2)
+        return final_od_arc(passes, t_final, self.final_od_arc)
 
     def start_state(self, msg: OrbitDetermination, now):
         """The best knowledge at max(OD epoch, now): the estimate plus every carrier burn flown since its epoch, as

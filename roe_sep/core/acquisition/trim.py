@@ -13,11 +13,19 @@ at or after ``now + margin`` -- the ic_planner's ``planning_margin``, the same u
 When that epoch falls after t_F, the IC epoch moves to one grid step after the trim (t_F is where the ICs are
 checked; the acquisition is over once its last burn has flown); otherwise t_F stays.
 
+The final OD's arc. radar_od restarts its batch after every burn and solves once ``passes_required`` passes span
+``min_arc`` (10 h): a burn between the radar passes just before t_F would leave no final OD at all (in the 100-run
+campaign about one run in ten: a late correction burn in the last orbits). :func:`radar_passes` predicts the
+station's passes of the carrier (the chief's secular elements, the sidereal angle of the scenario's epoch), and
+:func:`final_od_arc` returns the interval from the first pass such an arc needs to the end of the last pass before
+t_F: the acquisition plans keep their burns out of it (``no_burns`` of :func:`.planner.plan_acquisition`).
+
 Decision (seed 002 Eq. 2: only a tangential impulse changes da, a Delta da = 2 dvT / n). The OD predicts a da at
-t_F with the burns still to fly, and its 1-sigma from the OD covariance,
-sigma^2 = sigma_a_da^2 + (sigma_rate dt)^2 (the message carries no cross term: taken as independent). No trim
-when |a da_F| <= max(lattice / 2, tolerance - z sigma): already inside the tolerance with z sigmas of margin (z = 3:
-one run in about 700 at the threshold). Otherwise the trim is the integer number of quanta that brings the
+t_F with the burns still to fly, and its 1-sigma from the OD covariance, sigma^2 = sigma_a_da^2 + (sigma_rate dt)^2
+(the message carries no cross term: taken as independent). No trim when |a da_F| <= max(lattice / 2, tolerance -
+z sigma): already inside the tolerance with z sigmas of margin (z = 3: one run in about 700 at the threshold). No
+trim either when sigma > tolerance / z: such an OD cannot put a da inside the tolerance with that confidence (a
+two-pass solution's sigma is tens of meters). Otherwise the trim is the integer number of quanta that brings the
 predicted a da_F closest to zero; it leaves at most half the lattice spacing 2 dv_quantum / n (0.9 m at 515 km).
 The trim's effect on dl, de and di is below a meter for a few mm/s, checked with :func:`trajectory` against the
 along-track range, the e/i (anti-)parallelism, Eq. (25) and the field of view before the trim is proposed.
@@ -28,7 +36,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..relmotion.dynamics import arg_latitude_rate
+from ..constants import SECONDS_PER_DAY
+from ..od.radar import TIRA, chief_elevation, gmst, pass_windows
+from ..relmotion.dynamics import arg_latitude_rate, propagate_chief
 from ..relmotion.orbit import mean_motion
 from ..relmotion.trajectory import Burn, Chief, trajectory
 from ..safety.metrics import fov_limit, min_rn_distance
@@ -36,6 +46,7 @@ from .lp_transfer import grid_epochs
 from .planner import AcquisitionConfig, AcquisitionInfeasible, ei_deviation
 
 TRIM_SIGMAS = 3.0  # z of the decision threshold (one-sided normal tail 0.13 %)
+FINAL_OD_PASSES = 3  # passes in the final OD's arc: two (radar_od's minimum) leave a da to tens of meters
 
 
 def drift_lattice(a, dv_quantum):
@@ -53,6 +64,36 @@ def trim_threshold(tolerance, sigma, lattice, z=TRIM_SIGMAS):
     """|a da_F| [m] above which a trim is flown: ``tolerance - z sigma``, at least half the ``lattice`` (a smaller
     error no quantized trim can reduce) and at most the tolerance."""
     return min(tolerance, max(0.5 * lattice, tolerance - z * sigma))
+
+
+def radar_passes(kep, t0, t_start, t_end, jd0, station=TIRA, mask_deg=10.0, min_duration=60.0, j2=True):
+    """Rise/set times [s] ``(k, 2)`` of the carrier's passes above ``mask_deg`` at ``station`` in [t_start, t_end]:
+    the chief's mean elements ``kep`` ``[a, e, i, raan, argp, M]`` at ``t0`` propagated secularly, the Earth turned
+    by the sidereal angle of Julian date ``jd0`` at sim time 0 (the picosatellite is kilometers from the carrier:
+    the same passes to a few seconds); passes shorter than ``min_duration`` [s] are left out (radar_od counts a
+    pass from 5 measurements 10 s apart)."""
+    site_ef, site_enu = station.ecef, station.enu
+
+    def elevation(t):
+        t = np.asarray(t, dtype=float)
+        return chief_elevation(propagate_chief(kep, t - t0, j2), gmst(jd0 + t / SECONDS_PER_DAY), site_ef, site_enu)
+
+    p = pass_windows(elevation, t_start, t_end, math.radians(mask_deg))
+    return p[p[:, 1] - p[:, 0] >= min_duration] if len(p) else np.zeros((0, 2))
+
+
+def final_od_arc(passes, t_final, min_arc, min_passes=FINAL_OD_PASSES):
+    """``(start, end)`` [s] of the radar arc the final OD needs, or None: ``end`` the set of the last pass that ends
+    before ``t_final``, ``start`` the rise of the latest pass that spans ``min_arc`` [s] with it (radar_od's rule:
+    from the first measurement of the first pass to the last of the last) with at least ``min_passes`` passes."""
+    p = np.asarray(passes, dtype=float).reshape(-1, 2)
+    before = p[p[:, 1] < t_final]
+    if len(before) < min_passes:
+        return None
+    end = float(before[-1, 1])
+    early = before[:len(before) - min_passes + 1]
+    early = early[end - early[:, 0] >= min_arc]
+    return (float(early[-1, 0]), end) if len(early) else None
 
 
 @dataclass(frozen=True)
@@ -117,7 +158,7 @@ def plan_trim(roe0, chief: Chief, da_dot, burns, t_final, t_earliest, sigma_a_da
     sigma = predicted_drift_sigma(sigma_a_da, sigma_rate, t_final - chief.t0)
     lattice = drift_lattice(a, cfg.dv_quantum)
     threshold = trim_threshold(tolerance, sigma, lattice)
-    if abs(predicted) <= threshold:
+    if abs(predicted) <= threshold or sigma > tolerance / TRIM_SIGMAS:
         return TrimDecision(float(t_final), predicted, sigma, threshold, None, None, 0.0, kept)
     epoch = float(grid_epochs(t_earliest, t_earliest + step, chief, cfg.grid_per_orbit, cfg.j2)[0])
     t_f = max(float(t_final), epoch + step)
@@ -133,5 +174,5 @@ def plan_trim(roe0, chief: Chief, da_dot, burns, t_final, t_earliest, sigma_a_da
     return TrimDecision(t_f, predicted, sigma, threshold, epoch, float(chief.u_at(epoch, cfg.j2)), dv_t, final)
 
 
-__all__ = ["TRIM_SIGMAS", "TrimDecision", "drift_lattice", "plan_trim", "predicted_drift_sigma", "trim_problems",
-           "trim_threshold"]
+__all__ = ["TRIM_SIGMAS", "TrimDecision", "drift_lattice", "final_od_arc", "plan_trim", "predicted_drift_sigma",
+           "radar_passes", "trim_problems", "trim_threshold"]
