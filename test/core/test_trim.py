@@ -11,8 +11,10 @@ import pytest
 from roe_sep.core.acquisition.planner import AcquisitionConfig, AcquisitionInfeasible
 from roe_sep.core.acquisition.trim import (
     drift_lattice,
+    final_od_arc,
     plan_trim,
     predicted_drift_sigma,
+    radar_passes,
     trim_threshold,
 )
 from roe_sep.core.relmotion.dynamics import arg_latitude_rate, drag_da_dot, propagate
@@ -98,3 +100,46 @@ def test_trim_refused_when_another_initial_condition_would_break():
         plan_trim(state(8.0, a_dl=4000.0), CHIEF, DA_DOT, [], T_F, T0 + MARGIN, 1.0, 1.0 / 86400.0, 5.0, CFG)
     with pytest.raises(AcquisitionInfeasible, match="not finite"):
         plan_trim(state(8.0), CHIEF, DA_DOT, [], T_F, T0 + MARGIN, math.nan, 1.0 / 86400.0, 5.0, CFG)
+
+
+def test_no_trim_from_an_od_too_uncertain_to_place_a_da_inside_the_tolerance():
+    """sigma > tolerance / 3: the trim could not put a da inside the tolerance with 3-sigma confidence."""
+    d = plan_trim(state(12.0), CHIEF, DA_DOT, [], T_F, T0 + MARGIN, 1.7, 0.0, 5.0, CFG)
+    assert d.sigma_a_da == pytest.approx(1.7) and not d.trim and d.t_final == T_F
+    assert plan_trim(state(12.0), CHIEF, DA_DOT, [], T_F, T0 + MARGIN, 1.6, 0.0, 5.0, CFG).trim
+
+
+def test_final_od_arc_from_the_passes_before_the_ic_epoch():
+    """The arc runs from the latest pass that spans min_arc with the last pass before t_F, three passes at least,
+    to that last pass's set (the default scenario's TIRA passes around its IC epoch)."""
+    passes = [(160770, 161124), (166389, 166813), (199489, 199841), (205084, 205514), (246349, 246627),
+              (251930, 252376)]
+    assert final_od_arc(passes, 248334.0, 36000.0) == (199489.0, 246627.0)  # 205084 spans 41543 s but is the 2nd
+    assert final_od_arc(passes, 248334.0, 36000.0, min_passes=2) == (205084.0, 246627.0)
+    assert final_od_arc(passes, 248334.0, 46000.0) == (199489.0, 246627.0)
+    assert final_od_arc(passes, 248334.0, 80000.0) == (166389.0, 246627.0)
+    assert final_od_arc(passes, 253000.0, 36000.0) == (205084.0, 252376.0)
+    assert final_od_arc(passes[:2], 248334.0, 36000.0) is None
+    assert final_od_arc(passes, 248334.0, 200000.0) is None
+
+
+def test_radar_passes_see_the_carrier_above_the_mask():
+    """Predicted passes: the carrier is above the 10 deg mask inside each and below it just outside; passes come
+    in clusters about half a day apart (a 515 km sun-synchronous orbit over 50.6 deg N)."""
+    from roe_sep.core.od.radar import DEFAULT_EPOCH_UTC, TIRA, chief_elevation, gmst, julian_date
+    from roe_sep.core.relmotion.dynamics import propagate_chief
+
+    jd0 = julian_date(DEFAULT_EPOCH_UTC)
+    kep = np.array([A, 0.0, INC, 1.1, 0.0, 0.3])
+    passes = radar_passes(kep, 0.0, 0.0, 2 * 86400.0, jd0)
+    assert 4 <= len(passes) <= 12 and np.all(passes[:, 1] - passes[:, 0] >= 60.0)
+
+    def elevation(t):
+        return np.degrees(chief_elevation(propagate_chief(kep, t), gmst(jd0 + t / 86400.0), TIRA.ecef, TIRA.enu))
+
+    for rise, set_ in passes:
+        assert elevation(0.5 * (rise + set_)) > 10.0
+        assert elevation(rise - 5.0) < 10.0 < elevation(rise + 5.0)
+        assert elevation(set_ + 5.0) < 10.0 < elevation(set_ - 5.0)
+    gaps = np.diff(passes[:, 0])
+    assert np.any(gaps > 30000.0) and np.any(gaps < 7000.0)  # within a cluster one orbit, between clusters ~12 h
