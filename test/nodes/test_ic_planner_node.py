@@ -27,13 +27,15 @@ U0 = 1.0
 MARGIN = 5700.0
 
 
-def od_message(roe, t_est, solved=None, u=U0):
+def od_message(roe, t_est, solved=None, u=U0, sigma=None):
+    """An OD solution; ``sigma`` [m]: the 1-sigma of each a*ROE (default 1e-6 of the dimensionless ROE)."""
     msg = OrbitDetermination(a_da_dot=DA_DOT * A, a_da_dot_sigma=1e-4, passes=3, measurements=120,
                              residual_rms=1.0)
     msg.header.stamp = sec_to_time(t_est + 600.0 if solved is None else solved)
     chief = OrbitalElements(semi_major_axis=A, eccentricity=0.0, inclination=D.inc, raan=0.3, arg_perigee=0.0,
                             mean_arg_latitude=u)
-    msg.estimate = roe_to_msg(roe, chief, sec_to_time(t_est), covariance=np.eye(6) * 1e-12)
+    var = 1e-12 if sigma is None else (sigma / A) ** 2
+    msg.estimate = roe_to_msg(roe, chief, sec_to_time(t_est), covariance=np.eye(6) * var)
     return msg
 
 
@@ -123,12 +125,17 @@ def test_plan_bad_estimate_and_replan_policy(ground):
 def test_final_od_trims_the_drift_at_the_ic_epoch(ground):
     """An OD within two planning margins of the IC epoch whose a da at t_F is 8 m off: one tangential trim at or
     after now + planning_margin joins the burns still to fly, the IC epoch moves one grid step past it and the
-    aimed a da is within half the lattice (0.9 m); a later solution is not used."""
+    aimed a da is within half the lattice (0.9 m); a later solution is not used, nor, before, one that knows a da
+    at t_F less well than the plan in force's OD."""
     proc = start_node("ic_planner", "-p", "use_sim_time:=true", "-p", f"planning_margin:={MARGIN}")
     try:
         ground.od_pub.publish(od_message(ROE0, T_OD))
         assert spin_until(ground, lambda: len(ground.plans) >= 1, timeout=30)
         plan = ground.plans[-1]
+        # a newer solution that knows a da at t_F less well than the plan's (100 m against about 19 m): not used
+        ground.od_pub.publish(od_message(ROE0, T_OD + 10.0, sigma=100.0))
+        assert spin_until(ground, lambda: errors(ground, "a da at the IC epoch is known to", DiagnosticStatus.OK))
+        assert len(ground.plans) == 1
         t_f = time_to_sec(plan.aimed.header.stamp)
         epochs = [time_to_sec(m.epoch) for m in plan.maneuvers]
         now = t_f - 3000.0
@@ -140,7 +147,7 @@ def test_final_od_trims_the_drift_at_the_ic_epoch(ground):
         roe = state_at(ROE0, T_OD, burns, t_od, chief, True, DA_DOT) + np.array([8.0, 0, 0, 0, 0, 0]) / A
         ground.sim_time = now
         spin_until(ground, lambda: False, timeout=1.5)
-        ground.od_pub.publish(od_message(roe, t_od, solved=now, u=float(wrap_angle(chief.u_at(t_od)))))
+        ground.od_pub.publish(od_message(roe, t_od, solved=now, u=float(wrap_angle(chief.u_at(t_od))), sigma=0.5))
         assert spin_until(ground, lambda: len(ground.plans) >= 2, timeout=30)
         new = ground.plans[-1]
         kept = [m for m in plan.maneuvers if time_to_sec(m.epoch) >= now]
@@ -151,7 +158,7 @@ def test_final_od_trims_the_drift_at_the_ic_epoch(ground):
         assert time_to_sec(new.aimed.header.stamp) > time_to_sec(trim.epoch) > t_f
         assert abs(new.aimed.a_da) <= 0.9 + 1e-9
         assert spin_until(ground, lambda: errors(ground, "trim of", DiagnosticStatus.OK))
-        later = od_message(roe, t_od + 1.0, solved=now + 1.0, u=float(wrap_angle(chief.u_at(t_od + 1.0))))
+        later = od_message(roe, t_od + 1.0, solved=now + 1.0, u=float(wrap_angle(chief.u_at(t_od + 1.0))), sigma=0.5)
         ground.od_pub.publish(later)
         spin_until(ground, lambda: False, timeout=2.0)
         assert len(ground.plans) == 2 and proc.poll() is None
