@@ -53,7 +53,8 @@ from ..core.acquisition.planner import (
     plan_acquisition,
     validate_config,
 )
-from ..core.acquisition.trim import final_od_arc, plan_trim, predicted_drift_sigma, radar_passes
+from ..core.acquisition.trim import CLUSTER_GAP, final_od_arc, plan_trim, predicted_drift_sigma, radar_passes
+from ..core.constants import SECONDS_PER_DAY
 from ..core.od.radar import DEFAULT_EPOCH_UTC, julian_date
 from ..core.relmotion.dynamics import propagate_chief
 from ..core.relmotion.roe import wrap_angle
@@ -72,6 +73,8 @@ from .diagnostics import ERROR, OK, WARN, publish_status
 from .lockstep import Lockstep
 from .managed import ManagedNode
 from .params import ParameterError, declare, finite, require
+
+PASS_SLACK = 900.0  # s, between a predicted pass and its OD solution (the 5 km separation, the solution's delay)
 
 
 class IcPlannerNode(ManagedNode):
@@ -204,13 +207,14 @@ class IcPlannerNode(ManagedNode):
             self.get_logger().info(text)
             publish_status(self, self.diag_pub, OK, text, self._values())
             return
-        if self.trim and self.t_final is not None and now < self.t_final < now + 2.0 * self.cfg.planning_margin:
+        arc = self.radar_arc(msg, self.t_final) if self.t_final is not None else None
+        final_band = self.t_final is not None and now < self.t_final < now + 2.0 * self.cfg.planning_margin
+        if self.trim and (t_od >= arc[1] - PASS_SLACK if arc else final_band):
             self.final_trim(msg, t_od, now)
             return
-        arc = self.radar_arc(msg, self.t_final) if self.t_final is not None else None
-        if arc is not None and arc[0] <= max(t_od, now) + self.cfg.planning_margin <= arc[1]:
+        if arc is not None and max(t_od, now) + self.cfg.planning_margin > arc[0]:
             text = (f"OD at t = {t_od:.1f} s not used: its burns would fall in the final OD's radar arc "
-                    f"[{arc[0]:.0f}, {arc[1]:.0f}] s")
+                    f"[{arc[0]:.0f}, {arc[2]:.0f}] s (the final OD comes after the pass at t = {arc[1]:.0f} s)")
             self.get_logger().info(text)
             publish_status(self, self.diag_pub, OK, text, self._values())
             return
@@ -322,13 +326,20 @@ class IcPlannerNode(ManagedNode):
         roe0, chief, da_dot = self.start_state(msg, now)
         t_start = chief.t0
         # corrections of an acquisition in progress aim at its IC epoch; a first plan opens a new window
-        cfg = self.cfg if self.t_final is None else dataclasses.replace(self.cfg, window=self.t_final - t_start)
         t_f = self.t_final
-        if t_f is None:
-            t_f = float(grid_epochs(t_start, t_start + cfg.window, chief, cfg.grid_per_orbit, cfg.j2)[-1])
+        if t_f is None:  # a first plan: t_F at the end of the window, after the final OD and its trim (with trim)
+            t_f = float(grid_epochs(t_start, t_start + self.cfg.window, chief, self.cfg.grid_per_orbit,
+                                    self.cfg.j2)[-1])
+            arc = self.radar_arc(msg, t_f)
+            if arc is not None:
+                t_f = max(t_f, float(grid_epochs(arc[2] + PASS_SLACK + self.cfg.planning_margin,
+                                                 arc[2] + PASS_SLACK + 2.0 * self.cfg.planning_margin, chief,
+                                                 self.cfg.grid_per_orbit, self.cfg.j2)[1]))
         arc = self.radar_arc(msg, t_f)
+        # the plan aims at t_F: the last grid epoch within the window
+        cfg = dataclasses.replace(self.cfg, window=t_f - t_start + 1.0)
         plan = plan_acquisition(roe0, chief, da_dot, cfg, t_earliest=t_start + self.cfg.planning_margin,
-                                no_burns=[arc] if arc else ())
+                                no_burns=[(arc[0], arc[2])] if arc else ())
 
         out = ManeuverPlan(strategy="ic_acquisition", p_reduction=0.0)
         out.header.stamp = sec_to_time(t_start)  # the plan describes the burns from its start state on
@@ -347,12 +358,14 @@ class IcPlannerNode(ManagedNode):
         return predicted_drift_sigma(sigma_a_da, msg.a_da_dot_sigma, t_final - time_to_sec(msg.estimate.header.stamp))
 
     def radar_arc(self, msg: OrbitDetermination, t_final):
-        """``(start, end)`` [s] of the final OD's burn-free radar arc before ``t_final`` (:func:`final_od_arc` of the
-        predicted TIRA passes of the OD's chief); None with ``trim`` or ``final_od_arc`` off, or without one."""
+        """``(start, last_rise, end)`` [s] of the final OD's burn-free radar arc for the IC epoch ``t_final``
+        (:func:`final_od_arc` of the predicted TIRA passes of the OD's chief); None with ``trim`` or ``final_od_arc``
+        off, or without one."""
         if not (self.trim and self.final_od_arc):
             return None
         t_od = time_to_sec(msg.estimate.header.stamp)
-        passes = radar_passes(elements_to_array(msg.estimate.chief), t_od, t_od, t_final, self.jd0, j2=self.cfg.j2)
+        passes = radar_passes(elements_to_array(msg.estimate.chief), t_od, t_final - 2.0 * SECONDS_PER_DAY,
+                              t_final + 3.0 * CLUSTER_GAP, self.jd0, j2=self.cfg.j2)
         return final_od_arc(passes, t_final, self.final_od_arc)
 
     def start_state(self, msg: OrbitDetermination, now):
