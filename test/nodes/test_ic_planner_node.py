@@ -66,7 +66,9 @@ def ground():
 
 
 def test_plan_bad_estimate_and_replan_policy(ground):
-    proc = start_node("ic_planner", "-p", "use_sim_time:=true", "-p", f"planning_margin:={MARGIN}")
+    # final_od_arc 0: the window's end is t_F, as plan_acquisition's (the final OD's arc: test_trim, test_run)
+    proc = start_node("ic_planner", "-p", "use_sim_time:=true", "-p", f"planning_margin:={MARGIN}", "-p",
+                      "final_od_arc:=0.0")
     try:
         # a NaN estimate: ERROR diagnostic, no plan, the node keeps running
         ground.od_pub.publish(od_message(np.full(6, math.nan), T_OD - 500.0))
@@ -126,8 +128,10 @@ def test_final_od_trims_the_drift_at_the_ic_epoch(ground):
     """An OD within two planning margins of the IC epoch whose a da at t_F is 8 m off: one tangential trim at or
     after now + planning_margin joins the burns still to fly, the IC epoch moves one grid step past it and the
     aimed a da is within half the lattice (0.9 m); a later solution is not used, nor, before, one that knows a da
-    at t_F less well than the plan in force's OD."""
-    proc = start_node("ic_planner", "-p", "use_sim_time:=true", "-p", f"planning_margin:={MARGIN}")
+    at t_F less well than the plan in force's OD. Without a predicted radar arc (final_od_arc 0) the final OD is
+    the first solution within two planning margins of t_F."""
+    proc = start_node("ic_planner", "-p", "use_sim_time:=true", "-p", f"planning_margin:={MARGIN}", "-p",
+                      "final_od_arc:=0.0")
     try:
         ground.od_pub.publish(od_message(ROE0, T_OD))
         assert spin_until(ground, lambda: len(ground.plans) >= 1, timeout=30)
@@ -174,6 +178,7 @@ def test_final_od_trims_the_drift_at_the_ic_epoch(ground):
     (["-p", "window:=1000.0"], "'window'"),  # shorter than the planning margin
     (["-p", "ic_drift_tolerance:=-1.0"], "'ic_drift_tolerance'"),
     (["-p", "trim:=1"], "'trim'"),
+    (["-p", "final_od_arc:=-1.0"], "'final_od_arc'"),
 ])
 def test_bad_parameter_refused_at_startup(args, name):
     code, out = wait_exit(start_node("ic_planner", *args))
