@@ -15,14 +15,17 @@ When a plan is (re)computed -- what a flight-dynamics team wants from a stream o
   two-pass solution after a burn can be tens of meters off. The plan starts from the estimate propagated to now
   with every carrier burn flown since its epoch (``/sim/executed_maneuvers``, latched), so a correction never repeats
   a burn.
-* The first plan fixes the IC epoch t_F (the last grid epoch within OD epoch + ``window``); later solutions
-  re-plan the rest of the acquisition as corrections aimed at the same t_F, as a real campaign does.
-* No plan puts a burn in the final OD's radar arc (``final_od_arc``), and a solution whose re-plan would start
-  in it is not used: the radar needs that arc free of burns for the final OD.
-* Within two planning margins of t_F (and before it) the first newer solution is the final OD: with ``trim`` it
-  predicts a da at t_F and adds one tangential trim burn at or after now + planning_margin when that prediction is
-  not safely inside ``ic_drift_tolerance`` (:mod:`roe_sep.core.acquisition.trim`; a trim past t_F moves t_F to one
-  grid step after it). The plan in force keeps its other burns; later solutions are not used.
+* The first plan fixes the IC epoch t_F (the last grid epoch within OD epoch + ``window``; with ``trim``, at least
+  one grid step after the final OD's radar arc + planning_margin); later solutions re-plan the rest of the
+  acquisition as corrections aimed at the same t_F, as a real campaign does.
+* The final OD's radar arc (:func:`~roe_sep.core.acquisition.trim.final_od_arc` of the predicted TIRA passes: four
+  passes spanning ``final_od_arc``, ending with the last pass cluster before the window's end) stays free of burns:
+  no plan puts one there, and a solution whose re-plan would start in it is not used.
+* The solution after the arc's last pass is the final OD (without a predicted arc: the first newer solution within
+  two planning margins of t_F): with ``trim`` it predicts a da at t_F and adds one tangential trim burn at or after
+  now + planning_margin when that prediction is not safely inside ``ic_drift_tolerance``
+  (:mod:`roe_sep.core.acquisition.trim`; a trim past t_F moves t_F to one grid step after it). The plan in force
+  keeps its other burns; later solutions are not used.
 * A re-plan never moves a burn that is committed: one of the plan in force due within ``planning_margin`` from
   now (or executed without its record having arrived yet) keeps the plan in force (WARN on /diagnostics).
 * The first burn of a new plan is at or after max(OD epoch, now) + planning_margin; only an OD made after the
@@ -97,10 +100,9 @@ class IcPlannerNode(ManagedNode):
     * ``j2`` true: secular J2 in the prediction.
     * ``trim`` true: the final OD's drift trim; ``ic_drift_tolerance`` 5.0 m: the |a da| initial condition it
       protects (the report's drift check).
-    * ``final_od_arc`` 36000.0 s (radar_od's ``min_arc``): no acquisition burn between the rise of the TIRA pass
-      (10 deg mask, the default radar) that spans this with the last pass before t_F and that pass's set, so that
-      the final OD comes (radar_od restarts its arc at every burn); 0 = no such arc (with ``trim`` false: the plans
-      of an acquisition without the final OD).
+    * ``final_od_arc`` 36000.0 s (radar_od's ``min_arc``): the final OD's radar arc spans at least this (TIRA, 10
+      deg mask, radar_od's defaults); no acquisition burn in it (radar_od restarts its arc at every burn); 0 = no
+      arc (the final OD is then the first solution within two planning margins of t_F).
     """
 
     def __init__(self):

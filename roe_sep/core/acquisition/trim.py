@@ -4,21 +4,20 @@ quantized tangential carrier burn when that prediction is not safely inside the 
 Why. The acquisition plan of :mod:`.planner` nulls the drift at the IC epoch t_F from an OD made about a day
 earlier: the OD's drift-rate error carried that far (std 2.5 m over 0.93 days in the 100-run campaign of seeds
 1000-1099) and the 5 % execution error of the burns flown after that OD (std 1.9 m) leave |a da_F| above the 5 m
-initial condition in 9 % of the runs. A flight-dynamics team closes the loop on the last information instead: the
-radar OD of the pass cluster just before t_F (the default ops geometry gives one each half day; in the default
-scenario its solution falls about 0.5 h before t_F), then a trim uplinked at the next contact.
+initial condition in 9 % of the runs. A flight-dynamics team closes the loop on the last information instead: a
+final radar OD shortly before t_F, then a trim uplinked with the planning margin (the ground contact after the
+solution), flown before t_F.
 
-Timeline. The OD arrives at ``now``; the trim burn is the first grid epoch (the planner's grid, round values of u)
-at or after ``now + margin`` -- the ic_planner's ``planning_margin``, the same uplink delay every plan respects.
-When that epoch falls after t_F, the IC epoch moves to one grid step after the trim (t_F is where the ICs are
-checked; the acquisition is over once its last burn has flown); otherwise t_F stays.
-
-The final OD's arc. radar_od restarts its batch after every burn and solves once ``passes_required`` passes span
-``min_arc`` (10 h): a burn between the radar passes just before t_F would leave no final OD at all (in the 100-run
-campaign about one run in ten: a late correction burn in the last orbits). :func:`radar_passes` predicts the
-station's passes of the carrier (the chief's secular elements, the sidereal angle of the scenario's epoch), and
-:func:`final_od_arc` returns the interval from the first pass such an arc needs to the end of the last pass before
-t_F: the acquisition plans keep their burns out of it (``no_burns`` of :func:`.planner.plan_acquisition`).
+Timeline (the ic_planner, with the TIRA passes the ops geometry offers: clusters of two passes one orbit apart,
+about every 12 h). :func:`radar_passes` predicts the station's passes of the carrier (the chief's secular elements,
+the sidereal angle of the scenario's epoch). The final OD is the solution after the last pass of the cluster that
+holds the last pass before the end of the planning window; :func:`final_od_arc` gives its radar arc, from the
+latest pass that spans radar_od's ``min_arc`` (10 h) with it and leaves four passes in the arc. radar_od restarts
+its batch after every burn, so the acquisition plans keep their burns out of that arc (``no_burns`` of
+:func:`.planner.plan_acquisition`; a burn there left about one run in ten without any final OD), and the first plan
+puts t_F one grid step after the arc's end + planning_margin (the default scenario: 73.6 instead of 68.8 h after the
+ejection), so the trim, at the first grid epoch at or after the solution + planning_margin, flies before t_F. Four
+passes (two clusters) know a da to 0.4-0.5 m (1-sigma), three to 1.3 m and two to tens of meters (seed 5).
 
 Decision (seed 002 Eq. 2: only a tangential impulse changes da, a Delta da = 2 dvT / n). The OD predicts a da at
 t_F with the burns still to fly, and its 1-sigma from the OD covariance, sigma^2 = sigma_a_da^2 + (sigma_rate dt)^2
