@@ -11,16 +11,16 @@ When a plan is (re)computed -- what a flight-dynamics team wants from a stream o
 
 * Every *newer* solution (ordered by ``header.stamp``, then ``estimate.header.stamp``) is the best knowledge and
   re-plans; a re-delivered or older one is ignored. With ``trim``, a solution that predicts a da at t_F less well
-  (its 1-sigma from the covariance and the drift-rate sigma) than the one of the plan in force is not used either: a
-  two-pass solution after a burn can be tens of meters off. The plan starts from the estimate propagated to now
+  (its 1-sigma from the covariance and the drift-rate sigma) than the plan in force knows it (its OD's, with the
+  execution errors of the burns flown since, ``burn_sigma``) is not used either: a two-pass solution after a burn
+  can be tens of meters off. The plan starts from the estimate propagated to now
   with every carrier burn flown since its epoch (``/sim/executed_maneuvers``, latched), so a correction never repeats
   a burn.
-* The first plan fixes the IC epoch t_F (the last grid epoch within OD epoch + ``window``; with ``trim``, at least
-  one grid step after the final OD's radar arc + planning_margin); later solutions re-plan the rest of the
-  acquisition as corrections aimed at the same t_F, as a real campaign does.
-* The final OD's radar arc (:func:`~roe_sep.core.acquisition.trim.final_od_arc` of the predicted TIRA passes: four
-  passes spanning ``final_od_arc``, ending with the last pass cluster before the window's end) stays free of burns:
-  no plan puts one there, and a solution whose re-plan would start in it is not used.
+* The first plan fixes the IC epoch t_F (the last grid epoch within OD epoch + ``window``); later solutions
+  re-plan the rest of the acquisition as corrections aimed at the same t_F, as a real campaign does.
+* The final OD's radar arc (:func:`~roe_sep.core.acquisition.trim.final_od_arc` of the predicted TIRA passes: three
+  passes spanning ``final_od_arc``, ending with the last pass before t_F) stays free of burns: no plan puts one
+  there, and a solution whose re-plan would start in it is not used.
 * The solution after the arc's last pass is the final OD (without a predicted arc: the first newer solution within
   two planning margins of t_F): with ``trim`` it predicts a da at t_F and adds one tangential trim burn at or after
   now + planning_margin when that prediction is not safely inside ``ic_drift_tolerance``
@@ -60,6 +60,7 @@ from ..core.acquisition.trim import CLUSTER_GAP, final_od_arc, plan_trim, predic
 from ..core.constants import SECONDS_PER_DAY
 from ..core.od.radar import DEFAULT_EPOCH_UTC, julian_date
 from ..core.relmotion.dynamics import propagate_chief
+from ..core.relmotion.orbit import mean_motion
 from ..core.relmotion.roe import wrap_angle
 from ..core.relmotion.trajectory import Chief, state_at
 from .convert import (
@@ -100,6 +101,8 @@ class IcPlannerNode(ManagedNode):
     * ``j2`` true: secular J2 in the prediction.
     * ``trim`` true: the final OD's drift trim; ``ic_drift_tolerance`` 5.0 m: the |a da| initial condition it
       protects (the report's drift check).
+    * ``burn_sigma`` 0.05: 1-sigma magnitude error of a carrier burn (the scenario's thruster_sigma), for how well the
+      plan in force knows a da after its burns.
     * ``final_od_arc`` 36000.0 s (radar_od's ``min_arc``): the final OD's radar arc spans at least this (TIRA, 10
       deg mask, radar_od's defaults); no acquisition burn in it (radar_od restarts its arc at every burn); 0 = no
       arc (the final OD is then the first solution within two planning margins of t_F).
@@ -134,10 +137,13 @@ class IcPlannerNode(ManagedNode):
         }
         self.jd0 = julian_date(DEFAULT_EPOCH_UTC)  # sim time 0, as the simulator's and radar_od's default
         self.trim = declare(self, "trim", True, "trim the drift at the IC epoch from the final OD")
+        self.burn_sigma = declare(self, "burn_sigma", 0.05, "1-sigma magnitude error of a carrier burn (fraction)")
         self.final_od_arc = declare(self, "final_od_arc", 36000.0,
                                     "s, burn-free radar arc kept before the IC epoch for the final OD; 0 = none")
         self.ic_drift_tolerance = declare(self, "ic_drift_tolerance", 5.0, "m, |a da| initial condition the trim keeps")
         require("trim", isinstance(self.trim, bool), self.trim, "true or false")
+        require("burn_sigma", finite(self.burn_sigma) and self.burn_sigma >= 0, self.burn_sigma,
+                "a non-negative fraction")
         require("final_od_arc", finite(self.final_od_arc) and self.final_od_arc >= 0, self.final_od_arc,
                 "a non-negative number [s]")
         require("ic_drift_tolerance", finite(self.ic_drift_tolerance) and self.ic_drift_tolerance > 0,
@@ -168,6 +174,7 @@ class IcPlannerNode(ManagedNode):
         self.plan_in_force = None  # its ManeuverPlan (the trim keeps its other burns)
         self.final_decided = False  # the final OD's trim decision is made: the acquisition is complete
         self.plan_sigma = None  # m, 1-sigma of a da at t_F from the OD of the plan in force (with ``trim``)
+        self.plan_od_epoch = None  # s, that OD's epoch
         self.summary = {}
         self.plans = 0
         publish_status(self, self.diag_pub, OK, "waiting for an OD estimate", self._values())
@@ -220,10 +227,10 @@ class IcPlannerNode(ManagedNode):
             self.get_logger().info(text)
             publish_status(self, self.diag_pub, OK, text, self._values())
             return
-        sigma = self.drift_sigma(msg, self.t_final)
-        if sigma is not None and self.plan_sigma is not None and sigma > self.plan_sigma:
+        sigma, known = self.drift_sigma(msg, self.t_final), self.plan_knowledge(msg)
+        if sigma is not None and known is not None and sigma > known:
             text = (f"OD at t = {t_od:.1f} s not used: its a da at the IC epoch is known to {sigma:.2f} m (1-sigma), "
-                    f"the plan in force's OD to {self.plan_sigma:.2f} m")
+                    f"the plan in force's to {known:.2f} m")
             self.get_logger().info(text)
             publish_status(self, self.diag_pub, OK, text, self._values())
             return
@@ -241,6 +248,7 @@ class IcPlannerNode(ManagedNode):
         self.plan_pub.publish(plan_msg)
         self.plan_in_force = plan_msg
         self.plan_sigma = self.drift_sigma(msg, plan.t_final)
+        self.plan_od_epoch = t_od
         self.burn_epochs = [float(t) for t in plan.epochs]
         if self.t_final is None:
             self.t_final = float(plan.t_final)
@@ -328,18 +336,11 @@ class IcPlannerNode(ManagedNode):
         roe0, chief, da_dot = self.start_state(msg, now)
         t_start = chief.t0
         # corrections of an acquisition in progress aim at its IC epoch; a first plan opens a new window
+        cfg = self.cfg if self.t_final is None else dataclasses.replace(self.cfg, window=self.t_final - t_start)
         t_f = self.t_final
-        if t_f is None:  # a first plan: t_F at the end of the window, after the final OD and its trim (with trim)
-            t_f = float(grid_epochs(t_start, t_start + self.cfg.window, chief, self.cfg.grid_per_orbit,
-                                    self.cfg.j2)[-1])
-            arc = self.radar_arc(msg, t_f)
-            if arc is not None:
-                t_f = max(t_f, float(grid_epochs(arc[2] + PASS_SLACK + self.cfg.planning_margin,
-                                                 arc[2] + PASS_SLACK + 2.0 * self.cfg.planning_margin, chief,
-                                                 self.cfg.grid_per_orbit, self.cfg.j2)[1]))
+        if t_f is None:
+            t_f = float(grid_epochs(t_start, t_start + cfg.window, chief, cfg.grid_per_orbit, cfg.j2)[-1])
         arc = self.radar_arc(msg, t_f)
-        # the plan aims at t_F: the last grid epoch within the window
-        cfg = dataclasses.replace(self.cfg, window=t_f - t_start + 1.0)
         plan = plan_acquisition(roe0, chief, da_dot, cfg, t_earliest=t_start + self.cfg.planning_margin,
                                 no_burns=[(arc[0], arc[2])] if arc else ())
 
@@ -359,6 +360,16 @@ class IcPlannerNode(ManagedNode):
         sigma_a_da = math.sqrt(max(msg.estimate.covariance[0], 0.0))
         return predicted_drift_sigma(sigma_a_da, msg.a_da_dot_sigma, t_final - time_to_sec(msg.estimate.header.stamp))
 
+    def plan_knowledge(self, msg: OrbitDetermination):
+        """1-sigma [m] of a da at t_F as the plan in force knows it now: its OD's, with the execution errors of the
+        carrier burns flown since that OD (``burn_sigma`` of each one's a da change 2 |dvT| / n, seed 002 Eq. 2);
+        None without a plan (or without ``trim``)."""
+        if self.plan_sigma is None:
+            return None
+        n = float(mean_motion(msg.estimate.chief.semi_major_axis))
+        flown = [self.burn_sigma * 2.0 * abs(b.dv_rel[1]) / n for b in self.executed if b.epoch > self.plan_od_epoch]
+        return math.sqrt(self.plan_sigma ** 2 + sum(v * v for v in flown))
+
     def radar_arc(self, msg: OrbitDetermination, t_final):
         """``(start, last_rise, end)`` [s] of the final OD's burn-free radar arc for the IC epoch ``t_final``
         (:func:`final_od_arc` of the predicted TIRA passes of the OD's chief); None with ``trim`` or ``final_od_arc``
@@ -368,7 +379,10 @@ class IcPlannerNode(ManagedNode):
         t_od = time_to_sec(msg.estimate.header.stamp)
         passes = radar_passes(elements_to_array(msg.estimate.chief), t_od, t_final - 2.0 * SECONDS_PER_DAY,
                               t_final + 3.0 * CLUSTER_GAP, self.jd0, j2=self.cfg.j2)
-        return final_od_arc(passes, t_final, self.final_od_arc)
+        # the last pass before t_F ends the arc (not its cluster: waiting for the cluster's second pass, four passes,
+        # pushes t_F past it and leaves the acquisition no correction between the first day and the arc; seed 1006
+        # then drifted 23 m and inside the keep-out zone); three passes
+        return final_od_arc(passes, t_final, self.final_od_arc, min_passes=3, cluster_gap=0.0)
 
     def start_state(self, msg: OrbitDetermination, now):
         """The best knowledge at max(OD epoch, now): the estimate plus every carrier burn flown since its epoch, as
