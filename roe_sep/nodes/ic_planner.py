@@ -379,10 +379,8 @@ class IcPlannerNode(ManagedNode):
         t_od = time_to_sec(msg.estimate.header.stamp)
         passes = radar_passes(elements_to_array(msg.estimate.chief), t_od, t_final - 2.0 * SECONDS_PER_DAY,
                               t_final + 3.0 * CLUSTER_GAP, self.jd0, j2=self.cfg.j2)
-        # the last pass before t_F ends the arc (not its cluster: waiting for the cluster's second pass, four passes,
-        # pushes t_F past it and leaves the acquisition no correction between the first day and the arc; seed 1006
-        # then drifted 23 m and inside the keep-out zone); three passes
-        return final_od_arc(passes, t_final, self.final_od_arc, min_passes=3, cluster_gap=0.0)
+        # the last pass before t_F ends the arc, three passes (not its cluster's last pass: see the trim module)
+        return final_od_arc(passes, t_final, self.final_od_arc)
 
     def start_state(self, msg: OrbitDetermination, now):
         """The best knowledge at max(OD epoch, now): the estimate plus every carrier burn flown since its epoch, as

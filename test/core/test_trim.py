@@ -10,6 +10,7 @@ import pytest
 
 from roe_sep.core.acquisition.planner import AcquisitionConfig, AcquisitionInfeasible
 from roe_sep.core.acquisition.trim import (
+    CLUSTER_GAP,
     drift_lattice,
     final_od_arc,
     plan_trim,
@@ -110,18 +111,20 @@ def test_no_trim_from_an_od_too_uncertain_to_place_a_da_inside_the_tolerance():
 
 
 def test_final_od_arc_from_the_passes_before_the_ic_epoch():
-    """The arc ends with the cluster of the last pass before t_F (its passes about an orbit apart, also after t_F)
-    and starts at the latest pass that spans min_arc with that end and leaves four passes in the arc (the default
-    scenario's TIRA passes around its window's end)."""
+    """The arc ends with the last pass before t_F (or with that pass's cluster, passes about an orbit apart, also
+    after t_F) and starts at the latest pass that spans min_arc with that end and leaves three (four) passes in the
+    arc (the default scenario's TIRA passes around its IC epoch)."""
     passes = [(160770, 161124), (166389, 166813), (199489, 199841), (205084, 205514), (246349, 246627),
               (251930, 252376), (293000, 293400)]
-    assert final_od_arc(passes, 248334.0, 36000.0) == (199489.0, 251930.0, 252376.0)
-    assert final_od_arc(passes, 265000.0, 36000.0) == (199489.0, 251930.0, 252376.0)  # the same cluster
-    assert final_od_arc(passes, 248334.0, 36000.0, min_passes=3) == (205084.0, 251930.0, 252376.0)
-    assert final_od_arc(passes, 248334.0, 50000.0) == (199489.0, 251930.0, 252376.0)
-    assert final_od_arc(passes, 248334.0, 85000.0) == (166389.0, 251930.0, 252376.0)
-    assert final_od_arc(passes, 248334.0, 36000.0, cluster_gap=3000.0) == (166389.0, 246349.0, 246627.0)
-    assert final_od_arc(passes[:3], 200000.0, 36000.0) is None  # three passes only
+    assert final_od_arc(passes, 248334.0, 36000.0) == (199489.0, 246349.0, 246627.0)
+    assert final_od_arc(passes, 248334.0, 36000.0, min_passes=2) == (205084.0, 246349.0, 246627.0)
+    assert final_od_arc(passes, 248334.0, 46000.0) == (199489.0, 246349.0, 246627.0)
+    assert final_od_arc(passes, 248334.0, 80000.0) == (166389.0, 246349.0, 246627.0)
+    cluster = (199489.0, 251930.0, 252376.0)
+    assert final_od_arc(passes, 248334.0, 36000.0, min_passes=4, cluster_gap=CLUSTER_GAP) == cluster
+    assert final_od_arc(passes, 265000.0, 36000.0, min_passes=4, cluster_gap=CLUSTER_GAP) == cluster
+    assert final_od_arc(passes, 253000.0, 36000.0) == (205084.0, 251930.0, 252376.0)
+    assert final_od_arc(passes[:2], 200000.0, 36000.0) is None  # two passes only
     assert final_od_arc(passes, 248334.0, 200000.0) is None
     assert final_od_arc(passes, 100000.0, 36000.0) is None
 

@@ -10,14 +10,17 @@ solution), flown before t_F.
 
 Timeline (the ic_planner, with the TIRA passes the ops geometry offers: clusters of two passes one orbit apart,
 about every 12 h). :func:`radar_passes` predicts the station's passes of the carrier (the chief's secular elements,
-the sidereal angle of the scenario's epoch). The final OD is the solution after the last pass of the cluster that
-holds the last pass before the end of the planning window; :func:`final_od_arc` gives its radar arc, from the
-latest pass that spans radar_od's ``min_arc`` (10 h) with it and leaves four passes in the arc. radar_od restarts
-its batch after every burn, so the acquisition plans keep their burns out of that arc (``no_burns`` of
-:func:`.planner.plan_acquisition`; a burn there left about one run in ten without any final OD), and the first plan
-puts t_F one grid step after the arc's end + planning_margin (the default scenario: 73.6 instead of 68.8 h after the
-ejection), so the trim, at the first grid epoch at or after the solution + planning_margin, flies before t_F. Four
-passes (two clusters) know a da to 0.4-0.5 m (1-sigma), three to 1.3 m and two to tens of meters (seed 5).
+the sidereal angle of the scenario's epoch). The final OD is the solution after the last pass before t_F (the
+default scenario: 246610 s, 0.5 h before t_F); :func:`final_od_arc` gives its radar arc, from the latest pass that
+spans radar_od's ``min_arc`` (10 h) with it and leaves three passes in the arc. radar_od restarts its batch after
+every burn, so the acquisition plans keep their burns out of that arc (``no_burns`` of
+:func:`.planner.plan_acquisition`; a late correction burn there left about one run in ten without a final OD). The
+trim is the first grid epoch (the planner's grid, round values of u) at or after the solution + planning_margin,
+the uplink delay every plan respects; when it falls after t_F, the IC epoch moves one grid step past it (the
+default scenario: 71.7 instead of 68.8 h after the ejection), otherwise t_F stays. Three passes know a da to about
+1.3 m (1-sigma), two to tens of meters. Four (waiting for the second pass of the last cluster, 0.46 m for seed 5)
+would move t_F past that pass and keep the arc free from the previous cluster on, leaving the acquisition no
+correction between the first day's plan and the arc (seed 1006: a 23 m drift into the keep-out zone).
 
 Decision (seed 002 Eq. 2: only a tangential impulse changes da, a Delta da = 2 dvT / n). The OD predicts a da at
 t_F with the burns still to fly, and its 1-sigma from the OD covariance, sigma^2 = sigma_a_da^2 + (sigma_rate dt)^2
@@ -45,8 +48,7 @@ from .lp_transfer import grid_epochs
 from .planner import AcquisitionConfig, AcquisitionInfeasible, ei_deviation
 
 TRIM_SIGMAS = 3.0  # z of the decision threshold (one-sided normal tail 0.13 %)
-FINAL_OD_PASSES = 4  # passes in the final OD's arc: two (radar_od's minimum) leave a da to tens of meters, three
-#   to 1.3 m (1-sigma), four to 0.4 m (seed 5)
+FINAL_OD_PASSES = 3  # passes in the final OD's arc: two (radar_od's minimum) leave a da to tens of meters
 CLUSTER_GAP = 7200.0  # s, passes closer than this (about one orbit apart) form a cluster
 
 
@@ -83,12 +85,13 @@ def radar_passes(kep, t0, t_start, t_end, jd0, station=TIRA, mask_deg=10.0, min_
     return p[p[:, 1] - p[:, 0] >= min_duration] if len(p) else np.zeros((0, 2))
 
 
-def final_od_arc(passes, t_final, min_arc, min_passes=FINAL_OD_PASSES, cluster_gap=CLUSTER_GAP):
-    """``(start, last_rise, end)`` [s] of the radar arc the final OD needs, or None. Its last passes are the cluster
-    of the last pass that ends before ``t_final`` (the passes that follow it within ``cluster_gap``, about one orbit
-    apart, even after ``t_final``): ``last_rise`` the rise of the last of them, ``end`` its set; ``start`` the rise of
-    the latest pass that spans ``min_arc`` [s] with ``end`` (radar_od's rule: from the first measurement of the first
-    pass to the last of the last) with at least ``min_passes`` passes in the arc."""
+def final_od_arc(passes, t_final, min_arc, min_passes=FINAL_OD_PASSES, cluster_gap=0.0):
+    """``(start, last_rise, end)`` [s] of the radar arc the final OD needs, or None. Its last pass is the last one
+    that ends before ``t_final`` or, with ``cluster_gap`` (e.g. :data:`CLUSTER_GAP`), the last of that pass's
+    cluster (the passes that follow it within ``cluster_gap``, even after ``t_final``): ``last_rise`` its rise,
+    ``end`` its set; ``start`` the rise of the latest pass that spans ``min_arc`` [s] with ``end`` (radar_od's rule:
+    from the first measurement of the first pass to the last of the last) with at least ``min_passes`` passes in the
+    arc."""
     p = np.asarray(passes, dtype=float).reshape(-1, 2)
     last = np.flatnonzero(p[:, 1] < t_final)
     if not len(last):
