@@ -56,7 +56,14 @@ from ..core.acquisition.planner import (
     plan_acquisition,
     validate_config,
 )
-from ..core.acquisition.trim import CLUSTER_GAP, final_od_arc, plan_trim, predicted_drift_sigma, radar_passes
+from ..core.acquisition.trim import (
+    CLUSTER_GAP,
+    final_od_arc,
+    plan_trim,
+    predicted_drift_sigma,
+    radar_passes,
+    trim_problems,
+)
 from ..core.constants import SECONDS_PER_DAY
 from ..core.od.radar import DEFAULT_EPOCH_UTC, julian_date
 from ..core.relmotion.dynamics import propagate_chief
@@ -221,12 +228,20 @@ class IcPlannerNode(ManagedNode):
         if self.trim and (t_od >= arc[1] - PASS_SLACK if arc else final_band):
             self.final_trim(msg, t_od, now)
             return
-        if arc is not None and max(t_od, now) + self.cfg.planning_margin > arc[0]:
-            text = (f"OD at t = {t_od:.1f} s not used: its burns would fall in the final OD's radar arc "
-                    f"[{arc[0]:.0f}, {arc[2]:.0f}] s (the final OD comes after the pass at t = {arc[1]:.0f} s)")
-            self.get_logger().info(text)
-            publish_status(self, self.diag_pub, OK, text, self._values())
-            return
+        keep_arc = arc is None or max(t_od, now) + self.cfg.planning_margin <= arc[0]
+        if not keep_arc:
+            missed = self._guarded("OD estimate rejected", "acquisition check failed", self.plan_problems, msg, now)
+            if missed is None:
+                return
+            if not missed:
+                text = (f"OD at t = {t_od:.1f} s not used: the plan in force meets the initial conditions by it, and "
+                        f"its burns would fall in the final OD's radar arc [{arc[0]:.0f}, {arc[2]:.0f}] s (the final "
+                        f"OD comes after the pass at t = {arc[1]:.0f} s)")
+                self.get_logger().info(text)
+                publish_status(self, self.diag_pub, OK, text, self._values())
+                return
+            self.get_logger().info(f"OD at t = {t_od:.1f} s: the plan in force would miss the initial conditions "
+                                   f"({'; '.join(missed)}): re-planned within the final OD's radar arc")
         sigma, known = self.drift_sigma(msg, self.t_final), self.plan_knowledge(msg)
         if sigma is not None and known is not None and sigma > known:
             text = (f"OD at t = {t_od:.1f} s not used: its a da at the IC epoch is known to {sigma:.2f} m (1-sigma), "
@@ -241,7 +256,8 @@ class IcPlannerNode(ManagedNode):
             self.get_logger().warn(text)
             publish_status(self, self.diag_pub, WARN, text, self._values())
             return
-        made = self._guarded("OD estimate rejected", "acquisition planning failed", self.make_plan, msg, now)
+        made = self._guarded("OD estimate rejected", "acquisition planning failed", self.make_plan, msg, now,
+                             keep_arc)
         if made is None:
             return
         plan_msg, plan = made
@@ -297,6 +313,17 @@ class IcPlannerNode(ManagedNode):
         self.get_logger().info(text)
         publish_status(self, self.diag_pub, OK, text, self._values())
 
+    def plan_problems(self, msg: OrbitDetermination, now):
+        """The initial conditions other than the drift (the final trim's) that the plan in force misses at t_F by
+        this OD (:func:`~roe_sep.core.acquisition.trim.trim_problems`); [] when it meets them."""
+        roe0, chief, da_dot = self.start_state(msg, now)
+        flown = {round(b.epoch, 3) for b in self.executed}
+        kept = [m for m in (self.plan_in_force.maneuvers if self.plan_in_force else ())
+                if time_to_sec(m.epoch) >= chief.t0 and round(time_to_sec(m.epoch), 3) not in flown]
+        burns = plan_burns(kept) + [b for b in self.executed if b.epoch > chief.t0]
+        final = state_at(roe0, chief.t0, burns, max(self.t_final, chief.t0), chief, self.cfg.j2, da_dot)
+        return trim_problems(final, chief.a, self.cfg, roe0[1] > 0)
+
     def trim_decision(self, msg: OrbitDetermination, now, kept):
         """:func:`plan_trim` from the OD with the maneuvers ``kept`` of the plan in force still to fly and the burns
         flown after the decision time (under lockstep the solution arrives after the burns of its step)."""
@@ -331,7 +358,7 @@ class IcPlannerNode(ManagedNode):
             return self.t_final  # the acquisition is (nearly) complete: no new acquisition from here
         return None
 
-    def make_plan(self, msg: OrbitDetermination, now):
+    def make_plan(self, msg: OrbitDetermination, now, keep_arc=True):
         """ManeuverPlan and core plan for one OD solution; raises ValueError on a bad estimate or no solution."""
         roe0, chief, da_dot = self.start_state(msg, now)
         t_start = chief.t0
@@ -340,7 +367,7 @@ class IcPlannerNode(ManagedNode):
         t_f = self.t_final
         if t_f is None:
             t_f = float(grid_epochs(t_start, t_start + cfg.window, chief, cfg.grid_per_orbit, cfg.j2)[-1])
-        arc = self.radar_arc(msg, t_f)
+        arc = self.radar_arc(msg, t_f) if keep_arc else None
         plan = plan_acquisition(roe0, chief, da_dot, cfg, t_earliest=t_start + self.cfg.planning_margin,
                                 no_burns=[(arc[0], arc[2])] if arc else ())
 
