@@ -331,7 +331,8 @@ class IcPlannerNode(ManagedNode):
         sigma_a_da = math.sqrt(max(msg.estimate.covariance[0], 0.0))
         burns = plan_burns(kept) + [b for b in self.executed if b.epoch > chief.t0]
         return plan_trim(roe0, chief, da_dot, burns, self.t_final, now + self.cfg.planning_margin,
-                         sigma_a_da, msg.a_da_dot_sigma, self.ic_drift_tolerance, self.cfg)
+                         sigma_a_da, msg.a_da_dot_sigma, self.ic_drift_tolerance, self.cfg,
+                         t_od=time_to_sec(msg.estimate.header.stamp))
 
     def _guarded(self, rejected, failed, fn, *args):
         """``fn(*args)``, or None with the reason logged and on /diagnostics: a ValueError is a bad estimate or no

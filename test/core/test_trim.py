@@ -60,6 +60,11 @@ def test_no_trim_inside_the_threshold_keeps_the_ic_epoch():
     assert d.predicted_a_da == pytest.approx(1.5, abs=1e-6)
     assert d.threshold == pytest.approx(5.0 - 3.0 * d.sigma_a_da)
     assert d.final_roe[0] * A == pytest.approx(1.5, abs=1e-6)
+    # the drift-rate error grows from the OD's epoch, not from the decision time
+    rate = 1.0 / 86400.0
+    late = plan_trim(state(1.5), CHIEF, DA_DOT, [], T_F, T0 + MARGIN, 0.5, rate, 5.0, CFG, t_od=T0 - 43200.0)
+    assert late.sigma_a_da == pytest.approx(predicted_drift_sigma(0.5, rate, T_F - T0 + 43200.0))
+    assert late.sigma_a_da > d.sigma_a_da
 
 
 @pytest.mark.parametrize("a_da_tf", [4.2, -4.7, 9.0, -12.0])

@@ -149,12 +149,13 @@ def trim_problems(final_roe, a, cfg: AcquisitionConfig, leading, ei_tolerance_de
 
 
 def plan_trim(roe0, chief: Chief, da_dot, burns, t_final, t_earliest, sigma_a_da, sigma_rate, tolerance,
-              cfg: AcquisitionConfig = AcquisitionConfig(), ei_tolerance_deg=10.0) -> TrimDecision:
+              cfg: AcquisitionConfig = AcquisitionConfig(), ei_tolerance_deg=10.0, t_od=None) -> TrimDecision:
     """The trim decision from the estimate ``roe0`` (dimensionless, at ``chief.t0``, every burn flown so far applied)
     with the ``burns`` still to fly (:class:`Burn`, relative impulses), the IC epoch ``t_final`` in force and the
     earliest burn epoch ``t_earliest`` (now + uplink margin). ``sigma_a_da`` [m] and ``sigma_rate`` [m/s]: the OD's
     1-sigma of a da and of its drift rate; ``tolerance`` [m]: the |a da| initial condition (``ei_tolerance_deg``: its
-    e/i one). The decision is made at ``t_final``; a trim aims at the (possibly later) t_F it leaves. Raises
+    e/i one); ``t_od`` [s]: the OD's epoch, from which its drift-rate error grows (default ``chief.t0``). The
+    decision is made at ``t_final``; a trim aims at the (possibly later) t_F it leaves. Raises
     :class:`AcquisitionInfeasible` when the trimmed state would break another initial condition."""
     a = float(chief.a)
     x0 = np.asarray(roe0, dtype=float)
@@ -166,7 +167,7 @@ def plan_trim(roe0, chief: Chief, da_dot, burns, t_final, t_earliest, sigma_a_da
     pending = [b for b in burns if b.epoch >= chief.t0]
     kept = trajectory(x0, chief.t0, pending, [t_final], chief, cfg.j2, da_dot)[0]
     predicted = float(kept[0] * a)
-    sigma = predicted_drift_sigma(sigma_a_da, sigma_rate, t_final - chief.t0)
+    sigma = predicted_drift_sigma(sigma_a_da, sigma_rate, t_final - (chief.t0 if t_od is None else t_od))
     lattice = drift_lattice(a, cfg.dv_quantum)
     threshold = trim_threshold(tolerance, sigma, lattice)
     if abs(predicted) <= threshold or sigma > tolerance / TRIM_SIGMAS:
