@@ -2,7 +2,9 @@
 
 Keys: ``maneuvers`` (each executed burn: purpose, spacecraft, epoch, u, dv RTN and |dv|), ``dv_total`` and
 ``dv_by_purpose`` (carrier burns, m/s), ``final_roe`` (truth a*ROE at the end, m), ``min_distance`` (closest
-approach after the initial departure, m, with its epoch), ``time_to_ic`` (ejection to the IC epoch, s, when the
+approach after the initial departure, m, with its epoch), ``dispersions`` (what the simulator drew,
+:func:`dispersions_applied`), ``final_od`` (:func:`final_od_decision`) and ``ic_predicted_a_da``
+(:func:`predicted_ic_drift`), ``time_to_ic`` (ejection to the IC epoch, s, when the
 truth meets the initial conditions there; None when it does not), ``od`` (first solution, :func:`od_solution`:
 epoch, passes, 1-sigma, error against truth, NEES, drift rate against the truth's own; ``last``: the same of the
 last solution), ``ic`` (truth at the IC epoch and each initial condition), ``criteria`` (each pass/fail) and
@@ -10,6 +12,7 @@ last solution), ``ic`` (truth at the IC epoch and each initial condition), ``cri
 the monitor).
 """
 
+import json
 import math
 from pathlib import Path
 
@@ -166,6 +169,46 @@ def od_solution(msg, truth, truth_da_dot, burn_epochs=None):
     return out
 
 
+def dispersions_applied(text):
+    """The simulator's dispersions as drawn (its final status value ``dispersions_applied``, JSON): ``drag_factor``
+    (differential ballistic coefficient factor), ``ejection_delay_s``, ``burns`` ([spacecraft, magnitude factor,
+    attitude errors RTN rad] per executed burn, the SPL ejection first) and the ``configured`` distributions; None
+    when the status carries none."""
+    if not text:
+        return None
+    try:
+        out = json.loads(text)
+    except ValueError:
+        return None
+    return out if isinstance(out, dict) else None
+
+
+FINAL_OD_KEYS = ("trim_dv", "predicted_a_da", "sigma_a_da", "threshold", "t_final")
+
+
+def final_od_decision(diagnostics):
+    """The ic_planner's drift-trim decision from the final OD (its status values ``final_*``, the last one
+    published): ``trim`` (flown or not), ``trim_dv`` [m/s], ``predicted_a_da`` (at the IC epoch then in force, before
+    the trim) with its 1-sigma ``sigma_a_da`` and the ``threshold`` [m], ``t_final`` [s]; None without a decision."""
+    for status in reversed([s for _, d in diagnostics for s in d.status if s.name == "roe_sep/ic_planner"]):
+        values = {kv.key: kv.value for kv in status.values}
+        if "final_trim" in values:
+            try:
+                out = {k: float(values[f"final_{k}"]) for k in FINAL_OD_KEYS}
+            except (KeyError, ValueError):
+                return None
+            return {"trim": values["final_trim"] == "True", **out}
+    return None
+
+
+def predicted_ic_drift(final_od, ic_model_error):
+    """a da [m] at the IC epoch as the last information predicted it: the final OD's prediction when it flew no trim
+    (the IC epoch unchanged), else the aimed value of the last plan (the trim's); None without either."""
+    if final_od is not None and not final_od["trim"]:
+        return final_od["predicted_a_da"]
+    return ic_model_error["predicted"][0] if ic_model_error else None
+
+
 def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()):
     topics = (interfaces.EXECUTED_TOPIC, interfaces.TRUTH_ROE_TOPIC, interfaces.DIAGNOSTICS_TOPIC,
               interfaces.SAFETY_TOPIC, interfaces.PLAN_CHECK_TOPIC, interfaces.OD_TOPIC,
@@ -215,6 +258,7 @@ def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()
         "ic": planner_model_error(data[interfaces.ACQUISITION_PLAN_TOPIC], truth, truth_da_dot),
     }
 
+    final_od = final_od_decision(data[interfaces.DIAGNOSTICS_TOPIC])
     od = data[interfaces.OD_TOPIC]
     od_report = None
     if od:
@@ -236,9 +280,12 @@ def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()
         "min_distance": min_distance if math.isfinite(min_distance) else None,  # None: no approach after departure
         "min_distance_epoch": float(values.get("min_distance_time_s", "nan")),
         "truth_drag_a_da_dot_m_per_day": truth_da_dot,
+        "dispersions": dispersions_applied(values.get("dispersions_applied")),
         "od": od_report,
         "ic": ic,
         "model_error": model_error,  # planners' prediction - truth [m] at the drift-stop and at the IC epoch
+        "final_od": final_od,  # the drift-trim decision of the OD just before the IC epoch
+        "ic_predicted_a_da": predicted_ic_drift(final_od, model_error["ic"]),
         "execution_warnings": late,  # burns executed late or dropped (unapproved), from the simulator
         "end_violations": list(last.violations) if last is not None else None,  # informational (drag drift on)
         "plan_checks": [{"source": s.source, "plan_stamp": time_to_sec(s.plan_stamp), "safe": s.safe,

@@ -8,13 +8,18 @@ condition of :func:`roe_sep.report.initial_conditions` over the runs whose IC ep
 IC epoch, total dv, drift-stop and IC dv, time to IC of the runs that reached the ICs: n, missing, min, p5, p50,
 p95, max, mean); ``od_nees`` / ``od_last_nees`` (the first / last OD solution's NEES against its chi-square(6)
 bounds), ``od_drift_rate`` / ``od_last_drift_rate`` (their drift rate's squared normalized error against
-chi-square(1)); ``failures`` (count per kind and per reason).
+chi-square(1)); ``ic_reached_lower_95`` (its one-sided Clopper-Pearson bound, :func:`one_sided_lower`);
+``ic_trims`` (the runs whose final OD flew a drift trim, of those with a final-OD decision; the trims' dv a
+distribution);
+``dispersions`` (each applied dispersion against its configured distribution, :mod:`.dispersions`);
+``failures`` (count per kind and per reason).
 """
 
 import collections
 import dataclasses
 
 from ..core.montecarlo.stats import distribution, nees_consistency, proportion
+from .dispersions import dispersion_checks
 from .table import CRITERIA, IC_CHECKS
 
 DISTRIBUTIONS = {  # report key -> (row field, unit, of its absolute value)
@@ -22,6 +27,8 @@ DISTRIBUTIONS = {  # report key -> (row field, unit, of its absolute value)
     "min_rn_distance_ic": ("min_rn_ic_m", "m", False),
     "min_rn_distance_final": ("min_rn_final_m", "m", False),
     "abs_a_da_ic": ("ic_a_da_m", "m", True),
+    "abs_a_da_ic_predicted": ("ic_pred_a_da_m", "m", True),
+    "a_da_ic_prediction_error": ("ic_a_da_error_m", "m", True),
     "dv_total": ("dv_total_m_s", "m/s", False),
     "dv_drift_stop": ("dv_drift_stop_m_s", "m/s", False),
     "dv_ic": ("dv_ic_m_s", "m/s", False),
@@ -30,6 +37,9 @@ DISTRIBUTIONS = {  # report key -> (row field, unit, of its absolute value)
 
 
 def _column(rows, field, absolute=False):
+    if field == "ic_a_da_error_m":  # truth minus the prediction of the plan in force at the IC epoch
+        rows = [{field: None if r.get("ic_a_da_m") is None or r.get("ic_pred_a_da_m") is None
+                 else r["ic_a_da_m"] - r["ic_pred_a_da_m"]} for r in rows]
     return [None if r.get(field) is None else (abs(r[field]) if absolute else r[field]) for r in rows]
 
 
@@ -59,13 +69,32 @@ def aggregate(rows):
         "od_drift_rate": nees_consistency(_squares(r.get("od_z_a_da_dot") for r in done), dof=1),
         "od_last_nees": nees_consistency([r.get("od_last_nees") for r in done], dof=6),
         "od_last_drift_rate": nees_consistency(_squares(r.get("od_last_z_a_da_dot") for r in done), dof=1),
+        "dispersions": dispersion_checks(done),
         "failures": {"by_kind": dict(collections.Counter(r["failure"] for r in failed)),
                      "by_reason": dict(collections.Counter(r["reason"] for r in failed).most_common())},
     }
     out["distributions"]["min_distance"]["note"] = "missing: no approach after the departure (or no value)"
     out["distributions"]["abs_a_da_ic"]["note"] = "truth |a da| at the IC epoch (the drift initial condition)"
+    reached = sum(r["crit_ic_reached"] for r in done)
+    out["ic_reached_lower_95"] = one_sided_lower(reached, n)
+    trims = [r.get("ic_trim") for r in done if r.get("ic_trim") is not None]  # runs with a final-OD decision
+    out["ic_trims"] = proportion(sum(trims), len(trims))
+    out["distributions"]["ic_trim_dv"] = {"unit": "m/s", **distribution(
+        [r.get("ic_trim_dv_m_s") for r in done if r.get("ic_trim")])}
+    out["distributions"]["abs_a_da_ic_predicted"]["note"] = "|a da| the last information predicted at the IC epoch"
+    out["distributions"]["a_da_ic_prediction_error"]["note"] = "|truth - predicted a da| at the IC epoch"
     out["distributions"]["time_to_ic"]["note"] = "ejection to the IC epoch, runs that reached the ICs there"
     return out
+
+
+def one_sided_lower(k, n, confidence=0.95):
+    """Clopper-Pearson one-sided lower confidence bound of a proportion k/n (None without runs): the p below which
+    k or more successes in n would have probability < 1 - confidence (0 misses in 299 runs: 0.990)."""
+    from scipy.stats import beta
+
+    if not n:
+        return None
+    return 0.0 if k == 0 else float(beta.ppf(1.0 - confidence, k, n - k + 1))
 
 
 def planner_p(scenario, overrides):

@@ -8,6 +8,7 @@ its last row. Empty cells are "no value" (e.g. no OD solution in a failed run).
 
 import csv
 import io
+import json
 import math
 import os
 from pathlib import Path
@@ -22,17 +23,18 @@ CRITERIA = (*ERROR_CRITERIA, "min_distance", "plans_approved", "ic_reached")
 ROE_KEYS = ("a_da", "a_dl", "a_dex", "a_dey", "a_dix", "a_diy")
 FIELDS = (
     "seed", "status", "failure", "reason", "safe", *(f"crit_{c}" for c in CRITERIA),
-    *(f"ic_{c}" for c in IC_CHECKS), "ic_a_da_m",
+    *(f"ic_{c}" for c in IC_CHECKS), "ic_a_da_m", "ic_pred_a_da_m", "ic_trim", "ic_trim_dv_m_s",
+    "ic_final_od_sigma_m",
     "min_distance_m", "min_rn_ic_m", "min_rn_final_m", "final_de_m", "final_di_m",
     *(f"final_{k}_m" for k in ROE_KEYS),
     "dv_total_m_s", "dv_drift_stop_m_s", "dv_ic_m_s", "time_to_ic_s", "ejection_epoch_s",
     "od_epoch_s", "od_passes", "od_nees", *(f"od_err_{k}_m" for k in ROE_KEYS), "od_err_a_da_dot_m_per_day",
-    "od_z_a_da_dot", "od_solutions", "od_last_epoch_s", "od_last_nees", "od_last_z_a_da_dot",
-    "truth_drag_m_per_day", "wall_s", "domain_id",
+    "od_z_a_da_dot", "od_residual_rms", "od_measurements", "od_solutions", "od_last_epoch_s", "od_last_nees",
+    "od_last_z_a_da_dot", "truth_drag_m_per_day", "dispersions", "wall_s", "domain_id",
 )
-BOOL_FIELDS = {"safe", *(f"crit_{c}" for c in CRITERIA), *(f"ic_{c}" for c in IC_CHECKS)}
-INT_FIELDS = {"seed", "od_passes", "od_solutions", "domain_id"}
-STR_FIELDS = {"status", "failure", "reason"}
+BOOL_FIELDS = {"safe", "ic_trim", *(f"crit_{c}" for c in CRITERIA), *(f"ic_{c}" for c in IC_CHECKS)}
+INT_FIELDS = {"seed", "od_passes", "od_measurements", "od_solutions", "domain_id"}
+STR_FIELDS = {"status", "failure", "reason", "dispersions"}  # dispersions: the report's, as compact JSON
 RUN_FIELDS = ("wall_s", "domain_id")  # how the run went on this machine, not what it computed
 FAILURES = ("node_exit", "timeout", "aborted", "exception", "worker_lost")
 
@@ -62,6 +64,13 @@ def row_from_report(seed: int, rep: dict) -> dict:
     row["min_rn_ic_m"] = ic.get("min_rn_distance")
     row.update({f"ic_{c}": v for c, v in (ic.get("checks") or {}).items()})  # empty: no IC epoch evaluated
     row["ic_a_da_m"] = ic["roe"][0] if ic.get("roe") else None  # truth drift at the IC epoch
+    row["ic_pred_a_da_m"] = rep.get("ic_predicted_a_da")  # what the last information predicted there
+    final_od = rep.get("final_od")
+    if final_od:
+        row.update(ic_trim=final_od["trim"], ic_trim_dv_m_s=final_od["trim_dv"],
+                   ic_final_od_sigma_m=final_od["sigma_a_da"])
+    if rep.get("dispersions"):
+        row["dispersions"] = json.dumps(rep["dispersions"], separators=(",", ":"), allow_nan=False)
     final = rep.get("final_roe")
     if final:
         row["min_rn_final_m"] = float(min_rn_distance(final))  # Eq. 25 is homogeneous: a*ROE in, meters out
@@ -78,7 +87,8 @@ def row_from_report(seed: int, rep: dict) -> dict:
         rate_err = od.get("a_da_dot_error")
         row.update(od_epoch_s=od.get("epoch"), od_passes=od.get("passes"), od_nees=od.get("nees"),
                    od_err_a_da_dot_m_per_day=None if rate_err is None else rate_err * 86400.0,
-                   od_z_a_da_dot=od.get("a_da_dot_z"), od_solutions=od.get("solutions"))
+                   od_z_a_da_dot=od.get("a_da_dot_z"), od_solutions=od.get("solutions"),
+                   od_residual_rms=od.get("residual_rms"), od_measurements=od.get("measurements"))
         row.update({f"od_err_{k}_m": v for k, v in zip(ROE_KEYS, od.get("error") or ())})
         last = od.get("last") or {}
         row.update(od_last_epoch_s=last.get("epoch"), od_last_nees=last.get("nees"),

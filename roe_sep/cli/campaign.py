@@ -50,6 +50,10 @@ def print_campaign(rep):
     for name, prop in rep["criteria"].items():
         print(f"  {name:28s}{_p(prop)}")
     print(f"  {'safe (failed = unsafe)':28s}{_p(rep['p_safe_failures_unsafe'])}")
+    if rep.get("ic_reached_lower_95") is not None:
+        print(f"  {'ic_reached, one-sided 95 % lower bound (Clopper-Pearson)':60s}{rep['ic_reached_lower_95']:.4f}")
+    if rep.get("ic_trims", {}).get("n"):
+        print(f"  {'final OD flew a drift trim':28s}{_p(rep['ic_trims'])}")
     if any(prop["n"] for prop in rep["ic_checks"].values()):
         print("  initial conditions at the IC epoch:")
         for name, prop in rep["ic_checks"].items():
@@ -74,6 +78,14 @@ def print_campaign(rep):
         print(f"    {label:32s}mean {c['mean']:5.2f} in [{lo:.2f}, {hi:.2f}] "
               f"{'consistent  ' if c['consistent'] else 'INCONSISTENT'}  runs in chi2({c['dof']}) "
               f"[{slo:.2f}, {shi:.2f}]: {_p(c['within_single_run_bounds'])}")
+    if rep.get("dispersions"):
+        print("\n  dispersions as applied against the configured distributions (Kolmogorov-Smirnov, consistent at "
+              "p >= 0.01)")
+        for name, c in rep["dispersions"].items():
+            verdict = {True: "consistent", False: "INCONSISTENT", None: "too few samples"}[c["consistent"]]
+            p = "" if c["p_value"] is None else f"  KS D {c['statistic']:.3f}  p {c['p_value']:.3f}"
+            print(f"    {name:18s}{c['reference']:>24s}  n {c['n']:5d}  mean {_num(c['mean'], '{:.4g}'):>10s}  "
+                  f"std {_num(c['std'], '{:.4g}'):>10s}{p}  {verdict}")
     ol = rep["open_loop"]
     if ol.get("p") is not None:
         print(f"\n  open loop (roe-sep mc, {ol['samples']} samples, p = {ol['p']:g} m/s: {ol['p_source']}):")

@@ -10,11 +10,22 @@ plan_acquisition` (linear program + quantized re-solve, verified with the shared
 When a plan is (re)computed -- what a flight-dynamics team wants from a stream of OD solutions:
 
 * Every *newer* solution (ordered by ``header.stamp``, then ``estimate.header.stamp``) is the best knowledge and
-  re-plans; a re-delivered or older one is ignored. The plan starts from the estimate propagated to now with every
-  carrier burn flown since its epoch (``/sim/executed_maneuvers``, latched), so a correction never repeats a burn.
+  re-plans; a re-delivered or older one is ignored. With ``trim``, a solution that predicts a da at t_F less well
+  (its 1-sigma from the covariance and the drift-rate sigma) than the plan in force knows it (its OD's, with the
+  execution errors of the burns flown since, ``burn_sigma``) is not used either: a two-pass solution after a burn
+  can be tens of meters off. The plan starts from the estimate propagated to now
+  with every carrier burn flown since its epoch (``/sim/executed_maneuvers``, latched), so a correction never repeats
+  a burn.
 * The first plan fixes the IC epoch t_F (the last grid epoch within OD epoch + ``window``); later solutions
-  re-plan the rest of the acquisition as corrections aimed at the same t_F, as a real campaign does. Within two
-  planning margins of t_F the acquisition is complete and further solutions are not used.
+  re-plan the rest of the acquisition as corrections aimed at the same t_F, as a real campaign does.
+* The final OD's radar arc (:func:`~roe_sep.core.acquisition.trim.final_od_arc` of the predicted TIRA passes: three
+  passes spanning ``final_od_arc``, ending with the last pass before t_F) stays free of burns: no plan puts one
+  there, and a solution whose re-plan would start in it is not used.
+* The solution after the arc's last pass is the final OD (without a predicted arc: the first newer solution within
+  two planning margins of t_F): with ``trim`` it predicts a da at t_F and adds one tangential trim burn at or after
+  now + planning_margin when that prediction is not safely inside ``ic_drift_tolerance``
+  (:mod:`roe_sep.core.acquisition.trim`; a trim past t_F moves t_F to one grid step after it). The plan in force
+  keeps its other burns; later solutions are not used.
 * A re-plan never moves a burn that is committed: one of the plan in force due within ``planning_margin`` from
   now (or executed without its record having arrived yet) keeps the plan in force (WARN on /diagnostics).
 * The first burn of a new plan is at or after max(OD epoch, now) + planning_margin; only an OD made after the
@@ -39,6 +50,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 from roe_sep_msgs.msg import ImpulsiveManeuver, ManeuverPlan, OrbitDetermination
 
 from .. import interfaces
+from ..core.acquisition.lp_transfer import grid_epochs
 from ..core.acquisition.planner import (
     AcquisitionConfig,
     InvalidAcquisitionConfig,
@@ -46,7 +58,18 @@ from ..core.acquisition.planner import (
     plan_acquisition,
     validate_config,
 )
+from ..core.acquisition.trim import (
+    CLUSTER_GAP,
+    final_od_arc,
+    plan_trim,
+    predicted_drift_sigma,
+    radar_passes,
+    trim_problems,
+)
+from ..core.constants import SECONDS_PER_DAY
+from ..core.od.radar import DEFAULT_EPOCH_UTC, julian_date
 from ..core.relmotion.dynamics import propagate_chief
+from ..core.relmotion.orbit import mean_motion
 from ..core.relmotion.roe import wrap_angle
 from ..core.relmotion.trajectory import Chief, state_at
 from .convert import (
@@ -64,6 +87,8 @@ from .lockstep import Lockstep
 from .managed import ManagedNode
 from .params import ParameterError, declare
 
+PASS_SLACK = 900.0  # s, between a predicted pass and its OD solution (the 5 km separation, the solution's delay)
+
 
 class IcPlannerNode(ManagedNode):
     def __init__(self):
@@ -75,6 +100,11 @@ class IcPlannerNode(ManagedNode):
                  "fov_half_n_deg", "max_burn_dv", "dv_quantum", "axes", "planning_margin", "window", "grid_per_orbit",
                  "drift_tolerance", "ei_angle_tol_deg", "j2")
         values = {name: declare(self, name) for name in names}
+        self.jd0 = julian_date(DEFAULT_EPOCH_UTC)  # sim time 0, as the simulator's and radar_od's default
+        self.trim = declare(self, "trim")
+        self.burn_sigma = declare(self, "burn_sigma")
+        self.final_od_arc = declare(self, "final_od_arc")
+        self.ic_drift_tolerance = declare(self, "ic_drift_tolerance")
         try:
             self.cfg = AcquisitionConfig(**values)
             validate_config(self.cfg)
@@ -98,6 +128,10 @@ class IcPlannerNode(ManagedNode):
         self.t_final = None  # s, IC epoch of the acquisition in progress (fixed by its first plan)
         self.last_key = None  # (solution stamp, estimate epoch) of the newest OD seen
         self.burn_epochs = None  # s, burn epochs of the plan in force (None: no plan yet)
+        self.plan_in_force = None  # its ManeuverPlan (the trim keeps its other burns)
+        self.final_decided = False  # the final OD's trim decision is made: the acquisition is complete
+        self.plan_sigma = None  # m, 1-sigma of a da at t_F from the OD of the plan in force (with ``trim``)
+        self.plan_od_epoch = None  # s, that OD's epoch
         self.summary = {}
         self.plans = 0
         publish_status(self, self.diag_pub, OK, "waiting for an OD estimate", self._values())
@@ -120,6 +154,7 @@ class IcPlannerNode(ManagedNode):
         if self.t_final is None and plan.maneuvers:
             self.t_final = time_to_sec(plan.aimed.header.stamp)
             self.burn_epochs = [time_to_sec(m.epoch) for m in plan.maneuvers]
+            self.plan_in_force = plan
 
     def now(self):
         return self.get_clock().now().nanoseconds * 1e-9
@@ -138,6 +173,32 @@ class IcPlannerNode(ManagedNode):
             self.get_logger().info(text)
             publish_status(self, self.diag_pub, OK, text, self._values())
             return
+        arc = self.radar_arc(msg, self.t_final) if self.t_final is not None else None
+        final_band = self.t_final is not None and now < self.t_final < now + 2.0 * self.cfg.planning_margin
+        if self.trim and (t_od >= arc[1] - PASS_SLACK if arc else final_band):
+            self.final_trim(msg, t_od, now)
+            return
+        keep_arc = arc is None or max(t_od, now) + self.cfg.planning_margin <= arc[0]
+        if not keep_arc:
+            missed = self._guarded("OD estimate rejected", "acquisition check failed", self.plan_problems, msg, now)
+            if missed is None:
+                return
+            if not missed:
+                text = (f"OD at t = {t_od:.1f} s not used: the plan in force meets the initial conditions by it, and "
+                        f"its burns would fall in the final OD's radar arc [{arc[0]:.0f}, {arc[2]:.0f}] s (the final "
+                        f"OD comes after the pass at t = {arc[1]:.0f} s)")
+                self.get_logger().info(text)
+                publish_status(self, self.diag_pub, OK, text, self._values())
+                return
+            self.get_logger().info(f"OD at t = {t_od:.1f} s: the plan in force would miss the initial conditions "
+                                   f"({'; '.join(missed)}): re-planned within the final OD's radar arc")
+        sigma, known = self.drift_sigma(msg, self.t_final), self.plan_knowledge(msg)
+        if sigma is not None and known is not None and sigma > known:
+            text = (f"OD at t = {t_od:.1f} s not used: its a da at the IC epoch is known to {sigma:.2f} m (1-sigma), "
+                    f"the plan in force's to {known:.2f} m")
+            self.get_logger().info(text)
+            publish_status(self, self.diag_pub, OK, text, self._values())
+            return
         blocking = self._committed_burn(t_od, now)
         if blocking is not None:
             text = (f"OD at t = {t_od:.1f} s not used: the burn at t = {blocking:.1f} s of the plan in force is "
@@ -145,17 +206,15 @@ class IcPlannerNode(ManagedNode):
             self.get_logger().warn(text)
             publish_status(self, self.diag_pub, WARN, text, self._values())
             return
-        try:
-            plan_msg, plan = self.make_plan(msg, now)
-        except ValueError as exc:
-            self.get_logger().error(f"OD estimate rejected: {exc}")
-            publish_status(self, self.diag_pub, ERROR, f"OD estimate rejected: {exc}", self._values())
+        made = self._guarded("OD estimate rejected", "acquisition planning failed", self.make_plan, msg, now,
+                             keep_arc)
+        if made is None:
             return
-        except Exception as exc:  # noqa: BLE001 -- a planning bug must not take the node down; it is reported
-            self.get_logger().error(f"acquisition planning failed: {exc!r}\n{traceback.format_exc()}")
-            publish_status(self, self.diag_pub, ERROR, f"acquisition planning failed: {exc!r}", self._values())
-            return
+        plan_msg, plan = made
         self.plan_pub.publish(plan_msg)
+        self.plan_in_force = plan_msg
+        self.plan_sigma = self.drift_sigma(msg, plan.t_final)
+        self.plan_od_epoch = t_od
         self.burn_epochs = [float(t) for t in plan.epochs]
         if self.t_final is None:
             self.t_final = float(plan.t_final)
@@ -169,6 +228,75 @@ class IcPlannerNode(ManagedNode):
             f"a dl_F = {plan.final_roe[1] * plan.a:.0f} m, min R-N = {plan.min_rn:.0f} m")
         publish_status(self, self.diag_pub, OK, "acquisition plan published", self._values())
 
+    def final_trim(self, msg: OrbitDetermination, t_od, now):
+        """The final OD's drift trim (module docstring): once, from the first newer solution within two planning
+        margins of t_F whose flown burns are all on record."""
+        if self.final_decided:
+            return
+        flown = {round(b.epoch, 3) for b in self.executed}
+        if any(t_od <= t < now and round(t, 3) not in flown for t in self.burn_epochs or ()):
+            return  # a burn flown after the OD epoch is not on record yet: the next solution decides
+        kept = [m for m in (self.plan_in_force.maneuvers if self.plan_in_force else ())
+                if time_to_sec(m.epoch) >= now and round(time_to_sec(m.epoch), 3) not in flown]
+        decision = self._guarded("final OD rejected", "drift trim failed", self.trim_decision, msg, now, kept)
+        if decision is None:
+            return
+        self.final_decided = True
+        self.summary.update({f"final_{k}": v for k, v in decision.summary().items()})
+        text = (f"final OD at t = {t_od:.1f} s: predicted a da at the IC epoch {decision.predicted_a_da:+.2f} m "
+                f"(1-sigma {decision.sigma_a_da:.2f} m, trim threshold {decision.threshold:.2f} m): ")
+        if not decision.trim:
+            self.get_logger().info(text + "no trim")
+            publish_status(self, self.diag_pub, OK, text + "no trim", self._values())
+            return
+        out = ManeuverPlan(strategy="ic_acquisition", p_reduction=0.0)
+        out.header.stamp = sec_to_time(now)
+        out.header.frame_id = interfaces.CARRIER_RTN_FRAME
+        out.maneuvers = [*kept, maneuver_msg(decision.epoch, float(wrap_angle(decision.u)),
+                                             (0.0, decision.dv_t, 0.0), "carrier", "ic_acquisition")]
+        out.aimed = self.aimed(msg, decision.final_roe, decision.t_final)
+        self.plan_pub.publish(out)
+        self.plan_in_force, self.t_final = out, decision.t_final
+        self.burn_epochs = [time_to_sec(m.epoch) for m in out.maneuvers]
+        self.plans += 1
+        text += f"trim of {decision.dv_t:+.3f} m/s at t = {decision.epoch:.1f} s, IC epoch t = {decision.t_final:.1f} s"
+        self.get_logger().info(text)
+        publish_status(self, self.diag_pub, OK, text, self._values())
+
+    def plan_problems(self, msg: OrbitDetermination, now):
+        """The initial conditions other than the drift (the final trim's) that the plan in force misses at t_F by
+        this OD (:func:`~roe_sep.core.acquisition.trim.trim_problems`); [] when it meets them."""
+        roe0, chief, da_dot = self.start_state(msg, now)
+        flown = {round(b.epoch, 3) for b in self.executed}
+        kept = [m for m in (self.plan_in_force.maneuvers if self.plan_in_force else ())
+                if time_to_sec(m.epoch) >= chief.t0 and round(time_to_sec(m.epoch), 3) not in flown]
+        burns = plan_burns(kept) + [b for b in self.executed if b.epoch > chief.t0]
+        final = state_at(roe0, chief.t0, burns, max(self.t_final, chief.t0), chief, self.cfg.j2, da_dot)
+        return trim_problems(final, chief.a, self.cfg, roe0[1] > 0)
+
+    def trim_decision(self, msg: OrbitDetermination, now, kept):
+        """:func:`plan_trim` from the OD with the maneuvers ``kept`` of the plan in force still to fly and the burns
+        flown after the decision time (under lockstep the solution arrives after the burns of its step)."""
+        roe0, chief, da_dot = self.start_state(msg, now)
+        sigma_a_da = math.sqrt(max(msg.estimate.covariance[0], 0.0))
+        burns = plan_burns(kept) + [b for b in self.executed if b.epoch > chief.t0]
+        return plan_trim(roe0, chief, da_dot, burns, self.t_final, now + self.cfg.planning_margin,
+                         sigma_a_da, msg.a_da_dot_sigma, self.ic_drift_tolerance, self.cfg,
+                         t_od=time_to_sec(msg.estimate.header.stamp))
+
+    def _guarded(self, rejected, failed, fn, *args):
+        """``fn(*args)``, or None with the reason logged and on /diagnostics: a ValueError is a bad estimate or no
+        solution (``rejected``), anything else a bug (``failed``) that must not take the node down."""
+        try:
+            return fn(*args)
+        except ValueError as exc:
+            self.get_logger().error(f"{rejected}: {exc}")
+            publish_status(self, self.diag_pub, ERROR, f"{rejected}: {exc}", self._values())
+        except Exception as exc:  # noqa: BLE001 -- reported, never fatal
+            self.get_logger().error(f"{failed}: {exc!r}\n{traceback.format_exc()}")
+            publish_status(self, self.diag_pub, ERROR, f"{failed}: {exc!r}", self._values())
+        return None
+
     def _committed_burn(self, t_od, now):
         """A burn of the plan in force that a re-plan must not touch: due within ``planning_margin`` from now, or
         executed after the OD epoch without the executed-maneuver record having arrived yet (see the module
@@ -181,8 +309,60 @@ class IcPlannerNode(ManagedNode):
             return self.t_final  # the acquisition is (nearly) complete: no new acquisition from here
         return None
 
-    def make_plan(self, msg: OrbitDetermination, now):
+    def make_plan(self, msg: OrbitDetermination, now, keep_arc=True):
         """ManeuverPlan and core plan for one OD solution; raises ValueError on a bad estimate or no solution."""
+        roe0, chief, da_dot = self.start_state(msg, now)
+        t_start = chief.t0
+        # corrections of an acquisition in progress aim at its IC epoch; a first plan opens a new window
+        cfg = self.cfg if self.t_final is None else dataclasses.replace(self.cfg, window=self.t_final - t_start)
+        t_f = self.t_final
+        if t_f is None:
+            t_f = float(grid_epochs(t_start, t_start + cfg.window, chief, cfg.grid_per_orbit, cfg.j2)[-1])
+        arc = self.radar_arc(msg, t_f) if keep_arc else None
+        plan = plan_acquisition(roe0, chief, da_dot, cfg, t_earliest=t_start + self.cfg.planning_margin,
+                                no_burns=[(arc[0], arc[2])] if arc else ())
+
+        out = ManeuverPlan(strategy="ic_acquisition", p_reduction=0.0)
+        out.header.stamp = sec_to_time(t_start)  # the plan describes the burns from its start state on
+        out.header.frame_id = interfaces.CARRIER_RTN_FRAME
+        out.maneuvers = [maneuver_msg(float(t), float(wrap_angle(u)), dv, "carrier", "ic_acquisition")
+                         for t, u, dv in zip(plan.epochs, plan.u, plan.dv_carrier)]
+        out.aimed = self.aimed(msg, plan.final_roe, plan.t_final)
+        return out, plan
+
+    def drift_sigma(self, msg: OrbitDetermination, t_final):
+        """1-sigma [m] of a da at ``t_final`` predicted from the OD (:func:`predicted_drift_sigma`); None without
+        ``trim`` (the plans of an acquisition without the final OD re-plan on every newer solution) or t_F."""
+        if not self.trim or t_final is None:
+            return None
+        sigma_a_da = math.sqrt(max(msg.estimate.covariance[0], 0.0))
+        return predicted_drift_sigma(sigma_a_da, msg.a_da_dot_sigma, t_final - time_to_sec(msg.estimate.header.stamp))
+
+    def plan_knowledge(self, msg: OrbitDetermination):
+        """1-sigma [m] of a da at t_F as the plan in force knows it now: its OD's, with the execution errors of the
+        carrier burns flown since that OD (``burn_sigma`` of each one's a da change 2 |dvT| / n, seed 002 Eq. 2);
+        None without a plan (or without ``trim``)."""
+        if self.plan_sigma is None:
+            return None
+        n = float(mean_motion(msg.estimate.chief.semi_major_axis))
+        flown = [self.burn_sigma * 2.0 * abs(b.dv_rel[1]) / n for b in self.executed if b.epoch > self.plan_od_epoch]
+        return math.sqrt(self.plan_sigma ** 2 + sum(v * v for v in flown))
+
+    def radar_arc(self, msg: OrbitDetermination, t_final):
+        """``(start, last_rise, end)`` [s] of the final OD's burn-free radar arc for the IC epoch ``t_final``
+        (:func:`final_od_arc` of the predicted TIRA passes of the OD's chief); None with ``trim`` or ``final_od_arc``
+        off, or without one."""
+        if not (self.trim and self.final_od_arc):
+            return None
+        t_od = time_to_sec(msg.estimate.header.stamp)
+        passes = radar_passes(elements_to_array(msg.estimate.chief), t_od, t_final - 2.0 * SECONDS_PER_DAY,
+                              t_final + 3.0 * CLUSTER_GAP, self.jd0, j2=self.cfg.j2)
+        # the last pass before t_F ends the arc, three passes (not its cluster's last pass: see the trim module)
+        return final_od_arc(passes, t_final, self.final_od_arc)
+
+    def start_state(self, msg: OrbitDetermination, now):
+        """The best knowledge at max(OD epoch, now): the estimate plus every carrier burn flown since its epoch, as
+        (ROE, Chief there, da_dot [1/s]); raises ValueError on a bad estimate."""
         el = msg.estimate.chief
         a = el.semi_major_axis
         if not (math.isfinite(a) and a > 6.4e6):
@@ -192,26 +372,19 @@ class IcPlannerNode(ManagedNode):
         roe_od = msg_to_roe(msg.estimate)
         da_dot = msg.a_da_dot / a
         check_inputs(roe_od, od_chief, da_dot)
-        # the best knowledge now: the estimate plus every carrier burn flown since its epoch
         t_start = max(t_od, now)
         flown = [b for b in self.executed if t_od < b.epoch <= t_start]
         roe0 = state_at(roe_od, t_od, flown, t_start, od_chief, self.cfg.j2, da_dot)
-        chief = Chief(a=a, inc=el.inclination, u0=float(od_chief.u_at(t_start, self.cfg.j2)), t0=t_start)
-        # corrections of an acquisition in progress aim at its IC epoch; a first plan opens a new window
-        cfg = self.cfg if self.t_final is None else dataclasses.replace(self.cfg, window=self.t_final - t_start)
-        plan = plan_acquisition(roe0, chief, da_dot, cfg, t_earliest=t_start + self.cfg.planning_margin)
+        return roe0, Chief(a=a, inc=el.inclination, u0=float(od_chief.u_at(t_start, self.cfg.j2)), t0=t_start), da_dot
 
-        out = ManeuverPlan(strategy="ic_acquisition", p_reduction=0.0)
-        out.header.stamp = sec_to_time(t_start)  # the plan describes the burns from its start state on
-        out.header.frame_id = interfaces.CARRIER_RTN_FRAME
-        out.maneuvers = [maneuver_msg(float(t), float(wrap_angle(u)), dv, "carrier", "ic_acquisition")
-                         for t, u, dv in zip(plan.epochs, plan.u, plan.dv_carrier)]
-        kep = propagate_chief(elements_to_array(el), plan.t_final - t_od, self.cfg.j2)
+    def aimed(self, msg: OrbitDetermination, final_roe, t_final):
+        """The plan's ``aimed`` field: the predicted ROE at the IC epoch with the chief's elements there."""
+        el = msg.estimate.chief
+        kep = propagate_chief(elements_to_array(el), t_final - time_to_sec(msg.estimate.header.stamp), self.cfg.j2)
         kep[3:] = wrap_angle(kep[3:])
         aimed_chief = array_to_elements(kep)
         aimed_chief.mean_arg_latitude = float(wrap_angle(aimed_chief.mean_arg_latitude))
-        out.aimed = roe_to_msg(plan.final_roe, aimed_chief, sec_to_time(plan.t_final))
-        return out, plan
+        return roe_to_msg(final_roe, aimed_chief, sec_to_time(t_final))
 
 
 def main(args=None):

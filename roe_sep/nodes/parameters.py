@@ -305,6 +305,16 @@ IC_PLANNER = (
     Param("ei_angle_tol_deg", "double", _ACQ.ei_angle_tol_deg, "e/i deviation from (anti-)parallel allowed after "
           "quantization", "deg", range=(1.0e-3, 20.0)),
     Param("j2", "bool", _ACQ.j2, J2.format("prediction")),
+    Param("trim", "bool", True, "the final OD's drift trim: one tangential burn when the final OD predicts |a da| at "
+          "the IC epoch beyond max(0.9 m, ic_drift_tolerance - 3 sigma); false: no trim"),
+    Param("ic_drift_tolerance", "double", 5.0, "the |a da| initial condition the trim protects (the report's drift "
+          "check)", "m", range=(1.0e-3, 1.0e5)),
+    Param("burn_sigma", "double", 0.05, "1-sigma magnitude error of a carrier burn (the scenario's thruster_sigma): "
+          "how well the plan in force knows a da after its burns; an OD that knows it less well is not used",
+          range=(0.0, 1.0)),
+    Param("final_od_arc", "double", 36000.0, "burn-free radar arc kept before the IC epoch for the final OD "
+          "(radar_od's min_arc; radar_od restarts its arc at every burn); 0: none, the final OD is then the first "
+          "solution within two planning margins of t_F", "s", range=(0.0, 604800.0)),
 )
 
 SAFETY_MONITOR = (

@@ -19,6 +19,7 @@ the run (:mod:`roe_sep.core.truth.simulated`), the burn execution
 :class:`~.free_running.FreeRunningClock`); this node holds the parameters, the topics and the conversions.
 """
 
+import json
 import math
 import time
 
@@ -90,8 +91,8 @@ class SimNode(Node):
         self.step_timeout = declare(self, "step_timeout")
 
         raan, scenario, carrier = self._check(ltan, epoch, wait_for, participants, scenario_file)
-        world = dispersed_truth(scenario, carrier, raan, math.radians(u0_deg), self.seed, self.disperse,
-                                self.dynamics, self.j2, self.ejection_delay_max)
+        self.world = world = dispersed_truth(scenario, carrier, raan, math.radians(u0_deg), self.seed,
+                                             self.disperse, self.dynamics, self.j2, self.ejection_delay_max)
         self.truth = SimulatedTruth(world.model, self.truth_period, self.distance_step, self.departure,
                                     self._publish_truth, lambda: self.status(OK, "running"))
         self.execution = BurnExecution(self.truth, world.errors, world.ejection_delay, self.require_approval,
@@ -248,6 +249,7 @@ class SimNode(Node):
             "min_distance_m": f"{min_dist[0]:.3f}",
             "min_distance_time_s": f"{min_dist[1]:.1f}",
             "truth_a_da_dot_m_per_day": f"{model.da_dot * model.a * 86400:.3f}",
+            "dispersions_applied": json.dumps(self.world.applied()),
         })
         if message.startswith(("scenario complete", "scenario aborted")) and self.final_timer is None:
             # the end of the run is repeated every wall second, as diagnostics are, until the node stops: a

@@ -14,6 +14,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import psutil
 import pytest
 import yaml
@@ -141,6 +142,95 @@ def test_od_drift_rate_and_last_solution_columns_and_consistency(tmp_path):
     assert agg["od_drift_rate"]["dof"] == 1 and agg["od_drift_rate"]["n"] == 200
     assert not agg["od_last_nees"]["consistent"] and not agg["od_last_drift_rate"]["consistent"]
     assert agg["od_last_drift_rate"]["mean"] > agg["od_last_drift_rate"]["mean_bounds"][1]
+
+
+def _dispersed_report(rng, seed, spl_sigma=0.1, thruster_sigma=0.05, ballistic_sigma=0.2, noise_scale=1.0,
+                      applied=None):
+    """A run report whose ``dispersions`` are drawn as the simulator draws them (ExecutionErrors records each burn);
+    ``applied`` overrides the sigmas actually used (a dispersion silently not applied: 0) while the configured ones
+    stay in the report, as a framework with that bug would write them."""
+    from roe_sep.core.truth.secular import ExecutionErrors
+
+    used = {"spl_sigma": spl_sigma, "thruster_sigma": thruster_sigma, "ballistic_sigma": ballistic_sigma,
+            **(applied or {})}
+    att = 30.0 * math.pi / 180.0 / 3600.0
+    errors = ExecutionErrors(rng, used["spl_sigma"], used["thruster_sigma"], att)
+    errors.executed(np.array([0.0, 1.41, 0.0]), "picosatellite")
+    for _ in range(rng.integers(3, 9)):
+        errors.executed(np.array([0.0, 0.01, 0.0]), "carrier")
+    m = 120  # radar measurements of the first OD: 3 m residuals, 7 parameters
+    rms = noise_scale * math.sqrt(rng.chisquare(3 * m - 7) / (3 * m))
+    return {"run": {"completed": True}, "safe": True,
+            "od": {"epoch": 75600.0, "passes": 3, "measurements": m, "residual_rms": rms, "solutions": 3},
+            "dispersions": {"drag_factor": float(rng.normal(1.0, used["ballistic_sigma"])),
+                            "ejection_delay_s": float(rng.uniform(0.0, 10.0)), "burns": errors.applied,
+                            "configured": {"disperse": True, "ballistic_sigma": ballistic_sigma,
+                                           "ejection_delay_max_s": 10.0, "spl_sigma": spl_sigma,
+                                           "thruster_sigma": thruster_sigma, "attitude_sigma": att}}}
+
+
+@pytest.mark.parametrize("bug, failing", [
+    (None, set()),
+    ({"applied": {"spl_sigma": 0.0}}, {"spl_factor"}),
+    ({"applied": {"thruster_sigma": 0.025}}, {"thruster_factor"}),
+    ({"applied": {"ballistic_sigma": 0.0}}, {"drag_factor"}),
+    ({"noise_scale": 1.2}, {"radar_noise"}),
+])
+def test_dispersions_as_applied_against_the_configured_distributions(tmp_path, bug, failing):
+    """The dispersions each run drew go through runs.csv into a KS test per dispersion against the configured
+    distribution: honest draws are consistent; a dispersion not applied (or applied at half its sigma, or radar
+    noise 20 % above its sigma) is INCONSISTENT, and only that one."""
+    from roe_sep.campaign.aggregate import aggregate
+
+    rng = np.random.default_rng(11)
+    table = Table(tmp_path / "runs.csv")
+    for seed in range(300):
+        table.append(row_from_report(seed, _dispersed_report(rng, seed, **(bug or {}))))
+    rows = list(table.read().values())
+    assert json.loads(rows[0]["dispersions"])["configured"]["spl_sigma"] == 0.1
+    checks = aggregate(rows)["dispersions"]
+    assert set(checks) == {"spl_factor", "spl_attitude", "thruster_factor", "thruster_attitude", "drag_factor",
+                           "ejection_delay", "radar_noise"}
+    assert checks["spl_factor"]["n"] == 300 and checks["spl_attitude"]["n"] == 900
+    assert checks["spl_factor"]["reference"] == "N(1, 0.1)" and checks["ejection_delay"]["reference"] == "U(0, 10 s)"
+    assert {k for k, c in checks.items() if not c["consistent"]} == failing
+    for k in failing:
+        assert checks[k]["p_value"] < 0.01
+
+
+def test_ic_prediction_column_and_one_sided_bound(tmp_path):
+    """The a da the last information predicted at the IC epoch is a column beside the truth (the final OD's
+    prediction when it flew no trim, the trim plan's aim otherwise, :func:`roe_sep.report.predicted_ic_drift`); their
+    difference is a distribution; ic_reached has its one-sided Clopper-Pearson lower bound (0 misses in 299: 0.990)."""
+    from roe_sep.campaign.aggregate import aggregate, one_sided_lower
+    from roe_sep.report import predicted_ic_drift
+
+    def final(trim, predicted):
+        return {"trim": trim, "trim_dv": 0.004 if trim else 0.0, "predicted_a_da": predicted, "sigma_a_da": 1.2,
+                "threshold": 1.4, "t_final": 2.5e5}
+
+    table = Table(tmp_path / "runs.csv")
+    cases = ((final(False, 0.4), 1.0), (final(True, 6.0), -3.4), (None, 6.2))
+    for seed, (fin, true) in enumerate(cases):
+        aimed = {"predicted": [-0.9 if fin else 0.1, 7400.0, 0, 0, 0, 0]}
+        table.append(row_from_report(seed, {
+            "run": {"completed": True}, "criteria": {"ic_reached": abs(true) <= 5.0},
+            "ic": {"epoch": 2.5e5, "roe": [true, 7500.0, 0.0, -400.0, 0.0, 400.0], "checks": {}},
+            "final_od": fin, "ic_predicted_a_da": predicted_ic_drift(fin, aimed)}))
+    rows = list(table.read().values())
+    assert [r["ic_pred_a_da_m"] for r in rows] == [0.4, -0.9, 0.1]
+    assert [r["ic_trim"] for r in rows] == [False, True, None] and rows[1]["ic_trim_dv_m_s"] == 0.004
+    assert rows[0]["ic_final_od_sigma_m"] == 1.2
+    agg = aggregate(rows)
+    err = agg["distributions"]["a_da_ic_prediction_error"]
+    assert err["n"] == 3 and err["max"] == pytest.approx(6.1) and err["min"] == pytest.approx(0.6)
+    assert agg["distributions"]["abs_a_da_ic_predicted"]["max"] == 0.9
+    assert agg["ic_trims"]["k"] == 1 and agg["ic_trims"]["n"] == 2
+    assert agg["ic_reached_lower_95"] == pytest.approx(one_sided_lower(2, 3))
+    assert one_sided_lower(299, 299) == pytest.approx(0.05 ** (1 / 299)) and 0.98999 < one_sided_lower(299, 299)
+    assert one_sided_lower(472, 473) > 0.99 > one_sided_lower(471, 473)
+    assert one_sided_lower(0, 5) == 0.0 and one_sided_lower(0, 0) is None
+    assert predicted_ic_drift(None, None) is None
 
 
 # ------------------------------------------------------------------------------------------------- the table

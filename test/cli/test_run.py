@@ -209,3 +209,24 @@ def test_ic_drift_budget_of_the_reference_run_closes(tmp_path):
     remainder = b["truth_minus_predicted"] - b["execution"] + b["estimate"]
     assert abs(remainder) < 1.5, b
     assert abs(b["truth_a_da"]) <= 5.0
+
+
+def test_final_od_decision_from_the_ic_planner_status():
+    """The report reads the ic_planner's drift-trim decision from its last status carrying one (values are strings,
+    as on /diagnostics); a status without one, or another node's, is not a decision."""
+    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+
+    from roe_sep.report import final_od_decision
+
+    def status(name, **values):
+        return (0.0, DiagnosticArray(status=[DiagnosticStatus(name=name, values=[
+            KeyValue(key=k, value=str(v)) for k, v in values.items()])]))
+
+    decided = {"final_trim": True, "final_trim_dv": 0.004, "final_predicted_a_da": 3.02, "final_sigma_a_da": 1.28,
+               "final_threshold": 1.17, "final_t_final": 258669.8}
+    diags = [status("roe_sep/ic_planner", plans=1), status("roe_sep/ic_planner", plans=2, **decided),
+             status("roe_sep/sim", final_trim=False), status("roe_sep/ic_planner", plans=2)]
+    assert final_od_decision(diags) == {"trim": True, "trim_dv": 0.004, "predicted_a_da": 3.02, "sigma_a_da": 1.28,
+                                        "threshold": 1.17, "t_final": 258669.8}
+    assert final_od_decision(diags[:1]) is None
+    assert final_od_decision([status("roe_sep/ic_planner", final_trim=False, final_trim_dv="x")]) is None

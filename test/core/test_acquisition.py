@@ -270,3 +270,15 @@ def test_bad_configuration_names_the_field(changes, name):
     with pytest.raises(InvalidAcquisitionConfig) as info:
         plan_acquisition(TYPICAL, CHIEF, 0.0, dataclasses.replace(CFG, **changes))
     assert info.value.name == name and name in str(info.value)
+
+
+def test_no_burns_keeps_an_interval_free_of_burns():
+    """``no_burns`` (the final OD's radar arc): no burn in the interval, every IC still met; without it the same
+    problem burns there."""
+    free = plan_acquisition(TYPICAL, CHIEF, DA_DOT, CFG)
+    arc = (free.t_final - 46800.0, free.t_final - 1800.0)
+    assert np.any((free.epochs >= arc[0]) & (free.epochs <= arc[1]))
+    quiet = plan_acquisition(TYPICAL, CHIEF, DA_DOT, CFG, no_burns=[arc])
+    assert quiet.t_final == free.t_final and quiet.n_burns >= 1
+    assert not np.any((quiet.epochs >= arc[0]) & (quiet.epochs <= arc[1]))
+    check_plan(quiet, TYPICAL, CHIEF, DA_DOT, CFG)

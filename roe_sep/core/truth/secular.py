@@ -161,6 +161,7 @@ class ExecutionErrors:
     spl_sigma: float
     thruster_sigma: float
     attitude_sigma: float  # rad, per axis
+    applied: list = field(default_factory=list)  # (spacecraft, factor, eps) of every burn, as drawn
 
     def executed(self, dv_own: ArrayLike, spacecraft: str, reference: ArrayLike | None = None) -> np.ndarray:
         """The burn as executed: :func:`~roe_sep.core.relmotion.maneuvers.dispersed_dv` with f ~ N(1, sigma of the SPL
@@ -184,6 +185,7 @@ class ExecutionErrors:
         sigma = self.spl_sigma if spacecraft == "picosatellite" else self.thruster_sigma
         factor = self.rng.normal(1.0, sigma)
         eps = self.rng.normal(0.0, self.attitude_sigma, 3)
+        self.applied.append((spacecraft, float(factor), [float(e) for e in eps]))
         return dispersed_dv(dv_own, factor, eps, reference)
 
 

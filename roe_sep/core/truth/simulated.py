@@ -32,6 +32,14 @@ class Dispersed:
     errors: ExecutionErrors
     ejection_delay: float  # s
     da_dot: float  # 1/s, the true differential drag
+    configured: dict  # the distributions drawn from (sigmas, the delay's upper end), for the record of the run
+    drag_factor: float = 1.0  # the drawn factor of the differential ballistic coefficient
+
+    def applied(self) -> dict:
+        """What the run drew, as the campaign checks it against :attr:`configured` (Kolmogorov-Smirnov): the drag
+        factor, the ejection delay [s] and each burn's (spacecraft, magnitude factor, attitude errors [rad])."""
+        return {"drag_factor": self.drag_factor, "ejection_delay_s": self.ejection_delay,
+                "configured": self.configured, "burns": self.errors.applied}
 
 
 def dispersed_truth(scenario: "Scenario", carrier: "DoubleImpulseDesign | MultiImpulseDesign", raan: float, u0: float,
@@ -84,7 +92,10 @@ def dispersed_truth(scenario: "Scenario", carrier: "DoubleImpulseDesign | MultiI
     ejection_delay = float(timing.uniform(0.0, ejection_delay_max)) if disperse else 0.0
     errors = ExecutionErrors(rng, sep.spl_sigma if disperse else 0.0, sep.thruster_sigma if disperse else 0.0,
                              mc.attitude_sigma_arcsec * ARCSEC if disperse else 0.0)
-    return Dispersed(model, errors, ejection_delay, da_dot)
+    configured = {"disperse": bool(disperse), "ballistic_sigma": mc.ballistic_sigma,
+                  "ejection_delay_max_s": float(ejection_delay_max),
+                  **{k: getattr(errors, k) for k in ("spl_sigma", "thruster_sigma", "attitude_sigma")}}
+    return Dispersed(model, errors, ejection_delay, da_dot, configured, float(db_factor))
 
 
 class ClosestApproach:
