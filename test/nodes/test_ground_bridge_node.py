@@ -65,7 +65,7 @@ def test_ground_bridge_writes_opms_and_feeds_tdm_files_to_radar_od(tmp_path, bag
     out, inp = tmp_path / "ccsds", tmp_path / "in"
     bridge = start_node("ground_bridge", "-p", f"output_dir:={out}", "-p", f"input_dir:={inp}",
                         "-p", "poll_period:=0.2")
-    radar = start_node("radar_od", "-p", "od_drag_terms:=false")  # the reference bag's OD model
+    radar = start_node("radar_od")
     rclpy.init()
     node = rclpy.create_node("ground_bridge_test")
     try:
