@@ -14,7 +14,7 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from rclpy.exceptions import InvalidParameterTypeException
 from rclpy.parameter import Parameter
 
-from ..errors import ParameterError, show
+from ..errors import ParameterError, plain, show
 from . import parameters
 
 ROS_TYPES = {"bool": Parameter.Type.BOOL, "int": Parameter.Type.INTEGER, "double": Parameter.Type.DOUBLE,
@@ -48,11 +48,6 @@ def _param(node, name) -> parameters.Param:
     return parameters.table(node_table(type(node)))[name]
 
 
-def _plain(value):
-    """rclpy's array.array of a double array as a list (messages never show ``array('d', ...)``)."""
-    return list(value) if value is not None and not isinstance(value, (str, bool, int, float)) else value
-
-
 def _given(node, name):
     """The value given for ``name`` (a ``-p`` or params-file override) that rclpy refused for its type."""
     value = node.declare_parameter(name, None, ParameterDescriptor(dynamic_typing=True)).value
@@ -70,7 +65,7 @@ def _check_on_set(node):
                 p = _param(node, prm.name)
             except KeyError:
                 continue
-            why = parameters.problem(p, _plain(prm.value))
+            why = parameters.problem(p, plain(prm.value))
             if why:
                 return SetParametersResult(successful=False,
                                            reason=f"parameter '{prm.name}' {why}, got {show(prm.value)}")
@@ -93,19 +88,19 @@ def declare(node, name, attr=None):
             value = node.declare_parameter(name, ptype, ParameterDescriptor(type=ptype.value)).value
         except InvalidParameterTypeException:
             raise ParameterError(f"parameter '{name}' must be {parameters.type_text(p)}, got "
-                                 f"{show(_plain(_given(node, name)))}") from None
+                                 f"{show(_given(node, name))}") from None
         if value is None:
             # not given, or given as [] (rcl cannot type an empty list): the default, or an empty list of the type
             value = [] if p.type.endswith("[]") and name in getattr(node, "_parameter_overrides", {}) else p.default
             node.set_parameters([Parameter(name, ptype, value)])
-        why = parameters.problem(p, _plain(value))
+        why = parameters.problem(p, plain(value))
         if why:
-            raise ParameterError(f"parameter '{name}' {why}, got {show(_plain(value))}")
+            raise ParameterError(f"parameter '{name}' {why}, got {show(value)}")
         node.set_descriptor(name, descriptor(p))
         if attr is not None and not p.read_only:
             node.add_post_set_parameters_callback(
-                lambda params: [setattr(node, attr, _plain(q.value)) for q in params if q.name == name])
-    value = _plain(node.get_parameter(name).value)
+                lambda params: [setattr(node, attr, plain(q.value)) for q in params if q.name == name])
+    value = plain(node.get_parameter(name).value)
     why = parameters.problem(p, value)
     if why:
         raise ParameterError(f"parameter '{name}' {why}, got {show(value)}")
