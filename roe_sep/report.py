@@ -249,6 +249,12 @@ def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()
     criteria["min_distance"] = not math.isnan(min_distance) and min_distance >= limits.keep_out  # inf: no approach
     criteria["plans_approved"] = bool(plan_checks) and all(s.safe for s in plan_checks)
     safe = all(criteria[name] for name in (*ERROR_CRITERIA, "min_distance", "plans_approved"))
+    # what was seen to fail, as opposed to a criterion without evidence yet (a run stopped early)
+    seen = set(failed_ever) & set(ERROR_CRITERIA)
+    if not math.isnan(min_distance) and min_distance < limits.keep_out:
+        seen.add("min_distance")
+    if any(not s.safe for s in plan_checks):
+        seen.add("plans_approved")
     truth_da_dot = float(values.get("truth_a_da_dot_m_per_day", "nan"))
     ic = initial_conditions(truth, data[interfaces.ACQUISITION_PLAN_TOPIC], ic_burns, truth_da_dot, limits,
                             run_end=duration)
@@ -269,6 +275,7 @@ def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()
     return {
         "safe": bool(safe),
         "criteria": criteria,
+        "violations_seen": sorted(seen),
         "maneuvers": maneuvers,
         "dv_total": float(sum(m["dv"] for m in carrier)),
         "dv_by_purpose": by_purpose,

@@ -265,8 +265,10 @@ def _finish(out, report, reached, reason, codes, layout, params_file):
     """The run's outcome into its report, written to ``out/report.json``; returns the report."""
     report["run"].update({"completed": reached, "reason": reason, "exit_codes": codes, "layout": layout,
                           "params_file": str(params_file)})
-    if not reached and report.get("safe") is not False:
-        report["safe"] = None  # not known: the run did not complete (the criteria hold what could be evaluated)
+    if not reached:
+        # a run that did not complete is unsafe only on a violation seen; else not known (its criteria hold what
+        # could be evaluated, False also where there was no evidence yet)
+        report["safe"] = False if report.get("violations_seen") else None
     write_report(out / "report.json", report)
     return report
 

@@ -77,6 +77,26 @@ def test_time_to_ic_only_when_the_ics_are_reached():
         text.getvalue()
 
 
+def test_an_incomplete_run_is_unsafe_only_on_a_violation_seen(tmp_path):
+    """``violations_seen`` names the criteria seen to fail (not those without evidence yet); a run that did not
+    complete is reported unsafe on one of them, else its safety is not known (null): a run stopped before its first
+    safety check is not a violation."""
+    import dataclasses
+
+    from roe_sep.core.safety.monitor import MonitorLimits
+    from roe_sep.report import build_report
+    from roe_sep.run import _finish
+
+    bag = ROOT / "bags" / "default_run"
+    assert build_report(bag)["violations_seen"] == []
+    wide = build_report(bag, limits=dataclasses.replace(MonitorLimits(), keep_out=1e7))  # every distance inside it
+    assert "min_distance" in wide["violations_seen"] and not wide["criteria"]["min_distance"]
+    early = {"safe": False, "criteria": {"keep_out": False}, "violations_seen": [], "run": {}}
+    for rep, verdict in ((early, None), ({**wide, "run": {}}, False)):
+        out = _finish(tmp_path, rep, False, "interrupted (SIGTERM)", {}, "suites", "p.yaml")
+        assert out["safe"] is verdict and json.loads((tmp_path / "report.json").read_text())["safe"] is verdict
+
+
 def test_first_and_last_od_solution_against_the_truth():
     """The reference bag's OD solutions in the report: the first and the last, each with its ROE NEES (the core's
     formula) and its drift rate's error in its own sigma against the truth's own drift rate."""
