@@ -234,6 +234,13 @@ class IcPlannerNode(ManagedNode):
         margins of t_F whose flown burns are all on record."""
         if self.final_decided:
             return
+        if self.t_final is not None and now >= self.t_final:
+            self.final_decided = True
+            text = (f"OD at t = {t_od:.1f} s not used: it arrives after the IC epoch t = {self.t_final:.1f} s "
+                    "without a final OD trim decision before it")
+            self.get_logger().warn(text)
+            publish_status(self, self.diag_pub, WARN, text, self._values())
+            return
         flown = {round(b.epoch, 3) for b in self.executed}
         if any(t_od <= t < now and round(t, 3) not in flown for t in self.burn_epochs or ()):
             return  # a burn flown after the OD epoch is not on record yet: the next solution decides
@@ -261,6 +268,11 @@ class IcPlannerNode(ManagedNode):
         self.burn_epochs = [time_to_sec(m.epoch) for m in out.maneuvers]
         self.plans += 1
         text += f"trim of {decision.dv_t:+.3f} m/s at t = {decision.epoch:.1f} s, IC epoch t = {decision.t_final:.1f} s"
+        if decision.problems:  # missed anyway: the trim nulls the drift to hold the formation
+            text += f"; the initial conditions are missed even so ({'; '.join(decision.problems)}): drift nulled"
+            self.get_logger().warn(text)
+            publish_status(self, self.diag_pub, WARN, text, self._values())
+            return
         self.get_logger().info(text)
         publish_status(self, self.diag_pub, OK, text, self._values())
 

@@ -3,6 +3,7 @@ tolerance and the OD sigma, no trim inside it, a trim that nulls the predicted a
 the quantization lattice (checked with the secular propagation and seed 002 Eq. 2 directly), the IC epoch moved
 past a trim that falls after it, and the other initial conditions kept."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -101,11 +102,33 @@ def test_trim_before_the_ic_epoch_keeps_it_and_counts_the_burns_still_to_fly():
     assert abs(after) <= 0.5 * drift_lattice(A, CFG.dv_quantum) + 1e-9
 
 
-def test_trim_refused_when_another_initial_condition_would_break():
-    with pytest.raises(AcquisitionInfeasible, match=r"a dl_F\| = 3909.* outside \[5000, 10000\] m"):
-        plan_trim(state(8.0, a_dl=4000.0), CHIEF, DA_DOT, [], T_F, T0 + MARGIN, 1.0, 1.0 / 86400.0, 5.0, CFG)
+def test_trim_refused_when_it_alone_would_break_another_initial_condition():
+    """A -12 m trim lowers the minimum R-N distance at t_F from 259.3 to 249.6 m: with min_ei between the two, the
+    trim alone would break it and is refused; bad inputs are refused too."""
+    from roe_sep.core.safety.metrics import min_rn_distance
+    from roe_sep.core.relmotion.trajectory import trajectory
+
+    roe0 = state(-12.0)
+    d = plan_trim(roe0, CHIEF, DA_DOT, [], T_F, T0 + MARGIN, 1.0, 1.0 / 86400.0, 5.0, CFG)
+    free = trajectory(roe0, T0, [], [d.t_final], CHIEF, CFG.j2, DA_DOT)[0]
+    kept, trimmed = float(min_rn_distance(free)) * A, float(min_rn_distance(d.final_roe)) * A
+    assert d.trim and not d.problems and trimmed < kept - 5.0
+    cfg = dataclasses.replace(CFG, min_ei=0.5 * (kept + trimmed))
+    with pytest.raises(AcquisitionInfeasible, match="would break the initial conditions: minimum R-N distance"):
+        plan_trim(roe0, CHIEF, DA_DOT, [], T_F, T0 + MARGIN, 1.0, 1.0 / 86400.0, 5.0, cfg)
     with pytest.raises(AcquisitionInfeasible, match="not finite"):
         plan_trim(state(8.0), CHIEF, DA_DOT, [], T_F, T0 + MARGIN, math.nan, 1.0 / 86400.0, 5.0, CFG)
+
+
+def test_trim_still_nulls_the_drift_when_an_initial_condition_is_missed_anyway():
+    """dl already out of its band (4000 m < a_dl_min): the ICs are missed with or without the trim, which still
+    flies and nulls the drift (holding the formation); the decision names what is missed."""
+    roe0 = state(8.0, a_dl=4000.0)
+    d = plan_trim(roe0, CHIEF, DA_DOT, [], T_F, T0 + MARGIN, 1.0, 1.0 / 86400.0, 5.0, CFG)
+    assert d.trim and len(d.problems) == 1 and "a dl_F| = 3909" in d.problems[0]
+    assert d.summary()["missed"] == d.problems[0]
+    after = a_da_at(roe0, d.t_final, [Burn(d.epoch, (0.0, -d.dv_t, 0.0))])
+    assert abs(after) <= 0.5 * drift_lattice(A, CFG.dv_quantum) + 1e-9
 
 
 def test_no_trim_from_an_od_too_uncertain_to_place_a_da_inside_the_tolerance():
