@@ -9,8 +9,8 @@ truth). Criteria and thresholds: :mod:`roe_sep.core.safety.monitor`. Publishes `
 Contingencies (issue 28): what the ground can see of one -- a carrier burn executed late, not at all, or off in
 magnitude or direction from its approved plan, an OD inconsistent with its prediction from the commanded ejection
 and the executed burns, an OD whose residuals are too large -- is raised as a named WARN on ``/diagnostics``
-(``roe_sep/safety_monitor/contingency``, value ``contingency`` = the name, ``epoch_s``): :mod:`roe_sep.core.safety.anomaly`.
-A failure of that detection is reported, never fatal.
+(``roe_sep/safety_monitor/contingency``, value ``contingency`` = the name, ``epoch_s``):
+:mod:`roe_sep.core.safety.anomaly`. A failure of that detection is reported, never fatal.
 
 Parameters: :data:`roe_sep.nodes.parameters.SAFETY_MONITOR` (``safety_monitor --help``, docs/parameters.md).
 """
@@ -31,11 +31,11 @@ from roe_sep_msgs.msg import (
 
 from .. import interfaces
 from ..core.config import ConfigError, load_scenario
+from ..core.constants import ARCSEC
 from ..core.relmotion.dynamics import drag_da_dot
 from ..core.relmotion.maneuvers import delta_roe
 from ..core.relmotion.orbit import mean_motion
 from ..core.relmotion.trajectory import Chief, state_at
-from ..core.constants import ARCSEC
 from ..core.safety.anomaly import AnomalyLimits, AnomalyWatch
 from ..core.safety.monitor import MonitorLimits, assess
 from .convert import msg_to_roe, plan_burns, sec_to_time, time_to_sec, vector_to_array

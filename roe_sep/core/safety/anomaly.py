@@ -224,9 +224,9 @@ class AnomalyWatch:
                 nees = math.inf
             bound = float(stats.chi2.isf(self.limits.od_alpha, 4))
             if nees > bound:
-                out.append(Detection("od_inconsistent", t_now, f"OD at t = {t_od:.0f} s: e/i vectors "
-                                     f"{np.round(roe[EI] * a, 1).tolist()} m against {np.round(pred[EI] * a, 1).tolist()}"
-                                     f" m predicted (NEES {nees:.1f} > {bound:.1f})",
+                seen, expected = np.round(roe[EI] * a, 1).tolist(), np.round(pred[EI] * a, 1).tolist()
+                out.append(Detection("od_inconsistent", t_now, f"OD at t = {t_od:.0f} s: e/i vectors {seen} m "
+                                     f"against {expected} m predicted (NEES {nees:.1f} > {bound:.1f})",
                                      {"nees": nees, "bound": bound, "predicted": (pred[EI] * a).tolist(),
                                       "estimate": (roe[EI] * a).tolist()}))
         if np.all(np.isfinite(cov6)):

@@ -92,7 +92,7 @@ def _check_value(path, spec: Spec, value):
         if isinstance(value, (list, tuple)):
             if len(value) != 2:
                 raise ConfigError(f"{path}: expected a number or [lo, hi], got {show(value)}")
-            lo, hi = (_number(f"{path}[{i}]", v, spec, integer) for i, v in enumerate(value))
+            lo, hi = (_number(f"{path}[{i}]", v, spec, integer, element=True) for i, v in enumerate(value))
             if lo > hi:
                 raise ConfigError(f"{path}: expected [lo, hi] with lo <= hi, got {show(value)}")
             return (lo, hi)
@@ -108,10 +108,10 @@ def _check_value(path, spec: Spec, value):
     return value
 
 
-def _number(path, value, spec, integer):
+def _number(path, value, spec, integer, element=False):
     if isinstance(value, bool) or not isinstance(value, (int, float)) or (integer and not isinstance(value, int)):
         raise ConfigError(f"{path}: expected {'an integer' if integer else 'a number'}"
-                          f"{'' if spec.kind == 'number' else ' or [lo, hi]'}, got {show(value)}")
+                          f"{'' if spec.kind == 'number' or element else ' or [lo, hi]'}, got {show(value)}")
     try:
         check_number(path, value, spec.lo, spec.hi, integer=integer, unit=spec.unit)
     except ValueError as exc:
