@@ -73,6 +73,6 @@ def test_burn_underperformance_is_applied_detected_and_safe(tmp_path):
     ds = next(m for m in rep["maneuvers"] if m["purpose"] == "drift_stop")
     assert ds["dv"] < 1.33 * 0.85  # the default run's drift-stop is 1.33 m/s (test_run), here 50-80 % of it
     detected = {d["name"]: d for d in rep["contingencies_detected"]}
-    assert "burn_magnitude" in detected and detected["burn_magnitude"]["epoch"] == pytest.approx(ds["epoch"])
+    assert "burn_magnitude" in detected and detected["burn_magnitude"]["epoch"] == pytest.approx(ds["epoch"], abs=0.1)
     assert "burn_missing" not in detected and "burn_late" not in detected
     assert rep["safe"] is True, rep["violations_seen"]
