@@ -80,13 +80,26 @@ def parameters(config, bag_dir, overrides, nodes=NODES):
     return out
 
 
-def run_overrides(params=None, duration=None, seed=None, real_time_factor=None, foxglove=None, managed=False):
+CONTINGENCY_NODES = ("sim", "radar_od")  # the nodes that inject a contingency (issue 28): the truth and the radar
+
+
+def contingency_overrides(overrides, contingency):
+    """``overrides`` with the node parameter ``contingency`` of :data:`CONTINGENCY_NODES` set to ``contingency`` (a
+    name, 'none'); unchanged for None (the scenario's block decides)."""
+    if contingency is not None:
+        for node in CONTINGENCY_NODES:
+            overrides.setdefault(node, {})["contingency"] = str(contingency)
+    return overrides
+
+
+def run_overrides(params=None, duration=None, seed=None, real_time_factor=None, foxglove=None, managed=False,
+                  contingency=None):
     """The per-node parameter overrides of a run's options (``roe-sep run`` and the launch files' arguments):
     ``params`` (a params YAML, :func:`load_overrides`), the sim ``duration`` [s], the run ``seed`` (the simulator's,
     and the radar noise's :func:`radar_seed` unless the params file sets it), ``real_time_factor``, the
-    ``foxglove`` port, and ``managed`` (the :data:`MANAGED` nodes wait unconfigured for ``lifecycle_manager``,
-    which then starts them in order)."""
-    overrides = load_overrides(params)
+    ``foxglove`` port, ``managed`` (the :data:`MANAGED` nodes wait unconfigured for ``lifecycle_manager``,
+    which then starts them in order) and ``contingency`` (:func:`contingency_overrides`)."""
+    overrides = contingency_overrides(load_overrides(params), contingency)
     sim = overrides.setdefault("sim", {})
     if duration is not None:
         sim["duration"] = float(duration)

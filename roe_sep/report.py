@@ -9,7 +9,9 @@ truth meets the initial conditions there; None when it does not), ``od`` (first 
 epoch, passes, 1-sigma, error against truth, NEES, drift rate against the truth's own; ``last``: the same of the
 last solution), ``ic`` (truth at the IC epoch and each initial condition), ``criteria`` (each pass/fail) and
 ``safe`` (the safety criteria only: keep-out, passive safety, evaporation, closest approach, every plan approved by
-the monitor).
+the monitor), ``contingency`` (the contingency injected, as applied by the simulator or the radar:
+:func:`contingency_applied`; None without one) and ``contingencies_detected`` (what the safety monitor saw of one:
+:func:`contingencies_detected`).
 """
 
 import json
@@ -183,6 +185,47 @@ def dispersions_applied(text):
     return out if isinstance(out, dict) else None
 
 
+def contingency_applied(diagnostics):
+    """The run's contingency as applied (issue 28): the value ``contingency_applied`` (JSON: name, parameters as
+    drawn, configured, events) of the last status of the simulator or of radar_od that carries it, the simulator's
+    first (a contingency acts on one side only); None without one."""
+    for node in ("roe_sep/sim", "roe_sep/radar_od"):
+        for status in reversed([s for _, d in diagnostics for s in d.status if s.name == node]):
+            text = next((kv.value for kv in status.values if kv.key == "contingency_applied"), None)
+            if text:
+                out = dispersions_applied(text)
+                if out is not None:
+                    return out
+    return None
+
+
+CONTINGENCY_STATUS = "roe_sep/safety_monitor/contingency"
+
+
+def contingencies_detected(diagnostics):
+    """What the safety monitor detected (its named diagnostics ``roe_sep/safety_monitor/contingency``,
+    :mod:`roe_sep.core.safety.anomaly`): per name its first detection, ``{name, epoch [s], text, count}``, in the
+    order of their first epochs; [] when nothing was detected."""
+    found = {}
+    for _, d in diagnostics:
+        for s in d.status:
+            if s.name != CONTINGENCY_STATUS:
+                continue
+            values = {kv.key: kv.value for kv in s.values}
+            name = values.get("contingency")
+            try:
+                epoch = float(values.get("epoch_s", "nan"))
+            except ValueError:
+                epoch = math.nan
+            if not name or not math.isfinite(epoch):
+                continue
+            if name not in found or epoch < found[name]["epoch"]:
+                found[name] = {"name": name, "epoch": epoch, "text": s.message,
+                               "count": found.get(name, {}).get("count", 0)}
+            found[name]["count"] += 1
+    return sorted(found.values(), key=lambda x: (x["epoch"], x["name"]))
+
+
 FINAL_OD_KEYS = ("trim_dv", "predicted_a_da", "sigma_a_da", "threshold", "t_final")
 
 
@@ -288,6 +331,8 @@ def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()
         "min_distance_epoch": float(values.get("min_distance_time_s", "nan")),
         "truth_drag_a_da_dot_m_per_day": truth_da_dot,
         "dispersions": dispersions_applied(values.get("dispersions_applied")),
+        "contingency": contingency_applied(data[interfaces.DIAGNOSTICS_TOPIC]),
+        "contingencies_detected": contingencies_detected(data[interfaces.DIAGNOSTICS_TOPIC]),
         "od": od_report,
         "ic": ic,
         "model_error": model_error,  # planners' prediction - truth [m] at the drift-stop and at the IC epoch

@@ -190,7 +190,7 @@ def wait_for_completion(duration, deployment, timeout, progress):
 
 def run(config=None, out="out/run", params=None, duration=None, seed=None, timeout=1800.0, domain_id=None,
         progress=False, real_time_factor=None, foxglove=None, process_per_node=False, executor="events",
-        in_process=False, ground_bridge=True):
+        in_process=False, ground_bridge=True, contingency=None):
     """Run the scenario; returns the report dict (``report['safe']``) and writes it to ``out/report.json``.
     ``foxglove``: a port on 127.0.0.1 for the live Foxglove view (the ``foxglove_view`` node), None = none.
     ``process_per_node``: every node its own process, as a deployment runs them (log per node); default: two
@@ -198,7 +198,8 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
     (:mod:`roe_sep.nodes.suite`, ``executor`` ``events`` or ``single_threaded``); with ``in_process`` every node
     in this process, on one executor (:func:`run_in_process`: a campaign's runs). Under lockstep every layout and
     executor gives the same report. ``ground_bridge`` False: no CCSDS export (the loop and the report are the
-    same)."""
+    same). ``contingency``: a contingency's name (or 'none') for the simulator and the radar (their parameter
+    ``contingency``, docs/contingencies.md); None: the scenario's ``contingency:`` block decides."""
     from .nodes.parameters import DEFAULT_DURATION, check_overrides
 
     out = Path(out)
@@ -206,7 +207,7 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
     if bag_dir.exists():
         raise ValueError(f"output bag {bag_dir} exists already: choose another --out or remove it")
     # the same overrides and node order as the launch files (share/roe_sep/launch), from roe_sep.graph
-    overrides = run_overrides(params, duration, seed, real_time_factor, foxglove)
+    overrides = run_overrides(params, duration, seed, real_time_factor, foxglove, contingency=contingency)
     check_overrides(overrides, f"--params {params}" if params else "parameters")  # before any node starts
     out.mkdir(parents=True, exist_ok=True)
     sim = overrides["sim"]

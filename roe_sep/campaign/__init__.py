@@ -29,10 +29,12 @@ CAMPAIGN_FILE = "campaign.json"
 
 def settings(config, overrides, duration):
     """What makes two campaigns' runs comparable: the scenario (hash of its validated content, so the embedded
-    default counts too), the node overrides and the duration."""
+    default counts too; its contingency block when it has one), the node overrides (``--contingency``: those of
+    the simulator and the radar) and the duration."""
     from ..core.config import load_scenario
 
-    scenario = repr(load_scenario(config)).encode("utf-8")
+    loaded = load_scenario(config)
+    scenario = (repr(loaded) + ("" if loaded.contingency is None else repr(loaded.contingency))).encode("utf-8")
     return {"config": str(config) if config else None, "scenario_sha256": hashlib.sha256(scenario).hexdigest(),
             "overrides": overrides or {}, "duration": duration}
 

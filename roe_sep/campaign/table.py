@@ -31,10 +31,13 @@ FIELDS = (
     "od_epoch_s", "od_passes", "od_nees", *(f"od_err_{k}_m" for k in ROE_KEYS), "od_err_a_da_dot_m_per_day",
     "od_z_a_da_dot", "od_residual_rms", "od_measurements", "od_solutions", "od_last_epoch_s", "od_last_nees",
     "od_last_z_a_da_dot", "truth_drag_m_per_day", "dispersions", "wall_s", "domain_id",
+    "contingency", "contingencies_detected",
 )
+LEGACY_FIELDS = FIELDS[:-2]  # the header before the contingencies (issue 28): read as rows without them
 BOOL_FIELDS = {"safe", "ic_trim", *(f"crit_{c}" for c in CRITERIA), *(f"ic_{c}" for c in IC_CHECKS)}
 INT_FIELDS = {"seed", "od_passes", "od_measurements", "od_solutions", "domain_id"}
-STR_FIELDS = {"status", "failure", "reason", "dispersions"}  # dispersions: the report's, as compact JSON
+STR_FIELDS = {"status", "failure", "reason", "dispersions", "contingency", "contingencies_detected"}
+# dispersions, contingency: the report's, as compact JSON; contingencies_detected: {name: first epoch [s]} as JSON
 RUN_FIELDS = ("wall_s", "domain_id")  # how the run went on this machine, not what it computed
 FAILURES = ("node_exit", "timeout", "aborted", "exception", "worker_lost")
 
@@ -71,6 +74,11 @@ def row_from_report(seed: int, rep: dict) -> dict:
                    ic_final_od_sigma_m=final_od["sigma_a_da"])
     if rep.get("dispersions"):
         row["dispersions"] = json.dumps(rep["dispersions"], separators=(",", ":"), allow_nan=False)
+    if rep.get("contingency"):
+        row["contingency"] = json.dumps(rep["contingency"], separators=(",", ":"), allow_nan=False)
+    if rep.get("contingencies_detected"):
+        row["contingencies_detected"] = json.dumps({d["name"]: d["epoch"] for d in rep["contingencies_detected"]},
+                                                   separators=(",", ":"), allow_nan=False)
     final = rep.get("final_roe")
     if final:
         row["min_rn_final_m"] = float(min_rn_distance(final))  # Eq. 25 is homogeneous: a*ROE in, meters out
@@ -154,14 +162,16 @@ class Table:
         complete = text if text.endswith("\n") else text[: text.rfind("\n") + 1]  # drop a torn last line
         reader = csv.reader(io.StringIO(complete))
         header = next(reader, None)
-        if header is not None and tuple(header) != FIELDS:
+        fields = FIELDS if header is None or tuple(header) != LEGACY_FIELDS else LEGACY_FIELDS
+        if header is not None and tuple(header) != fields:
             raise ValueError(f"{self.path}: table header {header[:4]}... is not the header of this roe_sep version "
                              f"(expected {len(FIELDS)} columns starting {list(FIELDS[:4])}); use another --out")
         rows = {}
         for cells in reader:
-            if len(cells) != len(FIELDS):
+            if len(cells) != len(fields):
                 continue
-            row = {f: _parse(f, c) for f, c in zip(FIELDS, cells)}
+            row = {f: _parse(f, c) for f, c in zip(fields, cells)}
+            row.update({f: "" for f in FIELDS if f not in row})  # a legacy row: no contingency
             rows[row["seed"]] = row
         return rows
 
@@ -170,6 +180,7 @@ class Table:
         line left by a crash so the new row starts on its own line)."""
         line = format_row(row)
         self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._upgrade()
         with open(self.path, "a+", encoding="utf-8", newline="") as fh:
             fh.seek(0, os.SEEK_END)
             size = fh.tell()
@@ -184,6 +195,26 @@ class Table:
             fh.write(line)
             fh.flush()
             os.fsync(fh.fileno())
+
+
+    def _upgrade(self):
+        """A table with the legacy header (before the contingency columns) rewritten with this header, every row
+        with empty contingency cells, atomically; a campaign started before them goes on in its directory."""
+        if not self.path.exists():
+            return
+        with open(self.path, encoding="utf-8", newline="") as fh:
+            first = fh.readline()
+        if not first or tuple(next(csv.reader([first]))) != LEGACY_FIELDS:
+            return
+        rows = self.read()
+        tmp = self.path.with_suffix(".csv.tmp")
+        with open(tmp, "w", encoding="utf-8", newline="") as fh:
+            fh.write(format_header())
+            for row in rows.values():
+                fh.write(format_row(row))
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, self.path)
 
 
 def format_header() -> str:

@@ -6,7 +6,7 @@ import sys
 
 from ..children import guarded
 from .common import SEED_MAX, emit, finite_float, integer, seed
-from .run import DAY, check_params_file
+from .run import DAY, add_contingency, check_params_file
 
 RUNS_MAX = 100_000
 DOMAIN_MAX = 101  # ROS 2 on Linux: domain ids 0..101 keep the DDS ports below the ephemeral range
@@ -107,6 +107,7 @@ def print_campaign(rep):
 def cmd_campaign(args):
     from ..campaign import run_campaign
     from ..core.config import load_scenario
+    from ..graph import contingency_overrides
     from ..run import load_overrides
 
     if args.seed + args.runs - 1 > SEED_MAX:
@@ -116,6 +117,7 @@ def cmd_campaign(args):
     if args.params:
         check_params_file(args.params)
         overrides = load_overrides(args.params)
+    overrides = contingency_overrides(overrides, args.contingency)
     workers = args.workers or (None if args.scheduler else os.cpu_count() or 1)
     with guarded():  # SIGTERM/SIGHUP stop the campaign as Ctrl-C does (exit 128 + signal number)
         rep = run_campaign(args.runs, args.seed, args.out, workers=workers, scheduler=args.scheduler,
@@ -142,6 +144,7 @@ def register(subparsers):
     p.add_argument("--config", help="scenario YAML")
     p.add_argument("--params", help="ROS parameter YAML for every run ({node: {ros__parameters: ...}}); the "
                    "campaign sets radar_od.seed per run")
+    add_contingency(p)
     p.add_argument("--duration", type=finite_float(0.0, 30 * DAY, lo_open=True, unit="s"),
                    help="sim seconds per run, in (0, 2592000] (default 280800 = 3.25 days)")
     p.add_argument("--timeout", type=finite_float(0.0, 7 * DAY, lo_open=True, unit="s"), default=1800.0,

@@ -1,6 +1,7 @@
 """``roe-sep run``, ``roe-sep replay`` and ``roe-sep bag``: the scenario end to end over ROS 2
 (docs/run.md), and the tools for its bags."""
 
+import json
 import math
 import sys
 from pathlib import Path
@@ -50,8 +51,25 @@ def print_run(rep: dict, out=None):
         od = rep["od"]
         w(f"  first OD: t = {od['epoch']:.0f} s, {od['passes']} passes, {od['measurements']} measurements, "
           f"NEES = {od.get('nees') if od.get('nees') is None else round(od['nees'], 2)}\n")
+    if rep.get("contingency"):
+        c = rep["contingency"]
+        w(f"  contingency {c.get('name')}: {json.dumps(c.get('parameters'))}\n")
+        for event in c.get("events") or ():
+            w(f"    {event}\n")
+    for d in rep.get("contingencies_detected") or ():
+        w(f"  detected {d['name']} at t = {d['epoch']:.0f} s: {d['text']}\n")
     for name, ok in rep.get("criteria", {}).items():
         w(f"  {'pass' if ok else 'FAIL'}  {name}\n")
+
+
+def add_contingency(p):
+    """``--contingency NAME`` (docs/contingencies.md)."""
+    from ..core.truth.contingency import NAMES, NONE
+
+    p.add_argument("--contingency", choices=(*NAMES, NONE), metavar="NAME",
+                   help="inject a contingency (simulator and radar; the scenario's contingency block gives its "
+                        f"parameters when it names it, else its defaults): {', '.join(NAMES)}; or {NONE} (none, "
+                        "whatever the scenario says). Default: the scenario's block, if any (docs/contingencies.md)")
 
 
 def check_params_file(path):
@@ -95,7 +113,8 @@ def cmd_run(args):
         rep = run(config=args.config, out=args.out, params=args.params, duration=args.duration, seed=args.seed,
                   timeout=args.timeout, progress=not args.json and sys.stderr.isatty(),
                   real_time_factor=args.real_time_factor, foxglove=args.foxglove,
-                  process_per_node=args.process_per_node, executor=args.executor, in_process=args.in_process)
+                  process_per_node=args.process_per_node, executor=args.executor, in_process=args.in_process,
+                  contingency=args.contingency)
 
     def human(r):
         print_run(r)
@@ -152,6 +171,7 @@ def register_run(subparsers):
     p.add_argument("--real-time-factor", type=finite_float(0.0, 1e9, unit="sim s per wall s"), metavar="X",
                    help="pace the lockstep clock at X sim seconds per wall second at most (default 0: as fast as "
                         "the machine allows; the results are the same either way)")
+    add_contingency(p)
     p.add_argument("--json", action="store_true", help="print the report as JSON")
     layout = p.add_mutually_exclusive_group()
     layout.add_argument("--process-per-node", action="store_true",

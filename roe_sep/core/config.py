@@ -5,6 +5,7 @@ overrides what it names. Layout::
 
     separation: {altitude: 515000.0, u1_deg: 88.0, ...}        # SeparationConfig fields
     monte_carlo: {samples: 100000, seed: 0, p_values: [...], carrier: {cd: 2.3, area: 0.48, mass: 140.0}, ...}
+    contingency: {name: spl_weak, spl_fraction: [0.0, 0.5]}   # optional: roe_sep.core.truth.contingency
 """
 
 import dataclasses
@@ -20,6 +21,7 @@ from ..errors import ConfigError, show
 from .constants import SECONDS_PER_DAY
 from .montecarlo.sweep import DEFAULT_P_VALUES, MonteCarloConfig, Spacecraft
 from .separation.double_impulse import SeparationConfig
+from .truth.contingency import ContingencyConfig, contingency_from_dict
 
 # The range of every numeric key: (class, field) -> (lo, hi, lo_open, hi_open, unit). Physical limits or the domain
 # of the models (LEO circular carrier, close formation); a value outside is refused with the key, value and range.
@@ -51,6 +53,7 @@ RANGES = {
     (Spacecraft, "area"): (0.0, 1e3, True, False, "m^2"),
     (Spacecraft, "mass"): (0.0, 1e6, True, False, "kg"),
 }
+SECTIONS = ("separation", "monte_carlo", "contingency")
 P_RANGE = (0.0, 1.0)  # m/s, drift-stop reductions |p| (as `roe-sep mc --p`)
 
 
@@ -61,6 +64,9 @@ class Scenario:
     separation: SeparationConfig = field(default_factory=SeparationConfig)
     monte_carlo: MonteCarloConfig = field(default_factory=MonteCarloConfig)
     p_values: tuple = DEFAULT_P_VALUES
+    # the run's contingency (issue 28), None: nominal. Not in the repr: a scenario without one hashes as before
+    # (a campaign directory's settings, roe_sep.campaign.settings, add it when set)
+    contingency: ContingencyConfig | None = field(default=None, repr=False)
 
 
 def _coerce(path, value, hint):
@@ -117,9 +123,9 @@ def scenario_from_dict(data: dict | None) -> Scenario:
     data = {} if data is None else data
     if not isinstance(data, dict):
         raise ConfigError(f"configuration: expected a mapping at the top level, got {type(data).__name__}")
-    unknown = sorted(set(data) - {"separation", "monte_carlo"})
+    unknown = sorted(set(data) - set(SECTIONS))
     if unknown:
-        raise ConfigError(f"configuration: unknown section(s) {unknown}; known: ['separation', 'monte_carlo']")
+        raise ConfigError(f"configuration: unknown section(s) {unknown}; known: {list(SECTIONS)}")
     mc = dict(data.get("monte_carlo") or {})
     p_values = mc.pop("p_values", DEFAULT_P_VALUES)
     if not isinstance(p_values, (list, tuple)) or not p_values:
@@ -132,6 +138,7 @@ def scenario_from_dict(data: dict | None) -> Scenario:
         separation=_build("separation", SeparationConfig, data.get("separation")),
         monte_carlo=_build("monte_carlo", MonteCarloConfig, mc),
         p_values=p_values,
+        contingency=contingency_from_dict(data.get("contingency")),
     )
 
 

@@ -24,7 +24,10 @@ from ..checks import SEED_MAX
 from ..core.acquisition.planner import AcquisitionConfig, parse_axes
 from ..core.deployment.sweep import MODELS, USSA76_DENSITY_400KM
 from ..core.od.radar import DEFAULT_EPOCH_UTC, julian_date
+from ..core.safety.anomaly import AnomalyLimits
 from ..core.safety.monitor import MonitorLimits
+from ..core.truth.contingency import NAMES as CONTINGENCIES
+from ..core.truth.contingency import NONE as NO_CONTINGENCY
 from ..errors import show
 from ..graph import MANAGED
 from ..ndm.options import FORMATS
@@ -167,8 +170,18 @@ SCENARIO_FILE = Param("scenario_file", "string", "", "scenario YAML ('' = the em
 AUTOSTART = Param("autostart", "bool", True, "configure and activate in the constructor (false: stay unconfigured "
                   "for a lifecycle manager or `ros2 lifecycle set`)")
 J2 = "secular J2 in the {}"
+
+
+def _contingency(side):
+    return Param("contingency", "string", "", f"the run's contingency, injected by the {side} (issue 28, "
+                 "docs/contingencies.md): '' = the scenario's contingency block (none without one), 'none' = none, "
+                 "else that contingency with the block's parameters when the block names it, else its defaults "
+                 "(roe-sep run/campaign --contingency NAME sets it)", choices=("", NO_CONTINGENCY, *CONTINGENCIES))
+
+
 _ACQ = AcquisitionConfig()
 _LIM = MonitorLimits()
+_ANOM = AnomalyLimits()
 
 PLANNER = (
     AUTOSTART,
@@ -196,6 +209,8 @@ SIM = (
     Param("disperse", "bool", True, "apply the execution errors, the drag uncertainty and the ejection delay"),
     Param("ejection_delay_max", "double", 10.0, "the release mechanism fires uniformly within this delay after the "
           "commanded ejection epoch (an assumption: no seed gives a value; 0: on time)", "s", range=(0.0, 600.0)),
+    _contingency("simulator (spl_weak, drift_stop_delayed, drift_stop_missed, burn_underperformance; the others: "
+                 "none here)"),
     Param("duration", "double", DEFAULT_DURATION, "sim time at which the run ends (default 3.25 days: OD, the "
           "initial-condition acquisition and half a day on)", "s", range=(1.0, 1.0e9)),
     Param("time_step", "double", 600.0, "sim time per clock tick (lockstep: per step)", "s", range=(1.0e-3, 86400.0)),
@@ -270,6 +285,9 @@ RADAR_OD = (
           "(core.od.batch); false: the secular drift model alone"),
     Param("epoch_utc", "string", DEFAULT_EPOCH_UTC, "UTC calendar epoch of sim time 0 (the simulator's)",
           rule="an ISO-8601 UTC date-time, e.g. '2016-07-01T00:00:00'", check=_iso_epoch),
+    SCENARIO_FILE,
+    _contingency("radar (radar_pass_missed, radar_bias; the others: none here), drawn from the noise seed's own "
+                 "stream"),
 )
 
 IC_PLANNER = (
@@ -337,6 +355,22 @@ SAFETY_MONITOR = (
     Param("fov_half_n_deg", "double", math.degrees(_LIM.fov_half_n), "camera half field of view, normal",
           "deg", range=(0.01, 89.0)),
     Param("j2", "bool", True, J2.format("predictions")),
+    Param("burn_epoch_tolerance", "double", _ANOM.epoch_tolerance, "a carrier burn of an approved plan not executed "
+          "this long after its epoch raises burn_missing, one executed later burn_late (core.safety.anomaly)", "s",
+          range=(1.0, 86400.0)),
+    Param("burn_magnitude_z", "double", _ANOM.magnitude_z, "an executed carrier burn whose magnitude departs from "
+          "the commanded one by more than this many sigmas of the thruster's magnitude error raises burn_magnitude",
+          "sigma", range=(0.5, 100.0)),
+    Param("burn_pointing_deg", "double", _ANOM.pointing_deg, "an executed carrier burn more than this far off its "
+          "commanded direction raises burn_pointing (the attitude error: 30 arcsec per axis)", "deg",
+          range=(1.0e-3, 180.0)),
+    Param("od_alpha", "double", _ANOM.od_alpha, "an OD whose e/i vectors depart from their prediction (the previous "
+          "knowledge carried over the executed burns) beyond the chi-square(4) quantile 1 - od_alpha raises "
+          "od_inconsistent", range=(1.0e-12, 0.5)),
+    Param("od_model_sigma", "double", _ANOM.od_model_sigma, "model floor added per e/i component to that "
+          "prediction's 1-sigma (the secular model against the nonlinear truth)", "m", range=(0.0, 1.0e4)),
+    Param("residual_alpha", "double", _ANOM.residual_alpha, "an OD whose post-fit residuals exceed the "
+          "chi-square(3 m - 7) quantile 1 - residual_alpha raises od_residuals", range=(1.0e-12, 0.5)),
 )
 
 EJECTOR = (

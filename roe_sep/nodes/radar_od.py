@@ -27,6 +27,7 @@ Parameters: :data:`roe_sep.nodes.parameters.RADAR_OD` (``radar_od --help``, docs
 """
 
 import bisect
+import json
 import math
 
 import numpy as np
@@ -37,6 +38,7 @@ from roe_sep_msgs.msg import ImpulsiveManeuver, OrbitDetermination, RadarMeasure
 from rosgraph_msgs.msg import Clock
 
 from .. import interfaces
+from ..core.config import ConfigError, load_scenario
 from ..core.constants import R_EARTH, SECONDS_PER_DAY
 from ..core.od.batch import DragModel, DriftPrior, RadarBatch, batch_least_squares
 from ..core.od.radar import (
@@ -50,6 +52,8 @@ from ..core.od.radar import (
 )
 from ..core.relmotion.dynamics import propagate, propagate_chief
 from ..core.relmotion.roe import wrap_angle
+from ..core.truth.contingency import RADAR_SIDE, RadarContingency
+from ..core.truth.contingency import resolve as resolve_contingency
 from ..core.truth.nonlinear import vallado_band
 from .convert import array_to_elements, elements_to_array, msg_to_roe, roe_to_msg, sec_to_time, time_to_sec
 from .diagnostics import ERROR, OK, WARN, publish_status
@@ -85,6 +89,8 @@ class RadarODNode(ManagedNode):
         self.density_walk = declare(self, "density_walk")
         self.drag_terms = declare(self, "od_drag_terms")
         epoch = declare(self, "epoch_utc")
+        scenario_file = declare(self, "scenario_file")
+        contingency = declare(self, "contingency")
 
         self._check(names, lats, lons, alts)
         self.drag = (scale_height, ratio)
@@ -100,6 +106,7 @@ class RadarODNode(ManagedNode):
         self.mask = math.radians(mask)
         self.sigma = np.array([sigma_range, math.radians(sigma_angle), math.radians(sigma_angle)])
         self.rng = np.random.default_rng(seed)
+        self.contingency = self._contingency(scenario_file, contingency, seed, names)
 
         self._forget()
         self.pass_ids = [0] * len(self.stations)  # passes started per station
@@ -117,6 +124,19 @@ class RadarODNode(ManagedNode):
         for name, values in (("station_latitudes_deg", lats), ("station_longitudes_deg", lons),
                              ("station_altitudes_m", alts)):
             require(name, len(values) == n, values, f"{n} value(s), one per station of 'stations'")
+
+    def _contingency(self, scenario_file, name, seed, stations):
+        """The radar's side of the run's contingency (issue 28: missed passes, a range bias), drawn from its own
+        stream of the noise seed; None without one (or with one of the simulator's)."""
+        try:
+            chosen = resolve_contingency(load_scenario(scenario_file or None).contingency, name)
+            if chosen is None or chosen.name not in RADAR_SIDE:
+                return None
+            drawn = RadarContingency(chosen, seed, stations)
+        except ConfigError as exc:
+            raise ParameterError(f"parameter 'contingency' (scenario_file {scenario_file!r}): {exc}") from exc
+        self.get_logger().warn(f"contingency {drawn.name}: {drawn.values}")
+        return drawn
 
     def _forget(self):
         """No truth, no tracking, no records: the state of a run not started."""
@@ -149,9 +169,12 @@ class RadarODNode(ManagedNode):
         publish_status(self, self.diag_pub, OK, "waiting for truth", self._values())
 
     def _values(self):
-        return {"measurements": self.published, "passes_tracked": sum(self.pass_ids),
-                "passes_since_burn": len(self.usable()[1]), "estimates": self.estimates,
-                "last_burn_s": self.last_burn}
+        values = {"measurements": self.published, "passes_tracked": sum(self.pass_ids),
+                  "passes_since_burn": len(self.usable()[1]), "estimates": self.estimates,
+                  "last_burn_s": self.last_burn}
+        if self.contingency is not None:  # as applied so far (absent without one: a nominal status as before)
+            values["contingency_applied"] = json.dumps(self.contingency.applied())
+        return values
 
     # --- inputs ---------------------------------------------------------------------------------------------
     def on_truth(self, msg: RelativeOrbitalElements):
@@ -308,7 +331,10 @@ class RadarODNode(ManagedNode):
                     if not self.open_pass[s]:
                         self.open_pass[s] = True
                         self.pass_ids[s] += 1
-                    self.measure(t, s, z[s][j], chief[j], theta[j], t_tr)
+                        if self.contingency is not None:
+                            self.contingency.pass_opened(s, self.pass_ids[s], float(t))
+                    if self.contingency is None or not self.contingency.dropped(s, self.pass_ids[s], float(t)):
+                        self.measure(t, s, z[s][j], chief[j], theta[j], t_tr)
                 elif self.open_pass[s]:
                     self.open_pass[s] = False
                     self.pass_closed(s, self.pass_ids[s], now)
@@ -320,6 +346,8 @@ class RadarODNode(ManagedNode):
 
     def measure(self, t, s, z_true, chief, theta, truth_t):
         z = add_noise(z_true, self.sigma, self.rng)
+        if self.contingency is not None:
+            z[0] += self.contingency.range_bias(s)  # a station's range bias (radar_bias)
         self.records.append((float(t), s, self.pass_ids[s], z, chief, float(theta), truth_t))
         name = self.stations[s].name
         m = RadarMeasurement(station=name, pass_id=self.pass_ids[s], range=float(z[0]), azimuth=float(z[1]),

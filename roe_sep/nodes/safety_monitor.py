@@ -6,9 +6,16 @@ trajectory under it from the best knowledge the ground has (the OD estimate, els
 truth). Criteria and thresholds: :mod:`roe_sep.core.safety.monitor`. Publishes ``/safety/status`` (truth and estimate),
 ``/safety/plan_check`` (one verdict per plan; the simulator executes only approved plans) and ``/diagnostics``.
 
+Contingencies (issue 28): what the ground can see of one -- a carrier burn executed late, not at all, or off in
+magnitude or direction from its approved plan, an OD inconsistent with its prediction from the commanded ejection
+and the executed burns, an OD whose residuals are too large -- is raised as a named WARN on ``/diagnostics``
+(``roe_sep/safety_monitor/contingency``, value ``contingency`` = the name, ``epoch_s``):
+:mod:`roe_sep.core.safety.anomaly`. A failure of that detection is reported, never fatal.
+
 Parameters: :data:`roe_sep.nodes.parameters.SAFETY_MONITOR` (``safety_monitor --help``, docs/parameters.md).
 """
 
+import json
 import math
 
 import numpy as np
@@ -24,13 +31,15 @@ from roe_sep_msgs.msg import (
 
 from .. import interfaces
 from ..core.config import ConfigError, load_scenario
+from ..core.constants import ARCSEC
 from ..core.relmotion.dynamics import drag_da_dot
 from ..core.relmotion.maneuvers import delta_roe
 from ..core.relmotion.orbit import mean_motion
 from ..core.relmotion.trajectory import Chief, state_at
+from ..core.safety.anomaly import AnomalyLimits, AnomalyWatch
 from ..core.safety.monitor import MonitorLimits, assess
 from .convert import msg_to_roe, plan_burns, sec_to_time, time_to_sec, vector_to_array
-from .diagnostics import publish_status
+from .diagnostics import WARN, publish_status
 from .lockstep import Lockstep
 from .managed import ManagedNode
 from .params import ParameterError, declare
@@ -76,6 +85,12 @@ class SafetyMonitorNode(ManagedNode):
         self.estimate = None  # Knowledge from the OD
         self.ejection = None  # Knowledge from the commanded ejection
         self.executed = []  # Burns executed so far
+        anomaly = AnomalyLimits(declare(self, "burn_epoch_tolerance"), declare(self, "burn_magnitude_z"),
+                                declare(self, "burn_pointing_deg"), declare(self, "od_alpha"),
+                                declare(self, "od_model_sigma"), declare(self, "residual_alpha"))
+        sep, mc = self.scenario.separation, self.scenario.monte_carlo
+        self.watch = AnomalyWatch(anomaly, sep.spl_sigma, sep.thruster_sigma, mc.attitude_sigma_arcsec * ARCSEC,
+                                  self.j2)
         self.checked = set()
         self.pending_plans = {}
 
@@ -120,6 +135,21 @@ class SafetyMonitorNode(ManagedNode):
         self.get_logger().error(f"{what} rejected: {exc}")
         publish_status(self, self.diag_pub, 2, f"{what} rejected: {exc}", part="input")
 
+    def detect(self, what, call):
+        """Run one contingency detection (``call()`` -> detections) and raise each one found; a failure is reported
+        (ERROR on /diagnostics), never fatal."""
+        try:
+            found = call()
+        except Exception as exc:  # noqa: BLE001 -- a contingency must never crash the monitor
+            self.reject(f"contingency detection on {what}", f"{type(exc).__name__}: {exc}")
+            return
+        for d in found:
+            self.get_logger().warning(f"contingency detected: {d.name}: {d.text}")
+            values = {"contingency": d.name, "epoch_s": f"{d.epoch:.1f}",
+                      **{k: json.dumps(v) for k, v in d.values.items()}}
+            publish_status(self, self.diag_pub, WARN, f"{d.name}: {d.text}", values, part="contingency",
+                           stamp=d.epoch)
+
     def knowledge(self):
         """The newest ground knowledge: the OD estimate, else the commanded ejection."""
         return self.estimate or self.ejection
@@ -131,6 +161,7 @@ class SafetyMonitorNode(ManagedNode):
             roe = msg_to_roe(msg)
             if not (math.isfinite(t) and np.all(np.isfinite(roe))):
                 raise ValueError("non-finite state")
+            self.detect("sim time", lambda: self.watch.at(t))
             if t - self.last_truth < self.period or not np.any(roe):  # nothing to assess before the release
                 return
             self.last_truth = t
@@ -160,6 +191,10 @@ class SafetyMonitorNode(ManagedNode):
             if not (math.isfinite(t) and np.all(np.isfinite(roe)) and math.isfinite(da_dot)):
                 raise ValueError("non-finite estimate")
             self.estimate = Knowledge(roe, t, chief_of(est, t), da_dot)
+            cov = np.asarray(est.covariance, dtype=float).reshape(6, 6)
+            self.detect("OD estimate", lambda: self.watch.od(
+                time_to_sec(od.header.stamp), t, roe, cov, self.estimate.chief, da_dot, od.residual_rms,
+                od.measurements))
             self.last_estimate = -math.inf
             self.assess_estimate(t)
             self.recheck_pending()
@@ -176,6 +211,7 @@ class SafetyMonitorNode(ManagedNode):
             if not (math.isfinite(t) and np.all(np.isfinite(roe))):
                 raise ValueError("non-finite ejection")
             self.ejection = Knowledge(roe, t, chief, self.nominal_da_dot(chief.a))
+            self.detect("ejection event", lambda: self.watch.ejection(t, dv, chief, self.ejection.da_dot) or [])
             self.recheck_pending()
         except (ValueError, ZeroDivisionError) as exc:
             self.reject("ejection event", exc)
@@ -186,6 +222,9 @@ class SafetyMonitorNode(ManagedNode):
                 self.executed.append(plan_burns([m])[0])
         except ValueError as exc:
             self.reject("executed maneuver", exc)
+            return
+        self.detect("executed maneuver", lambda: self.watch.executed(
+            time_to_sec(m.epoch), vector_to_array(m.dv_rtn), m.spacecraft, m.purpose, m.mean_arg_latitude))
 
     def on_plan(self, topic, plan: ManeuverPlan):
         key = (topic, time_to_sec(plan.header.stamp))
@@ -224,6 +263,10 @@ class SafetyMonitorNode(ManagedNode):
             self.check_pub.publish(msg)
             return True
         self.publish(source, k.t, res, plan_stamp=plan.header.stamp, pub=self.check_pub)
+        if res.safe:  # the simulator flies it: its carrier burns are expected as planned
+            self.detect(f"plan on {topic}", lambda: self.watch.plan(topic, [
+                (time_to_sec(m.epoch), vector_to_array(m.dv_rtn), m.spacecraft, m.purpose) for m in plan.maneuvers],
+                plan.p_reduction) or [])
         self.get_logger().info(f"{source} checked: {'safe' if res.safe else 'UNSAFE'} {res.failed or ''}")
         return True
 

@@ -42,6 +42,7 @@ from .. import interfaces
 from ..core.config import ConfigError, load_scenario
 from ..core.od.radar import julian_date, raan_from_ltan
 from ..core.separation.double_impulse import InfeasibleDesignError, design
+from ..core.truth.contingency import resolve as resolve_contingency
 from ..core.truth.execution import BurnExecution
 from ..core.truth.simulated import SimulatedTruth, dispersed_truth
 from .convert import (
@@ -71,6 +72,7 @@ class SimNode(Node):
         self.seed = declare(self, "seed")
         self.disperse = declare(self, "disperse")
         self.ejection_delay_max = declare(self, "ejection_delay_max")
+        contingency = declare(self, "contingency")
         self.duration = declare(self, "duration")
         self.time_step = declare(self, "time_step")
         tick_period = declare(self, "tick_period")
@@ -91,12 +93,17 @@ class SimNode(Node):
         self.step_timeout = declare(self, "step_timeout")
 
         raan, scenario, carrier = self._check(ltan, epoch, wait_for, participants, scenario_file)
+        try:
+            chosen = resolve_contingency(scenario.contingency, contingency)
+        except ConfigError as exc:
+            raise ParameterError(f"parameter 'contingency': {exc}") from exc
         self.world = world = dispersed_truth(scenario, carrier, raan, math.radians(u0_deg), self.seed,
-                                             self.disperse, self.dynamics, self.j2, self.ejection_delay_max)
+                                             self.disperse, self.dynamics, self.j2, self.ejection_delay_max,
+                                             chosen)
         self.truth = SimulatedTruth(world.model, self.truth_period, self.distance_step, self.departure,
                                     self._publish_truth, lambda: self.status(OK, "running"))
         self.execution = BurnExecution(self.truth, world.errors, world.ejection_delay, self.require_approval,
-                                       lambda level, text: self.status(LEVELS[level], text))
+                                       lambda level, text: self.status(LEVELS[level], text), world.contingency)
         self.done = False
         self.waiting_since = time.monotonic()
         self._interface(tick_period)
@@ -105,7 +112,9 @@ class SimNode(Node):
             f"deg, differential drag a*da_dot = "
             f"{world.da_dot * carrier.a * 86400:.1f} m/day, {self.duration / 86400:.2f} days, "
             + (f"lockstep with {self.participants}" if self.participants
-               else f"free-running at {self.time_step / tick_period:.0f}x"))
+               else f"free-running at {self.time_step / tick_period:.0f}x")
+            + ("" if world.contingency is None else f"; contingency {world.contingency.name} "
+               f"{json.dumps(world.contingency.values)}"))
         self.status(OK, "running")
 
     def _check(self, ltan, epoch, wait_for, participants, scenario_file):
@@ -250,6 +259,9 @@ class SimNode(Node):
             "min_distance_time_s": f"{min_dist[1]:.1f}",
             "truth_a_da_dot_m_per_day": f"{model.da_dot * model.a * 86400:.3f}",
             "dispersions_applied": json.dumps(self.world.applied()),
+            # the contingency as applied (issue 28); absent without one, so a nominal run's status is as before
+            **({} if self.world.contingency is None else
+               {"contingency_applied": json.dumps(self.world.contingency.applied())}),
         })
         if message.startswith(("scenario complete", "scenario aborted")) and self.final_timer is None:
             # the end of the run is repeated every wall second, as diagnostics are, until the node stops: a

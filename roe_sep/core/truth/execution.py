@@ -59,8 +59,9 @@ class BurnExecution:
     """The pending burns and their execution on ``truth`` (a :class:`~.simulated.SimulatedTruth`). ``report(level,
     text)`` (level 'WARN' or 'ERROR') says why a burn or a plan was not taken as it came."""
 
-    def __init__(self, truth, errors, ejection_delay, require_approval, report):
+    def __init__(self, truth, errors, ejection_delay, require_approval, report, contingency=None):
         self.truth, self.errors, self.ejection_delay = truth, errors, ejection_delay
+        self.contingency = contingency  # a TruthContingency (issue 28): moves, drops or changes burns; None: none
         self.require_approval = require_approval
         self.report = report
         self.pending: list[PendingBurn] = []
@@ -137,6 +138,10 @@ class BurnExecution:
         refs = error_references([b.purpose for b in burns], [b.dv_rtn for b in burns], p_reduction)
         for b, ref in zip(burns, refs):
             b.error_reference = ref
+        if self.contingency is not None:  # a late or missed burn: the plan stands, its execution does not
+            for b in burns:
+                b.epoch = self.contingency.reschedule(b.epoch, b.purpose, b.spacecraft)
+            burns = [b for b in burns if b.epoch is not None]
         burns = [b for b in burns if b.key not in self.flown]
         self.pending = [b for b in self.pending if b.source != source] + burns
         self.plan_stamps[source] = stamp
@@ -198,6 +203,8 @@ class BurnExecution:
                                 f"{burn.epoch:.0f} s)")
         self.truth.advance(t_exec)
         executed = self.errors.executed(burn.dv_rtn, burn.spacecraft, burn.error_reference)
+        if self.contingency is not None:
+            executed = self.contingency.executed(executed, burn.purpose, burn.spacecraft, t_exec)
         done = ExecutedBurn(t_exec, float(self.truth.model.u_at(t_exec)), executed, burn.spacecraft, burn.purpose)
         self.truth.model.apply(t_exec, relative_impulse(executed, burn.spacecraft), burn.spacecraft)
         self.flown.add(burn.key)

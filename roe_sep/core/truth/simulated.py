@@ -11,7 +11,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..constants import ARCSEC
-from ..relmotion.dynamics import drag_da_dot
+from ..relmotion.dynamics import arg_latitude_rate, drag_da_dot
+from .contingency import SIM_SIDE, ContingencyConfig, TruthContingency
 from .secular import ExecutionErrors, TruthModel, chief_from_u
 
 if TYPE_CHECKING:  # for the annotations only
@@ -34,6 +35,7 @@ class Dispersed:
     da_dot: float  # 1/s, the true differential drag
     configured: dict  # the distributions drawn from (sigmas, the delay's upper end), for the record of the run
     drag_factor: float = 1.0  # the drawn factor of the differential ballistic coefficient
+    contingency: TruthContingency | None = None  # the run's contingency on the simulator's side (issue 28)
 
     def applied(self) -> dict:
         """What the run drew, as the campaign checks it against :attr:`configured` (Kolmogorov-Smirnov): the drag
@@ -43,10 +45,11 @@ class Dispersed:
 
 
 def dispersed_truth(scenario: "Scenario", carrier: "DoubleImpulseDesign | MultiImpulseDesign", raan: float, u0: float,
-                    seed: int, disperse: bool, dynamics: str, j2: bool, ejection_delay_max: float) -> Dispersed:
+                    seed: int, disperse: bool, dynamics: str, j2: bool, ejection_delay_max: float,
+                    contingency: ContingencyConfig | None = None) -> Dispersed:
     """The run of ``seed``. The draws are those of ``numpy.random.default_rng(seed)`` in a fixed order (ballistic
-    factor, then the execution errors) and the ejection delay from its own stream of the seed, so each dispersion
-    keeps its draws whatever the others do.
+    factor, then the execution errors), the ejection delay and the contingency each from its own stream of the
+    seed, so each dispersion keeps its draws whatever the others do (and a contingency changes nothing else).
 
     Parameters
     ----------
@@ -68,11 +71,15 @@ def dispersed_truth(scenario: "Scenario", carrier: "DoubleImpulseDesign | MultiI
         J2 in the secular truth; the nonlinear one has the zonals J2-J4 whatever ``j2`` says.
     ejection_delay_max : float
         The upper end [s] of the uniform delay of the release mechanism after the commanded ejection epoch.
+    contingency : ContingencyConfig, optional
+        The run's contingency (:func:`~.contingency.resolve`); only the simulator's (:data:`~.contingency.SIM_SIDE`)
+        act here, the radar's are ignored. Applied whether or not ``disperse``.
 
     Returns
     -------
     Dispersed
-        The truth model, the execution errors, the ejection delay [s] and the true differential drag [1/s].
+        The truth model, the execution errors, the ejection delay [s], the true differential drag [1/s] and the
+        drawn contingency (None without one).
     """
     sep, mc = scenario.separation, scenario.monte_carlo
     a, inc = carrier.a, carrier.inc
@@ -95,7 +102,10 @@ def dispersed_truth(scenario: "Scenario", carrier: "DoubleImpulseDesign | MultiI
     configured = {"disperse": bool(disperse), "ballistic_sigma": mc.ballistic_sigma,
                   "ejection_delay_max_s": float(ejection_delay_max),
                   **{k: getattr(errors, k) for k in ("spl_sigma", "thruster_sigma", "attitude_sigma")}}
-    return Dispersed(model, errors, ejection_delay, da_dot, configured, float(db_factor))
+    drawn = None
+    if contingency is not None and contingency.name in SIM_SIDE:
+        drawn = TruthContingency(contingency, seed, 2.0 * math.pi / float(arg_latitude_rate(a, inc, True)))
+    return Dispersed(model, errors, ejection_delay, da_dot, configured, float(db_factor), drawn)
 
 
 class ClosestApproach:
