@@ -53,7 +53,6 @@ from .. import interfaces
 from ..core.acquisition.lp_transfer import grid_epochs
 from ..core.acquisition.planner import (
     AcquisitionConfig,
-    AcquisitionInfeasible,
     InvalidAcquisitionConfig,
     check_inputs,
     plan_acquisition,
@@ -332,16 +331,8 @@ class IcPlannerNode(ManagedNode):
         if t_f is None:
             t_f = float(grid_epochs(t_start, t_start + cfg.window, chief, cfg.grid_per_orbit, cfg.j2)[-1])
         arc = self.radar_arc(msg, t_f) if keep_arc else None
-        t_earliest = t_start + self.cfg.planning_margin
-        try:
-            # the acquisition's burns all fly before the final OD's arc: their execution errors are then in that
-            # OD, which the trim corrects (a burn after it, its 5 % error uncorrected, missed the drift check)
-            plan = plan_acquisition(roe0, chief, da_dot, cfg, t_earliest=t_earliest,
-                                    no_burns=[(arc[0], t_f)] if arc else ())
-        except AcquisitionInfeasible:
-            if not arc:
-                raise
-            plan = plan_acquisition(roe0, chief, da_dot, cfg, t_earliest=t_earliest, no_burns=[(arc[0], arc[2])])
+        plan = plan_acquisition(roe0, chief, da_dot, cfg, t_earliest=t_start + self.cfg.planning_margin,
+                                no_burns=[(arc[0], arc[2])] if arc else ())
 
         out = ManeuverPlan(strategy="ic_acquisition", p_reduction=0.0)
         out.header.stamp = sec_to_time(t_start)  # the plan describes the burns from its start state on
