@@ -26,6 +26,10 @@ When a plan is (re)computed -- what a flight-dynamics team wants from a stream o
   now + planning_margin when that prediction is not safely inside ``ic_drift_tolerance``
   (:mod:`roe_sep.core.acquisition.trim`; a trim past t_F moves t_F to one grid step after it). The plan in force
   keeps its other burns; later solutions are not used.
+* With ``replan_on_burn``, an executed acquisition burn that departs from its plan by more than half the trim
+  lattice in a da (its execution error, known from the executed-maneuver record: the carrier's burns as its GPS
+  measures them) re-plans the rest from the last OD and that record, or re-trims once the final OD has decided:
+  the radar gives the next OD only after a burn-free arc of three passes, more than a day later.
 * A re-plan never moves a burn that is committed: one of the plan in force due within ``planning_margin`` from
   now (or executed without its record having arrived yet) keeps the plan in force (WARN on /diagnostics).
 * The first burn of a new plan is at or after max(OD epoch, now) + planning_margin; only an OD made after the
@@ -60,6 +64,7 @@ from ..core.acquisition.planner import (
 )
 from ..core.acquisition.trim import (
     CLUSTER_GAP,
+    drift_lattice,
     final_od_arc,
     plan_trim,
     predicted_drift_sigma,
@@ -104,6 +109,7 @@ class IcPlannerNode(ManagedNode):
         self.trim = declare(self, "trim")
         self.burn_sigma = declare(self, "burn_sigma")
         self.final_od_arc = declare(self, "final_od_arc")
+        self.replan_on_burn = declare(self, "replan_on_burn")
         self.ic_drift_tolerance = declare(self, "ic_drift_tolerance")
         try:
             self.cfg = AcquisitionConfig(**values)
@@ -132,6 +138,7 @@ class IcPlannerNode(ManagedNode):
         self.final_decided = False  # the final OD's trim decision is made: the acquisition is complete
         self.plan_sigma = None  # m, 1-sigma of a da at t_F from the OD of the plan in force (with ``trim``)
         self.plan_od_epoch = None  # s, that OD's epoch
+        self.last_od = None  # the newest OD solution after the separation plan (re-plans after a burn start from it)
         self.summary = {}
         self.plans = 0
         publish_status(self, self.diag_pub, OK, "waiting for an OD estimate", self._values())
@@ -146,6 +153,37 @@ class IcPlannerNode(ManagedNode):
                 self.executed.extend(plan_burns([m]))
             except ValueError as exc:
                 publish_status(self, self.diag_pub, ERROR, f"executed maneuver rejected: {exc}", self._values())
+                return
+            if self.replan_on_burn and m.purpose == "ic_acquisition":
+                self._guarded("re-plan after a burn rejected", "re-plan after a burn failed", self.after_burn, m)
+
+    def after_burn(self, m: ImpulsiveManeuver):
+        """An executed acquisition burn that departs from its plan (execution error) by more than half the trim
+        lattice in a da (seed 002 Eq. 2: a Delta da = 2 dvT / n) changes where the plan in force ends: re-plan the
+        rest from the last OD and the executed-maneuver record (the carrier's GPS-calibrated burns), or, once the
+        final OD decided, re-trim. Without this the departure waits for the next OD, which the radar gives only
+        after a burn-free arc of three passes (more than a day after a burn, or never once the final arc began)."""
+        t = time_to_sec(m.epoch)
+        msg = self.last_od
+        if msg is None or self.plan_in_force is None or self.t_final is None or t >= self.t_final:
+            return
+        planned = next((p for p in self.plan_in_force.maneuvers
+                        if p.spacecraft == "carrier" and abs(time_to_sec(p.epoch) - t) < 1e-3), None)
+        if planned is None:
+            return
+        a = msg.estimate.chief.semi_major_axis
+        departure = 2.0 * abs(m.dv_rtn.y - planned.dv_rtn.y) / float(mean_motion(a))
+        if departure <= 0.5 * drift_lattice(a, self.cfg.dv_quantum):
+            return
+        t_od = time_to_sec(msg.estimate.header.stamp)
+        self.get_logger().info(f"burn at t = {t:.1f} s departed from its plan by {departure:.2f} m of a da: "
+                               f"{'re-trim' if self.final_decided else 're-plan'} from the OD at t = {t_od:.1f} s")
+        if self.final_decided:
+            self.final_decided = False
+            self.final_trim(msg, t_od, t, after_burn=True)
+            self.final_decided = True
+        else:
+            self.decide(msg, t_od, t)
 
     def on_separation_plan(self, plan: ManeuverPlan):
         self.separation_end = max((time_to_sec(m.epoch) for m in plan.maneuvers), default=-math.inf)
@@ -173,6 +211,12 @@ class IcPlannerNode(ManagedNode):
             self.get_logger().info(text)
             publish_status(self, self.diag_pub, OK, text, self._values())
             return
+        self.last_od = msg
+        self.decide(msg, t_od, now)
+
+    def decide(self, msg: OrbitDetermination, t_od, now):
+        """What the OD ``msg`` (epoch ``t_od``) does at ``now``: the final trim, a re-plan, or nothing (module
+        docstring)."""
         arc = self.radar_arc(msg, self.t_final) if self.t_final is not None else None
         final_band = self.t_final is not None and now < self.t_final < now + 2.0 * self.cfg.planning_margin
         if self.trim and (t_od >= arc[1] - PASS_SLACK if arc else final_band):
@@ -228,9 +272,10 @@ class IcPlannerNode(ManagedNode):
             f"a dl_F = {plan.final_roe[1] * plan.a:.0f} m, min R-N = {plan.min_rn:.0f} m")
         publish_status(self, self.diag_pub, OK, "acquisition plan published", self._values())
 
-    def final_trim(self, msg: OrbitDetermination, t_od, now):
+    def final_trim(self, msg: OrbitDetermination, t_od, now, after_burn=False):
         """The final OD's drift trim (module docstring): once, from the first newer solution within two planning
-        margins of t_F whose flown burns are all on record."""
+        margins of t_F whose flown burns are all on record (``after_burn``: again, after a burn that departed from
+        its plan)."""
         if self.final_decided:
             return
         if self.t_final is not None and now >= self.t_final:
@@ -249,6 +294,8 @@ class IcPlannerNode(ManagedNode):
         if decision is None:
             return
         self.final_decided = True
+        if after_burn and not decision.trim:
+            return
         self.summary.update({f"final_{k}": v for k, v in decision.summary().items()})
         text = (f"final OD at t = {t_od:.1f} s: predicted a da at the IC epoch {decision.predicted_a_da:+.2f} m "
                 f"(1-sigma {decision.sigma_a_da:.2f} m, trim threshold {decision.threshold:.2f} m): ")
@@ -276,15 +323,21 @@ class IcPlannerNode(ManagedNode):
         publish_status(self, self.diag_pub, OK, text, self._values())
 
     def plan_problems(self, msg: OrbitDetermination, now):
-        """The initial conditions other than the drift (the final trim's) that the plan in force misses at t_F by
-        this OD (:func:`~roe_sep.core.acquisition.trim.trim_problems`); [] when it meets them."""
+        """The initial conditions that the plan in force misses at t_F by this OD
+        (:func:`~roe_sep.core.acquisition.trim.trim_problems`, and the drift when its prediction is beyond the
+        tolerance: a smaller one is the final trim's); [] when it meets them."""
         roe0, chief, da_dot = self.start_state(msg, now)
         flown = {round(b.epoch, 3) for b in self.executed}
         kept = [m for m in (self.plan_in_force.maneuvers if self.plan_in_force else ())
                 if time_to_sec(m.epoch) >= chief.t0 and round(time_to_sec(m.epoch), 3) not in flown]
         burns = plan_burns(kept) + [b for b in self.executed if b.epoch > chief.t0]
         final = state_at(roe0, chief.t0, burns, max(self.t_final, chief.t0), chief, self.cfg.j2, da_dot)
-        return trim_problems(final, chief.a, self.cfg, roe0[1] > 0)
+        problems = trim_problems(final, chief.a, self.cfg, roe0[1] > 0)
+        a_da = float(final[0]) * chief.a
+        if abs(a_da) > self.ic_drift_tolerance:  # this OD's best estimate already misses the drift: no waiting for
+            # a final OD that may not come (the radar resolves the pair only beyond min_separation)
+            problems.append(f"|a da_F| = {abs(a_da):.1f} m beyond ic_drift_tolerance = {self.ic_drift_tolerance:g} m")
+        return problems
 
     def trim_decision(self, msg: OrbitDetermination, now, kept):
         """:func:`plan_trim` from the OD with the maneuvers ``kept`` of the plan in force still to fly and the burns
@@ -315,7 +368,9 @@ class IcPlannerNode(ManagedNode):
         docstring); None when re-planning is free."""
         flown = {round(b.epoch, 3) for b in self.executed}
         for t in self.burn_epochs or ():
-            if now <= t < now + self.cfg.planning_margin or (t_od <= t < now and round(t, 3) not in flown):
+            if round(t, 3) in flown:  # flown (a re-plan after a burn starts at that burn's epoch)
+                continue
+            if now <= t < now + self.cfg.planning_margin or t_od <= t < now:
                 return t
         if self.t_final is not None and now + 2.0 * self.cfg.planning_margin > self.t_final:
             return self.t_final  # the acquisition is (nearly) complete: no new acquisition from here
@@ -373,7 +428,8 @@ class IcPlannerNode(ManagedNode):
         return final_od_arc(passes, t_final, self.final_od_arc)
 
     def start_state(self, msg: OrbitDetermination, now):
-        """The best knowledge at max(OD epoch, now): the estimate plus every carrier burn flown since its epoch, as
+        """The best knowledge at max(OD epoch, now, the latest burn on record): the estimate plus every carrier burn
+        flown since its epoch, as
         (ROE, Chief there, da_dot [1/s]); raises ValueError on a bad estimate."""
         el = msg.estimate.chief
         a = el.semi_major_axis
@@ -384,7 +440,8 @@ class IcPlannerNode(ManagedNode):
         roe_od = msg_to_roe(msg.estimate)
         da_dot = msg.a_da_dot / a
         check_inputs(roe_od, od_chief, da_dot)
-        t_start = max(t_od, now)
+        # every burn on record, also one flown after ``now`` (a solution stamped before a burn it arrives after)
+        t_start = max(t_od, now, *(b.epoch for b in self.executed))
         flown = [b for b in self.executed if t_od < b.epoch <= t_start]
         roe0 = state_at(roe_od, t_od, flown, t_start, od_chief, self.cfg.j2, da_dot)
         return roe0, Chief(a=a, inc=el.inclination, u0=float(od_chief.u_at(t_start, self.cfg.j2)), t0=t_start), da_dot

@@ -330,6 +330,9 @@ IC_PLANNER = (
     Param("burn_sigma", "double", 0.05, "1-sigma magnitude error of a carrier burn (the scenario's thruster_sigma): "
           "how well the plan in force knows a da after its burns; an OD that knows it less well is not used",
           range=(0.0, 1.0)),
+    Param("replan_on_burn", "bool", True, "re-plan (before the final OD) or re-trim (after it) from the last OD and "
+          "the executed-maneuver record when an executed acquisition burn departs from its plan by more than half the "
+          "trim lattice in a da (0.9 m at 515 km); false: only a new OD re-plans"),
     Param("final_od_arc", "double", 36000.0, "burn-free radar arc kept before the IC epoch for the final OD "
           "(radar_od's min_arc; radar_od restarts its arc at every burn); 0: none, the final OD is then the first "
           "solution within two planning margins of t_F", "s", range=(0.0, 604800.0)),
