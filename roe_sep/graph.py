@@ -80,7 +80,7 @@ def parameters(config, bag_dir, overrides, nodes=NODES):
     return out
 
 
-CONTINGENCY_NODES = ("sim", "radar_od")  # the nodes that inject a contingency (issue 28): the truth and the radar
+CONTINGENCY_NODES = ("sim", "radar_od")  # the nodes that inject a contingency: the truth and the radar
 
 
 def contingency_overrides(overrides, contingency):

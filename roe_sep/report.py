@@ -186,7 +186,7 @@ def dispersions_applied(text):
 
 
 def contingency_applied(diagnostics):
-    """The run's contingency as applied (issue 28): the value ``contingency_applied`` (JSON: name, parameters as
+    """The run's contingency as applied: the value ``contingency_applied`` (JSON: name, parameters as
     drawn, configured, events) of the last status of the simulator or of radar_od that carries it, the simulator's
     first (a contingency acts on one side only); None without one."""
     for node in ("roe_sep/sim", "roe_sep/radar_od"):

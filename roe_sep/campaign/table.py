@@ -33,7 +33,7 @@ FIELDS = (
     "od_last_z_a_da_dot", "truth_drag_m_per_day", "dispersions", "wall_s", "domain_id",
     "contingency", "contingencies_detected",
 )
-LEGACY_FIELDS = FIELDS[:-2]  # the header before the contingencies (issue 28): read as rows without them
+LEGACY_FIELDS = FIELDS[:-2]  # the header before the contingencies: read as rows without them
 BOOL_FIELDS = {"safe", "ic_trim", *(f"crit_{c}" for c in CRITERIA), *(f"ic_{c}" for c in IC_CHECKS)}
 INT_FIELDS = {"seed", "od_passes", "od_measurements", "od_solutions", "domain_id"}
 STR_FIELDS = {"status", "failure", "reason", "dispersions", "contingency", "contingencies_detected"}

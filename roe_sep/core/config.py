@@ -64,7 +64,7 @@ class Scenario:
     separation: SeparationConfig = field(default_factory=SeparationConfig)
     monte_carlo: MonteCarloConfig = field(default_factory=MonteCarloConfig)
     p_values: tuple = DEFAULT_P_VALUES
-    # the run's contingency (issue 28), None: nominal. Not in the repr: a scenario without one hashes as before
+    # the run's contingency, None: nominal. Not in the repr: a scenario without one hashes as before
     # (a campaign directory's settings, roe_sep.campaign.settings, add it when set)
     contingency: ContingencyConfig | None = field(default=None, repr=False)
 

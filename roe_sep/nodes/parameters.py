@@ -173,7 +173,7 @@ J2 = "secular J2 in the {}"
 
 
 def _contingency(side):
-    return Param("contingency", "string", "", f"the run's contingency, injected by the {side} (issue 28, "
+    return Param("contingency", "string", "", f"the run's contingency, injected by the {side} ("
                  "docs/contingencies.md): '' = the scenario's contingency block (none without one), 'none' = none, "
                  "else that contingency with the block's parameters when the block names it, else its defaults "
                  "(roe-sep run/campaign --contingency NAME sets it)", choices=("", NO_CONTINGENCY, *CONTINGENCIES))

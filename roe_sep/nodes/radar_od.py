@@ -126,7 +126,7 @@ class RadarODNode(ManagedNode):
             require(name, len(values) == n, values, f"{n} value(s), one per station of 'stations'")
 
     def _contingency(self, scenario_file, name, seed, stations):
-        """The radar's side of the run's contingency (issue 28: missed passes, a range bias), drawn from its own
+        """The radar's side of the run's contingency (missed passes, a range bias), drawn from its own
         stream of the noise seed; None without one (or with one of the simulator's)."""
         try:
             chosen = resolve_contingency(load_scenario(scenario_file or None).contingency, name)

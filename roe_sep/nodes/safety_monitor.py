@@ -6,7 +6,7 @@ trajectory under it from the best knowledge the ground has (the OD estimate, els
 truth). Criteria and thresholds: :mod:`roe_sep.core.safety.monitor`. Publishes ``/safety/status`` (truth and estimate),
 ``/safety/plan_check`` (one verdict per plan; the simulator executes only approved plans) and ``/diagnostics``.
 
-Contingencies (issue 28): what the ground can see of one -- a carrier burn executed late, not at all, or off in
+Contingencies: what the ground can see of one -- a carrier burn executed late, not at all, or off in
 magnitude or direction from its approved plan, an OD inconsistent with its prediction from the commanded ejection
 and the executed burns, an OD whose residuals are too large -- is raised as a named WARN on ``/diagnostics``
 (``roe_sep/safety_monitor/contingency``, value ``contingency`` = the name, ``epoch_s``):

@@ -259,7 +259,7 @@ class SimNode(Node):
             "min_distance_time_s": f"{min_dist[1]:.1f}",
             "truth_a_da_dot_m_per_day": f"{model.da_dot * model.a * 86400:.3f}",
             "dispersions_applied": json.dumps(self.world.applied()),
-            # the contingency as applied (issue 28); absent without one, so a nominal run's status is as before
+            # the contingency as applied; absent without one, so a nominal run's status is as before
             **({} if self.world.contingency is None else
                {"contingency_applied": json.dumps(self.world.contingency.applied())}),
         })

@@ -1,4 +1,4 @@
-"""Contingencies in a campaign's bookkeeping (issue 28), without DDS: the ``--contingency`` flag as node parameters,
+"""Contingencies in a campaign's bookkeeping, without DDS: the ``--contingency`` flag as node parameters,
 the campaign's settings, the ``contingency`` and ``contingencies_detected`` columns, and a table written before
 them read and continued."""
 

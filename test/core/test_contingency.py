@@ -1,4 +1,4 @@
-"""Contingencies as scenario inputs (issue 28): the ``contingency:`` block and its errors, the draws from their own
+"""Contingencies as scenario inputs: the ``contingency:`` block and its errors, the draws from their own
 stream of the seed, what each contingency changes in the simulator's burn execution and the radar (and nothing
 else), and the safety monitor's detection of what it can see (core.safety.anomaly)."""
 

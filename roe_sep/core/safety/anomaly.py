@@ -1,4 +1,4 @@
-"""Contingency detection, without ROS: what the safety monitor can see of a contingency (issue 28) from what the
+"""Contingency detection, without ROS: what the safety monitor can see of a contingency from what the
 ground has -- the plans it approved, the executed carrier burns, the commanded ejection and the OD solutions -- never
 the truth. Each finding is a named :class:`Detection`; the safety monitor raises it on ``/diagnostics`` and the run
 report lists the first epoch of each name (``contingencies_detected``).

@@ -1,4 +1,4 @@
-"""Contingencies as scenario inputs (issue 28): a weak ejection, a late or missed drift-stop, lost radar passes, an
+"""Contingencies as scenario inputs: a weak ejection, a late or missed drift-stop, lost radar passes, an
 underperforming carrier burn, a radar range bias -- injected where they happen in flight, by the simulator (truth and
 burn execution) and by the radar (measurements), never by the planners, which must find out as they would in flight.
 

@@ -61,7 +61,7 @@ class BurnExecution:
 
     def __init__(self, truth, errors, ejection_delay, require_approval, report, contingency=None):
         self.truth, self.errors, self.ejection_delay = truth, errors, ejection_delay
-        self.contingency = contingency  # a TruthContingency (issue 28): moves, drops or changes burns; None: none
+        self.contingency = contingency  # a TruthContingency: moves, drops or changes burns; None: none
         self.require_approval = require_approval
         self.report = report
         self.pending: list[PendingBurn] = []

@@ -35,7 +35,7 @@ class Dispersed:
     da_dot: float  # 1/s, the true differential drag
     configured: dict  # the distributions drawn from (sigmas, the delay's upper end), for the record of the run
     drag_factor: float = 1.0  # the drawn factor of the differential ballistic coefficient
-    contingency: TruthContingency | None = None  # the run's contingency on the simulator's side (issue 28)
+    contingency: TruthContingency | None = None  # the run's contingency on the simulator's side
 
     def applied(self) -> dict:
         """What the run drew, as the campaign checks it against :attr:`configured` (Kolmogorov-Smirnov): the drag
