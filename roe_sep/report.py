@@ -148,7 +148,8 @@ def truth_drift_rate(truth, t, burn_epochs):
 
 def od_solution(msg, truth, truth_da_dot, burn_epochs=None):
     """One OD solution against the truth at its epoch: ``estimate``, ``sigma`` and ``error`` (a*ROE, m), ``nees``
-    (6 dof: the message carries the ROE block of the covariance), the drift rate ``a_da_dot`` with its
+    (6 dof: the ROE block of the covariance), ``nees7`` (7 dof: ROE and drift rate, :func:`od_covariance7`), the
+    drift rate ``a_da_dot`` with its
     ``a_da_dot_sigma`` and ``a_da_dot_error`` against the truth's drift rate ``a_da_dot_truth`` (m/s), and
     ``a_da_dot_z``, the error in sigmas (standard normal for an honest covariance). The truth's drift rate is
     :func:`truth_drift_rate` given the epochs of the executed burns ``burn_epochs``, else (or without a long enough
@@ -168,7 +169,23 @@ def od_solution(msg, truth, truth_da_dot, burn_epochs=None):
         out["a_da_dot_truth"] = rate if rate is not None else truth_da_dot / 86400.0
         out["a_da_dot_error"] = float(msg.a_da_dot - out["a_da_dot_truth"])
         out["a_da_dot_z"] = out["a_da_dot_error"] / msg.a_da_dot_sigma if msg.a_da_dot_sigma > 0 else None
+        cov7 = od_covariance7(msg)
+        out["nees7"] = (nees([*out["estimate"], msg.a_da_dot], [*at_od, out["a_da_dot_truth"]], cov7)
+                        if cov7 is not None else None)
     return out
+
+
+def od_covariance7(msg):
+    """The 7x7 covariance [m^2, m^2/s, m^2/s^2] of (a*ROE, a*da_dot) of an OD message: the ROE block, the drift
+    rate's cross terms and variance; None when the message carries no cross terms (recorded before them) or no
+    covariance."""
+    cross = np.asarray(getattr(msg, "a_da_dot_covariance", ()), dtype=float)
+    roe = np.asarray(msg.estimate.covariance, dtype=float).reshape(6, 6)
+    if cross.shape != (6,) or not np.any(roe) or not msg.a_da_dot_sigma > 0:
+        return None
+    cov = np.zeros((7, 7))
+    cov[:6, :6], cov[:6, 6], cov[6, :6], cov[6, 6] = roe, cross, cross, msg.a_da_dot_sigma ** 2
+    return cov
 
 
 def dispersions_applied(text):

@@ -97,6 +97,8 @@ def orbit_determination(msg):
         _finite(name, getattr(msg, name))
     if len(msg.estimate.covariance) != 36:
         raise BadMessage("estimate.covariance", f"{len(msg.estimate.covariance)} values", "36 values")
+    for k, v in enumerate(getattr(msg, "a_da_dot_covariance", ())):
+        _finite(f"a_da_dot_covariance[{k}]", v)
 
 
 def safety_status(msg):

@@ -69,6 +69,9 @@ def aggregate(rows):
         "od_drift_rate": nees_consistency(_squares(r.get("od_z_a_da_dot") for r in done), dof=1),
         "od_last_nees": nees_consistency([r.get("od_last_nees") for r in done], dof=6),
         "od_last_drift_rate": nees_consistency(_squares(r.get("od_last_z_a_da_dot") for r in done), dof=1),
+        # ROE and drift rate together (7 dof, with their cross-covariance)
+        "od_nees7": nees_consistency([r.get("od_nees7") for r in done], dof=7),
+        "od_last_nees7": nees_consistency([r.get("od_last_nees7") for r in done], dof=7),
         "dispersions": dispersion_checks(done),
         "failures": {"by_kind": dict(collections.Counter(r["failure"] for r in failed)),
                      "by_reason": dict(collections.Counter(r["reason"] for r in failed).most_common())},

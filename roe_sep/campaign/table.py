@@ -31,9 +31,10 @@ FIELDS = (
     "od_epoch_s", "od_passes", "od_nees", *(f"od_err_{k}_m" for k in ROE_KEYS), "od_err_a_da_dot_m_per_day",
     "od_z_a_da_dot", "od_residual_rms", "od_measurements", "od_solutions", "od_last_epoch_s", "od_last_nees",
     "od_last_z_a_da_dot", "truth_drag_m_per_day", "dispersions", "wall_s", "domain_id",
-    "contingency", "contingencies_detected",
+    "contingency", "contingencies_detected", "od_nees7", "od_last_nees7",
 )
-LEGACY_FIELDS = FIELDS[:-2]  # the header before the contingencies: read as rows without them
+# the headers of earlier versions (before the contingencies, before the 7-state NEES): read as rows without them
+LEGACY_HEADERS = (FIELDS[:-4], FIELDS[:-2])
 BOOL_FIELDS = {"safe", "ic_trim", *(f"crit_{c}" for c in CRITERIA), *(f"ic_{c}" for c in IC_CHECKS)}
 INT_FIELDS = {"seed", "od_passes", "od_measurements", "od_solutions", "domain_id"}
 STR_FIELDS = {"status", "failure", "reason", "dispersions", "contingency", "contingencies_detected"}
@@ -93,13 +94,13 @@ def row_from_report(seed: int, rep: dict) -> dict:
     od = rep.get("od")
     if od:
         rate_err = od.get("a_da_dot_error")
-        row.update(od_epoch_s=od.get("epoch"), od_passes=od.get("passes"), od_nees=od.get("nees"),
+        row.update(od_epoch_s=od.get("epoch"), od_passes=od.get("passes"), od_nees=od.get("nees"), od_nees7=od.get("nees7"),
                    od_err_a_da_dot_m_per_day=None if rate_err is None else rate_err * 86400.0,
                    od_z_a_da_dot=od.get("a_da_dot_z"), od_solutions=od.get("solutions"),
                    od_residual_rms=od.get("residual_rms"), od_measurements=od.get("measurements"))
         row.update({f"od_err_{k}_m": v for k, v in zip(ROE_KEYS, od.get("error") or ())})
         last = od.get("last") or {}
-        row.update(od_last_epoch_s=last.get("epoch"), od_last_nees=last.get("nees"),
+        row.update(od_last_epoch_s=last.get("epoch"), od_last_nees=last.get("nees"), od_last_nees7=last.get("nees7"),
                    od_last_z_a_da_dot=last.get("a_da_dot_z"))
     return row
 
@@ -162,7 +163,7 @@ class Table:
         complete = text if text.endswith("\n") else text[: text.rfind("\n") + 1]  # drop a torn last line
         reader = csv.reader(io.StringIO(complete))
         header = next(reader, None)
-        fields = FIELDS if header is None or tuple(header) != LEGACY_FIELDS else LEGACY_FIELDS
+        fields = tuple(header) if header is not None and tuple(header) in LEGACY_HEADERS else FIELDS
         if header is not None and tuple(header) != fields:
             raise ValueError(f"{self.path}: table header {header[:4]}... is not the header of this roe_sep version "
                              f"(expected {len(FIELDS)} columns starting {list(FIELDS[:4])}); use another --out")
@@ -171,7 +172,7 @@ class Table:
             if len(cells) != len(fields):
                 continue
             row = {f: _parse(f, c) for f, c in zip(fields, cells)}
-            row.update({f: "" for f in FIELDS if f not in row})  # a legacy row: no contingency
+            row.update({f: _parse(f, "") for f in FIELDS if f not in row})  # a legacy row: the newer cells empty
             rows[row["seed"]] = row
         return rows
 
@@ -198,13 +199,13 @@ class Table:
 
 
     def _upgrade(self):
-        """A table with the legacy header (before the contingency columns) rewritten with this header, every row
-        with empty contingency cells, atomically; a campaign started before them goes on in its directory."""
+        """A table with a legacy header (:data:`LEGACY_HEADERS`) rewritten with this header, every row with the
+        newer cells empty, atomically; a campaign started before them goes on in its directory."""
         if not self.path.exists():
             return
         with open(self.path, encoding="utf-8", newline="") as fh:
             first = fh.readline()
-        if not first or tuple(next(csv.reader([first]))) != LEGACY_FIELDS:
+        if not first or tuple(next(csv.reader([first]))) not in LEGACY_HEADERS:
             return
         rows = self.read()
         tmp = self.path.with_suffix(".csv.tmp")

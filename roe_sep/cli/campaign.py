@@ -68,8 +68,10 @@ def print_campaign(rep):
     for key, label in (("od_nees", "first solution, ROE NEES"),
                        ("od_drift_rate", "first solution, drift rate z^2"),
                        ("od_last_nees", "last solution, ROE NEES"),
-                       ("od_last_drift_rate", "last solution, drift rate z^2")):
-        c = rep[key]
+                       ("od_last_drift_rate", "last solution, drift rate z^2"),
+                       ("od_nees7", "first solution, 7-state NEES"),
+                       ("od_last_nees7", "last solution, 7-state NEES")):
+        c = rep.get(key) or {"mean": None}
         if c["mean"] is None:
             print(f"    {label:32s}no OD solution in any completed run")
             continue

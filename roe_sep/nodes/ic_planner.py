@@ -57,6 +57,7 @@ from .. import interfaces
 from ..core.acquisition.lp_transfer import grid_epochs
 from ..core.acquisition.planner import (
     AcquisitionConfig,
+    AcquisitionInfeasible,
     InvalidAcquisitionConfig,
     check_inputs,
     plan_acquisition,
@@ -64,7 +65,9 @@ from ..core.acquisition.planner import (
 )
 from ..core.acquisition.trim import (
     CLUSTER_GAP,
+    burns_drift_sigma,
     drift_lattice,
+    ei_margin,
     final_od_arc,
     plan_trim,
     predicted_drift_sigma,
@@ -110,6 +113,7 @@ class IcPlannerNode(ManagedNode):
         self.burn_sigma = declare(self, "burn_sigma")
         self.final_od_arc = declare(self, "final_od_arc")
         self.replan_on_burn = declare(self, "replan_on_burn")
+        self.ei_margin_sigmas = declare(self, "ei_margin_sigmas")
         self.ic_drift_tolerance = declare(self, "ic_drift_tolerance")
         try:
             self.cfg = AcquisitionConfig(**values)
@@ -255,6 +259,12 @@ class IcPlannerNode(ManagedNode):
         if made is None:
             return
         plan_msg, plan = made
+        if not plan_msg.maneuvers:  # the ICs are met without a burn: nothing to fly (an empty plan is no plan)
+            text = (f"OD at t = {t_od:.1f} s: the initial conditions are met at t = {plan.t_final:.1f} s without a "
+                    "further burn; the plan in force stays")
+            self.get_logger().info(text)
+            publish_status(self, self.diag_pub, OK, text, self._values())
+            return
         self.plan_pub.publish(plan_msg)
         self.plan_in_force = plan_msg
         self.plan_sigma = self.drift_sigma(msg, plan.t_final)
@@ -344,10 +354,12 @@ class IcPlannerNode(ManagedNode):
         flown after the decision time (under lockstep the solution arrives after the burns of its step)."""
         roe0, chief, da_dot = self.start_state(msg, now)
         sigma_a_da = math.sqrt(max(msg.estimate.covariance[0], 0.0))
-        burns = plan_burns(kept) + [b for b in self.executed if b.epoch > chief.t0]
+        to_fly = plan_burns(kept)
+        burns = to_fly + [b for b in self.executed if b.epoch > chief.t0]
         return plan_trim(roe0, chief, da_dot, burns, self.t_final, now + self.cfg.planning_margin,
                          sigma_a_da, msg.a_da_dot_sigma, self.ic_drift_tolerance, self.cfg,
-                         t_od=time_to_sec(msg.estimate.header.stamp))
+                         t_od=time_to_sec(msg.estimate.header.stamp),
+                         sigma_burns=burns_drift_sigma([b.dv_rel[1] for b in to_fly], chief.a, self.burn_sigma))
 
     def _guarded(self, rejected, failed, fn, *args):
         """``fn(*args)``, or None with the reason logged and on /diagnostics: a ValueError is a bad estimate or no
@@ -386,8 +398,15 @@ class IcPlannerNode(ManagedNode):
         if t_f is None:
             t_f = float(grid_epochs(t_start, t_start + cfg.window, chief, cfg.grid_per_orbit, cfg.j2)[-1])
         arc = self.radar_arc(msg, t_f) if keep_arc else None
-        plan = plan_acquisition(roe0, chief, da_dot, cfg, t_earliest=t_start + self.cfg.planning_margin,
-                                no_burns=[(arc[0], arc[2])] if arc else ())
+        kwargs = dict(t_earliest=t_start + self.cfg.planning_margin, no_burns=[(arc[0], arc[2])] if arc else ())
+        margin = ei_margin(msg_to_roe(msg.estimate) * chief.a, msg.estimate.covariance, self.ei_margin_sigmas)
+        try:  # the e/i magnitudes planned with the OD's uncertainty as margin above min_ei (ei_margin_sigmas)
+            plan = plan_acquisition(roe0, chief, da_dot, dataclasses.replace(cfg, min_ei=cfg.min_ei + margin),
+                                    **kwargs)
+        except AcquisitionInfeasible:
+            if margin == 0.0:
+                raise
+            plan = plan_acquisition(roe0, chief, da_dot, cfg, **kwargs)
 
         out = ManeuverPlan(strategy="ic_acquisition", p_reduction=0.0)
         out.header.stamp = sec_to_time(t_start)  # the plan describes the burns from its start state on

@@ -333,6 +333,9 @@ IC_PLANNER = (
     Param("replan_on_burn", "bool", True, "re-plan (before the final OD) or re-trim (after it) from the last OD and "
           "the executed-maneuver record when an executed acquisition burn departs from its plan by more than half the "
           "trim lattice in a da (0.9 m at 515 km); false: only a new OD re-plans"),
+    Param("ei_margin_sigmas", "double", 2.0, "plans keep |a de|, |a di| and the minimum R-N distance (Eq. 25) this "
+          "many 1-sigmas of the OD's |a de| and |a di| above min_ei (about 20 m for a radar OD); without a plan that "
+          "meets it, min_ei alone; 0: no margin", range=(0.0, 10.0)),
     Param("final_od_arc", "double", 36000.0, "burn-free radar arc kept before the IC epoch for the final OD "
           "(radar_od's min_arc; radar_od restarts its arc at every burn); 0: none, the final OD is then the first "
           "solution within two planning margins of t_F", "s", range=(0.0, 604800.0)),

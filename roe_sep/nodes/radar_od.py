@@ -469,6 +469,7 @@ class RadarODNode(ManagedNode):
         msg.header.frame_id = interfaces.CARRIER_RTN_FRAME
         mean, cov = result.mean_state()  # the mean ROE as the project defines them (with drag's short-period de)
         msg.estimate = roe_to_msg(mean[:6], chief, sec_to_time(result.t_est), covariance=cov[:6, :6])
+        msg.a_da_dot_covariance = [float(v) for v in cov[:6, 6] * a * a]
         return msg
 
 

@@ -7,7 +7,7 @@ import json
 import pytest
 
 from roe_sep.campaign import settings
-from roe_sep.campaign.table import FIELDS, LEGACY_FIELDS, Table, format_row, row_from_report
+from roe_sep.campaign.table import FIELDS, LEGACY_HEADERS, Table, format_row, row_from_report
 from roe_sep.cli import build_parser
 from roe_sep.graph import run_overrides
 from roe_sep.nodes.parameters import check_overrides
@@ -45,7 +45,8 @@ def report(contingency=None, detected=()):
 
 
 def test_the_columns():
-    assert FIELDS[-2:] == ("contingency", "contingencies_detected") and LEGACY_FIELDS == FIELDS[:-2]
+    assert FIELDS[-4:] == ("contingency", "contingencies_detected", "od_nees7", "od_last_nees7")
+    assert LEGACY_HEADERS == (FIELDS[:-4], FIELDS[:-2])
     row = row_from_report(1, report())
     assert "contingency" not in row and "contingencies_detected" not in row  # empty cells: a nominal row as before
     applied = {"name": "spl_weak", "parameters": {"spl_fraction": 0.2, "residual_dv": 0.0}, "configured": {},
@@ -55,23 +56,24 @@ def test_the_columns():
     assert json.loads(row["contingencies_detected"]) == {"od_inconsistent": 75900.0}
 
 
-def test_a_table_from_before_the_contingencies_is_read_and_continued(tmp_path):
+@pytest.mark.parametrize("legacy", LEGACY_HEADERS, ids=["before_contingencies", "before_nees7"])
+def test_a_table_from_an_earlier_version_is_read_and_continued(tmp_path, legacy):
     import csv
     import io
 
     path = tmp_path / "runs.csv"
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
-    writer.writerow(LEGACY_FIELDS)
-    old = format_row(row_from_report(7, report())).rstrip("\n").split(",")[: len(LEGACY_FIELDS)]
+    writer.writerow(legacy)
+    old = format_row(row_from_report(7, report())).rstrip("\n").split(",")[: len(legacy)]
     writer.writerow(old)
     path.write_text(buf.getvalue(), encoding="utf-8")
     table = Table(path)
     rows = table.read()
-    assert rows[7]["status"] == "ok" and rows[7]["contingency"] == ""
+    assert rows[7]["status"] == "ok" and rows[7]["contingency"] == "" and rows[7]["od_nees7"] is None
     table.append(row_from_report(8, report({"name": "drift_stop_missed", "parameters": {}, "configured": {},
                                             "events": []})))
     assert path.read_text(encoding="utf-8").splitlines()[0].split(",") == list(FIELDS)
     rows = table.read()
     assert set(rows) == {7, 8} and json.loads(rows[8]["contingency"])["name"] == "drift_stop_missed"
-    assert rows[7] == {**rows[7], "contingency": "", "contingencies_detected": ""}
+    assert rows[7] == {**rows[7], "contingency": "", "contingencies_detected": "", "od_nees7": None}

@@ -99,7 +99,8 @@ def test_an_incomplete_run_is_unsafe_only_on_a_violation_seen(tmp_path):
 
 def test_first_and_last_od_solution_against_the_truth():
     """The reference bag's OD solutions in the report: the first and the last, each with its ROE NEES (the core's
-    formula) and its drift rate's error in its own sigma against the truth's own drift rate."""
+    formula), its 7-state NEES (with the drift rate and their cross-covariance) and its drift rate's error in its own
+    sigma against the truth's own drift rate."""
     from roe_sep.core.od.batch import nees
     from roe_sep.report import build_report, read_topics
 
@@ -118,6 +119,13 @@ def test_first_and_last_od_solution_against_the_truth():
         assert sol["a_da_dot_error"] == pytest.approx(sol["a_da_dot"] - sol["a_da_dot_truth"])
         assert sol["a_da_dot_z"] == pytest.approx(sol["a_da_dot_error"] / sol["a_da_dot_sigma"])
         assert abs(sol["a_da_dot_z"]) < 4.0 and sol["nees"] < CHI2_6_999
+        # 7 states with the drift rate's cross-covariance: the radar_od's 7x7 (mean ROE and a da_dot) rebuilt
+        cov7 = np.zeros((7, 7))
+        cov7[:6, :6], cov7[6, 6] = cov, msg.a_da_dot_sigma ** 2
+        cov7[:6, 6] = cov7[6, :6] = msg.a_da_dot_covariance
+        assert np.any(cov7[:6, 6]) and np.all(np.linalg.eigvalsh(cov7) > 0.0)
+        truth7 = [*(np.array(sol["estimate"]) - sol["error"]), sol["a_da_dot_truth"]]
+        assert sol["nees7"] == pytest.approx(nees([*sol["estimate"], sol["a_da_dot"]], truth7, cov7))
     assert json.loads(json.dumps(rep, allow_nan=False))["od"]["last"] == last
 
 

@@ -63,6 +63,30 @@ def predicted_drift_sigma(sigma_a_da, sigma_rate, dt):
     return math.hypot(sigma_a_da, sigma_rate * dt)
 
 
+def burns_drift_sigma(dv_t, a, burn_sigma):
+    """1-sigma [m] of a da from the magnitude errors of tangential burns ``dv_t`` [m/s] still to fly, each
+    ``burn_sigma`` (relative 1-sigma) of its a da change 2 |dvT| / n (seed 002 Eqs. 2 and 22), independent."""
+    dv = np.asarray(dv_t, dtype=float)
+    return float(np.sqrt(np.sum((burn_sigma * 2.0 * dv / float(mean_motion(a))) ** 2)))
+
+
+def ei_margin(roe_m, cov_m2, z):
+    """Margin [m] to plan the e/i magnitudes and Eq. (25) with above min_ei: ``z`` times the larger 1-sigma of
+    |a de| and |a di| of an OD (``roe_m`` a*ROE [m], ``cov_m2`` its 6x6 covariance [m^2]), each along its own vector
+    (the component that changes the magnitude). Radar ODs know a de to about 20 m: a plan that ends at min_ei misses
+    it in about half the runs whose e/i vector the optimum puts there."""
+    x = np.asarray(roe_m, dtype=float)
+    p = np.asarray(cov_m2, dtype=float).reshape(6, 6)
+    out = 0.0
+    for k in (2, 4):
+        v = x[k:k + 2]
+        norm = float(np.hypot(*v))
+        if norm > 0.0:
+            u = v / norm
+            out = max(out, float(np.sqrt(max(u @ p[k:k + 2, k:k + 2] @ u, 0.0))))
+    return z * out
+
+
 def trim_threshold(tolerance, sigma, lattice, z=TRIM_SIGMAS):
     """|a da_F| [m] above which a trim is flown: ``tolerance - z sigma``, at least half the ``lattice`` (a smaller
     error no quantized trim can reduce) and at most the tolerance."""
@@ -157,12 +181,15 @@ def trim_problems(final_roe, a, cfg: AcquisitionConfig, leading, ei_tolerance_de
 
 
 def plan_trim(roe0, chief: Chief, da_dot, burns, t_final, t_earliest, sigma_a_da, sigma_rate, tolerance,
-              cfg: AcquisitionConfig = AcquisitionConfig(), ei_tolerance_deg=10.0, t_od=None) -> TrimDecision:
+              cfg: AcquisitionConfig = AcquisitionConfig(), ei_tolerance_deg=10.0, t_od=None,
+              sigma_burns=0.0) -> TrimDecision:
     """The trim decision from the estimate ``roe0`` (dimensionless, at ``chief.t0``, every burn flown so far applied)
     with the ``burns`` still to fly (:class:`Burn`, relative impulses), the IC epoch ``t_final`` in force and the
     earliest burn epoch ``t_earliest`` (now + uplink margin). ``sigma_a_da`` [m] and ``sigma_rate`` [m/s]: the OD's
     1-sigma of a da and of its drift rate; ``tolerance`` [m]: the |a da| initial condition (``ei_tolerance_deg``: its
-    e/i one); ``t_od`` [s]: the OD's epoch, from which its drift-rate error grows (default ``chief.t0``). The
+    e/i one); ``t_od`` [s]: the OD's epoch, from which its drift-rate error grows (default ``chief.t0``);
+    ``sigma_burns`` [m]: the 1-sigma of a da from the execution errors of the ``burns`` (:func:`burns_drift_sigma`),
+    in the decision's sigma beside the OD's (the "too uncertain" rule is the OD's alone). The
     decision is made at ``t_final``; a trim aims at the (possibly later) t_F it leaves. Raises
     :class:`AcquisitionInfeasible` when the trim would break another initial condition that the untrimmed plan keeps;
     one the plan misses either way is in the decision's ``problems`` and the trim still nulls the drift."""
@@ -176,10 +203,11 @@ def plan_trim(roe0, chief: Chief, da_dot, burns, t_final, t_earliest, sigma_a_da
     pending = [b for b in burns if b.epoch >= chief.t0]
     kept = trajectory(x0, chief.t0, pending, [t_final], chief, cfg.j2, da_dot)[0]
     predicted = float(kept[0] * a)
-    sigma = predicted_drift_sigma(sigma_a_da, sigma_rate, t_final - (chief.t0 if t_od is None else t_od))
+    od_sigma = predicted_drift_sigma(sigma_a_da, sigma_rate, t_final - (chief.t0 if t_od is None else t_od))
+    sigma = math.hypot(od_sigma, sigma_burns)  # with the execution errors of the burns still to fly
     lattice = drift_lattice(a, cfg.dv_quantum)
     threshold = trim_threshold(tolerance, sigma, lattice)
-    if abs(predicted) <= threshold or sigma > tolerance / TRIM_SIGMAS:
+    if abs(predicted) <= threshold or od_sigma > tolerance / TRIM_SIGMAS:
         return TrimDecision(float(t_final), predicted, sigma, threshold, None, None, 0.0, kept)
     epoch = float(grid_epochs(t_earliest, t_earliest + step, chief, cfg.grid_per_orbit, cfg.j2)[0])
     t_f = max(float(t_final), epoch + step)
@@ -200,5 +228,5 @@ def plan_trim(roe0, chief: Chief, da_dot, burns, t_final, t_earliest, sigma_a_da
                         tuple(problems.values()))
 
 
-__all__ = ["TRIM_SIGMAS", "TrimDecision", "drift_lattice", "final_od_arc", "plan_trim", "predicted_drift_sigma",
+__all__ = ["TRIM_SIGMAS", "TrimDecision", "burns_drift_sigma", "drift_lattice", "ei_margin", "final_od_arc", "plan_trim", "predicted_drift_sigma",
            "ic_problems", "radar_passes", "trim_problems", "trim_threshold"]
