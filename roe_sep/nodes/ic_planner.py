@@ -180,8 +180,10 @@ class IcPlannerNode(ManagedNode):
         if departure <= 0.5 * drift_lattice(a, self.cfg.dv_quantum):
             return
         t_od = time_to_sec(msg.estimate.header.stamp)
-        self.get_logger().info(f"burn at t = {t:.1f} s departed from its plan by {departure:.2f} m of a da: "
-                               f"{'re-trim' if self.final_decided else 're-plan'} from the OD at t = {t_od:.1f} s")
+        text = (f"burn at t = {t:.1f} s departed from its plan by {departure:.2f} m of a da: "
+                f"{'re-trim' if self.final_decided else 're-plan'} from the OD at t = {t_od:.1f} s")
+        self.get_logger().info(text)
+        publish_status(self, self.diag_pub, OK, text, self._values())
         if self.final_decided:
             self.final_decided = False
             self.final_trim(msg, t_od, t, after_burn=True)

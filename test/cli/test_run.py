@@ -97,6 +97,20 @@ def test_an_incomplete_run_is_unsafe_only_on_a_violation_seen(tmp_path):
         assert out["safe"] is verdict and json.loads((tmp_path / "report.json").read_text())["safe"] is verdict
 
 
+def test_the_reference_run_replans_after_a_departing_burn():
+    """The ic_planner's status in the reference bag: an acquisition burn whose execution error moved a da by more
+    than half the trim lattice (0.9 m) is followed by a re-plan (or re-trim) from the last OD, which is published."""
+    from roe_sep.report import read_topics
+
+    bag = ROOT / "bags" / "default_run"
+    data = read_topics(bag, (interfaces.DIAGNOSTICS_TOPIC, interfaces.ACQUISITION_PLAN_TOPIC))
+    texts = [s.message for _, d in data[interfaces.DIAGNOSTICS_TOPIC] for s in d.status
+             if s.name == "roe_sep/ic_planner"]
+    departed = [t for t in texts if "departed from its plan by" in t]
+    assert departed and all(float(t.split(" by ")[1].split(" m")[0]) > 0.9 for t in departed)
+    assert len(data[interfaces.ACQUISITION_PLAN_TOPIC]) > 1 + len([t for t in texts if "trim of" in t])
+
+
 def test_first_and_last_od_solution_against_the_truth():
     """The reference bag's OD solutions in the report: the first and the last, each with its ROE NEES (the core's
     formula), its 7-state NEES (with the drift rate and their cross-covariance) and its drift rate's error in its own

@@ -12,7 +12,9 @@ import pytest
 from roe_sep.core.acquisition.planner import AcquisitionConfig, AcquisitionInfeasible
 from roe_sep.core.acquisition.trim import (
     CLUSTER_GAP,
+    burns_drift_sigma,
     drift_lattice,
+    ei_margin,
     final_od_arc,
     plan_trim,
     predicted_drift_sigma,
@@ -177,3 +179,37 @@ def test_radar_passes_see_the_carrier_above_the_mask():
         assert elevation(set_ + 5.0) < 10.0 < elevation(set_ - 5.0)
     gaps = np.diff(passes[:, 0])
     assert np.any(gaps > 30000.0) and np.any(gaps < 7000.0)  # within a cluster one orbit, between clusters ~12 h
+
+
+def test_burns_drift_sigma_is_each_burns_share_of_eq_2():
+    """burn_sigma of each tangential burn's a da change 2 |dvT| / n, root-sum-square."""
+    assert burns_drift_sigma([], A, 0.05) == 0.0
+    one = burns_drift_sigma([0.01], A, 0.05)
+    assert one == pytest.approx(0.05 * 2.0 * 0.01 / N)
+    assert burns_drift_sigma([0.01, -0.01], A, 0.05) == pytest.approx(math.sqrt(2.0) * one)
+
+
+def test_the_burns_still_to_fly_widen_the_decision_sigma():
+    """An OD that knows a da to 0.2 m predicts 3.9 m: inside 5 - 3 x 0.2 = 4.4 m, no trim; with a 7.5 mm/s burn
+    still to fly (its 5 % error: 0.68 m) the sigma is 0.71 m, the threshold 2.86 m, and the trim flies. The "too
+    uncertain" rule stays the OD's own: a large burn to fly does not stop the trim."""
+    roe0 = state(3.9)
+    d = plan_trim(roe0, CHIEF, DA_DOT, [], T_F, T0 + MARGIN, 0.2, 0.0, 5.0, CFG)
+    assert not d.trim and d.threshold == pytest.approx(4.4)
+    s = burns_drift_sigma([0.0075], A, 0.05)
+    d = plan_trim(roe0, CHIEF, DA_DOT, [], T_F, T0 + MARGIN, 0.2, 0.0, 5.0, CFG, sigma_burns=s)
+    assert d.trim and d.sigma_a_da == pytest.approx(math.hypot(0.2, s))
+    assert d.threshold == pytest.approx(5.0 - 3.0 * math.hypot(0.2, s))
+    assert plan_trim(roe0, CHIEF, DA_DOT, [], T_F, T0 + MARGIN, 0.2, 0.0, 5.0, CFG, sigma_burns=10.0).trim
+
+
+def test_ei_margin_is_the_larger_sigma_along_the_e_and_i_vectors():
+    """z times the 1-sigma of |a de| along a de and of |a di| along a di; a sigma across a vector (its direction)
+    does not change the magnitude and does not count."""
+    roe = np.array([0.0, 7500.0, 0.0, -300.0, 0.0, 400.0])
+    cov = np.diag([1.0, 100.0, 400.0, 25.0, 9.0, 16.0])  # de: along (dey) 5 m, across (dex) 20 m; di: along 4 m
+    assert ei_margin(roe, cov, 2.0) == pytest.approx(10.0)
+    cov[5, 5] = 144.0  # di along: 12 m
+    assert ei_margin(roe, cov, 2.0) == pytest.approx(24.0)
+    assert ei_margin(roe, cov, 0.0) == 0.0
+    assert ei_margin(np.zeros(6), cov, 2.0) == 0.0  # no vector, no direction
