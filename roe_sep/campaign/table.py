@@ -94,7 +94,8 @@ def row_from_report(seed: int, rep: dict) -> dict:
     od = rep.get("od")
     if od:
         rate_err = od.get("a_da_dot_error")
-        row.update(od_epoch_s=od.get("epoch"), od_passes=od.get("passes"), od_nees=od.get("nees"), od_nees7=od.get("nees7"),
+        row.update(od_epoch_s=od.get("epoch"), od_passes=od.get("passes"), od_nees=od.get("nees"),
+                   od_nees7=od.get("nees7"),
                    od_err_a_da_dot_m_per_day=None if rate_err is None else rate_err * 86400.0,
                    od_z_a_da_dot=od.get("a_da_dot_z"), od_solutions=od.get("solutions"),
                    od_residual_rms=od.get("residual_rms"), od_measurements=od.get("measurements"))

@@ -107,8 +107,8 @@ def test_trim_before_the_ic_epoch_keeps_it_and_counts_the_burns_still_to_fly():
 def test_trim_refused_when_it_alone_would_break_another_initial_condition():
     """A -12 m trim lowers the minimum R-N distance at t_F from 259.3 to 249.6 m: with min_ei between the two, the
     trim alone would break it and is refused; bad inputs are refused too."""
-    from roe_sep.core.safety.metrics import min_rn_distance
     from roe_sep.core.relmotion.trajectory import trajectory
+    from roe_sep.core.safety.metrics import min_rn_distance
 
     roe0 = state(-12.0)
     d = plan_trim(roe0, CHIEF, DA_DOT, [], T_F, T0 + MARGIN, 1.0, 1.0 / 86400.0, 5.0, CFG)

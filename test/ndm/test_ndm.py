@@ -164,13 +164,19 @@ def exported(request, tmp_path_factory):
     return request.param, out
 
 
-def test_export_writes_the_set_and_it_reads_back(exported):
+def set_names(run):
+    """The files of the reference bag's set: two OPMs (RTN and EME2000) per approved plan, then the executed burns'
+    OPM, the ephemeris, the radar TDM and the closest approach's CDM."""
+    plans = [f"plan{k:02d}_{p.strategy}{frame}.opm" for k, (_, p) in enumerate(approved(run), start=1)
+             for frame in ("", "_eme2000")]
+    return [*plans, "executed_carrier.opm", "ephemeris.oem", "radar.tdm", "closest_approach.cdm"]
+
+
+def test_export_writes_the_set_and_it_reads_back(exported, run):
     fmt, out = exported
     names = sorted(p.name for p in out.iterdir())
-    assert names == sorted(f"{n}.{fmt}" for n in (
-        "plan01_double_impulse.opm", "plan01_double_impulse_eme2000.opm", "plan02_ic_acquisition.opm",
-        "plan02_ic_acquisition_eme2000.opm", "plan03_ic_acquisition.opm", "plan03_ic_acquisition_eme2000.opm",
-        "executed_carrier.opm", "ephemeris.oem", "radar.tdm", "closest_approach.cdm"))
+    assert len(approved(run)) >= 3  # the separation plan and at least two acquisition plans
+    assert names == sorted(f"{n}.{fmt}" for n in set_names(run))
     for p in out.iterdir():
         text = p.read_text()
         assert "NP.FLOAT64" not in text and "np.float64" not in text
@@ -219,7 +225,8 @@ def test_opm_dv_equals_the_plans_to_one_micrometer_per_second(exported, run):
     state (propagated two-body to the burn epoch) as planned; the executed OPM carries the executed burns."""
     fmt, out = exported
     plans = approved(run)
-    assert [p.strategy for _, p in plans] == ["double_impulse", "ic_acquisition", "ic_acquisition"]
+    assert [p.strategy for _, p in plans] == ["double_impulse"] + ["ic_acquisition"] * (len(plans) - 1)
+    assert len(plans) >= 3
     worst = 0.0
     for k, (_, plan) in enumerate(plans, start=1):
         burns = [m for m in plan.maneuvers if m.spacecraft == "carrier" and np.any(vec(m.dv_rtn))]
@@ -256,7 +263,7 @@ def test_opm_dv_equals_the_plans_to_one_micrometer_per_second(exported, run):
                 if m.spacecraft == "carrier"}
     opm = ndm.read_message(out / f"executed_carrier.opm.{fmt}").body.segment.data.maneuver_parameters
     report = json.loads(BAG.with_suffix(".report.json").read_text())
-    assert len(opm) == len(executed) == sum(m["spacecraft"] == "carrier" for m in report["maneuvers"]) == 8
+    assert len(opm) == len(executed) == sum(m["spacecraft"] == "carrier" for m in report["maneuvers"]) >= 3
     for m in opm:
         t = frames.sim_time(EPOCH, m.man_epoch_ignition)
         dv = np.array([m.man_dv_1.value, m.man_dv_2.value, m.man_dv_3.value]) * 1e3
@@ -460,7 +467,7 @@ def test_orekit_reads_the_set_as_written_and_refuses_broken_files(exported, run,
     assert "J2000_OF_DATE" in bad[f"unknown_frame.opm.{fmt}"]["error"]
     assert "ANGLE_TYPE" in bad[f"bad_angle_type.tdm.{fmt}"]["error"]
     good = {n: e["read"] for n, e in files.items() if e["ok"]}
-    assert sorted(good) == sorted(p.name for p in out.iterdir()) and len(good) == 10
+    assert sorted(good) == sorted(p.name for p in out.iterdir()) and len(good) == len(set_names(run))
     assert {e["format"] for e in files.values()} == {fmt}
 
     # OPM: frames, time system, the plans' Delta-v (Orekit converts km/s to m/s itself)
@@ -481,7 +488,7 @@ def test_orekit_reads_the_set_as_written_and_refuses_broken_files(exported, run,
     assert worst < 1e-6
     report = json.loads(BAG.with_suffix(".report.json").read_text())
     assert len(good[f"executed_carrier.opm.{fmt}"]["maneuvers"]) == sum(
-        m["spacecraft"] == "carrier" for m in report["maneuvers"]) == 8
+        m["spacecraft"] == "carrier" for m in report["maneuvers"]) >= 3
 
     # OEM: the library's segments, states and covariances (km^2... -> m^2...) as Orekit reads them
     ours = ndm.read_message(out / f"ephemeris.oem.{fmt}").body.segment
@@ -537,7 +544,7 @@ def _model_schemas():
     return {k: model_schema(c) for k, c in (("opm", nd.Opm), ("oem", nd.Oem), ("tdm", nd.Tdm), ("cdm", nd.Cdm))}
 
 
-def test_the_set_validates_against_the_schema_of_the_ndm_models(exported):
+def test_the_set_validates_against_the_schema_of_the_ndm_models(exported, run):
     """All ten files (KVN: as read back and written in XML) are valid against the XML Schema written from ccsds-ndm's
     models of the NDM/XML 2.0.0 schemas: element order, mandatory elements, units, enumerations, the epoch pattern,
     MAN_DELTA_MASS < 0."""
@@ -546,7 +553,7 @@ def test_the_set_validates_against_the_schema_of_the_ndm_models(exported):
     fmt, out = exported
     schemas = _model_schemas()
     files = sorted(out.iterdir())
-    assert len(files) == 10 and {p.name.split(".")[-2] for p in files} == set(schemas)
+    assert len(files) == len(set_names(run)) and {p.name.split(".")[-2] for p in files} == set(schemas)
     for p in files:
         assert errors(schemas[p.name.split(".")[-2]], _xml_of(p, fmt)) == [], p.name
 
@@ -587,7 +594,7 @@ def test_schema_validation_refuses_broken_files(what, edit, match):
     assert any("NP.FLOAT64" in e for e in errors(schema, ndm.to_text(opm, "xml")))
 
 
-def test_the_set_validates_against_the_official_ndm_xml_schemas(exported):
+def test_the_set_validates_against_the_official_ndm_xml_schemas(exported, run):
     """Every exported file (KVN: as read back and written in XML) is valid against the official CCSDS NDM/XML 2.0.0
     schema set of the SANA registry (test/data/ndmxml-2.0.0, the unqualified variant), and every XML file names that
     set's master schema in ``xsi:noNamespaceSchemaLocation`` (CCSDS 505.0-B-2); a broken copy is refused."""
@@ -596,7 +603,7 @@ def test_the_set_validates_against_the_official_ndm_xml_schemas(exported):
     fmt, out = exported
     schema = official_schema()
     files = sorted(out.iterdir())
-    assert len(files) == 10
+    assert len(files) == len(set_names(run))
     for p in files:
         assert errors(schema, _xml_of(p, fmt)) == [], p.name
         if fmt == "xml":

@@ -228,5 +228,7 @@ def plan_trim(roe0, chief: Chief, da_dot, burns, t_final, t_earliest, sigma_a_da
                         tuple(problems.values()))
 
 
-__all__ = ["TRIM_SIGMAS", "TrimDecision", "burns_drift_sigma", "drift_lattice", "ei_margin", "final_od_arc", "plan_trim", "predicted_drift_sigma",
-           "ic_problems", "radar_passes", "trim_problems", "trim_threshold"]
+__all__ = [
+    "TRIM_SIGMAS", "TrimDecision", "burns_drift_sigma", "drift_lattice", "ei_margin", "final_od_arc", "ic_problems",
+    "plan_trim", "predicted_drift_sigma", "radar_passes", "trim_problems", "trim_threshold",
+]
