@@ -26,9 +26,11 @@ OD finds a weak ejection), missed radar passes (an OD that comes late is not yet
 """
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy import stats
 
 from ..relmotion.dynamics import propagate
@@ -76,7 +78,7 @@ class PlannedBurn:
     missing: bool = False  # burn_missing raised
 
 
-def angle_between(a, b) -> float:
+def angle_between(a: ArrayLike, b: ArrayLike) -> float:
     """The angle [rad] between two vectors (0 when either is zero)."""
     na, nb = float(np.linalg.norm(a)), float(np.linalg.norm(b))
     if na == 0.0 or nb == 0.0:
@@ -86,7 +88,24 @@ def angle_between(a, b) -> float:
 
 def ei_transition(a: float, inc: float, dt: float, j2: bool) -> np.ndarray:
     """The 4x4 transition of the e/i vectors over ``dt`` [s] in the secular model (J2 turns the relative
-    eccentricity vector; :func:`~roe_sep.core.relmotion.dynamics.propagate` is linear in the ROE without drag)."""
+    eccentricity vector; :func:`~roe_sep.core.relmotion.dynamics.propagate` is linear in the ROE without drag).
+
+    Parameters
+    ----------
+    a : float
+        The chief's semi-major axis [m].
+    inc : float
+        The chief's inclination [rad].
+    dt : float
+        The time span [s] of the transition.
+    j2 : bool
+        With the J2 secular rates.
+
+    Returns
+    -------
+    numpy.ndarray, shape (4, 4)
+        The transition of the (dimensionless or a-scaled) e/i components of the ROE over ``dt``.
+    """
     cols = propagate(np.eye(6), dt, a, inc, j2, 0.0)  # row k: the propagated unit vector e_k
     return cols.T[EI, EI]
 
@@ -107,9 +126,24 @@ class AnomalyWatch:
         self.burns = []  # (Burn, a*e/i covariance [m^2] it adds) executed after the knowledge's epoch
 
     # ------------------------------------------------------------------ burns
-    def plan(self, source: str, burns, p_reduction: float) -> None:
+    def plan(self, source: str, burns: Iterable[tuple[float, ArrayLike, str, str]], p_reduction: float) -> None:
         """An approved plan on ``source``: ``burns`` (epoch [s], dv (3,) [m/s], spacecraft, purpose); its carrier
-        burns not executed yet replace those of the previous plan on that source (as the simulator takes it)."""
+        burns not executed yet replace those of the previous plan on that source (as the simulator takes it).
+
+        Parameters
+        ----------
+        source : str
+            The topic the plan came on.
+        burns : iterable of (float, array_like, str, str)
+            Each burn's epoch [s], dv ``(3,)`` [m/s] in the RTN frame of the spacecraft that burns, that spacecraft
+            (``carrier`` or ``picosatellite``) and its purpose.
+        p_reduction : float
+            The plan's drift-stop reduction |p| [m/s] (:func:`~roe_sep.core.truth.secular.error_references`).
+
+        Returns
+        -------
+        None
+        """
         burns = list(burns)
         refs = error_references([b[3] for b in burns], [np.asarray(b[1], dtype=float) for b in burns], p_reduction)
         new = [PlannedBurn(source, float(e), np.asarray(dv, dtype=float), sc, purpose, ref)
@@ -127,10 +161,29 @@ class AnomalyWatch:
                                      f"executed by t = {t:.0f} s", {"planned_epoch_s": b.epoch}))
         return out
 
-    def executed(self, epoch: float, dv, spacecraft: str, purpose: str, u: float) -> list[Detection]:
+    def executed(self, epoch: float, dv: ArrayLike, spacecraft: str, purpose: str, u: float) -> list[Detection]:
         """An executed burn (epoch [s], dv (3,) [m/s] as executed in its own RTN, the carrier's mean argument of
         latitude ``u`` [rad] then): compared with its planned burn (the open one of that purpose nearest in time,
-        not after it by more than the tolerance), and kept for the OD's prediction."""
+        not after it by more than the tolerance), and kept for the OD's prediction.
+
+        Parameters
+        ----------
+        epoch : float
+            The epoch [s] of sim time the burn executed at.
+        dv : array_like, shape (3,)
+            The burn as executed [m/s] in the RTN frame of the spacecraft that burned.
+        spacecraft : str
+            Who burned: ``carrier`` (any other burn is ignored).
+        purpose : str
+            The burn's purpose (matched with the planned burns of that purpose).
+        u : float
+            The carrier's mean argument of latitude [rad] at the burn.
+
+        Returns
+        -------
+        list of Detection
+            ``burn_late``, ``burn_magnitude`` and ``burn_pointing`` findings on this burn (empty when none).
+        """
         dv = np.asarray(dv, dtype=float)
         if spacecraft != "carrier":
             return []
@@ -178,20 +231,61 @@ class AnomalyWatch:
         return out
 
     # ------------------------------------------------------------------ knowledge
-    def ejection(self, t: float, dv_commanded, chief: Chief, da_dot: float) -> None:
+    def ejection(self, t: float, dv_commanded: ArrayLike, chief: Chief, da_dot: float) -> None:
         """The commanded ejection at ``t`` [s] (the picosatellite's dv (3,) [m/s]): the first knowledge, with the
-        SPL's magnitude and attitude errors as its e/i covariance."""
+        SPL's magnitude and attitude errors as its e/i covariance.
+
+        Parameters
+        ----------
+        t : float
+            The epoch [s] of sim time of the ejection.
+        dv_commanded : array_like, shape (3,)
+            The commanded ejection [m/s] in the picosatellite's RTN frame.
+        chief : Chief
+            The chief's a [m], i [rad] and mean argument of latitude u0 [rad] at its epoch t0 [s].
+        da_dot : float
+            The differential-drag rate of da [1/s].
+
+        Returns
+        -------
+        None
+        """
         roe = delta_roe(np.asarray(dv_commanded, dtype=float), chief.u0, chief.a, mean_motion(chief.a))
         x = roe[EI] * chief.a
         cov = self.spl_sigma ** 2 * np.outer(x, x) + (self.attitude_sigma ** 2) * float(x @ x) * np.eye(4)
         self.knowledge = (float(t), roe, chief, cov, float(da_dot))
         self.burns = []
 
-    def od(self, t_now: float, t_od: float, roe, cov6, chief: Chief, da_dot: float, residual_rms: float,
-           measurements: int) -> list[Detection]:
+    def od(self, t_now: float, t_od: float, roe: ArrayLike, cov6: ArrayLike, chief: Chief, da_dot: float,
+           residual_rms: float, measurements: int) -> list[Detection]:
         """An OD solution at ``t_od`` [s] (dimensionless ROE, its a*ROE covariance (6, 6) [m^2], the drift rate
         [1/s], the residual RMS in sigmas over ``measurements``), published at ``t_now``: ``od_residuals`` and
-        ``od_inconsistent``; the solution is then the knowledge the next one is predicted from."""
+        ``od_inconsistent``; the solution is then the knowledge the next one is predicted from.
+
+        Parameters
+        ----------
+        t_now : float
+            The epoch [s] of sim time the solution is published at (the findings' epoch).
+        t_od : float
+            The epoch [s] of sim time of the solution.
+        roe : array_like, shape (6,)
+            The estimated ROE (dimensionless) at ``t_od``.
+        cov6 : array_like, shape (6, 6)
+            The covariance [m^2] of the a-scaled ROE (a non-finite one is not taken as knowledge).
+        chief : Chief
+            The chief's a [m], i [rad] and mean argument of latitude u0 [rad] at its epoch t0 [s].
+        da_dot : float
+            The estimated drift rate of da [1/s].
+        residual_rms : float
+            The post-fit residual RMS in measurement sigmas (dimensionless).
+        measurements : int
+            The number of measurements of the batch.
+
+        Returns
+        -------
+        list of Detection
+            ``od_residuals`` and ``od_inconsistent`` findings on this solution (empty when none).
+        """
         roe = np.asarray(roe, dtype=float)
         cov6 = np.asarray(cov6, dtype=float)
         out = []

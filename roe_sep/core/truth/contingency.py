@@ -32,6 +32,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ...checks import check_number
 from ...errors import ConfigError, show
@@ -81,7 +82,8 @@ class ContingencyConfig:
     name: str
     parameters: tuple = ()
 
-    def get(self, key):
+    def get(self, key: str) -> float | str | tuple[float, float]:
+        """The value of parameter ``key``: a number, a string or a ``(lo, hi)`` range; KeyError when it has none."""
         return dict(self.parameters)[key]
 
 
@@ -119,7 +121,7 @@ def _number(path, value, spec, integer, element=False):
     return int(value) if integer else float(value)
 
 
-def contingency_from_dict(data, path="contingency") -> ContingencyConfig | None:
+def contingency_from_dict(data: dict | None, path: str = "contingency") -> ContingencyConfig | None:
     """The scenario's ``contingency:`` block: None (absent, null or ``name: none``), else a mapping with ``name`` (one
     of :data:`NAMES`) and any of that contingency's parameters (:data:`SPECS`). ConfigError naming the key."""
     if data is None:
@@ -188,9 +190,24 @@ def configured(config: ContingencyConfig) -> dict:
     return {k: list(v) if isinstance(v, tuple) else v for k, v in config.parameters}
 
 
-def rotate_normal(dv, angle: float, azimuth: float) -> np.ndarray:
+def rotate_normal(dv: ArrayLike, angle: float, azimuth: float) -> np.ndarray:
     """``dv`` ``(3,)`` turned by ``angle`` [rad] about the axis normal to it at ``azimuth`` [rad] (measured from the
-    normal of ``dv`` in the plane of ``dv`` and the R axis, or the N axis for a radial ``dv``); magnitude kept."""
+    normal of ``dv`` in the plane of ``dv`` and the R axis, or the N axis for a radial ``dv``); magnitude kept.
+
+    Parameters
+    ----------
+    dv : array_like, shape (3,)
+        The burn [m/s] in RTN.
+    angle : float
+        The angle [rad] it is turned by.
+    azimuth : float
+        The azimuth [rad] of the rotation axis about ``dv``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,)
+        The turned burn [m/s] in RTN, of the magnitude of ``dv`` (a copy of a zero ``dv``).
+    """
     v = np.asarray(dv, dtype=float)
     mag = float(np.linalg.norm(v))
     if mag == 0.0:
@@ -241,7 +258,22 @@ class TruthContingency(Contingency):
     def reschedule(self, epoch: float, purpose: str, spacecraft: str) -> float | None:
         """The epoch [s] a planned burn commanded at ``epoch`` executes at, None when it never does: a
         ``drift_stop`` k orbits late (``drift_stop_delayed``) or dropped (``drift_stop_missed``); every other burn
-        on time."""
+        on time.
+
+        Parameters
+        ----------
+        epoch : float
+            The commanded epoch [s] of sim time.
+        purpose : str
+            The burn's purpose (only a ``drift_stop`` moves).
+        spacecraft : str
+            Who burns (only the ``carrier``'s burns move).
+
+        Returns
+        -------
+        float or None
+            The epoch [s] of sim time it executes at, None when it never does.
+        """
         if purpose != "drift_stop" or spacecraft != "carrier":
             return epoch
         if self.name == "drift_stop_missed":
@@ -254,9 +286,26 @@ class TruthContingency(Contingency):
             return late
         return epoch
 
-    def executed(self, dv_executed, purpose: str, spacecraft: str, epoch: float) -> np.ndarray:
+    def executed(self, dv_executed: ArrayLike, purpose: str, spacecraft: str, epoch: float) -> np.ndarray:
         """The burn as executed under the contingency from ``dv_executed`` ``(3,)`` [m/s], the burn with its
-        nominal execution errors (:meth:`~.secular.ExecutionErrors.executed`, drawn as without the contingency)."""
+        nominal execution errors (:meth:`~.secular.ExecutionErrors.executed`, drawn as without the contingency).
+
+        Parameters
+        ----------
+        dv_executed : array_like, shape (3,)
+            The burn [m/s] in the RTN frame of the spacecraft that burns, with its nominal execution errors.
+        purpose : str
+            The burn's purpose (``ejection`` for the SPL's).
+        spacecraft : str
+            Who burns: ``carrier`` or ``picosatellite`` (the carrier's burns are counted).
+        epoch : float
+            The epoch [s] of sim time it executes at (for the record).
+
+        Returns
+        -------
+        numpy.ndarray, shape (3,)
+            The burn [m/s] as executed under the contingency (``dv_executed`` when it is not touched).
+        """
         dv = np.asarray(dv_executed, dtype=float)
         if spacecraft == "carrier":
             self.carrier_burns += 1
@@ -304,7 +353,21 @@ class RadarContingency(Contingency):
             self.events.append(f"range bias {self.values['bias_m']:+.2f} m at {self.stations[self.bias_station]}")
 
     def pass_opened(self, station: int, pass_id: int, t: float) -> None:
-        """A pass of ``station`` opened at ``t`` [s] (the first measurement epoch of it)."""
+        """A pass of ``station`` opened at ``t`` [s] (the first measurement epoch of it).
+
+        Parameters
+        ----------
+        station : int
+            The station's index in ``stations``.
+        pass_id : int
+            The pass's id at that station.
+        t : float
+            The epoch [s] of sim time of the pass's first measurement.
+
+        Returns
+        -------
+        None
+        """
         if self.name != "radar_pass_missed":
             return
         self.passes_opened += 1
@@ -317,7 +380,22 @@ class RadarContingency(Contingency):
             self.events.append(f"{self.stations[station]} pass {pass_id} from t = {t:.1f} s: no measurement")
 
     def dropped(self, station: int, pass_id: int, t: float) -> bool:
-        """Whether the measurement of ``station`` in its pass ``pass_id`` at ``t`` [s] is never made."""
+        """Whether the measurement of ``station`` in its pass ``pass_id`` at ``t`` [s] is never made.
+
+        Parameters
+        ----------
+        station : int
+            The station's index in ``stations``.
+        pass_id : int
+            The pass's id at that station.
+        t : float
+            The epoch [s] of sim time of the measurement.
+
+        Returns
+        -------
+        bool
+            True when the measurement is never made (a dropped pass or within the outage).
+        """
         if self.name != "radar_pass_missed":
             return False
         if self.outage_start is not None:
