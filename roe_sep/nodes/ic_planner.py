@@ -65,6 +65,7 @@ from ..core.acquisition.planner import (
 )
 from ..core.acquisition.trim import (
     CLUSTER_GAP,
+    a_da_change,
     burns_drift_sigma,
     drift_lattice,
     ei_margin,
@@ -77,7 +78,6 @@ from ..core.acquisition.trim import (
 from ..core.constants import SECONDS_PER_DAY
 from ..core.od.radar import DEFAULT_EPOCH_UTC, julian_date
 from ..core.relmotion.dynamics import propagate_chief
-from ..core.relmotion.orbit import mean_motion
 from ..core.relmotion.roe import wrap_angle
 from ..core.relmotion.trajectory import Chief, state_at
 from .convert import (
@@ -176,7 +176,7 @@ class IcPlannerNode(ManagedNode):
         if planned is None:
             return
         a = msg.estimate.chief.semi_major_axis
-        departure = 2.0 * abs(m.dv_rtn.y - planned.dv_rtn.y) / float(mean_motion(a))
+        departure = abs(float(a_da_change(m.dv_rtn.y - planned.dv_rtn.y, a)))
         if departure <= 0.5 * drift_lattice(a, self.cfg.dv_quantum):
             return
         t_od = time_to_sec(msg.estimate.header.stamp)
@@ -185,9 +185,7 @@ class IcPlannerNode(ManagedNode):
         self.get_logger().info(text)
         publish_status(self, self.diag_pub, OK, text, self._values())
         if self.final_decided:
-            self.final_decided = False
             self.final_trim(msg, t_od, t, after_burn=True)
-            self.final_decided = True
         else:
             self.decide(msg, t_od, t)
 
@@ -226,7 +224,8 @@ class IcPlannerNode(ManagedNode):
         arc = self.radar_arc(msg, self.t_final) if self.t_final is not None else None
         final_band = self.t_final is not None and now < self.t_final < now + 2.0 * self.cfg.planning_margin
         if self.trim and (t_od >= arc[1] - PASS_SLACK if arc else final_band):
-            self.final_trim(msg, t_od, now)
+            if not self.final_decided:  # once (a departing burn re-trims through after_burn)
+                self.final_trim(msg, t_od, now)
             return
         keep_arc = arc is None or max(t_od, now) + self.cfg.planning_margin <= arc[0]
         if not keep_arc:
@@ -285,11 +284,9 @@ class IcPlannerNode(ManagedNode):
         publish_status(self, self.diag_pub, OK, "acquisition plan published", self._values())
 
     def final_trim(self, msg: OrbitDetermination, t_od, now, after_burn=False):
-        """The final OD's drift trim (module docstring): once, from the first newer solution within two planning
-        margins of t_F whose flown burns are all on record (``after_burn``: again, after a burn that departed from
-        its plan)."""
-        if self.final_decided:
-            return
+        """The final OD's drift trim (module docstring), from the first newer solution within two planning margins of
+        t_F whose flown burns are all on record (``decide`` calls it once; ``after_burn``: again, after a burn that
+        departed from its plan, publishing only a trim)."""
         if self.t_final is not None and now >= self.t_final:
             self.final_decided = True
             text = (f"OD at t = {t_od:.1f} s not used: it arrives after the IC epoch t = {self.t_final:.1f} s "
@@ -432,9 +429,9 @@ class IcPlannerNode(ManagedNode):
         None without a plan (or without ``trim``)."""
         if self.plan_sigma is None:
             return None
-        n = float(mean_motion(msg.estimate.chief.semi_major_axis))
-        flown = [self.burn_sigma * 2.0 * abs(b.dv_rel[1]) / n for b in self.executed if b.epoch > self.plan_od_epoch]
-        return math.sqrt(self.plan_sigma ** 2 + sum(v * v for v in flown))
+        flown = [b.dv_rel[1] for b in self.executed if b.epoch > self.plan_od_epoch]
+        return math.hypot(self.plan_sigma,
+                          burns_drift_sigma(flown, msg.estimate.chief.semi_major_axis, self.burn_sigma))
 
     def radar_arc(self, msg: OrbitDetermination, t_final):
         """``(start, last_rise, end)`` [s] of the final OD's burn-free radar arc for the IC epoch ``t_final``

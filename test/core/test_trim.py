@@ -12,6 +12,7 @@ import pytest
 from roe_sep.core.acquisition.planner import AcquisitionConfig, AcquisitionInfeasible
 from roe_sep.core.acquisition.trim import (
     CLUSTER_GAP,
+    a_da_change,
     burns_drift_sigma,
     drift_lattice,
     ei_margin,
@@ -213,3 +214,10 @@ def test_ei_margin_is_the_larger_sigma_along_the_e_and_i_vectors():
     assert ei_margin(roe, cov, 2.0) == pytest.approx(24.0)
     assert ei_margin(roe, cov, 0.0) == 0.0
     assert ei_margin(np.zeros(6), cov, 2.0) == 0.0  # no vector, no direction
+
+
+def test_a_da_change_is_eq_2():
+    """2 dvT / n, signed and broadcasting; the lattice is one quantum of it."""
+    assert float(a_da_change(0.01, A)) == pytest.approx(2.0 * 0.01 / N)
+    assert np.allclose(a_da_change([0.01, -0.02], A), [2.0 * 0.01 / N, -2.0 * 0.02 / N])
+    assert drift_lattice(A, CFG.dv_quantum) == pytest.approx(float(a_da_change(CFG.dv_quantum, A)))

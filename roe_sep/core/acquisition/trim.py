@@ -52,9 +52,15 @@ FINAL_OD_PASSES = 3  # passes in the final OD's arc: two (radar_od's minimum) le
 CLUSTER_GAP = 7200.0  # s, passes closer than this (about one orbit apart) form a cluster
 
 
+def a_da_change(dv_t, a):
+    """Change [m] of a da by a tangential impulse ``dv_t`` [m/s] at semi-major axis ``a`` [m]: 2 dvT / n (seed 002
+    Eq. 2; broadcasts)."""
+    return 2.0 * np.asarray(dv_t, dtype=float) / float(mean_motion(a))
+
+
 def drift_lattice(a, dv_quantum):
-    """Spacing [m] of the a da values quantized tangential burns reach: 2 dv_quantum / n (seed 002 Eq. 2)."""
-    return 2.0 * dv_quantum / float(mean_motion(a))
+    """Spacing [m] of the a da values quantized tangential burns reach: :func:`a_da_change` of one quantum."""
+    return float(a_da_change(dv_quantum, a))
 
 
 def predicted_drift_sigma(sigma_a_da, sigma_rate, dt):
@@ -66,8 +72,7 @@ def predicted_drift_sigma(sigma_a_da, sigma_rate, dt):
 def burns_drift_sigma(dv_t, a, burn_sigma):
     """1-sigma [m] of a da from the magnitude errors of tangential burns ``dv_t`` [m/s] still to fly, each
     ``burn_sigma`` (relative 1-sigma) of its a da change 2 |dvT| / n (seed 002 Eqs. 2 and 22), independent."""
-    dv = np.asarray(dv_t, dtype=float)
-    return float(np.sqrt(np.sum((burn_sigma * 2.0 * dv / float(mean_motion(a))) ** 2)))
+    return float(np.sqrt(np.sum((burn_sigma * a_da_change(dv_t, a)) ** 2)))
 
 
 def ei_margin(roe_m, cov_m2, z):
@@ -229,6 +234,6 @@ def plan_trim(roe0, chief: Chief, da_dot, burns, t_final, t_earliest, sigma_a_da
 
 
 __all__ = [
-    "TRIM_SIGMAS", "TrimDecision", "burns_drift_sigma", "drift_lattice", "ei_margin", "final_od_arc", "ic_problems",
-    "plan_trim", "predicted_drift_sigma", "radar_passes", "trim_problems", "trim_threshold",
+    "TRIM_SIGMAS", "TrimDecision", "a_da_change", "burns_drift_sigma", "drift_lattice", "ei_margin", "final_od_arc",
+    "ic_problems", "plan_trim", "predicted_drift_sigma", "radar_passes", "trim_problems", "trim_threshold",
 ]
