@@ -22,7 +22,9 @@ import numpy as np
 
 from . import interfaces, validate
 from .core.od.batch import nees
+from .core.od.ensemble import secular_drift
 from .core.relmotion.dynamics import propagate
+from .core.relmotion.orbit import mean_motion
 from .core.safety.metrics import min_rn_distance
 from .core.safety.monitor import ERROR_CRITERIA, MonitorLimits, in_fov
 from .stamps import time_to_sec
@@ -128,22 +130,17 @@ def initial_conditions(truth, plans, ic_burns, truth_da_dot, limits, drift_toler
             "reached": all(checks.values())}
 
 
-MIN_RATE_SPAN = 5700.0
-"""s, shortest burn-free truth span whose a*da slope is the truth's drift rate (about one orbit at 515 km)."""
-
-
-def truth_drift_rate(truth, t, burn_epochs):
-    """The truth's own drift rate of a*da [m/s] at ``t``: the least-squares slope of the truth's mean a*da over
-    the samples after the latest burn at or before ``t`` up to ``t`` (the span a batch OD with one constant drift
-    rate fits). None when that span is shorter than ``MIN_RATE_SPAN``. The simulator's nominal drag (seed 002
-    Eq. 24 at the nominal density) is smaller in magnitude than the nonlinear truth's own rate by 0.5-0.6 m/day
-    (about 0.8 %), a bias of 0.3 sigma of a last solution."""
+def truth_secular_drift(truth, t, burn_epochs):
+    """The truth's secular a*da [m] and drift rate [m/s] at ``t`` (:func:`~roe_sep.core.od.ensemble.secular_drift`,
+    the comparand of the OD's secular state) over the truth samples after the latest burn at or before ``t`` up to
+    ``t``; None over too short a span."""
     start = max((b for b in burn_epochs if b <= t), default=-math.inf)
-    pts = [(time_to_sec(m.header.stamp), m.a_da) for _, m in truth if start < time_to_sec(m.header.stamp) <= t]
-    if len(pts) < 3 or pts[-1][0] - pts[0][0] < MIN_RATE_SPAN:
+    span = [m for _, m in truth if start < time_to_sec(m.header.stamp) <= t]
+    if not span:
         return None
-    ts, ada = np.array(pts).T
-    return float(np.polyfit(ts - t, ada, 1)[0])
+    ts = np.array([time_to_sec(m.header.stamp) for m in span])
+    period = 2.0 * math.pi / float(mean_motion(span[-1].chief.semi_major_axis))
+    return secular_drift(ts, [m.a_da for m in span], t, period, [m.chief.mean_arg_latitude for m in span])
 
 
 def od_solution(msg, truth, truth_da_dot, burn_epochs=None):
@@ -151,9 +148,10 @@ def od_solution(msg, truth, truth_da_dot, burn_epochs=None):
     (6 dof: the ROE block of the covariance), ``nees7`` (7 dof: ROE and drift rate, :func:`od_covariance7`), the
     drift rate ``a_da_dot`` with its
     ``a_da_dot_sigma`` and ``a_da_dot_error`` against the truth's drift rate ``a_da_dot_truth`` (m/s), and
-    ``a_da_dot_z``, the error in sigmas (standard normal for an honest covariance). The truth's drift rate is
-    :func:`truth_drift_rate` given the epochs of the executed burns ``burn_epochs``, else (or without a long enough
-    burn-free span) the simulator's drag ``truth_da_dot`` [m/day]. No error without truth at the epoch."""
+    ``a_da_dot_z``, the error in sigmas (standard normal for an honest covariance). The truth is its secular state
+    (:func:`truth_secular_drift` given the epochs of the executed burns ``burn_epochs``: its mean ROE with the
+    secular a*da and drift rate), else (or without a long enough burn-free span) its mean ROE and the
+    simulator's drag ``truth_da_dot`` [m/day]. No error without truth at the epoch."""
     est = msg.estimate
     cov = np.asarray(est.covariance, dtype=float).reshape(6, 6)
     t_od = time_to_sec(est.header.stamp)
@@ -163,10 +161,12 @@ def od_solution(msg, truth, truth_da_dot, burn_epochs=None):
            "a_da_dot_sigma": float(msg.a_da_dot_sigma)}
     at_od = truth_at(truth, t_od, truth_da_dot)
     if at_od is not None:
+        secular = None if burn_epochs is None else truth_secular_drift(truth, t_od, burn_epochs)
+        if secular is not None:
+            at_od[0] = secular[0]
         out["error"] = (np.array(out["estimate"]) - at_od).tolist()
         out["nees"] = nees(out["estimate"], at_od, cov) if np.any(cov) else None
-        rate = None if burn_epochs is None else truth_drift_rate(truth, t_od, burn_epochs)
-        out["a_da_dot_truth"] = rate if rate is not None else truth_da_dot / 86400.0
+        out["a_da_dot_truth"] = secular[1] if secular is not None else truth_da_dot / 86400.0
         out["a_da_dot_error"] = float(msg.a_da_dot - out["a_da_dot_truth"])
         out["a_da_dot_z"] = out["a_da_dot_error"] / msg.a_da_dot_sigma if msg.a_da_dot_sigma > 0 else None
         cov7 = od_covariance7(msg)

@@ -434,7 +434,8 @@ class RadarODNode(ManagedNode):
         prior = (self.prior.carried(float(np.max(batch.t)), self.density_walk)
                  if self.prior is not None and self.use_prior else None)
         try:
-            result = batch_least_squares(batch, prior=prior, drag=self.drag_terms)
+            result = batch_least_squares(batch, prior=prior, drag=self.drag_terms,
+                                         model=self.drag_model(batch.chief[-1, 0]))
         except ValueError as exc:
             self.get_logger().error(f"orbit determination failed: {exc}")
             publish_status(self, self.diag_pub, ERROR, f"orbit determination failed: {exc}", self._values())
@@ -450,12 +451,15 @@ class RadarODNode(ManagedNode):
             + ("" if prior is None else f", drift prior from t = {self.prior.t:.0f} s"))
         publish_status(self, self.diag_pub, OK, f"estimate {self.estimates} published", self._values())
 
-    def drift_prior(self, result, a_chief):
-        """The a priori information of a solution for the batches after the next burn (its drag model: the
-        configured scale height, else Vallado's for the carrier's altitude)."""
+    def drag_model(self, a_chief):
+        """The drift rate's drag model at the carrier's semi-major axis ``a_chief`` [m]: the configured scale
+        height, else Vallado's for the carrier's altitude, and the ballistic ratio."""
         scale_height, ratio = self.drag
-        h = scale_height or vallado_band(a_chief - R_EARTH)[2]
-        return DriftPrior.from_result(result, a_chief, DragModel(h, ratio))
+        return DragModel(scale_height or vallado_band(a_chief - R_EARTH)[2], ratio)
+
+    def drift_prior(self, result, a_chief):
+        """The a priori information of a solution for the batches after the next burn (:meth:`drag_model`)."""
+        return DriftPrior.from_result(result, a_chief, self.drag_model(a_chief))
 
     def od_msg(self, result, chief_kep, passes, now):
         kep = np.array(chief_kep, dtype=float)

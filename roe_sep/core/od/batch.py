@@ -62,15 +62,26 @@ activity: ``density_walk`` (relative 1-sigma of the orbit-mean density per sqrt(
 compensation, Tapley et al. Sec. 6.9) widens the a priori variance by (beta density_walk)^2 dt / 1 day between the
 two epochs.
 
-Why these choices, measured (the OD ensemble of :mod:`roe_sep.core.od.ensemble` on the nonlinear truth, and the
-recorded runs): the secular model with one constant drift rate over a batch recovers the truth's own drift rate
-from noise-free measurements to < 0.1 sigma, so a piecewise drift rate or process noise inside a batch would model
-an error that is not there. The drift rate's optimism of the 100-run campaign (mean z^2 1.42) came from comparing
-with the simulator's Eq. (24) value, which is smaller in magnitude than the nonlinear truth's own rate by
-0.51 +- 0.09 m/day at the first and 0.58 +- 0.14 m/day at the last solution (20 recorded runs, seeds 1000-1019):
-against the truth's own rate the same recorded last solutions have mean z^2 0.95 (1.96 against Eq. 24). The
-remaining lever is information: the drift rate is a property of the pair, so the carried beta shrinks the last
-solution's drift-rate sigma from 2.3 to 0.79 m/day with z^2 1.03 (256 chains).
+The same g changes within a batch: the drift rate grows as the carrier decays into denser air and the deputy's
+own drift takes it lower still, d ln g / dt = -(a_c_dot + R a_c da_dot) / H (:meth:`DragModel.growth`; 0.26 %/day
+from the carrier and 0.19 %/day from an 81 m/day drift in the default scenario, so 0.36 m/day over a 20-h batch
+at -81 m/day). With a drag model, the batch propagates da_dot(t) = x[6] (1 + gamma (t - t_est))
+(:func:`propagate_state`, :func:`drift_growth`; the carrier's rate a_c_dot from its own mean elements over the
+batch, :func:`chief_decay`), so x[6] is the rate at t_est, the one the drift prior and the guidance carry
+forward; a constant rate would be the batch's mean rate, half a batch old.
+
+Why these choices, measured (the OD ensemble of :mod:`roe_sep.core.od.ensemble` on the nonlinear truth, 256 chains,
+and the recorded runs): with the growth, the secular model recovers the truth's secular state from noise-free
+measurements to a 7-state NEES of 0.10 on average (0.36 at most; drift rate 0.14 sigma, 0.26 at most, 8
+chains), against 7 for the noise, so process noise inside a batch would model an error that is not there. The truth to
+compare with is its secular state (:func:`~roe_sep.core.od.ensemble.secular_drift`): a batch that spans a day
+determines a da about 6 h before its epoch to 2.6 cm, finer than the orbit-periodic centimeters of drag that the
+first-order mean elements keep. Against it the first solutions have mean 7-state NEES 7.02, drift-rate z^2 1.02,
+the last 7.48 and 0.97 (band of 256: [6.55, 7.47], [0.83, 1.18]). The drift rate's optimism of an earlier
+100-run campaign (mean z^2 1.42) came from comparing with the simulator's Eq. (24) value, which is smaller in
+magnitude than the nonlinear truth's own rate by 0.5-0.6 m/day. The remaining lever is information: the drift rate
+is a property of the pair, so the carried beta shrinks the last solution's drift-rate sigma from 2.05 to
+0.79 m/day.
 """
 
 from dataclasses import dataclass
@@ -78,7 +89,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..constants import SECONDS_PER_DAY
-from ..relmotion.dynamics import drag_dix_dot, drag_short_period_de, j2_kappa, propagate, propagate_chief
+from ..relmotion.dynamics import (
+    drag_dix_dot,
+    drag_short_period_de,
+    j2_kappa,
+    propagate,
+    propagate_chief,
+    propagate_elements,
+)
+from ..relmotion.orbit import mean_motion
 from ..relmotion.roe import roe_to_rtn, wrap_angle
 from .radar import chief_from_kepler, chief_position_velocity, earth_rotation_matrix, look_position, observe, rtn_matrix
 
@@ -136,6 +155,13 @@ class DragModel:
 
     scale_height: float
     ballistic_ratio: float
+
+    def growth(self, a_chief_dot, a_da_dot):
+        """d ln g / dt [1/s] = -(a_c_dot + R a_c da_dot) / H: the relative growth of the drift rate as the carrier
+        decays at ``a_chief_dot`` [m/s] (denser air) and the deputy's own drift ``a_da_dot`` [m/s] (a_c da_dot)
+        takes it lower still (the time derivative of :meth:`factor` at first order in a da / H)."""
+        return -(np.asarray(a_chief_dot, dtype=float)
+                 + self.ballistic_ratio * np.asarray(a_da_dot, dtype=float)) / self.scale_height
 
     def factor(self, a_chief, a_ref, da):
         """g = exp(-(a_c - a_ref) / H) (1 - R a_c da / H): da_dot over beta at carrier mean semi-major axis
@@ -195,17 +221,54 @@ def _chief_a_inc(batch: RadarBatch):
     return batch.chief[k, 0], batch.chief[k, 2]
 
 
-def propagate_state(x, dt, a, inc, j2=True, drag=True):
-    """ROE ``(..., 6)`` of states ``x`` ``(..., 7)`` after ``dt`` [s]: :func:`propagate` with da_dot = x[6], and
-    the relative inclination drift that the same differential drag drives (:func:`drag_dix_dot`), dix_dot, with
-    its J2 couplings into dl (d dl/dt = ... - 7 kappa sin 2i dix: - 7/2 kappa sin 2i dix_dot dt^2) and diy
-    (d diy/dt = ... + 2 kappa sin^2 i dix: + kappa sin^2 i dix_dot dt^2); ``drag`` False: :func:`propagate` alone
-    (the secular model without the drag terms, e.g. to reproduce solutions recorded with it)."""
+def chief_decay(batch: RadarBatch):
+    """The carrier's mean semi-major axis rate [m/s] over the batch: the least-squares slope of its mean a (its own
+    GPS orbit) against time; 0 over less than one orbital period (the slope would be the short-periodic remainder
+    of the mean elements rather than the decay)."""
+    t = np.asarray(batch.t, dtype=float)
+    a = np.asarray(batch.chief[:, 0], dtype=float)
+    if t.size < 2 or np.ptp(t) < 2.0 * np.pi / mean_motion(float(np.mean(a))):
+        return 0.0
+    return float(np.polyfit(t - t.mean(), a - a.mean(), 1)[0])
+
+
+def drift_growth(x, batch: RadarBatch, model, decay=None):
+    """gamma [1/s] (:meth:`DragModel.growth`) of states ``x`` ``(..., 7)`` over ``batch``: the carrier's decay
+    ``decay`` [m/s] (default :func:`chief_decay`) and the state's own drift a_c x[6]; 0 without a drag ``model``."""
+    x = np.asarray(x, dtype=float)
+    if model is None:
+        return np.zeros(x.shape[:-1])
+    a = _chief_a_inc(batch)[0]
+    return model.growth(chief_decay(batch) if decay is None else decay, a * x[..., 6])
+
+
+def propagate_state(x, dt, a, inc, j2=True, drag=True, growth=0.0):
+    """ROE ``(..., 6)`` of states ``x`` ``(..., 7)`` after ``dt`` [s]: :func:`propagate` with da_dot = x[6] at
+    dt = 0, and
+
+    * the drift rate's growth (``growth`` gamma [1/s], :meth:`DragModel.growth`): da_dot(dt) = x[6] (1 + gamma dt),
+      which adds x[6] gamma dt^2 / 2 to da and its integral x[6] gamma dt^3 / 6 to dl and diy through the same
+      rates as da (Eq. of :func:`~roe_sep.core.relmotion.dynamics.propagate_elements`);
+    * the relative inclination drift that the same differential drag drives (:func:`drag_dix_dot`), dix_dot, with
+      its J2 couplings into dl (d dl/dt = ... - 7 kappa sin 2i dix: - 7/2 kappa sin 2i dix_dot dt^2) and diy
+      (d diy/dt = ... + 2 kappa sin^2 i dix: + kappa sin^2 i dix_dot dt^2);
+
+    ``drag`` False: :func:`propagate` alone (the secular model without the drag terms, e.g. to reproduce solutions
+    recorded with it)."""
     x = np.asarray(x, dtype=float)
     dt = np.asarray(dt, dtype=float)
     roe = propagate(x[..., :6], dt, a, inc, j2, x[..., 6])
     if not drag:
         return roe
+    curve = x[..., 6] * np.asarray(growth, dtype=float)  # d2 da / dt2 [1/s^2]
+    if np.any(curve != 0.0):
+        # a zero state at the constant rate c dt / 3 integrates da to (c dt / 3) dt^2 / 2 = c dt^3 / 6: the
+        # growth's integral, so its dl and diy are the growth's
+
+        grow = propagate_elements((0.0,) * 6, dt, a, inc, j2, curve * dt / 3.0)
+        roe[..., 0] += 0.5 * curve * dt * dt
+        roe[..., 1] += grow[1]
+        roe[..., 5] += grow[5]
     dix_dot = drag_dix_dot(x[..., 6], a, inc)
     roe[..., 4] += dix_dot * dt
     if j2:
@@ -224,13 +287,16 @@ def mean_roe_map(a, u):
     return jac
 
 
-def model_roe(x, batch: RadarBatch, t_est, j2=True, drag=True):
+def model_roe(x, batch: RadarBatch, t_est, j2=True, drag=True, model=None, decay=None):
     """Mean ROE ``(..., m, 6)`` at the measurement epochs of states ``x`` ``(..., 7)`` at ``t_est``:
-    :func:`propagate_state` (a, i of the chief at the batch's latest epoch; J2) plus drag's short-periodic de at
-    each epoch's mean argument of latitude (:func:`drag_short_period_de`); ``drag`` False: neither drag term."""
+    :func:`propagate_state` (a, i of the chief at the batch's latest epoch; J2; the drift rate's growth of the drag
+    ``model``, :func:`drift_growth`, none without one) plus drag's short-periodic de at each epoch's mean argument
+    of latitude (:func:`drag_short_period_de`); ``drag`` False: no drag term. ``decay``: the carrier's
+    :func:`chief_decay` when the caller has it."""
     x = np.asarray(x, dtype=float)
     a, inc = _chief_a_inc(batch)
-    roe = propagate_state(x[..., None, :], batch.t - t_est, a, inc, j2, drag)
+    growth = drift_growth(x, batch, model if drag else None, decay)[..., None]
+    roe = propagate_state(x[..., None, :], batch.t - t_est, a, inc, j2, drag, growth)
     if not drag:
         return roe
     u = batch.chief[:, 4] + batch.chief[:, 5]
@@ -238,10 +304,10 @@ def model_roe(x, batch: RadarBatch, t_est, j2=True, drag=True):
     return roe
 
 
-def predict(x, batch: RadarBatch, t_est, j2=True, drag=True):
+def predict(x, batch: RadarBatch, t_est, j2=True, drag=True, model=None, decay=None):
     """h(x): modeled [range, az, el] ``(..., m, 3)`` for states ``x`` ``(..., 7)`` at epoch ``t_est``: the mean ROE
     of :func:`model_roe` observed with :func:`observe`."""
-    roe = model_roe(x, batch, t_est, j2, drag)
+    roe = model_roe(x, batch, t_est, j2, drag, model, decay)
     return observe(roe, batch.chief, batch.theta, batch.site_ef, batch.site_enu)
 
 
@@ -251,11 +317,11 @@ def state_steps(a):
     return np.array([1.0] * 6 + [1e-6]) / a
 
 
-def jacobian(x, batch: RadarBatch, t_est, j2=True, drag=True):
+def jacobian(x, batch: RadarBatch, t_est, j2=True, drag=True, model=None, decay=None):
     """H = dh/dx ``(m, 3, 7)`` by central differences (h(x + s e_j) - h(x - s e_j)) / 2 s, azimuth wrapped."""
     s = state_steps(_chief_a_inc(batch)[0])
     pert = np.concatenate([np.diag(s), -np.diag(s)]) + np.asarray(x, dtype=float)
-    z = predict(pert, batch, t_est, j2, drag)  # (14, m, 3)
+    z = predict(pert, batch, t_est, j2, drag, model, decay)  # (14, m, 3)
     diff = measurement_residual(z[:STATE_SIZE], z[STATE_SIZE:])  # (7, m, 3)
     return np.moveaxis(diff / (2.0 * s[:, None, None]), 0, -1)
 
@@ -299,24 +365,26 @@ def _check(batch: RadarBatch):
 
 
 def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_iterations=20, tol=1e-6, prior=None,
-                        drag=True):
+                        drag=True, model=None):
     """Gauss-Newton weighted least squares of x = [ROE at t_est (6), da_dot] (module docstring).
 
     ``t_est`` defaults to the last measurement epoch; ``x0`` to :func:`initial_guess`; ``prior`` (a
     :class:`DriftPrior`, already carried to ``t_est``) adds its a priori row at the carrier's semi-major axis of the
-    batch's latest epoch; ``drag`` False leaves out the model's two drag terms (module docstring). Converged when
-    the step's Mahalanobis length sqrt(dx^T H^T W H dx) is below ``tol`` (a fraction of one sigma). Raises
-    ValueError with the reason for too few or non-finite measurements, an unobservable state (singular normal
-    matrix) or no convergence.
+    batch's latest epoch; ``drag`` False leaves out the model's drag terms (module docstring); ``model`` (a
+    :class:`DragModel`) adds the drift rate's growth over the batch (:func:`drift_growth`; none without it).
+    Converged when the step's Mahalanobis length sqrt(dx^T H^T W H dx) is below ``tol`` (a fraction of one
+    sigma). Raises ValueError with the reason for too few or non-finite measurements, an unobservable state
+    (singular normal matrix) or no convergence.
     """
     _check(batch)
     t_est = float(np.max(batch.t)) if t_est is None else float(t_est)
     x = initial_guess(batch, t_est, j2, drag) if x0 is None else np.array(x0, dtype=float)
     w = 1.0 / np.asarray(batch.sigma, dtype=float).reshape(-1)
     a_chief = _chief_a_inc(batch)[0]
+    decay = chief_decay(batch)
 
     def whitened(x):
-        r = measurement_residual(batch.z, predict(x, batch, t_est, j2, drag)).reshape(-1) * w
+        r = measurement_residual(batch.z, predict(x, batch, t_est, j2, drag, model, decay)).reshape(-1) * w
         if prior is None:
             return r, None
         r_p, h_p = prior.residual_row(x, a_chief)
@@ -324,7 +392,7 @@ def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_ite
 
     for iteration in range(1, max_iterations + 1):
         r, h_p = whitened(x)
-        h = jacobian(x, batch, t_est, j2, drag).reshape(-1, STATE_SIZE) * w[:, None]
+        h = jacobian(x, batch, t_est, j2, drag, model, decay).reshape(-1, STATE_SIZE) * w[:, None]
         if h_p is not None:
             h = np.vstack([h, h_p])
         scale = np.linalg.norm(h, axis=0)
@@ -342,7 +410,7 @@ def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_ite
             break
     else:
         raise ValueError(f"Gauss-Newton did not converge in {max_iterations} iterations")
-    r = measurement_residual(batch.z, predict(x, batch, t_est, j2, drag)).reshape(-1) * w
+    r = measurement_residual(batch.z, predict(x, batch, t_est, j2, drag, model, decay)).reshape(-1) * w
     cov = (vt.T / sv**2) @ vt / np.outer(scale, scale)  # at the last step's Jacobian (a priori row included)
     k = np.argmax(batch.t)
     chief_est = propagate_chief(batch.chief[k], t_est - batch.t[k])
