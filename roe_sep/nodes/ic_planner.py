@@ -31,7 +31,8 @@ When a plan is (re)computed -- what a flight-dynamics team wants from a stream o
   measures them) re-plans the rest from the last OD and that record, or re-trims once the final OD has decided:
   the radar gives the next OD only after a burn-free arc of three passes, more than a day later.
 * A re-plan never moves a burn that is committed: one of the plan in force due within ``planning_margin`` from
-  now (or executed without its record having arrived yet) keeps the plan in force (WARN on /diagnostics).
+  now (or executed without its record having arrived yet) keeps the plan in force (WARN on /diagnostics). A
+  departing burn's re-plan that a committed burn deferred is made when that burn's execution record arrives.
 * The first burn of a new plan is at or after max(OD epoch, now) + planning_margin; only an OD made after the
   separation plan's last burn (``/separation/drift_stop_plan``: the drift-stop, or the multi-impulse burns) starts
   the acquisition.
@@ -143,6 +144,7 @@ class IcPlannerNode(ManagedNode):
         self.plan_sigma = None  # m, 1-sigma of a da at t_F from the OD of the plan in force (with ``trim``)
         self.plan_od_epoch = None  # s, that OD's epoch
         self.last_od = None  # the newest OD solution after the separation plan (re-plans after a burn start from it)
+        self.replan_pending = False  # a departing burn's re-plan waits for a committed burn (the next burn re-plans)
         self.summary = {}
         self.plans = 0
         publish_status(self, self.diag_pub, OK, "waiting for an OD estimate", self._values())
@@ -177,17 +179,22 @@ class IcPlannerNode(ManagedNode):
             return
         a = msg.estimate.chief.semi_major_axis
         departure = abs(float(a_da_change(m.dv_rtn.y - planned.dv_rtn.y, a)))
-        if departure <= 0.5 * drift_lattice(a, self.cfg.dv_quantum):
+        departed = departure > 0.5 * drift_lattice(a, self.cfg.dv_quantum)
+        if not (departed or self.replan_pending):
             return
         t_od = time_to_sec(msg.estimate.header.stamp)
-        text = (f"burn at t = {t:.1f} s departed from its plan by {departure:.2f} m of a da: "
-                f"{'re-trim' if self.final_decided else 're-plan'} from the OD at t = {t_od:.1f} s")
+        why = (f"burn at t = {t:.1f} s departed from its plan by {departure:.2f} m of a da" if departed else
+               f"burn at t = {t:.1f} s flown, the committed burn that deferred an earlier departure's re-plan")
+        text = f"{why}: {'re-trim' if self.final_decided else 're-plan'} from the OD at t = {t_od:.1f} s"
         self.get_logger().info(text)
         publish_status(self, self.diag_pub, OK, text, self._values())
+        self.replan_pending = False
         if self.final_decided:
             self.final_trim(msg, t_od, t, after_burn=True)
         else:
-            self.decide(msg, t_od, t)
+            # a committed burn (the plan's next, within planning_margin) keeps the plan in force: its own execution
+            # record re-plans then, from the same knowledge plus both burns
+            self.replan_pending = bool(self.decide(msg, t_od, t))
 
     def on_separation_plan(self, plan: ManeuverPlan):
         self.separation_end = max((time_to_sec(m.epoch) for m in plan.maneuvers), default=-math.inf)
@@ -220,7 +227,8 @@ class IcPlannerNode(ManagedNode):
 
     def decide(self, msg: OrbitDetermination, t_od, now):
         """What the OD ``msg`` (epoch ``t_od``) does at ``now``: the final trim, a re-plan, or nothing (module
-        docstring)."""
+        docstring). True when a committed burn of the plan in force kept it (the re-plan is deferred), else
+        None."""
         arc = self.radar_arc(msg, self.t_final) if self.t_final is not None else None
         final_band = self.t_final is not None and now < self.t_final < now + 2.0 * self.cfg.planning_margin
         if self.trim and (t_od >= arc[1] - PASS_SLACK if arc else final_band):
@@ -254,7 +262,7 @@ class IcPlannerNode(ManagedNode):
                     f"{'executed after the OD epoch' if blocking < now else 'committed (within planning_margin)'}")
             self.get_logger().warn(text)
             publish_status(self, self.diag_pub, WARN, text, self._values())
-            return
+            return True
         made = self._guarded("OD estimate rejected", "acquisition planning failed", self.make_plan, msg, now,
                              keep_arc)
         if made is None:
@@ -267,6 +275,7 @@ class IcPlannerNode(ManagedNode):
             publish_status(self, self.diag_pub, OK, text, self._values())
             return
         self.plan_pub.publish(plan_msg)
+        self.replan_pending = False
         self.plan_in_force = plan_msg
         self.plan_sigma = self.drift_sigma(msg, plan.t_final)
         self.plan_od_epoch = t_od

@@ -273,16 +273,16 @@ RADAR_OD = (
     Param("drift_prior", "bool", True, "the drift rate of the last solution before a burn is a priori information "
           "for the batches after it (core.od.batch.DriftPrior; its measurements precede the burn, so nothing is "
           "counted twice)"),
-    Param("density_scale_height_m", "double", 0.0, "density scale height with which the drift prior is carried "
-          "to the spacecraft's heights after a burn (0: Vallado Table 8-4 at the carrier's altitude, 63.8 km at "
-          "515 km)", "m", range=(0.0, 1.0e6)),
-    Param("drag_ballistic_ratio", "double", 1.5217, "B_d / (B_d - B_c) of the drift prior's drag model (the default "
+    Param("density_scale_height_m", "double", 0.0, "density scale height of the drift rate's drag model: the "
+          "drift prior carried to the spacecraft's heights after a burn, and the drift rate's growth within a batch "
+          "(0: Vallado Table 8-4 at the carrier's altitude, 63.8 km at 515 km)", "m", range=(0.0, 1.0e6)),
+    Param("drag_ballistic_ratio", "double", 1.5217, "B_d / (B_d - B_c) of the drift rate's drag model (the default "
           "scenario: 0.0230 / 0.0151 m^2/kg)", range=(1.0, 1.0e6)),
     Param("density_walk", "double", 0.0, "relative 1-sigma random walk of the orbit-mean density per sqrt(day) "
           "between a drift prior and its batch (0: the simulated atmospheres have no random variability)",
           "1/sqrt(day)", range=(0.0, 10.0)),
-    Param("od_drag_terms", "bool", True, "the OD model's drag-driven dix drift and short-periodic de "
-          "(core.od.batch); false: the secular drift model alone"),
+    Param("od_drag_terms", "bool", True, "the OD model's drag terms: the drift rate's growth within a batch, the "
+          "drag-driven dix drift and short-periodic de (core.od.batch); false: the secular drift model alone"),
     Param("epoch_utc", "string", DEFAULT_EPOCH_UTC, "UTC calendar epoch of sim time 0 (the simulator's)",
           rule="an ISO-8601 UTC date-time, e.g. '2016-07-01T00:00:00'", check=_iso_epoch),
     SCENARIO_FILE,
