@@ -7,7 +7,7 @@ across the burns. The table: for the first and the last solution of every chain,
 (ROE) NEES against the instantaneous mean ROE and drift-rate z^2 with their chi-square 95 % bands, the fraction
 inside the single-run 95 % bounds, and the mean drift-rate sigma.
 
-    python studies/od_consistency.py [--members 64] [--draws 4] [--seed 0] [--json]
+    python studies/od_consistency.py [--members 128] [--draws 2] [--seed 0] [--json]
 """
 
 import argparse
@@ -22,8 +22,8 @@ from roe_sep.core.od.ensemble import consistency, run_ensemble  # noqa: E402
 
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--members", type=int, default=64)
-    p.add_argument("--draws", type=int, default=4)
+    p.add_argument("--members", type=int, default=128)
+    p.add_argument("--draws", type=int, default=2)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--json", action="store_true")
     args = p.parse_args(argv)
