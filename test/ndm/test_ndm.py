@@ -14,16 +14,18 @@ from oracle import kepler_to_cartesian
 from roe_sep import interfaces
 from roe_sep.cli import main
 from roe_sep.cli.export import read_run
-from roe_sep.core.constants import MU_EARTH, SECONDS_PER_DAY
-from roe_sep.core.od.batch import RadarBatch, batch_least_squares
+from roe_sep.core.constants import MU_EARTH, R_EARTH, SECONDS_PER_DAY
+from roe_sep.core.od.batch import DragModel, RadarBatch, batch_least_squares
 from roe_sep.core.od.radar import TIRA, gmst, julian_date
 from roe_sep.core.relmotion.dynamics import propagate_chief
 from roe_sep.core.relmotion.maneuvers import delta_roe
 from roe_sep.core.relmotion.orbit import mean_motion
 from roe_sep.core.relmotion.roe import kepler_to_roe, roe_to_kepler
+from roe_sep.core.truth.nonlinear import vallado_band
 from roe_sep.ndm import frames
 from roe_sep.ndm import messages as ndm
 from roe_sep.ndm.dataset import Options, Truth, approved, vec
+from roe_sep.nodes.parameters import table
 from roe_sep.stamps import time_to_sec
 
 BAG = Path(__file__).resolve().parents[2] / "bags" / "default_run"
@@ -333,7 +335,10 @@ def test_tdm_fed_back_gives_the_runs_od_solution(exported, run):
     truth = Truth(run[interfaces.TRUTH_ROE_TOPIC])
     batch = _batch([m.t for m in meas], [m.z for m in meas],
                    [(m.sigma_range, m.sigma_angle, m.sigma_angle) for m in meas], truth)
-    result = batch_least_squares(batch)
+    # radar_od's drag model: Vallado's scale height at the carrier's altitude and the configured ballistic ratio
+    ratio = table("radar_od")["drag_ballistic_ratio"].default
+    model = DragModel(vallado_band(batch.chief[-1, 0] - R_EARTH)[2], ratio)
+    result = batch_least_squares(batch, model=model)
     x, _ = result.mean_state()  # the mean ROE radar_od publishes (with drag's short-periodic de)
     a = od.estimate.chief.semi_major_axis
     est = np.array([getattr(od.estimate, k) for k in ("a_da", "a_dl", "a_dex", "a_dey", "a_dix", "a_diy")])
