@@ -31,7 +31,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy import stats
 
 from ..relmotion.dynamics import propagate
 from ..relmotion.maneuvers import delta_roe
@@ -286,6 +285,8 @@ class AnomalyWatch:
         list of Detection
             ``od_residuals`` and ``od_inconsistent`` findings on this solution (empty when none).
         """
+        from scipy import stats  # here, not at import: every node process imports this module (its limits)
+
         roe = np.asarray(roe, dtype=float)
         cov6 = np.asarray(cov6, dtype=float)
         out = []
