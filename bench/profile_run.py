@@ -224,7 +224,7 @@ def main(argv=None):
     cmd = [sys.executable, "-m", "roe_sep.cli", "run", "--seed", str(args.seed), "--out", str(work / "run"),
            *args.extra]
     t0 = time.monotonic()
-    subprocess.run(cmd, env=env, check=False, stdout=subprocess.DEVNULL)
+    subprocess.run(cmd, env=env, cwd=ROOT, check=False, stdout=subprocess.DEVNULL)  # -m: cwd first on sys.path
     wall = time.monotonic() - t0
     metas = sorted(profdir.glob("*.json"), key=lambda p: int(p.name.split("_", 1)[0]))
     total_cpu = sum(json.loads(m.read_text())["cpu_user"] + json.loads(m.read_text())["cpu_sys"] for m in metas)
