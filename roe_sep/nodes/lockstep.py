@@ -176,7 +176,7 @@ class Lockstep:
         step = self.pending
         if step is None:
             return
-        counts = self._counts(step)
+        counts = self.last_counts  # the pending step's counts (on_step_msg sets both), not rebuilt per message
         due = {}
         for topic in self.inputs:
             need = counts.get(topic, 0) - self.processed[topic]

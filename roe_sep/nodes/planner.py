@@ -13,6 +13,7 @@ plan (blind drift reduction with |p| of Eq. 21, then the tangential e-vector pai
 
 import dataclasses
 import math
+import os
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
@@ -21,7 +22,7 @@ from roe_sep_msgs.srv import PlanSeparation
 
 from .. import interfaces
 from ..core.config import ConfigError, load_scenario
-from ..core.montecarlo.sweep import p_best
+from ..core.montecarlo.sweep import p_best, p_best_stored
 from ..core.relmotion.dynamics import drag_da_dot, raan_rate
 from ..core.relmotion.roe import wrap_angle
 from ..core.separation.double_impulse import design, plan_drift_stop, reduction_bounds
@@ -33,11 +34,24 @@ from .managed import ManagedNode
 from .params import ParameterError, declare, finite
 
 
+def cache_dir():
+    """Where the start-up sweep's result is stored between processes: ``ROE_SEP_CACHE_DIR``, else
+    ``$XDG_CACHE_HOME/roe_sep`` (``~/.cache/roe_sep``); None (not stored) when ``ROE_SEP_CACHE_DIR`` is ``off``."""
+    env = os.environ.get("ROE_SEP_CACHE_DIR")
+    if env:
+        return None if env == "off" else env
+    return os.path.join(os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "roe_sep")
+
+
 def startup_p(scenario, samples, seed):
     """The drift-stop reduction |p| [m/s] of p_mode 'monte_carlo': p_best of a ``samples``-sample sweep with
-    ``seed`` (seed 002 Table 3), memoised (:func:`roe_sep.core.montecarlo.sweep.p_best`)."""
+    ``seed`` (seed 002 Table 3), memoised in the process and stored on disk (:func:`cache_dir`,
+    :func:`roe_sep.core.montecarlo.sweep.p_best_stored`): identical in every run of a scenario, computed once."""
     mc = dataclasses.replace(scenario.monte_carlo, samples=samples, seed=seed)
-    return p_best(scenario.separation, mc, tuple(scenario.p_values))
+    directory = cache_dir()
+    if directory is None:
+        return p_best(scenario.separation, mc, tuple(scenario.p_values))
+    return p_best_stored(scenario.separation, mc, tuple(scenario.p_values), directory)
 
 
 class PlannerNode(ManagedNode):

@@ -79,6 +79,8 @@ class RecorderNode(Node):
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
         # lockstep: log times from the simulator's steps (see on_step)
         self.steps = collections.deque(maxlen=64)  # (counts, lo, hi) of the latest step messages, in order
+        self.steps_seen = 0  # step messages appended to self.steps so far (the serial of the next one)
+        self.first_step = {}  # topic -> serial of the first step that may attribute its next held message
         self.received = collections.Counter()
         self.held = collections.defaultdict(collections.deque)  # topic -> (n, data, source) not attributed yet
         self.last_log = {}  # topic -> last log time [ns] (monotone per channel)
@@ -169,6 +171,7 @@ class RecorderNode(Node):
         t = step.header.stamp.sec * 1_000_000_000 + step.header.stamp.nanosec
         lo = int(round(step.period_start * 1e9)) if step.round == 0 else t
         self.steps.append((dict(zip(step.topics, step.counts)), min(lo, t), t))
+        self.steps_seen += 1
         if self.pending:  # received before the clock started (start-up statuses): published before this step
             self._write_pending(min(lo, t))
         self.step_time = t if self.step_time is None else max(self.step_time, t)
@@ -187,12 +190,22 @@ class RecorderNode(Node):
         self._release(topic)
 
     def _release(self, topic):
+        """Write the held messages of ``topic`` that a step attributes: the n-th at the window of the first step
+        whose count reaches n. Counts never decrease from one step message to the next (they are totals, and the
+        simulator's single reliable writer delivers in order), so the search for a topic's next message resumes at
+        the step where its previous one was found instead of scanning every step held from the oldest on."""
         held = self.held[topic]
+        steps = self.steps
+        base = self.steps_seen - len(steps)  # serial of steps[0]
+        k = max(self.first_step.get(topic, 0), base) - base
         while held:
             n, data, source = held[0]
-            window = next(((lo, hi) for counts, lo, hi in self.steps if counts.get(topic, 0) >= n), None)
-            if window is None:
+            while k < len(steps) and steps[k][0].get(topic, 0) < n:
+                k += 1
+            self.first_step[topic] = base + k
+            if k == len(steps):
                 return
+            window = steps[k][1:]
             held.popleft()
             stamp = _stamp_ns(data)
             self._write_monotone(topic, data, min(max(stamp, window[0]), window[1]), source)

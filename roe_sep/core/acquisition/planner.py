@@ -66,8 +66,6 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import sparse
-from scipy.optimize import Bounds, LinearConstraint, linprog, milp
 
 from ...errors import AcquisitionInfeasible, InvalidAcquisitionConfig
 from ..relmotion.dynamics import arg_latitude_rate, propagate
@@ -357,6 +355,8 @@ def _assemble(pb: _Problem, cols, ihat, exact, path=True, target=True, ei=True):
             -np.inf, 0.0)
         add(np.zeros(2 * n_s), {i_nu: 1.0 / cg, i_l: -float(fov_limit(1.0, math.radians(cfg.fov_half_n_deg)))},
             -np.inf, 0.0)
+    from scipy import sparse  # here, not at import: the nodes import this module for its config alone
+
     blocks = [sparse.csr_matrix(np.array(rows))]
     lb, ub = list(lbs), list(ubs)
     if path:  # s a dl >= a_dl_min at every grid epoch (plus the sagitta between epochs)
@@ -398,6 +398,9 @@ def _assemble(pb: _Problem, cols, ihat, exact, path=True, target=True, ei=True):
 
 
 def _linprog(pb, cols, ihat, **flags):
+    from scipy import sparse
+    from scipy.optimize import linprog
+
     cost, lo_v, hi_v, a_mat, lb, ub = _assemble(pb, cols, ihat, exact=True, **flags)
     eq = lb == ub
     up = ~eq & np.isfinite(ub)
@@ -409,6 +412,8 @@ def _linprog(pb, cols, ihat, **flags):
 
 
 def _milp(pb, cols, ihat):
+    from scipy.optimize import Bounds, LinearConstraint, milp
+
     cost, lo_v, hi_v, a_mat, lb, ub = _assemble(pb, cols, ihat, exact=False)
     integrality = np.concatenate([np.ones(2 * len(cols)), np.zeros(3)])
     return milp(cost, integrality=integrality, bounds=Bounds(lo_v, hi_v), constraints=LinearConstraint(a_mat, lb, ub),

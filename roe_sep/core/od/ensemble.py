@@ -22,7 +22,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import chi2
 
 from ..constants import R_EARTH, SECONDS_PER_DAY
 from ..montecarlo.stats import nees_bounds
@@ -249,6 +248,8 @@ def consistency(solutions, which):
     """Statistics of the first or last solution of every chain (``which`` 'first' | 'last' | 'all'): count, mean
     7-state NEES with its band, mean drift-rate z^2 with its band, mean 6-state NEES, the fraction of 7-state NEES
     inside the single-run 95 % bound chi2(7, 0.95) and of |z| inside 1.96, mean drift-rate sigma [m/day]."""
+    from scipy.stats import chi2  # here, not at import: the run report imports this module
+
     chains = {}
     for s in solutions:
         chains.setdefault((s.member, s.draw), []).append(s)
