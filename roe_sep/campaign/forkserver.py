@@ -99,13 +99,13 @@ def serve():
 
     for name in NODES:
         suite.node_class(name)
-    from .. import report  # noqa: F401
-    from . import child  # noqa: F401
-
     # what a run loads on first use (the core imports them lazily: the ic_planner's LP, the OD consistency test)
     import scipy.optimize  # noqa: F401
     import scipy.sparse  # noqa: F401
     import scipy.special  # noqa: F401
+
+    from .. import report  # noqa: F401
+    from . import child  # noqa: F401
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the worker decides; a terminal's Ctrl-C goes to the worker
     out = sys.stdout
