@@ -157,13 +157,6 @@ def wait_for_completion(duration, deployment, timeout, progress):
     os.environ.pop("ROS_LOCALHOST_ONLY", None)
     rclpy.init()
     node = rclpy.create_node("roe_sep_run")
-    # the observer takes about 1,400 messages a run (every node's /diagnostics, /clock): on rclpy's EventsExecutor,
-    # as the nodes, no wait set is rebuilt per message (the global SingleThreadedExecutor of rclpy.spin_once cost
-    # about 0.4 CPU-s a run)
-    from rclpy.experimental import EventsExecutor
-
-    executor = EventsExecutor()
-    executor.add_node(node)
     now = {"t": 0.0, "end": None}
 
     def on_status(array):
@@ -176,7 +169,7 @@ def wait_for_completion(duration, deployment, timeout, progress):
     shown = -1
     try:
         while True:
-            executor.spin_once(timeout_sec=0.1)
+            rclpy.spin_once(node, timeout_sec=0.1)
             if now["end"] is not None:
                 return now["end"] == "scenario complete", now["end"]
             dead = deployment.dead()
@@ -191,7 +184,6 @@ def wait_for_completion(duration, deployment, timeout, progress):
     finally:
         if progress:
             print(file=sys.stderr)
-        executor.shutdown()
         node.destroy_node()
         rclpy.try_shutdown()
 
