@@ -201,6 +201,35 @@ PLANNER = (
     Param("strategy", "string", "double_impulse", "'double_impulse' (ejection + drift-stop) or 'multi_impulse' "
           "(seed 001 Sec. 3: every carrier burn of the multi-impulse plan, each <= 0.3 m/s, quantized to 1 mm/s; k "
           "and p_mode do not apply)", choices=STRATEGIES),
+    Param("drift_stop_retry", "bool", True, "a drift-stop with no executed carrier burn on the executed-maneuver "
+          "record retry_tolerance after its epoch (missed, or late: the safety monitor's burn_missing) is replaced "
+          "by the same drift-stop whole orbits later, at its argument of latitude, the first such epoch at least "
+          "retry_margin after the finding (seed 002 Table 1 safety #4, Eq. 13); false: no replacement "
+          "(docs/contingencies.md)"),
+    Param("retry_tolerance", "double", _ANOM.epoch_tolerance, "a drift-stop is missing this long after its epoch "
+          "(the safety monitor's burn_epoch_tolerance)", "s", range=(1.0, 86400.0)),
+    Param("retry_margin", "double", 11400.0, "the replacement drift-stop is at least this long after the finding "
+          "(two orbits: the uplink at a ground contact, as the ic_planner's planning_margin)", "s",
+          range=(0.0, 864000.0)),
+    Param("weak_ejection_hold", "bool", True, "the carrier camera's bearings from the release to hold_lead before "
+          "the drift-stop are tested against the commanded ejection (core.safety.ejection_check); a weak ejection "
+          "withdraws the blind drift-stop (an empty plan: the acquisition then starts from the first OD); false: "
+          "the drift-stop flies whatever the camera sees (docs/contingencies.md)"),
+    Param("camera_sigma_deg", "double", 0.02, "1-sigma bearing error of the carrier camera per axis (centroid and "
+          "attitude knowledge; an assumption, no seed gives it)", "deg", range=(1.0e-5, 5.0)),
+    Param("camera_model_sigma_deg", "double", 0.05, "model floor added to the bearing error: the secular linear "
+          "model against the nonlinear truth (J2 short-periodic terms, curvature) at a few km", "deg",
+          range=(0.0, 5.0)),
+    Param("camera_seed", "int", 0, "seed of the camera's bearing noise (roe-sep run sets a stream of the run seed)",
+          range=(0, SEED_MAX)),
+    Param("camera_period", "double", 60.0, "sim time between the camera's bearings", "s", range=(1.0, 3600.0)),
+    Param("hold_fraction", "double", 0.5, "the drift-stop is held when the best-fitting fraction f1 of the SPL "
+          "impulse is below this (the blind drift-stop reverses the drift of f1 <~ 0.45 into an approach)",
+          range=(0.0, 1.0)),
+    Param("hold_alpha", "double", 1.0e-3, "false-alarm probability of the weak-ejection test (chi-square, 1 dof, "
+          "the best f1 against the best within three SPL sigmas of 1)", range=(1.0e-12, 0.5)),
+    Param("hold_lead", "double", 1800.0, "the camera's decision is made this long before the drift-stop (its last "
+          "bearing then; the withdrawal's uplink)", "s", range=(0.0, 86400.0)),
 )
 
 SIM = (
