@@ -175,7 +175,7 @@ class PlannerNode(ManagedNode):
         try:
             if self.hold and not self.camera_done and t >= self.in_force[3] - self.hold_lead:
                 self.camera_decision(t)
-            if self.retry:
+            if self.retry and self.in_force is not None:
                 self.check_missing(t)
         except ValueError as exc:
             self.get_logger().error(f"drift-stop check failed: {exc}")
