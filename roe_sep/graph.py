@@ -20,7 +20,8 @@ PARTICIPANTS = ("ejector", "planner", "radar_od", "ic_planner", "safety_monitor"
 # subscribers of each topic the simulator waits for before its clock starts (so that nobody misses a message)
 SUBSCRIBERS = {
     "/sim/truth/roe": ("ejector", "radar_od", "safety_monitor", "recorder", "ground_bridge"),
-    "/sim/truth/rtn": ("planner", "recorder"),
+    "/sim/truth/rtn": ("recorder",),
+    "/sim/camera/bearing": ("planner", "recorder"),
     "/sim/executed_maneuvers": ("planner", "radar_od", "ic_planner", "safety_monitor", "recorder", "ground_bridge"),
     "/separation/ejection": ("ejector", "planner", "safety_monitor", "sim", "recorder", "ground_bridge"),
     "/separation/drift_stop_plan": ("ic_planner", "safety_monitor", "sim", "recorder", "ground_bridge"),
@@ -46,18 +47,6 @@ def suites(nodes):
 
 
 RADAR_STREAM = 1  # the radar noise's stream of a run seed (the simulator uses the seed itself)
-
-
-CAMERA_STREAM = 4  # the carrier camera's bearing noise (the planner's camera_seed); 2 and 3: the ejection delay and
-# the contingency draws of the simulator
-
-
-def camera_seed(seed: int) -> int:
-    """The planner's camera noise seed of a run seed: a 32-bit word of ``SeedSequence([seed, 4])``, as
-    :func:`radar_seed`."""
-    import numpy as np
-
-    return int(np.random.SeedSequence([int(seed), CAMERA_STREAM]).generate_state(1, np.uint32)[0])
 
 
 def radar_seed(seed: int) -> int:
@@ -118,7 +107,6 @@ def run_overrides(params=None, duration=None, seed=None, real_time_factor=None, 
     if seed is not None:
         sim["seed"] = int(seed)
         overrides.setdefault("radar_od", {}).setdefault("seed", radar_seed(seed))
-        overrides.setdefault("planner", {}).setdefault("camera_seed", camera_seed(seed))
     if real_time_factor is not None:
         sim["real_time_factor"] = float(real_time_factor)
     if foxglove is not None:

@@ -17,37 +17,44 @@ Two contingency mitigations (docs/contingencies.md, "What the closed loop does a
   Eqs. 9, 18) is re-published whole orbits later, at its argument of latitude, the first such epoch at least
   ``retry_margin`` after the finding, stamped with the finding's epoch: a new plan, checked by the safety monitor
   like any other; the along-track separation grows meanwhile at the post-ejection rate (Eq. 13).
-* ``weak_ejection_hold``: the carrier camera's bearings of the picosatellite (the truth's relative position
-  ``/sim/truth/rtn`` turned into noisy lines of sight, :func:`roe_sep.core.safety.ejection_check.camera_bearing`:
-  the camera's measurement model, never the SPL's impulse) from the release to ``hold_lead`` before the
-  drift-stop are tested against the commanded ejection (:func:`~roe_sep.core.safety.ejection_check.check_ejection`);
-  a weak ejection withdraws the drift-stop: an empty plan, after which the ic_planner starts the acquisition from
-  the first OD. Each finding is a WARN ``roe_sep/planner/contingency`` on ``/diagnostics`` (value ``contingency``:
-  ``drift_stop_replaced`` or ``weak_ejection``, ``epoch_s``).
+* ``weak_ejection_hold``: the carrier camera's bearings of the picosatellite (``/sim/camera/bearing``, the
+  simulator's sensor: unit lines of sight with their noise; the planner never reads the truth) from the release to
+  ``hold_lead`` before the drift-stop are tested against the commanded ejection
+  (:func:`~roe_sep.core.safety.ejection_check.check_ejection`: the bearings see the SPL's fraction over the drag's,
+  f1 / g; held when they exclude every nominal pair); a weak ejection withdraws the drift-stop: an empty plan,
+  after which the ic_planner starts the acquisition from the first OD. Each finding is a WARN
+  ``roe_sep/planner/contingency`` on ``/diagnostics`` (value ``contingency``: ``drift_stop_replaced`` or
+  ``weak_ejection``, ``epoch_s``).
+
+A restarted planner re-publishes the plan of the latched ejection event and recovers what was executed from the
+latched executed-maneuver record before it may find a drift-stop missing (:meth:`PlannerNode.record_recovered`).
 """
 
 import dataclasses
 import math
+import time
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
-from roe_sep_msgs.msg import EjectionEvent, ImpulsiveManeuver, ManeuverPlan, RelativeState
+from geometry_msgs.msg import Vector3Stamped
+from roe_sep_msgs.msg import EjectionEvent, ImpulsiveManeuver, ManeuverPlan
 from roe_sep_msgs.srv import PlanSeparation
 
 from .. import interfaces
 from ..core.config import ConfigError, load_scenario
 from ..core.montecarlo.sweep import p_best
-from ..core.relmotion.dynamics import arg_latitude_rate, drag_da_dot, raan_rate
+from ..core.relmotion.dynamics import arg_latitude_rate, drag_da_dot, propagate_chief, raan_rate
 from ..core.relmotion.roe import wrap_angle
-from ..core.relmotion.trajectory import Chief
-from ..core.safety.ejection_check import camera_bearing, check_ejection
+from ..core.safety.ejection_check import check_ejection, nominal_fraction
 from ..core.separation.double_impulse import design, plan_drift_stop, reduction_bounds
 from ..core.separation.multi_impulse import MultiImpulseConfig, multi_config, plan_carrier_burns
-from .convert import maneuver_msg, roe_to_msg, sec_to_time, time_to_sec, vector_to_array
+from .convert import elements_to_array, maneuver_msg, roe_to_msg, sec_to_time, time_to_sec, vector_to_array
 from .diagnostics import ERROR, OK, WARN, publish_status
 from .lockstep import Lockstep
 from .managed import ManagedNode
 from .params import ParameterError, declare, finite
+
+RECORD_SETTLE = 2.0  # wall s a restarted planner (no lockstep) lets the latched executed record arrive in full
 
 
 def startup_p(scenario, samples, seed):
@@ -76,10 +83,8 @@ class PlannerNode(ManagedNode):
         self.retry_margin = declare(self, "retry_margin")
         self.hold = declare(self, "weak_ejection_hold")
         self.camera_sigma = math.radians(declare(self, "camera_sigma_deg"))
-        self.model_sigma = math.radians(declare(self, "camera_model_sigma_deg"))
-        self.camera_rng = np.random.default_rng(declare(self, "camera_seed"))
-        self.camera_period = declare(self, "camera_period")
-        self.hold_fraction = declare(self, "hold_fraction")
+        self.camera_floor = declare(self, "camera_model_floor")
+        self.hold_sigmas = declare(self, "hold_sigmas")
         self.hold_alpha = declare(self, "hold_alpha")
         self.hold_lead = declare(self, "hold_lead")
         try:
@@ -107,13 +112,13 @@ class PlannerNode(ManagedNode):
                      what="ejection event")
         ls.subscribe(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, self.on_executed, interfaces.EXECUTED,
                      stamp=lambda m: time_to_sec(m.epoch), what="executed maneuver")
-        ls.subscribe(RelativeState, interfaces.TRUTH_RTN_TOPIC, self.on_camera, interfaces.STREAM,
-                     what="camera view")
+        ls.subscribe(Vector3Stamped, interfaces.CAMERA_TOPIC, self.on_bearing, interfaces.STREAM,
+                     what="camera bearing")
         self.in_force = None  # (event, k, p, drift-stop epoch [s]) of the drift-stop plan in force
         self.drift_stops = []  # epochs [s] of the executed drift-stops on record
         self.released = None  # s, the deployer's release (the executed ejection's epoch on record)
-        self.bearings = []  # (t [s], measured unit line of sight (3,))
-        self.last_bearing = -math.inf
+        self.record_since = None  # steady s: the executed ejection arrived (a restarted planner's record recovered)
+        self.bearings = []  # (t [s], measured unit line of sight (3,)) of the camera
         self.camera_done = False  # the camera's decision is made (or not needed)
         self.retried = set()  # drift-stop epochs (to the ms) already replaced
         # without lockstep steps (a free-running clock) the sim-time checks run on a timer
@@ -153,19 +158,23 @@ class PlannerNode(ManagedNode):
             self.drift_stops.append(t)
         elif m.purpose == "ejection" and self.released is None:
             self.released = t  # the release switch: when, not how fast
+            self.record_since = time.monotonic()
 
-    def on_camera(self, state: RelativeState):
-        """The carrier camera: the line of sight to the picosatellite, measured with its noise (the scene is the
-        truth's relative position; what the planner keeps is the noisy bearing alone)."""
-        t = time_to_sec(state.header.stamp)
-        if not self.hold or self.camera_done or self.released is None or t <= self.released \
-                or t - self.last_bearing < self.camera_period:
-            return
-        pos = vector_to_array(state.position)
-        if not np.all(np.isfinite(pos)) or not np.any(pos):
-            return
-        self.last_bearing = t
-        self.bearings.append((t, camera_bearing(pos[None, :], self.camera_sigma, self.camera_rng)[0]))
+    def record_recovered(self):
+        """Whether the executed-maneuver record is complete enough to say a drift-stop is missing: the executed
+        ejection is on it (the record is latched and in order, and no drift-stop flies before the ejection), and,
+        without lockstep (where every round holds every message the simulator counted, the latched history of a
+        restarted planner included), ``RECORD_SETTLE`` wall seconds have passed since it arrived, so that the rest
+        of the latched history has been taken too."""
+        if self.released is None:
+            return False
+        return self.lockstep.active or time.monotonic() - self.record_since >= RECORD_SETTLE
+
+    def on_bearing(self, msg: Vector3Stamped):
+        """The carrier camera's measured line of sight (the simulator's sensor, noise included), kept until the
+        decision."""
+        if self.hold and not self.camera_done:
+            self.bearings.append((time_to_sec(msg.header.stamp), vector_to_array(msg.vector)))
 
     def on_step(self, t):
         """Sim-time checks (each lockstep step; a timer without one): the camera's decision before the drift-stop,
@@ -173,7 +182,7 @@ class PlannerNode(ManagedNode):
         if self.in_force is None:
             return
         try:
-            if self.hold and not self.camera_done and t >= self.in_force[3] - self.hold_lead:
+            if not self.camera_done and t >= self.in_force[3] - self.hold_lead:
                 self.camera_decision(t)
             if self.retry and self.in_force is not None:
                 self.check_missing(t)
@@ -190,22 +199,22 @@ class PlannerNode(ManagedNode):
     def camera_decision(self, t):
         """Test the camera's bearings against the commanded ejection; withdraw the drift-stop of a weak one."""
         self.camera_done = True
-        self.lockstep.unsubscribe(interfaces.TRUTH_RTN_TOPIC)
+        self.lockstep.unsubscribe(interfaces.CAMERA_TOPIC)  # the same whether or not the hold is on
         event, _, _, t_stop = self.in_force
-        if self.released is None or t >= t_stop or not self.bearings:
+        if not self.hold or self.released is None or t >= t_stop or not self.bearings:
             return
-        chief = event.chief
-        c = Chief(chief.semi_major_axis, chief.inclination, event.ejection.mean_arg_latitude,
-                  time_to_sec(event.header.stamp))
+        chief = elements_to_array(event.chief)
+        chief = propagate_chief(chief, self.released - time_to_sec(event.header.stamp), self.j2)
         mc = self.scenario.monte_carlo
-        da_dot = float(drag_da_dot(mc.delta_b, mc.density, c.a)) if mc.drag else 0.0
+        da_dot = float(drag_da_dot(mc.delta_b, mc.density, chief[0])) if mc.drag else 0.0
         times = np.array([b[0] for b in self.bearings])
         los = np.array([b[1] for b in self.bearings])
-        check = check_ejection(times, los, vector_to_array(event.ejection.dv_rtn), self.released, c, da_dot,
-                               math.hypot(self.camera_sigma, self.model_sigma), self.scenario.separation.spl_sigma,
-                               self.hold_fraction, self.hold_alpha, self.j2)
-        self.get_logger().info(f"camera check of the ejection: best f1 = {check.f1:.2f}, chi-square gain "
-                               f"{check.gain:.1f} over the nominal SPL, {check.samples} bearings: "
+        bound = nominal_fraction(self.scenario.separation.spl_sigma, mc.ballistic_sigma, self.hold_sigmas)
+        check = check_ejection(times, los, vector_to_array(event.ejection.dv_rtn), self.released, chief, da_dot,
+                               self.camera_sigma, self.camera_floor, bound, self.hold_alpha, self.j2)
+        self.bearings = []
+        self.get_logger().info(f"camera check of the ejection: best f1/g = {check.f1:.2f} (nominal >= "
+                               f"{bound:.3f}), chi-square gain {check.gain:.1f}, {check.samples} bearings: "
                                f"{'drift-stop held' if check.weak else 'drift-stop flies'}")
         if not check.weak:
             return
@@ -216,7 +225,8 @@ class PlannerNode(ManagedNode):
         self.plans += 1
         self.in_force = None
         self.finding("weak_ejection", t, f"the camera's bearings fit f1 = {check.f1:.2f} of the commanded ejection "
-                     f"(chi-square gain {check.gain:.1f} over the nominal SPL, {check.samples} bearings): drift-stop "
+                     f"at the nominal drag (chi-square gain {check.gain:.1f} over the nominal set f1/g >= "
+                     f"{bound:.3f}, {check.samples} bearings): drift-stop "
                      f"at t = {t_stop:.0f} s withdrawn, the acquisition starts from the first OD",
                      {"f1": f"{check.f1:.3f}", "gain": f"{check.gain:.2f}", "samples": check.samples})
 
@@ -224,7 +234,7 @@ class PlannerNode(ManagedNode):
         """Replace the drift-stop in force when the record shows none ``retry_tolerance`` after its epoch."""
         event, k, p, t_stop = self.in_force
         key = round(t_stop, 3)
-        if t <= t_stop + self.retry_tolerance or key in self.retried:
+        if t <= t_stop + self.retry_tolerance or key in self.retried or not self.record_recovered():
             return
         if any(e >= t_stop - self.retry_tolerance for e in self.drift_stops):
             return
