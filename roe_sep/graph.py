@@ -21,7 +21,8 @@ PARTICIPANTS = ("ejector", "planner", "radar_od", "ic_planner", "safety_monitor"
 SUBSCRIBERS = {
     "/sim/truth/roe": ("ejector", "radar_od", "safety_monitor", "recorder", "ground_bridge"),
     "/sim/truth/rtn": ("recorder",),
-    "/sim/executed_maneuvers": ("radar_od", "ic_planner", "safety_monitor", "recorder", "ground_bridge"),
+    "/sim/camera/bearing": ("planner", "recorder"),
+    "/sim/executed_maneuvers": ("planner", "radar_od", "ic_planner", "safety_monitor", "recorder", "ground_bridge"),
     "/separation/ejection": ("ejector", "planner", "safety_monitor", "sim", "recorder", "ground_bridge"),
     "/separation/drift_stop_plan": ("ic_planner", "safety_monitor", "sim", "recorder", "ground_bridge"),
     "/acquisition/plan": ("ic_planner", "safety_monitor", "sim", "recorder", "ground_bridge"),

@@ -50,6 +50,8 @@ EJECTION_TOPIC = "/separation/ejection"  # EjectionEvent, LATCHED, ejector
 DRIFT_STOP_PLAN_TOPIC = "/separation/drift_stop_plan"  # ManeuverPlan, LATCHED, planner
 TRUTH_ROE_TOPIC = "/sim/truth/roe"  # RelativeOrbitalElements, STREAM, sim
 TRUTH_RTN_TOPIC = "/sim/truth/rtn"  # RelativeState, STREAM, sim
+CAMERA_TOPIC = "/sim/camera/bearing"  # geometry_msgs/Vector3Stamped, STREAM, sim: the carrier camera's measured unit
+# line of sight to the picosatellite in the carrier RTN frame, stamped with its epoch (noise included, no truth)
 EXECUTED_TOPIC = "/sim/executed_maneuvers"  # ImpulsiveManeuver, EXECUTED, sim (as executed, with errors)
 RADAR_TOPIC = "/radar/measurements"  # RadarMeasurement, STREAM, radar_od
 EXTERNAL_RADAR_TOPIC = "/ground/radar_measurements"  # RadarMeasurement, BULK, ground_bridge (TDM in) -> radar_od

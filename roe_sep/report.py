@@ -217,16 +217,18 @@ def contingency_applied(diagnostics):
 
 
 CONTINGENCY_STATUS = "roe_sep/safety_monitor/contingency"
+MITIGATION_STATUS = "roe_sep/planner/contingency"  # what the planner acted on (drift_stop_replaced, weak_ejection)
 
 
 def contingencies_detected(diagnostics):
     """What the safety monitor detected (its named diagnostics ``roe_sep/safety_monitor/contingency``,
-    :mod:`roe_sep.core.safety.anomaly`): per name its first detection, ``{name, epoch [s], text, count}``, in the
-    order of their first epochs; [] when nothing was detected."""
+    :mod:`roe_sep.core.safety.anomaly`) and what the planner acted on (``roe_sep/planner/contingency``): per name
+    its first finding, ``{name, epoch [s], text, count}``, in the order of their first epochs; [] when nothing was
+    found."""
     found = {}
     for _, d in diagnostics:
         for s in d.status:
-            if s.name != CONTINGENCY_STATUS:
+            if s.name not in (CONTINGENCY_STATUS, MITIGATION_STATUS):
                 continue
             values = {kv.key: kv.value for kv in s.values}
             name = values.get("contingency")

@@ -112,12 +112,21 @@ def truth(msg):
     roe("", msg)
 
 
+def bearing(msg):
+    """Vector3Stamped of the camera: a stamp and a unit line of sight."""
+    time_of("header.stamp", msg.header.stamp)
+    v = (msg.vector.x, msg.vector.y, msg.vector.z)
+    if not all(math.isfinite(c) for c in v) or abs(math.sqrt(sum(c * c for c in v)) - 1.0) > 1e-6:
+        raise BadMessage("vector", v, "a finite unit vector")
+
+
 def executed(msg):
     maneuver("", msg)
 
 
 def validator_for(msg_type):
     """The validation function of a message type read by our nodes (None: no check)."""
+    from geometry_msgs.msg import Vector3Stamped
     from roe_sep_msgs.msg import (
         EjectionEvent,
         ImpulsiveManeuver,
@@ -128,4 +137,4 @@ def validator_for(msg_type):
     )
 
     return {RelativeOrbitalElements: truth, EjectionEvent: ejection, ManeuverPlan: plan, ImpulsiveManeuver: executed,
-            OrbitDetermination: orbit_determination, SafetyStatus: safety_status}.get(msg_type)
+            OrbitDetermination: orbit_determination, SafetyStatus: safety_status, Vector3Stamped: bearing}.get(msg_type)

@@ -201,6 +201,33 @@ PLANNER = (
     Param("strategy", "string", "double_impulse", "'double_impulse' (ejection + drift-stop) or 'multi_impulse' "
           "(seed 001 Sec. 3: every carrier burn of the multi-impulse plan, each <= 0.3 m/s, quantized to 1 mm/s; k "
           "and p_mode do not apply)", choices=STRATEGIES),
+    Param("drift_stop_retry", "bool", True, "a drift-stop with no executed carrier burn on the executed-maneuver "
+          "record retry_tolerance after its epoch (missed, or late: the safety monitor's burn_missing) is replaced "
+          "by the same drift-stop whole orbits later, at its argument of latitude, the first such epoch at least "
+          "retry_margin after the finding (seed 002 Table 1 safety #4, Eq. 13); false: no replacement "
+          "(docs/contingencies.md)"),
+    Param("retry_tolerance", "double", _ANOM.epoch_tolerance, "a drift-stop is missing this long after its epoch "
+          "(the safety monitor's burn_epoch_tolerance)", "s", range=(1.0, 86400.0)),
+    Param("retry_margin", "double", 11400.0, "the replacement drift-stop is at least this long after the finding "
+          "(two orbits: the uplink at a ground contact, as the ic_planner's planning_margin)", "s",
+          range=(0.0, 864000.0)),
+    Param("weak_ejection_hold", "bool", True, "the carrier camera's bearings (/sim/camera/bearing) from the release "
+          "to hold_lead before the drift-stop are tested against the commanded ejection "
+          "(core.safety.ejection_check); a weak ejection withdraws the blind drift-stop (an empty plan: the "
+          "acquisition then starts from the first OD); false: the drift-stop flies whatever the camera sees "
+          "(docs/contingencies.md)"),
+    Param("camera_sigma_deg", "double", 0.02, "1-sigma bearing error per axis the test assumes (the simulator's "
+          "camera_sigma_deg)", "deg", range=(1.0e-5, 5.0)),
+    Param("camera_model_floor", "double", 1.0, "1-sigma position error of the bearing model against the nonlinear "
+          "truth (measured below 0.9 m over the 2 h before the drift-stop), an angle of floor / range added to the "
+          "camera's", "m", range=(0.0, 1000.0)),
+    Param("hold_sigmas", "double", 3.0, "the nominal set: f1 / g >= (1 - k spl_sigma) / (1 + k ballistic_sigma) "
+          "with k this (0.4375 with the default scenario): the bearings see the SPL's fraction f1 over the drag's "
+          "g only; the drift-stop is held when they exclude the whole set", range=(0.0, 10.0)),
+    Param("hold_alpha", "double", 1.0e-3, "false-alarm probability of the weak-ejection test (chi-square, 1 dof, "
+          "the best apparent fraction f1 / g against the best in the nominal set)", range=(1.0e-12, 0.5)),
+    Param("hold_lead", "double", 1800.0, "the camera's decision is made this long before the drift-stop (its last "
+          "bearing then; the withdrawal's uplink)", "s", range=(0.0, 86400.0)),
 )
 
 SIM = (
@@ -217,6 +244,13 @@ SIM = (
     Param("tick_period", "double", 0.01, "wall time between clock ticks (free-running clock)", "s",
           range=(1.0e-4, 10.0)),
     Param("truth_period", "double", 60.0, "sim-time period of the truth topics", "s", range=(0.1, 86400.0)),
+    Param("camera_period", "double", 60.0, "sim time between the carrier camera's bearings of the picosatellite "
+          "(/sim/camera/bearing, from the release on; 0: no camera)", "s", range=(0.0, 3600.0)),
+    Param("camera_sigma_deg", "double", 0.02, "1-sigma bearing error of the carrier camera per axis (centroid and "
+          "attitude knowledge; an assumption, no seed gives it); the noise is its own stream of the seed", "deg",
+          range=(0.0, 5.0)),
+    Param("camera_duration", "double", 14400.0, "the camera tracks the picosatellite this long after the release "
+          "(the blind drift-stop of the default design is 2.4 h after it)", "s", range=(0.0, 1.0e7)),
     Param("u0_deg", "double", 50.0, "carrier mean argument of latitude at sim time 0", "deg",
           range=(-360.0, 360.0)),
     Param("ltan_hours", "double", 9.5, "local time of the carrier's ascending node (BIROS: 09:30)", "h",

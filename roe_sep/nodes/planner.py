@@ -9,29 +9,53 @@ docs/parameters.md). ``strategy`` ``multi_impulse`` (seed 001 Sec. 3,
 :func:`roe_sep.core.separation.multi_impulse.plan_carrier_burns`) publishes every carrier burn of the multi-impulse
 plan (blind drift reduction with |p| of Eq. 21, then the tangential e-vector pair) as one ManeuverPlan with strategy
 "multi_impulse" on the same topic.
+
+Two contingency mitigations (docs/contingencies.md, "What the closed loop does about them"), each a parameter:
+
+* ``drift_stop_retry``: when the executed-maneuver record (``/sim/executed_maneuvers``) holds no drift-stop
+  ``retry_tolerance`` after the epoch of the drift-stop in force (missed or late), the same drift-stop (seed 002
+  Eqs. 9, 18) is re-published whole orbits later, at its argument of latitude, the first such epoch at least
+  ``retry_margin`` after the finding, stamped with the finding's epoch: a new plan, checked by the safety monitor
+  like any other; the along-track separation grows meanwhile at the post-ejection rate (Eq. 13).
+* ``weak_ejection_hold``: the carrier camera's bearings of the picosatellite (``/sim/camera/bearing``, the
+  simulator's sensor: unit lines of sight with their noise; the planner never reads the truth) from the release to
+  ``hold_lead`` before the drift-stop are tested against the commanded ejection
+  (:func:`~roe_sep.core.safety.ejection_check.check_ejection`: the bearings see the SPL's fraction over the drag's,
+  f1 / g; held when they exclude every nominal pair); a weak ejection withdraws the drift-stop: an empty plan,
+  after which the ic_planner starts the acquisition from the first OD. Each finding is a WARN
+  ``roe_sep/planner/contingency`` on ``/diagnostics`` (value ``contingency``: ``drift_stop_replaced`` or
+  ``weak_ejection``, ``epoch_s``).
+
+A restarted planner re-publishes the plan of the latched ejection event and recovers what was executed from the
+latched executed-maneuver record before it may find a drift-stop missing (:meth:`PlannerNode.record_recovered`).
 """
 
 import dataclasses
 import math
 import os
+import time
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
-from roe_sep_msgs.msg import EjectionEvent, ManeuverPlan
+from geometry_msgs.msg import Vector3Stamped
+from roe_sep_msgs.msg import EjectionEvent, ImpulsiveManeuver, ManeuverPlan
 from roe_sep_msgs.srv import PlanSeparation
 
 from .. import interfaces
 from ..core.config import ConfigError, load_scenario
 from ..core.montecarlo.sweep import p_best, p_best_stored
-from ..core.relmotion.dynamics import drag_da_dot, raan_rate
+from ..core.relmotion.dynamics import arg_latitude_rate, drag_da_dot, propagate_chief, raan_rate
 from ..core.relmotion.roe import wrap_angle
+from ..core.safety.ejection_check import check_ejection, nominal_fraction
 from ..core.separation.double_impulse import design, plan_drift_stop, reduction_bounds
 from ..core.separation.multi_impulse import MultiImpulseConfig, multi_config, plan_carrier_burns
-from .convert import maneuver_msg, roe_to_msg, sec_to_time, time_to_sec, vector_to_array
-from .diagnostics import ERROR, OK, publish_status
+from .convert import elements_to_array, maneuver_msg, roe_to_msg, sec_to_time, time_to_sec, vector_to_array
+from .diagnostics import ERROR, OK, WARN, publish_status
 from .lockstep import Lockstep
 from .managed import ManagedNode
 from .params import ParameterError, declare, finite
+
+RECORD_SETTLE = 2.0  # wall s a restarted planner (no lockstep) lets the latched executed record arrive in full
 
 
 def cache_dir():
@@ -68,6 +92,15 @@ class PlannerNode(ManagedNode):
         seed = declare(self, "mc_seed")
         self.j2 = declare(self, "j2")
         self.strategy = declare(self, "strategy")
+        self.retry = declare(self, "drift_stop_retry")
+        self.retry_tolerance = declare(self, "retry_tolerance")
+        self.retry_margin = declare(self, "retry_margin")
+        self.hold = declare(self, "weak_ejection_hold")
+        self.camera_sigma = math.radians(declare(self, "camera_sigma_deg"))
+        self.camera_floor = declare(self, "camera_model_floor")
+        self.hold_sigmas = declare(self, "hold_sigmas")
+        self.hold_alpha = declare(self, "hold_alpha")
+        self.hold_lead = declare(self, "hold_lead")
         try:
             self.scenario = load_scenario(scenario_file or None)
         except ConfigError as exc:
@@ -86,11 +119,24 @@ class PlannerNode(ManagedNode):
 
     def activate(self):
         """Publishers, subscriptions, services (the ``activate`` transition)."""
-        self.lockstep = ls = Lockstep(self)
+        self.lockstep = ls = Lockstep(self, on_step=self.on_step)
         self.plan_pub = ls.publisher(ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.LATCHED)
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
         ls.subscribe(EjectionEvent, interfaces.EJECTION_TOPIC, self.on_ejection, interfaces.LATCHED,
                      what="ejection event")
+        ls.subscribe(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, self.on_executed, interfaces.EXECUTED,
+                     stamp=lambda m: time_to_sec(m.epoch), what="executed maneuver")
+        ls.subscribe(Vector3Stamped, interfaces.CAMERA_TOPIC, self.on_bearing, interfaces.STREAM,
+                     what="camera bearing")
+        self.in_force = None  # (event, k, p, drift-stop epoch [s]) of the drift-stop plan in force
+        self.drift_stops = []  # epochs [s] of the executed drift-stops on record
+        self.released = None  # s, the deployer's release (the executed ejection's epoch on record)
+        self.record_since = None  # steady s: the executed ejection arrived (a restarted planner's record recovered)
+        self.bearings = []  # (t [s], measured unit line of sight (3,)) of the camera
+        self.camera_done = False  # the camera's decision is made (or not needed)
+        self.retried = set()  # drift-stop epochs (to the ms) already replaced
+        # without lockstep steps (a free-running clock) the sim-time checks run on a timer
+        self.create_timer(1.0, lambda: None if self.lockstep.active else self.on_step(self.now()))
         self.create_service(PlanSeparation, interfaces.PLAN_SERVICE, self.on_plan_request)
         self.plans = 0
         publish_status(self, self.diag_pub, OK, "waiting for the ejection event", self._values())
@@ -109,11 +155,119 @@ class PlannerNode(ManagedNode):
             return
         self.plan_pub.publish(plan)
         self.plans += 1
+        if self.strategy != "multi_impulse":
+            self.in_force = (event, None, None, time_to_sec(plan.maneuvers[0].epoch))
         burn = plan.maneuvers[0]
         self.get_logger().info(
             f"drift-stop planned at t = {time_to_sec(burn.epoch):.1f} s, carrier dv RTN = "
             f"({burn.dv_rtn.x:+.6f}, {burn.dv_rtn.y:+.6f}, {burn.dv_rtn.z:+.6f}) m/s, p = {plan.p_reduction:g} m/s")
         publish_status(self, self.diag_pub, OK, "drift-stop plan published", self._values())
+
+    def now(self):
+        return self.get_clock().now().nanoseconds * 1e-9
+
+    def on_executed(self, m: ImpulsiveManeuver):
+        t = time_to_sec(m.epoch)
+        if m.spacecraft == "carrier" and m.purpose == "drift_stop":
+            self.drift_stops.append(t)
+        elif m.purpose == "ejection" and self.released is None:
+            self.released = t  # the release switch: when, not how fast
+            self.record_since = time.monotonic()
+
+    def record_recovered(self):
+        """Whether the executed-maneuver record is complete enough to say a drift-stop is missing: the executed
+        ejection is on it (the record is latched and in order, and no drift-stop flies before the ejection), and,
+        without lockstep (where every round holds every message the simulator counted, the latched history of a
+        restarted planner included), ``RECORD_SETTLE`` wall seconds have passed since it arrived, so that the rest
+        of the latched history has been taken too."""
+        if self.released is None:
+            return False
+        return self.lockstep.active or time.monotonic() - self.record_since >= RECORD_SETTLE
+
+    def on_bearing(self, msg: Vector3Stamped):
+        """The carrier camera's measured line of sight (the simulator's sensor, noise included), kept until the
+        decision."""
+        if self.hold and not self.camera_done:
+            self.bearings.append((time_to_sec(msg.header.stamp), vector_to_array(msg.vector)))
+
+    def on_step(self, t):
+        """Sim-time checks (each lockstep step; a timer without one): the camera's decision before the drift-stop,
+        a missing drift-stop's replacement."""
+        if self.in_force is None:
+            return
+        try:
+            if not self.camera_done and t >= self.in_force[3] - self.hold_lead:
+                self.camera_decision(t)
+            if self.retry and self.in_force is not None:
+                self.check_missing(t)
+        except ValueError as exc:
+            self.get_logger().error(f"drift-stop check failed: {exc}")
+            publish_status(self, self.diag_pub, ERROR, f"drift-stop check failed: {exc}", self._values())
+
+    def finding(self, name, t, text, values=None):
+        """A contingency the planner acted on: logged and a named WARN on /diagnostics."""
+        self.get_logger().warning(f"{name}: {text}")
+        publish_status(self, self.diag_pub, WARN, f"{name}: {text}",
+                       {"contingency": name, "epoch_s": f"{t:.1f}", **(values or {})}, part="contingency", stamp=t)
+
+    def camera_decision(self, t):
+        """Test the camera's bearings against the commanded ejection; withdraw the drift-stop of a weak one."""
+        self.camera_done = True
+        self.lockstep.unsubscribe(interfaces.CAMERA_TOPIC)  # the same whether or not the hold is on
+        event, _, _, t_stop = self.in_force
+        if not self.hold or self.released is None or t >= t_stop or not self.bearings:
+            return
+        chief = elements_to_array(event.chief)
+        chief = propagate_chief(chief, self.released - time_to_sec(event.header.stamp), self.j2)
+        mc = self.scenario.monte_carlo
+        da_dot = float(drag_da_dot(mc.delta_b, mc.density, chief[0])) if mc.drag else 0.0
+        times = np.array([b[0] for b in self.bearings])
+        los = np.array([b[1] for b in self.bearings])
+        bound = nominal_fraction(self.scenario.separation.spl_sigma, mc.ballistic_sigma, self.hold_sigmas)
+        check = check_ejection(times, los, vector_to_array(event.ejection.dv_rtn), self.released, chief, da_dot,
+                               self.camera_sigma, self.camera_floor, bound, self.hold_alpha, self.j2)
+        self.bearings = []
+        self.get_logger().info(f"camera check of the ejection: best f1/g = {check.f1:.2f} (nominal >= "
+                               f"{bound:.3f}), chi-square gain {check.gain:.1f}, {check.samples} bearings: "
+                               f"{'drift-stop held' if check.weak else 'drift-stop flies'}")
+        if not check.weak:
+            return
+        hold = ManeuverPlan(strategy="double_impulse", ejection_epoch=event.header.stamp, p_reduction=0.0)
+        hold.header.stamp = sec_to_time(t)
+        hold.header.frame_id = interfaces.CARRIER_RTN_FRAME
+        self.plan_pub.publish(hold)
+        self.plans += 1
+        self.in_force = None
+        self.finding("weak_ejection", t, f"the camera's bearings fit f1 = {check.f1:.2f} of the commanded ejection "
+                     f"at the nominal drag (chi-square gain {check.gain:.1f} over the nominal set f1/g >= "
+                     f"{bound:.3f}, {check.samples} bearings): drift-stop "
+                     f"at t = {t_stop:.0f} s withdrawn, the acquisition starts from the first OD",
+                     {"f1": f"{check.f1:.3f}", "gain": f"{check.gain:.2f}", "samples": check.samples})
+
+    def check_missing(self, t):
+        """Replace the drift-stop in force when the record shows none ``retry_tolerance`` after its epoch."""
+        event, k, p, t_stop = self.in_force
+        key = round(t_stop, 3)
+        if t <= t_stop + self.retry_tolerance or key in self.retried or not self.record_recovered():
+            return
+        if any(e >= t_stop - self.retry_tolerance for e in self.drift_stops):
+            return
+        self.retried.add(key)
+        k = self.k if k is None else k
+        base = self.make_plan(event, k=k, p=p)
+        p = base.p_reduction
+        chief = event.chief
+        period = 2.0 * math.pi / float(arg_latitude_rate(chief.semi_major_axis, chief.inclination, self.j2))
+        orbits = max(1, math.ceil((t + self.retry_margin - t_stop) / period - 1e-9))
+        plan = self.make_plan(event, k=k + 2 * orbits, p=p)
+        plan.header.stamp = sec_to_time(t)  # a new plan, from the finding on
+        self.plan_pub.publish(plan)
+        self.plans += 1
+        t_new = time_to_sec(plan.maneuvers[0].epoch)
+        self.in_force = (event, k + 2 * orbits, p, t_new)
+        self.finding("drift_stop_replaced", t, f"no drift-stop on record {t - t_stop:.0f} s after its epoch "
+                     f"t = {t_stop:.1f} s: the same drift-stop {orbits} orbit(s) later, at t = {t_new:.1f} s",
+                     {"planned_epoch_s": f"{t_stop:.1f}", "replacement_epoch_s": f"{t_new:.1f}"})
 
     def on_plan_request(self, request, response):
         """PlanSeparation service: design the separation for a requested configuration (zero = default)."""

@@ -248,11 +248,14 @@ class SafetyMonitorNode(ManagedNode):
         source = f"plan:{topic}"
         try:
             burns = plan_burns(plan.maneuvers)
-            if not burns or not all(math.isfinite(b.epoch) and np.all(np.isfinite(b.dv_rel)) for b in burns):
+            if not (burns or topic == interfaces.DRIFT_STOP_PLAN_TOPIC) \
+                    or not all(math.isfinite(b.epoch) and np.all(np.isfinite(b.dv_rel)) for b in burns):
                 raise ValueError("empty plan or non-finite burn")
             done = [b for b in self.executed if b.epoch > k.t]
             future = [b for b in burns if b.epoch >= k.t]
-            t_end = max(b.epoch for b in burns) + self.limits.plan_horizon
+            # an empty drift-stop plan withdraws the drift-stop (the planner's hold): the drift checked as it is
+            t_end = max((b.epoch for b in burns), default=max(k.t, time_to_sec(plan.header.stamp))) \
+                + self.limits.plan_horizon
             res = assess(k.roe, k.t, k.chief, self.limits, done + future, t_end, self.j2, k.da_dot)
         except ValueError as exc:
             self.reject(f"plan on {topic}", exc)

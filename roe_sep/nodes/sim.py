@@ -10,8 +10,10 @@ its real dispersion and executes every planned carrier burn at its epoch with ex
 seconds, after which the burn is dropped.
 
 Publishes the truth ROE (``/sim/truth/roe``) and RTN state (``/sim/truth/rtn``) every ``truth_period`` and right after
-each burn, every executed burn on ``/sim/executed_maneuvers`` (as executed, errors included) and ``/diagnostics``
-with the running minimum distance.
+each burn, every executed burn on ``/sim/executed_maneuvers`` (as executed, errors included), the carrier camera's
+bearings of the picosatellite (``/sim/camera/bearing``: a sensor, so its noise is the simulator's,
+:class:`roe_sep.core.truth.simulated.Camera`; every ``camera_period`` from the release for ``camera_duration``) and
+``/diagnostics`` with the running minimum distance.
 
 Parameters: :data:`roe_sep.nodes.parameters.SIM` (``sim --help``, docs/parameters.md). The parts: the truth over
 the run (:mod:`roe_sep.core.truth.simulated`), the burn execution
@@ -24,6 +26,7 @@ import math
 import time
 
 from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import Vector3Stamped
 from rclpy.clock import Clock as RclpyClock
 from rclpy.clock import ClockType
 from rclpy.node import Node
@@ -44,7 +47,7 @@ from ..core.od.radar import julian_date, raan_from_ltan
 from ..core.separation.double_impulse import InfeasibleDesignError, design
 from ..core.truth.contingency import resolve as resolve_contingency
 from ..core.truth.execution import BurnExecution
-from ..core.truth.simulated import SimulatedTruth, dispersed_truth
+from ..core.truth.simulated import Camera, SimulatedTruth, camera_rng, dispersed_truth
 from .convert import (
     array_to_elements,
     array_to_vector,
@@ -77,6 +80,9 @@ class SimNode(Node):
         self.time_step = declare(self, "time_step")
         tick_period = declare(self, "tick_period")
         self.truth_period = declare(self, "truth_period")
+        camera_period = declare(self, "camera_period")
+        camera_sigma = math.radians(declare(self, "camera_sigma_deg"))
+        camera_duration = declare(self, "camera_duration")
         u0_deg = declare(self, "u0_deg")
         ltan = declare(self, "ltan_hours")
         epoch = declare(self, "epoch_utc")
@@ -102,6 +108,9 @@ class SimNode(Node):
                                              chosen)
         self.truth = SimulatedTruth(world.model, self.truth_period, self.distance_step, self.departure,
                                     self._publish_truth, lambda: self.status(OK, "running"))
+        # the carrier camera: its own stream of the seed, so a run draws what it drew without it
+        self.truth.camera = Camera(camera_period, camera_sigma, camera_duration, camera_rng(self.seed),
+                                   self._publish_bearings)
         self.execution = BurnExecution(self.truth, world.errors, world.ejection_delay, self.require_approval,
                                        lambda level, text: self.status(LEVELS[level], text), world.contingency)
         self.done = False
@@ -144,6 +153,7 @@ class SimNode(Node):
         self.clock_pub = self.create_publisher(Clock, interfaces.CLOCK_TOPIC, 10)
         self.roe_pub = ls.publisher(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, interfaces.STREAM)
         self.rtn_pub = ls.publisher(RelativeState, interfaces.TRUTH_RTN_TOPIC, interfaces.STREAM)
+        self.camera_pub = ls.publisher(Vector3Stamped, interfaces.CAMERA_TOPIC, interfaces.STREAM)
         self.exec_pub = ls.publisher(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, interfaces.EXECUTED)
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
         ls.subscribe(EjectionEvent, interfaces.EJECTION_TOPIC, self.on_ejection, interfaces.LATCHED,
@@ -225,6 +235,8 @@ class SimNode(Node):
 
     def execute(self, burn):
         done = self.execution.execute(burn)
+        if done.purpose == "ejection":
+            self.truth.camera.release(done.epoch)  # the camera tracks the picosatellite from its release on
         self.exec_pub.publish(maneuver_msg(done.epoch, done.u, done.dv_rtn, done.spacecraft, done.purpose))
         self.truth.publish([done.epoch])
         dv = done.dv_rtn
@@ -248,6 +260,14 @@ class SimNode(Node):
             state.header.stamp = stamp
             state.header.frame_id = interfaces.CARRIER_RTN_FRAME
             self.rtn_pub.publish(state)
+
+    def _publish_bearings(self, epochs, los):
+        """The camera's measured lines of sight (carrier RTN, noise included) at ``epochs`` [s]."""
+        for t, u in zip(epochs, los):
+            msg = Vector3Stamped(vector=array_to_vector(u))
+            msg.header.stamp = sec_to_time(t)
+            msg.header.frame_id = interfaces.CARRIER_RTN_FRAME
+            self.camera_pub.publish(msg)
 
     def status(self, level, message):
         model = self.truth.model

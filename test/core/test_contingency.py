@@ -206,6 +206,20 @@ def test_drift_stop_missed_never_executes_and_a_republished_plan_does_not_bring_
     assert np.array_equal(missed[0][2], base[0][2])
 
 
+def test_a_replacement_drift_stop_for_another_epoch_flies_and_cancels_a_late_one():
+    """The contingency acts on the first drift-stop commanded; the planner's replacement (the same burn whole orbits
+    later, a new plan on the same topic) flies, and replaces a delayed one still pending."""
+    first = (DRIFT_STOP, [(3000.0, [0.3, 0.05, 0.0], "carrier", "drift_stop")])
+    late = 3000.0 + 3 * PERIOD
+    replacement = (DRIFT_STOP, [(late, [0.3, 0.05, 0.0], "carrier", "drift_stop")])
+    missed, w = fly(contingency_from_dict({"name": "drift_stop_missed"}), plans=[first, replacement])
+    assert [(b[4], b[0]) for b in missed] == [("ejection", missed[0][0]), ("drift_stop", late)]
+    assert len(w.contingency.events) == 1
+    delayed, w = fly(contingency_from_dict({"name": "drift_stop_delayed", "delay_orbits": 1}),
+                     plans=[first, replacement])
+    assert [(b[4], b[0]) for b in delayed][1:] == [("drift_stop", late)]  # the late one is not flown as well
+
+
 def test_burn_underperformance_magnitude_and_pointing_on_the_nth_carrier_burn():
     base, _ = fly(None)
     low, w = fly(contingency_from_dict({"name": "burn_underperformance", "burn": 2}))

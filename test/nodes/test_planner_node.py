@@ -5,7 +5,8 @@ import math
 import numpy as np
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus  # noqa: E402
-from roe_sep_msgs.msg import EjectionEvent, ManeuverPlan  # noqa: E402
+from roe_sep_msgs.msg import EjectionEvent, ImpulsiveManeuver, ManeuverPlan  # noqa: E402
+from rosgraph_msgs.msg import Clock  # noqa: E402
 from rosutil import rclpy, spin_until, start_node, stop_node, wait_exit  # noqa: I001  (skips without rclpy)
 
 from roe_sep import interfaces  # noqa: E402
@@ -134,6 +135,51 @@ def test_plan_separation_service(ground):
         bad = call(spl_dv=0.3)
         assert not bad.success and "too small" in bad.message
         assert planner.poll() is None
+    finally:
+        code, out = stop_node(planner)
+    assert code == 0, out
+
+
+def executed_burn(purpose, t, spacecraft, dv):
+    m = ImpulsiveManeuver(epoch=sec_to_time(t), dv_rtn=array_to_vector(dv), spacecraft=spacecraft, purpose=purpose)
+    return m
+
+
+@pytest.mark.parametrize("record", ["ejection and drift-stop", "ejection only"])
+def test_a_restarted_planner_recovers_the_executed_record_before_it_replaces_a_drift_stop(ground, record):
+    """A planner (re)started after the drift-stop's epoch receives the latched ejection at once; until the
+    executed-maneuver record has arrived it must not call the drift-stop missing (it would fly twice). With the record:
+    a drift-stop on it, nothing is replaced; only the ejection on it, the drift-stop is replaced (drift_stop_retry)."""
+    clock_pub = ground.create_publisher(Clock, interfaces.CLOCK_TOPIC, 10)
+    exec_pub = ground.create_publisher(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, interfaces.EXECUTED)
+    t_stop = 1000.0 + 3 * math.pi / D.n
+    now = [t_stop + 600.0]  # past the drift-stop's epoch and its retry tolerance
+
+    def tick():
+        clock_pub.publish(Clock(clock=sec_to_time(now[0])))
+        now[0] += 1.0
+
+    ground.create_timer(0.02, tick)
+    ground.ejection_pub.publish(ejection_event())
+    planner = start_node("planner", "-p", "use_sim_time:=true", "-p", "p_mode:=fixed", "-p", "p_reduction:=0.06")
+    try:
+        assert spin_until(ground, lambda: len(ground.plans) >= 1)
+        assert time_to_sec(ground.plans[0].maneuvers[0].epoch) == pytest.approx(t_stop, rel=2e-3)
+        spin_until(ground, lambda: False, timeout=4.0)  # no record yet: nothing is replaced, however long
+        assert len(ground.plans) == 1
+        exec_pub.publish(executed_burn("ejection", 1003.0, "picosatellite", D.dv1_rtn))
+        if record == "ejection and drift-stop":
+            stop = ground.plans[0].maneuvers[0]
+            exec_pub.publish(executed_burn("drift_stop", time_to_sec(stop.epoch), "carrier",
+                                           [stop.dv_rtn.x, stop.dv_rtn.y, stop.dv_rtn.z]))
+        replaced = spin_until(ground, lambda: len(ground.plans) >= 2, timeout=8.0)
+        assert replaced is (record == "ejection only")
+        if replaced:
+            later = time_to_sec(ground.plans[-1].maneuvers[0].epoch) - time_to_sec(ground.plans[0].maneuvers[0].epoch)
+            assert later > 0 and later / (2 * math.pi / D.n) == pytest.approx(round(later / (2 * math.pi / D.n)),
+                                                                           abs=0.02)
+            assert spin_until(ground, lambda: any(kv.value == "drift_stop_replaced" for d in ground.diags
+                                                  for st in d.status for kv in st.values), timeout=5.0)
     finally:
         code, out = stop_node(planner)
     assert code == 0, out

@@ -17,7 +17,8 @@ The contingencies (docs/contingencies.md):
 * ``drift_stop_delayed``: the drift-stop executes ``delay_orbits`` k (default 1-3) orbits late (seed 002 Table 1,
   safety #4: no collision before passive safety; the along-track drift keeps growing at its post-ejection rate,
   Eq. 13, for k more orbits). Whole orbits: the burn stays at its argument of latitude.
-* ``drift_stop_missed``: the drift-stop never executes (seed 000 Sec. IV).
+* ``drift_stop_missed``: the drift-stop never executes (seed 000 Sec. IV). Both act on the first drift-stop
+  commanded (re-published for the same epoch too); a replacement commanded for another epoch flies.
 * ``burn_underperformance``: the ``burn``-th executed carrier burn (default 1, the drift-stop) executes at a
   ``magnitude`` fraction (default U(0.5, 0.8)) of its executed magnitude, or (``mode: pointing``) turned by
   ``pointing_deg`` (default U(5, 15) deg) about an axis normal to it at a uniform azimuth.
@@ -248,6 +249,7 @@ class TruthContingency(Contingency):
         super().__init__(config, draw(config, seed))
         self.period = float(period)
         self.carrier_burns = 0
+        self.drift_stop_epoch = None  # s (to the ms), the first drift-stop commanded: the one that fails
         self._seen = set()
 
     def _event(self, key, text):
@@ -256,9 +258,9 @@ class TruthContingency(Contingency):
             self.events.append(text)
 
     def reschedule(self, epoch: float, purpose: str, spacecraft: str) -> float | None:
-        """The epoch [s] a planned burn commanded at ``epoch`` executes at, None when it never does: a
-        ``drift_stop`` k orbits late (``drift_stop_delayed``) or dropped (``drift_stop_missed``); every other burn
-        on time.
+        """The epoch [s] a planned burn commanded at ``epoch`` executes at, None when it never does: the first
+        commanded ``drift_stop`` (and the same burn re-published) k orbits late (``drift_stop_delayed``) or dropped
+        (``drift_stop_missed``); every other burn on time, a replacement drift-stop commanded for another epoch too.
 
         Parameters
         ----------
@@ -275,6 +277,10 @@ class TruthContingency(Contingency):
             The epoch [s] of sim time it executes at, None when it never does.
         """
         if purpose != "drift_stop" or spacecraft != "carrier":
+            return epoch
+        if self.drift_stop_epoch is None:
+            self.drift_stop_epoch = round(epoch, 3)
+        if round(epoch, 3) != self.drift_stop_epoch:  # a replacement commanded for another epoch flies
             return epoch
         if self.name == "drift_stop_missed":
             self._event(("missed", round(epoch, 3)), f"drift_stop commanded at t = {epoch:.1f} s: not executed")

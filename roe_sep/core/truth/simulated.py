@@ -4,7 +4,7 @@ departure. The ``sim`` node (:mod:`roe_sep.nodes.sim`) publishes what this compu
 """
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -12,6 +12,7 @@ import numpy as np
 
 from ..constants import ARCSEC
 from ..relmotion.dynamics import arg_latitude_rate, drag_da_dot
+from ..safety.ejection_check import camera_bearing
 from .contingency import SIM_SIDE, ContingencyConfig, TruthContingency
 from .secular import ExecutionErrors, TruthModel, chief_from_u
 
@@ -19,9 +20,17 @@ if TYPE_CHECKING:  # for the annotations only
     from ..config import Scenario
     from ..separation.double_impulse import DoubleImpulseDesign
     from ..separation.multi_impulse import MultiImpulseDesign
+    from .nonlinear import NonlinearTruth
 
 EJECTION_TIMING_STREAM = 2  # the ejection delay's stream of a run seed (graph.RADAR_STREAM = 1: the radar noise)
+CAMERA_STREAM = 4  # the carrier camera's bearing noise (3: the contingency draws)
 STATUS_PERIOD = 3600.0  # s of sim time between the simulator's routine reports
+
+
+def camera_rng(seed: int) -> np.random.Generator:
+    """The carrier camera's noise generator of a run ``seed``: ``SeedSequence([seed, CAMERA_STREAM])``, a stream of
+    its own, so the camera changes no other draw of the run (:func:`dispersed_truth`)."""
+    return np.random.default_rng(np.random.SeedSequence([int(seed), CAMERA_STREAM]))
 
 
 @dataclass
@@ -140,6 +149,53 @@ class ClosestApproach:
         self.tail = (times[-2:], dist[-2:])
 
 
+class Camera:
+    """The carrier camera (the simulator's sensor): from the release on (:meth:`release`, the executed ejection's
+    epoch) for ``duration`` [s], a bearing of the picosatellite every ``period`` [s] (0: no camera), the truth's
+    relative position turned into a noisy unit line of sight in the carrier's RTN frame
+    (:func:`~roe_sep.core.safety.ejection_check.camera_bearing`, ``sigma`` [rad] per axis, the generator ``rng``,
+    :func:`camera_rng`), handed to ``on_bearings(epochs, lines_of_sight)``."""
+
+    def __init__(self, period: float, sigma: float, duration: float, rng: np.random.Generator,
+                 on_bearings: Callable[[list, np.ndarray], None]) -> None:
+        self.period, self.sigma, self.duration, self.rng = period, sigma, duration, rng
+        self.on_bearings = on_bearings
+        self.start = None  # s, the release
+        self.next = math.inf
+
+    def release(self, t: float) -> None:
+        """The picosatellite left at ``t`` [s]: bearings from ``t + period`` on (a second release is ignored)."""
+        if self.start is None and self.period > 0.0:
+            self.start = float(t)
+            self.next = self.start + self.period
+
+    def observe(self, model: "TruthModel | NonlinearTruth", t_from: float, t_to: float) -> None:
+        """The bearings due in (``t_from``, ``t_to``] of ``model``'s truth, handed to ``on_bearings``.
+
+        Parameters
+        ----------
+        model : TruthModel or NonlinearTruth
+            The truth (its ``rtn_at``: the relative position [m] in the carrier's RTN frame).
+        t_from, t_to : float
+            The window [s] of sim time.
+
+        Returns
+        -------
+        None
+        """
+        if self.start is None:
+            return
+        end = min(float(t_to), self.start + self.duration)
+        epochs = []
+        while self.next <= end + 1e-9:
+            if self.next > t_from:
+                epochs.append(self.next)
+            self.next += self.period
+        if epochs:
+            pos = model.rtn_at(np.asarray(epochs, dtype=float))[0]
+            self.on_bearings(epochs, camera_bearing(pos, self.sigma, self.rng))
+
+
 class SimulatedTruth:
     """The truth's timeline: :meth:`advance` moves ``model`` to a sim time, hands the truth samples of every
     ``truth_period`` epoch on the way to ``on_samples(epochs, (kep, roe, (pos, vel)))``, tracks the closest approach
@@ -154,6 +210,7 @@ class SimulatedTruth:
         self.t = 0.0
         self.next_truth = 0.0
         self.next_status = STATUS_PERIOD
+        self.camera = None  # a Camera observing on the way (the simulator's)
 
     def advance(self, t_to: float) -> None:
         """Move the truth to ``t_to`` [s]."""
@@ -174,6 +231,8 @@ class SimulatedTruth:
             self.next_truth += self.truth_period
         if epochs:
             self.publish(epochs)
+        if self.camera is not None:
+            self.camera.observe(self.model, self.t, t_to)
         self.t = t_to
 
     def publish(self, epochs: Sequence[float]) -> None:
