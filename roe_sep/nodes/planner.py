@@ -32,7 +32,6 @@ latched executed-maneuver record before it may find a drift-stop missing (:meth:
 
 import dataclasses
 import math
-import os
 import time
 
 import numpy as np
@@ -43,7 +42,7 @@ from roe_sep_msgs.srv import PlanSeparation
 
 from .. import interfaces
 from ..core.config import ConfigError, load_scenario
-from ..core.montecarlo.sweep import p_best, p_best_stored
+from ..core.montecarlo.sweep import p_best
 from ..core.relmotion.dynamics import arg_latitude_rate, drag_da_dot, propagate_chief, raan_rate
 from ..core.relmotion.roe import wrap_angle
 from ..core.safety.ejection_check import check_ejection, nominal_fraction
@@ -54,23 +53,15 @@ from .diagnostics import ERROR, OK, WARN, publish_status
 from .lockstep import Lockstep
 from .managed import ManagedNode
 from .params import ParameterError, declare, finite
+from .sweep_store import cache_dir, p_best_stored
 
 RECORD_SETTLE = 2.0  # wall s a restarted planner (no lockstep) lets the latched executed record arrive in full
-
-
-def cache_dir():
-    """Where the start-up sweep's result is stored between processes: ``ROE_SEP_CACHE_DIR``, else
-    ``$XDG_CACHE_HOME/roe_sep`` (``~/.cache/roe_sep``); None (not stored) when ``ROE_SEP_CACHE_DIR`` is ``off``."""
-    env = os.environ.get("ROE_SEP_CACHE_DIR")
-    if env:
-        return None if env == "off" else env
-    return os.path.join(os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "roe_sep")
 
 
 def startup_p(scenario, samples, seed):
     """The drift-stop reduction |p| [m/s] of p_mode 'monte_carlo': p_best of a ``samples``-sample sweep with
     ``seed`` (seed 002 Table 3), memoised in the process and stored on disk (:func:`cache_dir`,
-    :func:`roe_sep.core.montecarlo.sweep.p_best_stored`): identical in every run of a scenario, computed once."""
+    :func:`~roe_sep.nodes.sweep_store.p_best_stored`): identical in every run of a scenario, computed once."""
     mc = dataclasses.replace(scenario.monte_carlo, samples=samples, seed=seed)
     directory = cache_dir()
     if directory is None:

@@ -13,12 +13,8 @@ No Python loop runs over samples: every quantity is an array over the sample axi
 """
 
 import functools
-import hashlib
-import json
-import os
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
@@ -376,56 +372,3 @@ def p_best(separation: SeparationConfig, mc: MonteCarloConfig, p_values: tuple[f
     """
     return float(sweep(make_design(separation), mc, tuple(float(p) for p in p_values)).p_best)
 
-
-
-@functools.lru_cache(maxsize=1)
-def code_version() -> str:
-    """A digest of the core's source (every ``roe_sep/core`` module) and NumPy's version: what :func:`p_best`'s value
-    depends on besides its arguments."""
-    h = hashlib.sha256(np.__version__.encode())
-    root = Path(__file__).resolve().parents[1]
-    for path in sorted(root.rglob("*.py")):
-        h.update(str(path.relative_to(root)).encode())
-        h.update(path.read_bytes())
-    return h.hexdigest()
-
-
-@functools.lru_cache(maxsize=8)
-def p_best_stored(separation: SeparationConfig, mc: MonteCarloConfig, p_values: tuple[float, ...],
-                  directory: str) -> float:
-    """:func:`p_best`, stored on disk in ``directory`` (one small JSON file per key) so that a fresh process (a cold
-    ``roe-sep run``) does not repeat the identical sweep. The key is a SHA-256 of the arguments' exact ``repr``
-    (floats round-trip) and :func:`code_version`: a changed input or core module computes anew. A missing,
-    unreadable or foreign file is computed and (atomically) rewritten; a directory that cannot be written costs
-    only the sweep.
-
-    Parameters
-    ----------
-    separation, mc, p_values
-        As for :func:`p_best`.
-    directory : str
-        Directory of the stored values (created when missing).
-
-    Returns
-    -------
-    float
-        The reduction |p| [m/s] of least risk, the same float as :func:`p_best`.
-    """
-    key = hashlib.sha256(repr((separation, mc, tuple(float(p) for p in p_values), code_version())).encode())
-    key = key.hexdigest()
-    path = Path(directory) / f"p_best_{key[:40]}.json"
-    try:
-        stored = json.loads(path.read_text(encoding="utf-8"))
-        if stored.get("key") == key and isinstance(stored.get("p_best"), float):
-            return stored["p_best"]
-    except (OSError, ValueError, AttributeError):
-        pass
-    value = p_best(separation, mc, p_values)
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_text(json.dumps({"key": key, "p_best": value}), encoding="utf-8")
-        os.replace(tmp, path)
-    except OSError:
-        pass
-    return value

@@ -4,7 +4,8 @@ import dataclasses
 import json
 
 from roe_sep.core.config import load_scenario
-from roe_sep.core.montecarlo.sweep import p_best, p_best_stored
+from roe_sep.core.montecarlo.sweep import p_best
+from roe_sep.nodes.sweep_store import p_best_stored
 
 
 def inputs(samples=2000, seed=3):
