@@ -4,7 +4,8 @@ Seed 001: TIRA can distinguish the two spacecraft only once they are at least 5 
 determination needs several passes over about 12 h. This stub simulates those measurements and runs the OD:
 
 * Every measurement epoch k * ``sample_interval`` is simulated from the first ``/sim/truth/roe`` sample at or
-  after it, propagated back to the epoch (:func:`~roe_sep.core.relmotion.dynamics.propagate` with J2,
+  after it, propagated back to the epoch (:func:`~roe_sep.core.relmotion.dynamics.propagate` with J2 and the
+  truth's own drift of da between that sample and the one before, :func:`~roe_sep.core.od.radar.truth_da_rate`;
   :func:`~roe_sep.core.relmotion.dynamics.propagate_chief`), once that sample has arrived: under lockstep each
   truth sample advances the tracking to its stamp; run alone, the tracking advances to the earlier of ``/clock``
   (rosgraph_msgs/Clock, the node runs with ``use_sim_time``) and the latest truth sample, so a clock that runs
@@ -48,6 +49,7 @@ from ..core.od.radar import (
     julian_date,
     observe,
     relative_distance,
+    truth_da_rate,
     visible,
 )
 from ..core.relmotion.dynamics import propagate, propagate_chief
@@ -145,6 +147,7 @@ class RadarODNode(ManagedNode):
         self.history_t, self.history_roe, self.history_kep = [], [], []
         self.t_last = None  # last processed measurement epoch [s]
         self.last_burn = -math.inf
+        self.burn_epochs = []  # every executed burn's epoch [s]
         self.open_pass = [False] * len(self.stations)
         self.records = []  # (t, station, pass_id, z, chief, theta, truth_t)
         self.last_solution = None  # (ODResult, carrier a [m]) of the latest estimate
@@ -218,6 +221,7 @@ class RadarODNode(ManagedNode):
     def on_maneuver(self, msg: ImpulsiveManeuver):
         self.flush_tracks()  # the measurements before the burn see the burn history they saw when simulated
         t = time_to_sec(msg.epoch)
+        self.burn_epochs.append(t)
         if t > self.last_burn:
             self.last_burn = t
             if self.last_solution is not None and self.last_solution[0].t_est <= t:
@@ -309,7 +313,8 @@ class RadarODNode(ManagedNode):
         roe_tr = np.repeat(np.array([c[1][1] for c in calls]), sizes, axis=0)
         kep_tr = np.repeat(np.array([c[1][2] for c in calls]), sizes, axis=0)
         chief = propagate_chief(kep_tr, epochs - t_tr)
-        roe = propagate(roe_tr, epochs - t_tr, kep_tr[:, 0], kep_tr[:, 2], True, 0.0)
+        rate = np.repeat([self.truth_rate(c[1][0], c[1][1]) for c in calls], sizes)
+        roe = propagate(roe_tr, epochs - t_tr, kep_tr[:, 0], kep_tr[:, 2], True, rate)
         theta = gmst(self.jd0 + epochs / SECONDS_PER_DAY)
         sep = relative_distance(roe, kep_tr[:, 0], chief[:, 4] + chief[:, 5])
         z = [observe(roe, chief, theta, self.site_ef[s], self.site_enu[s]) for s in range(len(self.stations))]
@@ -320,6 +325,14 @@ class RadarODNode(ManagedNode):
             start += n
             self._passes(ep, truth[0], now, chief[rows], theta[rows], sep[rows], [zs[rows] for zs in z],
                          [vs[rows] for vs in seen])
+
+    def truth_rate(self, t, roe):
+        """The truth's drift of da [1/s] into its sample (``t``, ``roe``) from the sample before it
+        (:func:`~roe_sep.core.od.radar.truth_da_rate`); 0 for the first sample or across a burn."""
+        k = bisect.bisect_left(self.history_t, t)
+        if k == 0 or any(self.history_t[k - 1] < b <= t for b in self.burn_epochs):
+            return 0.0
+        return truth_da_rate(self.history_t[k - 1], self.history_roe[k - 1], t, roe)
 
     def _passes(self, epochs, t_tr, now, chief, theta, sep, z, seen):
         """Open and close passes, measure, estimate: one :meth:`track` call's epochs, station by station."""

@@ -29,6 +29,7 @@ from roe_sep.core.od.radar import (
     relative_distance,
     rtn_matrix,
     sun_right_ascension,
+    truth_da_rate,
     visible,
 )
 from roe_sep.core.relmotion.dynamics import propagate_chief, sun_synchronous_inclination
@@ -200,3 +201,10 @@ def test_utc_epoch_of_a_pass_is_reasonable():
     start = datetime(2016, 7, 1, tzinfo=timezone.utc)
     evening = [start + timedelta(seconds=float(r)) for r, _ in windows if r > 12 * 3600]
     assert len(evening) >= 2 and all(18 <= e.hour <= 23 for e in evening)
+
+
+def test_truth_da_rate_is_the_secant_of_da():
+    roe0 = np.array([1e-6, 2e-4, 0.0, 0.0, 0.0, 0.0])
+    roe1 = roe0 + np.array([-3e-8, 1e-6, 1.0, 1.0, 1.0, 1.0])
+    assert truth_da_rate(100.0, roe0, 160.0, roe1) == pytest.approx(-3e-8 / 60.0, rel=1e-12)
+    assert truth_da_rate(160.0, roe1, 160.0, roe1) == 0.0  # no span: no rate
