@@ -149,6 +149,8 @@ class RadarODNode(ManagedNode):
         self.last_burn = -math.inf
         self.burn_epochs = []  # every executed burn's epoch [s]
         self.open_pass = [False] * len(self.stations)
+        self.pass_seen = [0] * len(self.stations)  # epochs of the open pass the station should have measured
+        self.pass_start = [0.0] * len(self.stations)  # epoch [s] of the open pass's first such epoch
         self.records = []  # (t, station, pass_id, z, chief, theta, truth_t)
         self.last_solution = None  # (ODResult, carrier a [m]) of the latest estimate
         self.prior = None  # DriftPrior from the last solution before the latest burn
@@ -344,8 +346,10 @@ class RadarODNode(ManagedNode):
                     if not self.open_pass[s]:
                         self.open_pass[s] = True
                         self.pass_ids[s] += 1
+                        self.pass_seen[s], self.pass_start[s] = 0, float(t)
                         if self.contingency is not None:
                             self.contingency.pass_opened(s, self.pass_ids[s], float(t))
+                    self.pass_seen[s] += 1
                     if self.contingency is None or not self.contingency.dropped(s, self.pass_ids[s], float(t)):
                         self.measure(t, s, z[s][j], chief[j], theta[j], t_tr)
                 elif self.open_pass[s]:
@@ -375,10 +379,24 @@ class RadarODNode(ManagedNode):
         count = sum(1 for r in self.records if r[1] == s and r[2] == pass_id)
         name = self.stations[s].name
         self.get_logger().info(f"{name} pass {pass_id} closed: {count} measurements")
+        if count == 0 and self.pass_seen[s] >= self.min_pass:
+            self.pass_lost(s, pass_id)
         if count < self.min_pass:
             return
         publish_status(self, self.diag_pub, OK, f"{name} pass {pass_id}: {count} measurements", self._values())
         self.estimate(now)
+
+    def pass_lost(self, s, pass_id):
+        """A pass that the station had in view (the picosatellite above its mask and separable for at least
+        ``min_pass_measurements`` epochs) closed without one measurement: the station delivered nothing, which its
+        operators know at once. A named WARN ``roe_sep/radar_od/contingency`` (value ``contingency``
+        ``radar_pass_missed``, ``epoch_s`` the pass's first epoch); the OD waits for the passes that follow."""
+        name, t0 = self.stations[s].name, self.pass_start[s]
+        text = (f"radar_pass_missed: {name} pass {pass_id} from t = {t0:.0f} s ({self.pass_seen[s]} epochs in view) "
+                "delivered no measurement")
+        self.get_logger().warn(text)
+        publish_status(self, self.diag_pub, WARN, text, {"contingency": "radar_pass_missed", "epoch_s": f"{t0:.1f}",
+                                                         "station": name, "pass_id": pass_id}, part="contingency")
 
     def on_external(self, msg: RadarMeasurement):
         """A ground segment's measurement: a record of the external pass -(pass_id + 1) of its station (never an
