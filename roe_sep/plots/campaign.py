@@ -70,3 +70,39 @@ def write_campaign_figures(rows, out_dir, min_rn=None, dl_range=None):
           "Time to the ICs, runs that reached them", paths[1])
     fig_ei_vs_along_track(rows, paths[2], min_rn, dl_range)
     return paths
+
+
+def fig_distance_vs_time(series, path, title, keep_out=None, split_label=("", ""), departure=1000.0):
+    """Distance [m] between the spacecraft against time since the ejection [h], one line per run, log scale:
+    ``series`` a list of ``(t_h, distance_m, flag)`` (``flag`` True: drawn in red and counted under
+    ``split_label[1]``, else grey under ``split_label[0]``), the keep-out radius [m] dashed when given, and the
+    closest approach of all runs after their departure (first beyond ``departure`` [m], as the simulator tracks
+    it) marked."""
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    counts = [0, 0]
+    best = None
+    for t_h, d, flag in series:
+        counts[bool(flag)] += 1
+        ax.plot(t_h, np.maximum(d, 1e-1), lw=0.6, alpha=0.55 if flag else 0.35,
+                color="tab:red" if flag else "0.45")
+        gone = np.nonzero(d >= departure)[0]
+        if gone.size:
+            k = gone[0] + int(np.argmin(d[gone[0]:]))
+            if best is None or d[k] < best[1]:
+                best = (t_h[k], d[k])
+    for flag, colour in ((False, "0.45"), (True, "tab:red")):
+        if counts[flag] and split_label[flag]:
+            ax.plot([], [], color=colour, label=f"{split_label[flag]} ({counts[flag]})")
+    if keep_out is not None:
+        ax.axhline(keep_out, color="tab:blue", ls="--", lw=1, label=f"keep-out {keep_out:g} m")
+    if best is not None:
+        ax.plot([best[0]], [max(best[1], 1e-1)], "kv", ms=6,
+                label=f"closest after departure {best[1]:.0f} m at {best[0]:.1f} h")
+    ax.set_yscale("log")
+    ax.set_xlabel("time since the ejection [h]")
+    ax.set_ylabel("distance [m]")
+    ax.set_title(f"{title} ({len(series)} runs)")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8, loc="lower right")
+    save(fig, path)

@@ -100,3 +100,55 @@ def test_burn_underperformance_is_applied_detected_and_safe(tmp_path):
     assert "burn_magnitude" in detected and detected["burn_magnitude"]["epoch"] == pytest.approx(ds["epoch"], abs=0.1)
     assert "burn_missing" not in detected and "burn_late" not in detected
     assert rep["safe"] is True, rep["violations_seen"]
+
+
+@pytest.mark.dds
+@pytest.mark.slow
+def test_drift_stop_delayed_is_detected_and_replaced(tmp_path):
+    """Seed 002 Table 1 safety #4: a drift-stop one orbit late must cause no collision before passive safety. The
+    monitor finds it missing at its epoch; the planner's replacement (whole orbits later, after the uplink margin)
+    replaces the late burn still pending on board, so exactly one drift-stop flies, and every criterion holds."""
+    config = tmp_path / "late.yaml"
+    config.write_text("contingency:\n  name: drift_stop_delayed\n  delay_orbits: 1\n", encoding="utf-8")
+    rep = run(config=config, out=tmp_path / "run", seed=5, timeout=1500)
+    assert rep["run"]["completed"], rep["run"]["reason"]
+    assert rep["contingency"]["name"] == "drift_stop_delayed" and rep["contingency"]["parameters"]["delay_orbits"] == 1
+    detected = {d["name"]: d for d in rep["contingencies_detected"]}
+    assert "burn_missing" in detected and 9156.4 < detected["burn_missing"]["epoch"] < 9156.4 + 600.0
+    assert "drift_stop_replaced" in detected
+    stops = [m for m in rep["maneuvers"] if m["purpose"] == "drift_stop"]
+    assert len(stops) == 1 and stops[0]["epoch"] > 9156.4 + 5000.0
+    assert rep["safe"] is True and all(rep["criteria"].values()), rep["criteria"]
+
+
+@pytest.mark.dds
+@pytest.mark.slow
+def test_radar_pass_missed_is_reported_and_the_od_waits(tmp_path):
+    """Seed 001 Sec. 5: TIRA passes lost, no backup. The station reports each lost pass (radar_pass_missed), the
+    first OD comes from the passes after them, and the acquisition still reaches the ICs (one day more of run time:
+    the IC epoch moves with the first OD)."""
+    config = tmp_path / "lost.yaml"
+    config.write_text("contingency:\n  name: radar_pass_missed\n  passes: 2\n", encoding="utf-8")
+    rep = run(config=config, out=tmp_path / "run", seed=5, timeout=1500, duration=345600.0)
+    assert rep["run"]["completed"], rep["run"]["reason"]
+    assert len(rep["contingency"]["events"]) == 2
+    detected = {d["name"]: d for d in rep["contingencies_detected"]}
+    lost = detected["radar_pass_missed"]
+    assert lost["count"] == 2 and "TIRA pass 1" in lost["text"]
+    assert rep["od"]["epoch"] > 75600.0  # the nominal first OD (test_golden) needs the lost passes
+    assert rep["safe"] is True and rep["criteria"]["ic_reached"], rep["criteria"]
+
+
+@pytest.mark.dds
+@pytest.mark.slow
+def test_radar_bias_is_detected_in_the_residuals(tmp_path):
+    """A 50 m range bias at TIRA (five range sigmas): the monitor finds the OD's post-fit residuals beyond their
+    chi-square bound (od_residuals); the run stays safe."""
+    config = tmp_path / "bias.yaml"
+    config.write_text("contingency:\n  name: radar_bias\n  bias_m: 50.0\n", encoding="utf-8")
+    rep = run(config=config, out=tmp_path / "run", seed=5, timeout=1500)
+    assert rep["run"]["completed"], rep["run"]["reason"]
+    assert rep["contingency"]["parameters"]["bias_m"] == 50.0
+    detected = {d["name"]: d for d in rep["contingencies_detected"]}
+    assert "od_residuals" in detected and detected["od_residuals"]["epoch"] >= rep["od"]["epoch"]
+    assert rep["safe"] is True, rep["violations_seen"]

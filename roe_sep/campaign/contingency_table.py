@@ -1,0 +1,117 @@
+"""The contingency table: one campaign per contingency (``roe-sep campaign --contingency NAME``), each beside the
+nominal campaign of the same seeds, laid out as seed 001 Sec. 4 lays out its robust analysis: per case the outcome
+(P(safe), closest approach, P(ICs reached), time to the ICs, carrier dv) and whether the ground saw it.
+
+A row of the table is :func:`summarize` of one campaign's ``runs.csv`` rows (:class:`~roe_sep.campaign.table.Table`);
+:func:`markdown` writes the rows as the Markdown table of docs/contingencies.md. Proportions carry their Wilson 95 %
+interval (:func:`~roe_sep.core.montecarlo.stats.proportion`; with 0 of n the upper end is the bound). The closest
+approach is the simulator's (after the departure, ``min_distance_m``); a collision is a closest approach below the
+hard-body radius ``HARD_BODY_RADIUS``.
+"""
+
+import json
+import math
+
+import numpy as np
+
+from ..core.montecarlo.stats import proportion
+
+HARD_BODY_RADIUS = 1.0
+"""m, the picosatellite's hard-body radius of the collision count (README "R = 1 m")."""
+
+EXPECTED_DETECTIONS = {
+    "spl_weak": ("weak_ejection", "od_inconsistent"),
+    "drift_stop_delayed": ("burn_missing", "burn_late"),
+    "drift_stop_missed": ("burn_missing",),
+    "burn_underperformance": ("burn_magnitude", "burn_pointing"),
+    "radar_pass_missed": ("radar_pass_missed",),
+    "radar_bias": ("od_residuals",),
+}
+"""Per contingency, the named findings (safety monitor, planner, radar station) that mean the ground saw it
+(docs/contingencies.md, "Detection")."""
+
+
+def _contingency(row):
+    text = row.get("contingency") or ""
+    return json.loads(text) if text else None
+
+
+def _detected(row):
+    text = row.get("contingencies_detected") or ""
+    return json.loads(text) if text else {}
+
+
+def _percentiles(values, qs):
+    v = np.asarray([x for x in values if x is not None and math.isfinite(x)], dtype=float)
+    return [float(np.percentile(v, q)) if v.size else None for q in qs]
+
+
+def summarize(rows, label=None):
+    """One row of the table from a campaign's rows (``{seed: row}`` or an iterable of rows); ``label`` names it
+    (default: the contingency of its rows, 'nominal' without one). Strict-JSON values (None for no value)."""
+    rows = list(rows.values()) if isinstance(rows, dict) else list(rows)
+    done = [r for r in rows if r["status"] == "ok"]
+    names = {(_contingency(r) or {}).get("name") for r in done}
+    name = names.pop() if len(names) == 1 else None
+    n = len(done)
+    dmin = [r["min_distance_m"] for r in done]
+    finite = [d for d in dmin if d is not None]
+    reached = [r for r in done if r["crit_ic_reached"]]
+    expected = EXPECTED_DETECTIONS.get(name, ())
+    seen = [r for r in done if expected and any(k in _detected(r) for k in expected)]
+    first = [min(_detected(r)[k] for k in expected if k in _detected(r)) for r in seen]
+    failed = {}
+    for r in done:
+        for key, value in r.items():
+            if key.startswith("crit_") and value is False:
+                failed[key[5:]] = failed.get(key[5:], 0) + 1
+    p01, = _percentiles(finite, [0.1])
+    t50, t95 = _percentiles([r["time_to_ic_s"] / 3600.0 for r in reached if r["time_to_ic_s"] is not None], [50, 95])
+    dv50, dv95 = _percentiles([r["dv_total_m_s"] for r in done], [50, 95])
+    return {
+        "label": label or name or "nominal",
+        "contingency": name,
+        "runs": len(rows), "completed": n, "failed_runs": len(rows) - n,
+        "seeds": [min(r["seed"] for r in rows), max(r["seed"] for r in rows)] if rows else None,
+        "p_safe": proportion(sum(1 for r in done if r["safe"]), n) if n else None,
+        "collisions": proportion(sum(1 for d in finite if d < HARD_BODY_RADIUS), n) if n else None,
+        "min_distance_p0_1_m": p01,
+        "min_distance_min_m": min(finite) if finite else None,
+        "no_departure": sum(1 for d in dmin if d is None),
+        "p_ic_reached": proportion(len(reached), n) if n else None,
+        "time_to_ic_h_p50_p95": [t50, t95],
+        "dv_total_m_s_p50_p95": [dv50, dv95],
+        "criteria_failed": dict(sorted(failed.items())),
+        "detections": list(expected),
+        "p_detected": proportion(len(seen), n) if n and expected else None,
+        "detected_epoch_s_p50": _percentiles(first, [50])[0] if first else None,
+    }
+
+
+def _p(prop):
+    if prop is None:
+        return "--"
+    lo, hi = prop["ci95"]
+    return f"{prop['k']}/{prop['n']} [{lo:.3f}, {hi:.3f}]"
+
+
+def _num(v, fmt):
+    return "--" if v is None else format(v, fmt)
+
+
+def markdown(summaries):
+    """The Markdown table of :func:`summarize` rows."""
+    head = ("| case | runs | P(safe) | collisions (d < 1 m) | closest approach p0.1 / min [m] | P(ICs reached) | "
+            "time to ICs p50 / p95 [h] | dv p50 / p95 [m/s] | detected | criteria failed (runs) |")
+    lines = [head, "|" + "---|" * (head.count("|") - 1)]
+    for s in summaries:
+        t50, t95 = s["time_to_ic_h_p50_p95"]
+        dv50, dv95 = s["dv_total_m_s_p50_p95"]
+        crit = ", ".join(f"{k} {v}" for k, v in s["criteria_failed"].items()) or "none"
+        det = "--" if s["p_detected"] is None else f"{_p(s['p_detected'])} ({', '.join(s['detections'])})"
+        lines.append(
+            f"| {s['label']} | {s['completed']}/{s['runs']} | {_p(s['p_safe'])} | {_p(s['collisions'])} | "
+            f"{_num(s['min_distance_p0_1_m'], '.0f')} / {_num(s['min_distance_min_m'], '.0f')} | "
+            f"{_p(s['p_ic_reached'])} | {_num(t50, '.1f')} / {_num(t95, '.1f')} | "
+            f"{_num(dv50, '.3f')} / {_num(dv95, '.3f')} | {det} | {crit} |")
+    return "\n".join(lines) + "\n"
