@@ -26,7 +26,7 @@ from roe_sep import interfaces  # noqa: E402
 from roe_sep.campaign.contingency_table import EXPECTED_DETECTIONS, markdown, summarize  # noqa: E402
 from roe_sep.campaign.table import Table  # noqa: E402
 from roe_sep.core.safety.monitor import MonitorLimits  # noqa: E402
-from roe_sep.plots.campaign import fig_distance_vs_time  # noqa: E402
+from roe_sep.plots.campaign import fig_distance_grid, fig_distance_vs_time  # noqa: E402
 from roe_sep.report import read_topics  # noqa: E402
 from roe_sep.stamps import time_to_sec  # noqa: E402
 
@@ -65,8 +65,9 @@ def main(argv=None):
     p.add_argument("--md", type=Path, help="write the Markdown table here")
     p.add_argument("--json", type=Path, help="write the rows as strict JSON here")
     p.add_argument("--figures", type=Path, help="write one distance-vs-time figure per case into this directory")
+    p.add_argument("--grid", type=Path, help="write the cases' figures as the panels of one figure here")
     args = p.parse_args(argv)
-    summaries = []
+    summaries, panels = [], []
     keep_out = MonitorLimits().keep_out
     for case in args.case:
         label, _, directory = case.partition("=")
@@ -75,20 +76,28 @@ def main(argv=None):
             p.error(f"{directory}: no runs.csv rows")
         s = summarize(rows, label)
         summaries.append(s)
-        if args.figures:
-            args.figures.mkdir(parents=True, exist_ok=True)
+        if args.figures or args.grid:
             series = []
             for seed, row in sorted(rows.items()):
                 bag = Path(directory) / "runs" / str(seed) / "bag"
                 if row["status"] != "ok" or not bag.exists() or row["ejection_epoch_s"] is None:
                     continue
                 t_h, d = distance_series(bag, row["ejection_epoch_s"])
-                series.append((t_h, d, flagged(row, s["contingency"])))
-            slug = re.sub(r"[^a-z0-9]+", "_", label.lower()).strip("_")
-            split = ("unsafe", "safe")[::-1] if s["contingency"] is None else ("seen by the ground", "not seen")
-            s["figure"] = str(args.figures / f"{slug}.png")
-            fig_distance_vs_time(series, s["figure"], label, keep_out, split)
+                rep = json.loads((Path(directory) / "runs" / str(seed) / "report.json").read_text(encoding="utf-8"))
+                t_min = (None if rep["min_distance_epoch"] is None
+                         else (rep["min_distance_epoch"] - row["ejection_epoch_s"]) / 3600.0)
+                closest = (t_min, rep["min_distance"] if t_min is not None else None)
+                series.append((t_h, d, flagged(row, s["contingency"]), closest))
+            split = ("safe", "unsafe") if s["contingency"] is None else ("seen by the ground", "not seen")
+            panels.append((label, series, split))
+            if args.figures:
+                args.figures.mkdir(parents=True, exist_ok=True)
+                slug = re.sub(r"[^a-z0-9]+", "_", label.lower()).strip("_")
+                s["figure"] = str(args.figures / f"{slug}.png")
+                fig_distance_vs_time(series, s["figure"], label, keep_out, split)
         print(f"{label}: {s['completed']} runs", file=sys.stderr)
+    if args.grid:
+        fig_distance_grid(panels, args.grid, keep_out)
     if args.md:
         args.md.write_text(markdown(summaries), encoding="utf-8")
     text = json.dumps(summaries, indent=1, allow_nan=False)

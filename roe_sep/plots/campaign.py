@@ -7,6 +7,7 @@
   limits (minimum R-N distance, along-track band).
 """
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -72,37 +73,57 @@ def write_campaign_figures(rows, out_dir, min_rn=None, dl_range=None):
     return paths
 
 
-def fig_distance_vs_time(series, path, title, keep_out=None, split_label=("", ""), departure=1000.0):
-    """Distance [m] between the spacecraft against time since the ejection [h], one line per run, log scale:
-    ``series`` a list of ``(t_h, distance_m, flag)`` (``flag`` True: drawn in red and counted under
-    ``split_label[1]``, else grey under ``split_label[0]``), the keep-out radius [m] dashed when given, and the
-    closest approach of all runs after their departure (first beyond ``departure`` [m], as the simulator tracks
-    it) marked."""
-    plt = pyplot()
-    fig, ax = plt.subplots(figsize=(7, 4.5))
+
+def _draw_distance(ax, series, title, keep_out, split_label):
     counts = [0, 0]
-    best = None
-    for t_h, d, flag in series:
+    closest = []
+    for t_h, d, flag, (t_min, d_min) in series:
         counts[bool(flag)] += 1
         ax.plot(t_h, np.maximum(d, 1e-1), lw=0.6, alpha=0.55 if flag else 0.35,
                 color="tab:red" if flag else "0.45")
-        gone = np.nonzero(d >= departure)[0]
-        if gone.size:
-            k = gone[0] + int(np.argmin(d[gone[0]:]))
-            if best is None or d[k] < best[1]:
-                best = (t_h[k], d[k])
+        if d_min is not None and math.isfinite(d_min):
+            closest.append((t_min, d_min, flag))
     for flag, colour in ((False, "0.45"), (True, "tab:red")):
         if counts[flag] and split_label[flag]:
             ax.plot([], [], color=colour, label=f"{split_label[flag]} ({counts[flag]})")
     if keep_out is not None:
         ax.axhline(keep_out, color="tab:blue", ls="--", lw=1, label=f"keep-out {keep_out:g} m")
-    if best is not None:
-        ax.plot([best[0]], [max(best[1], 1e-1)], "kv", ms=6,
-                label=f"closest after departure {best[1]:.0f} m at {best[0]:.1f} h")
+    if closest:
+        c = np.array(closest, dtype=float)
+        ax.scatter(c[:, 0], np.maximum(c[:, 1], 1e-1), s=9, c=np.where(c[:, 2] > 0, "tab:red", "k"), marker="v",
+                   zorder=3, label="each run's closest approach after departure")
+        k = int(np.argmin(c[:, 1]))
+        ax.annotate(f"{c[k, 1]:.0f} m", (c[k, 0], max(c[k, 1], 1e-1)), textcoords="offset points", xytext=(4, -10),
+                    fontsize=8)
     ax.set_yscale("log")
+    ax.set_ylim(10.0, 2e5)
     ax.set_xlabel("time since the ejection [h]")
     ax.set_ylabel("distance [m]")
-    ax.set_title(f"{title} ({len(series)} runs)")
+    ax.set_title(f"{title} ({len(series)} runs)", fontsize=10)
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8, loc="lower right")
+    ax.legend(fontsize=7, loc="lower right")
+
+
+def fig_distance_vs_time(series, path, title, keep_out=None, split_label=("", "")):
+    """Distance [m] between the spacecraft against time since the ejection [h], one line per run, log scale
+    (10 m to 200 km): ``series`` a list of ``(t_h, distance_m, flag, (t_closest_h, closest_m))`` (``flag`` True:
+    drawn in red and counted under ``split_label[1]``, else grey under ``split_label[0]``; the run's closest approach
+    after its departure as the simulator tracks it, a triangle, the smallest labelled), the keep-out radius [m]
+    dashed when given."""
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    _draw_distance(ax, series, title, keep_out, split_label)
+    save(fig, path)
+
+
+def fig_distance_grid(panels, path, keep_out=None, columns=2):
+    """:func:`fig_distance_vs_time` of several campaigns in one figure, a panel each: ``panels`` a list of
+    ``(title, series, split_label)``."""
+    plt = pyplot()
+    rows = -(-len(panels) // columns)
+    fig, axes = plt.subplots(rows, columns, figsize=(6.5 * columns, 3.8 * rows), squeeze=False)
+    for ax, (title, series, split) in zip(axes.flat, panels):
+        _draw_distance(ax, series, title, keep_out, split)
+    for ax in axes.flat[len(panels):]:
+        ax.set_visible(False)
     save(fig, path)
