@@ -10,9 +10,9 @@ import pytest
 from roe_sep.core.config import Scenario, load_scenario, scenario_from_dict
 from roe_sep.core.relmotion.dynamics import arg_latitude_rate
 from roe_sep.core.relmotion.maneuvers import delta_roe
-from roe_sep.core.relmotion.orbit import mean_motion
+from roe_sep.core.relmotion.orbit import angle_between, mean_motion
 from roe_sep.core.relmotion.trajectory import Chief
-from roe_sep.core.safety.anomaly import AnomalyLimits, AnomalyWatch, angle_between
+from roe_sep.core.safety.anomaly import AnomalyLimits, AnomalyWatch
 from roe_sep.core.separation.double_impulse import design
 from roe_sep.core.truth.contingency import (
     NAMES,

@@ -79,3 +79,13 @@ def test_mean_motion_hand_value():
     # n = sqrt(mu / a^3) at 515 km, by hand: a = 6893137 m
     assert mean_motion(6893137.0) == pytest.approx(np.sqrt(3.986004418e14 / 6893137.0**3), rel=1e-15)
     assert mean_motion(6893137.0) == pytest.approx(1.1031727e-3, rel=1e-7)
+
+
+def test_angle_between_vectorized_and_zero_vectors():
+    from roe_sep.core.relmotion.orbit import angle_between
+
+    a = np.array([[1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 0.0, 0.0]])
+    b = np.array([[0.0, 2.0, 0.0], [-1.0, -1.0, 0.0], [1.0, 0.0, 0.0]])
+    np.testing.assert_allclose(angle_between(a, b), [np.pi / 2, np.pi, 0.0])
+    np.testing.assert_allclose(angle_between(a.T, b.T, axis=0), [np.pi / 2, np.pi, 0.0])
+    assert float(angle_between([1.0, 0.0], [1.0, 1e-9])) == pytest.approx(1e-9)

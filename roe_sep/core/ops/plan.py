@@ -35,7 +35,7 @@ from ...errors import ConfigError, show
 from ..constants import MU_EARTH, R_EARTH
 from ..od.radar import raan_from_sun
 from ..relmotion.dynamics import sun_synchronous_inclination
-from ..relmotion.orbit import mean_motion, orbital_period, semi_major_axis
+from ..relmotion.orbit import angle_between, mean_motion, orbital_period, semi_major_axis
 
 if TYPE_CHECKING:  # skyfield is imported where it is used (it loads ephemeris data)
     from skyfield.jpllib import SpiceKernel
@@ -314,12 +314,6 @@ def rtn_to_inertial(r: np.ndarray, v: np.ndarray, vec_rtn: ArrayLike) -> np.ndar
     return vec_rtn[0] * rh + vec_rtn[1] * th + vec_rtn[2] * nh
 
 
-def angle_between(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Angle ``(N,)`` [deg] between column vectors ``(3, N)``."""
-    c = np.sum(x * y, axis=0) / (np.linalg.norm(x, axis=0) * np.linalg.norm(y, axis=0))
-    return np.degrees(np.arccos(np.clip(c, -1.0, 1.0)))
-
-
 def passes(sat: "EarthSatellite", site: "GeographicPosition", t0: "Time", t1: "Time", min_el: float) -> list[tuple]:
     """Visibility passes (rise, set, max elevation [deg]) of ``sat`` above ``min_el`` at ``site``.
 
@@ -417,7 +411,7 @@ def plan(cfg: OpsConfig, date: _dt.date, days: float = 2.0, boresight_rtn: Array
     sun_vec = (eph["sun"] - eph["earth"]).at(grid).position.km - r
     u = argument_of_latitude(r, v)
     bore = np.asarray(boresight_rtn if boresight_rtn is not None else _boresight(cfg), dtype=float)
-    sun_angle = angle_between(rtn_to_inertial(r, v, bore), sun_vec)
+    sun_angle = np.degrees(angle_between(rtn_to_inertial(r, v, bore), sun_vec, axis=0))
     dts = grid.utc_datetime()
     eclipses = [{"start": _iso(a), "end": _iso(b), "duration_s": (b - a).total_seconds()}
                 for a, b in intervals(~sunlit, dts)]

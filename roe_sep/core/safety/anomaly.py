@@ -34,7 +34,7 @@ from numpy.typing import ArrayLike
 
 from ..relmotion.dynamics import propagate
 from ..relmotion.maneuvers import delta_roe
-from ..relmotion.orbit import mean_motion
+from ..relmotion.orbit import angle_between, mean_motion
 from ..relmotion.trajectory import Burn, Chief, state_at
 from ..truth.execution import relative_impulse
 from ..truth.secular import error_references
@@ -75,14 +75,6 @@ class PlannedBurn:
     purpose: str
     reference: np.ndarray | None  # the burn its magnitude error acts on (Eq. 18), None: itself
     missing: bool = False  # burn_missing raised
-
-
-def angle_between(a: ArrayLike, b: ArrayLike) -> float:
-    """The angle [rad] between two vectors (0 when either is zero)."""
-    na, nb = float(np.linalg.norm(a)), float(np.linalg.norm(b))
-    if na == 0.0 or nb == 0.0:
-        return 0.0
-    return math.acos(max(-1.0, min(1.0, float(np.dot(a, b)) / (na * nb))))
 
 
 def ei_transition(a: float, inc: float, dt: float, j2: bool) -> np.ndarray:
@@ -223,7 +215,7 @@ class AnomalyWatch:
                 out.append(Detection("burn_magnitude", epoch, f"{b.purpose} burn at t = {epoch:.0f} s executed "
                                      f"{float(np.linalg.norm(dv)):.4f} m/s of {cmd:.4f} m/s ({z:+.1f} sigma)",
                                      {"ratio": float(np.linalg.norm(dv)) / cmd, "z": z}))
-        off = math.degrees(angle_between(dv, b.dv))
+        off = math.degrees(float(angle_between(dv, b.dv)))
         if cmd > 0.0 and off > lim.pointing_deg:
             out.append(Detection("burn_pointing", epoch, f"{b.purpose} burn at t = {epoch:.0f} s executed "
                                  f"{off:.2f} deg off its commanded direction", {"angle_deg": off}))
