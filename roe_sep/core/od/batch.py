@@ -21,6 +21,20 @@ secular model lacked (:func:`propagate_state`, :func:`model_roe`):
   elements (:mod:`roe_sep.core.truth.mean_osc`), which keep drag's orbit-periodic terms, 0.85 m of a de at
   -81 m/day; in the relative position a constant along-track offset 2 a x[6] / n.
 
+With a drag model (:class:`DragModel`, which holds the density scale height H) a third term of the same drag:
+
+* the secular drift of the relative e vector (:func:`drag_de_drift`): drag decays each orbit's eccentricity
+  vector at d e/dt = (1 / (2 H) + 1 / (2 a)) a_dot e (King-Hele 1964; the perigee is in denser air), so for the
+  pair d de/dt = k (a da_dot e_c + a_d_dot de), e_c the carrier's mean e vector (:func:`chief_eccentricity`, its
+  own GPS orbit). The carrier's drift-stop has a radial impulse of 1.3 m/s (e_c = 1.8e-4), which J3 turns and
+  grows to 2.4-3.6e-4 in the last batch of a run: 1.2 m/day of a de at -74 m/day of a*da_dot. The along-track
+  oscillation 2 a de it changes projects on the smallest axis of a long batch (6.5 mm, a da about 15 h before the
+  epoch): noise-free measurements from four closed-loop truths, 43 h since the last burn, missed the secular
+  truth by 7-state NEES 4.26, 2.31, 2.30, 4.82 without the term (-1.30, -0.11, -0.92, -1.40 cm along that
+  axis, a dex 0.7-1.1 m off), 0.24, 4.80, 0.50, 0.50 with it (-0.20, +0.89, -0.22, -0.41 cm, de within 0.15 m;
+  the second truth's remaining error is not the e vector's); the OD ensemble with the closed loop's carrier
+  eccentricity (16 members, no burn for 43 h, noise-free) by 2.06 on average without, 0.23 with it.
+
 The state x is secular; :meth:`ODResult.mean_state` gives the mean ROE at t_est with the short-periodic de (what the
 truth and the reports call the ROE). Without the two terms, noise-free solutions on the nonlinear truth miss it by
 7-state NEES 0.4-1.6 (the mean 0.9 of an expected 7 for noise alone); with them by 0.04-0.27. Gauss-Newton iterations
@@ -30,7 +44,8 @@ truth and the reports call the ROE). Without the two terms, noise-free solutions
 solved by SVD of the column-scaled, whitened H (no explicit normal matrix, so ill-conditioning is detected rather
 than rounded away). Azimuth residuals are wrapped to [-pi, pi). Formal covariance P = (H^T W H)^-1 at the solution.
 The secular ROE model is linear in x and the look angles are almost linear over the estimate's uncertainty
-(hundreds of meters at ~1000 km range), so the estimate is unbiased and P is its actual covariance: the normalized
+(hundreds of meters at ~1000 km range; the e vector's drag drift is bilinear in de and x[6], a relative
+change of 1e-3 of de a day), so the estimate is unbiased and P is its actual covariance: the normalized
 estimation error squared (:func:`nees`) is chi-square with 7 degrees of freedom.
 
 Drift rate across burns (:class:`DragModel`, :class:`DriftPrior`). A burn changes the ROE by its executed (not its
@@ -76,12 +91,12 @@ measurements to a 7-state NEES of 0.10 on average (0.36 at most; drift rate 0.14
 chains), against 7 for the noise, so process noise inside a batch would model an error that is not there. The truth to
 compare with is its secular state (:func:`~roe_sep.core.od.ensemble.secular_drift`): a batch that spans a day
 determines a da about 6 h before its epoch to 2.6 cm, finer than the orbit-periodic centimeters of drag that the
-first-order mean elements keep. Against it the first solutions have mean 7-state NEES 7.02, drift-rate z^2 1.02,
-the last 7.48 and 0.97 (band of 256: [6.55, 7.47], [0.83, 1.18]). The drift rate's optimism of an earlier
-100-run campaign (mean z^2 1.42) came from comparing with the simulator's Eq. (24) value, which is smaller in
-magnitude than the nonlinear truth's own rate by 0.5-0.6 m/day. The remaining lever is information: the drift rate
-is a property of the pair, so the carried beta shrinks the last solution's drift-rate sigma from 2.05 to
-0.79 m/day.
+first-order mean elements keep. Against it the first solutions have mean 7-state NEES 7.09, drift-rate z^2 0.97,
+the last 7.08 and 1.07 (band of 256: [6.55, 7.47], [0.83, 1.18]; with the e vector's drag drift). The drift
+rate's optimism of an earlier 100-run campaign (mean z^2 1.42) came from comparing with the simulator's Eq. (24)
+value, which is smaller in magnitude than the nonlinear truth's own rate by 0.5-0.6 m/day. The remaining lever
+is information: the drift rate is a property of the pair, so the carried beta shrinks the last solution's
+drift-rate sigma from 2.05 to 0.79 m/day.
 """
 
 from dataclasses import dataclass
@@ -232,6 +247,57 @@ def chief_decay(batch: RadarBatch):
     return float(np.polyfit(t - t.mean(), a - a.mean(), 1)[0])
 
 
+def chief_eccentricity(batch: RadarBatch, t_ref):
+    """The carrier's mean eccentricity vector e_c = e (cos argp, sin argp) at ``t_ref`` [s] and its rate [1/s],
+    ``((2,), (2,))``: the least-squares line of its mean elements (its own GPS orbit) against time over the batch;
+    over less than one orbital period their mean and no rate (as :func:`chief_decay`). The J2 perigee rotation and
+    J3 turn e_c about the frozen eccentricity at about 6e-5 per day in the default scenario, the same order as e_c
+    over a batch: a line, not a constant."""
+    t = np.asarray(batch.t, dtype=float)
+    kep = np.asarray(batch.chief, dtype=float)
+    ecc = kep[:, 1:2] * np.stack([np.cos(kep[:, 4]), np.sin(kep[:, 4])], axis=-1)
+    if t.size < 2 or np.ptp(t) < 2.0 * np.pi / mean_motion(float(np.mean(kep[:, 0]))):
+        return ecc.mean(axis=0), np.zeros(2)
+    slope, at_ref = np.polyfit(t - float(t_ref), ecc, 1)
+    return at_ref, slope
+
+
+def drag_de_drift(x, de, dt, a, scale_height, ecc, ecc_rate=(0.0, 0.0), a_chief_dot=0.0, growth=0.0):
+    """Secular change ``(..., 2)`` of the relative eccentricity vector by drag over ``dt`` [s] of states ``x``
+    ``(..., 7)`` whose relative e vector is ``de`` ``(..., 2)``, chief semi-major axis ``a`` [m], density scale height
+    ``scale_height`` H [m], carrier mean e vector ``ecc`` at dt = 0 and its rate ``ecc_rate`` [1/s]
+    (:func:`chief_eccentricity`), carrier decay ``a_chief_dot`` [m/s] and drift growth ``growth`` gamma [1/s].
+
+    Drag at the density rho(r) = rho(a) exp(-(r - a) / H), r = a (1 - e cos M), decays the eccentricity of a
+    near-circular orbit with its semi-major axis (Gauss's equations averaged over an orbit, first order in e and in
+    c = a e / H; King-Hele, *Theory of Satellite Orbits in an Atmosphere*, 1964, Ch. 4:
+    de/dt = -B rho sqrt(mu/a) (I1(c) + e (I0 + I2) / 2) against da/dt = -B rho sqrt(mu a) (I0 + 2 e I1)):
+
+        d e_vec / dt = k a_dot e_vec,   k = 1 / (2 H) + 1 / (2 a),
+
+    the perigee being lower, in denser air, than the apogee (the argument of perigee has no secular drag rate).
+    For the pair, de = e_d - e_c and a_d - a_c = a da, so at first order
+
+        d de / dt = k (a da_dot e_c + a_d_dot de),   a_d_dot = a_c_dot + a da_dot,
+
+    the first term the differential drag acting on the carrier's own eccentricity, the second the decay of the
+    relative e vector with the picosatellite's orbit. With da_dot(t) = x[6] (1 + gamma t) and
+    e_c(t) = e_c + e_c_dot t (:func:`chief_eccentricity`) integrated in closed form, de held at its value at dt
+    (J2 turns it by 0.1 rad over a 43-h batch). At e_c = 3e-4, H = 64 km and a*da_dot = -74 m/day the first term
+    moves a de 1.2 m/day (2.4 m/day of the along-track oscillation 2 a de), the second 0.4 m/day at
+    |a de| = 460 m and a_d_dot = -111 m/day."""
+    x = np.asarray(x, dtype=float)
+    dt = np.asarray(dt, dtype=float)[..., None]
+    gamma = np.asarray(growth, dtype=float)[..., None]
+    rate = x[..., 6, None]
+    e0, e1 = np.asarray(ecc, dtype=float), np.asarray(ecc_rate, dtype=float)
+    k = 0.5 / scale_height + 0.5 / a
+    # int_0^dt da_dot(t) e_c(t) dt and int_0^dt a_d_dot(t) dt
+    carrier = rate * (e0 * dt + (e1 + gamma * e0) * dt**2 / 2.0 + gamma * e1 * dt**3 / 3.0)
+    decay = (a_chief_dot + a * rate) * dt + a * rate * gamma * dt**2 / 2.0
+    return k * (a * carrier + decay * np.asarray(de, dtype=float))
+
+
 def drift_growth(x, batch: RadarBatch, model, decay=None):
     """gamma [1/s] (:meth:`DragModel.growth`) of states ``x`` ``(..., 7)`` over ``batch``: the carrier's decay
     ``decay`` [m/s] (default :func:`chief_decay`) and the state's own drift a_c x[6]; 0 without a drag ``model``."""
@@ -299,6 +365,10 @@ def model_roe(x, batch: RadarBatch, t_est, j2=True, drag=True, model=None, decay
     roe = propagate_state(x[..., None, :], batch.t - t_est, a, inc, j2, drag, growth)
     if not drag:
         return roe
+    if model is not None:
+        ecc, ecc_rate = chief_eccentricity(batch, t_est)
+        roe[..., 2:4] += drag_de_drift(x[..., None, :], roe[..., 2:4], batch.t - t_est, a, model.scale_height, ecc,
+                                       ecc_rate, chief_decay(batch) if decay is None else decay, growth)
     u = batch.chief[:, 4] + batch.chief[:, 5]
     roe[..., 2:4] += drag_short_period_de(x[..., None, 6], a, u)
     return roe
