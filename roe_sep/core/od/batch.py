@@ -91,8 +91,9 @@ measurements to a 7-state NEES of 0.10 on average (0.36 at most; drift rate 0.14
 chains), against 7 for the noise, so process noise inside a batch would model an error that is not there. The truth to
 compare with is its secular state (:func:`~roe_sep.core.od.ensemble.secular_drift`): a batch that spans a day
 determines a da about 6 h before its epoch to 2.6 cm, finer than the orbit-periodic centimeters of drag that the
-first-order mean elements keep. Against it the first solutions have mean 7-state NEES 7.09, drift-rate z^2 0.97,
-the last 7.08 and 1.07 (band of 256: [6.55, 7.47], [0.83, 1.18]; with the e vector's drag drift). The drift
+first-order mean elements keep. Against it the first solutions have mean 7-state NEES 7.08, drift-rate z^2 0.97,
+the last 7.08 and 1.06 (band of 256: [6.55, 7.47], [0.83, 1.18]; with the e vector's drag drift, the ensemble's
+carrier eccentric as its drift-stop leaves it, :func:`~roe_sep.core.od.ensemble.carrier_after_drift_stop`). The drift
 rate's optimism of an earlier 100-run campaign (mean z^2 1.42) came from comparing with the simulator's Eq. (24)
 value, which is smaller in magnitude than the nonlinear truth's own rate by 0.5-0.6 m/day. The remaining lever
 is information: the drift rate is a property of the pair, so the carried beta shrinks the last solution's

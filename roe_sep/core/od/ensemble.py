@@ -121,6 +121,23 @@ class Solution:
         return (self.a_da_dot - self.a_da_dot_truth) / self.a_da_dot_sigma
 
 
+def carrier_after_drift_stop(chief, carrier):
+    """The carrier's mean elements ``chief`` (circular) with the eccentricity vector its own drift-stop gave it: the
+    carrier burns -dv2 (the design's drift-stop, relative effect dv2) at u2, which changes its e vector by Gauss's
+    equations (seed 002 Eq. 2, :func:`~roe_sep.core.relmotion.maneuvers.delta_roe` of its own burn): the radial
+    1.3 m/s of the default design makes e = 1.8e-4, whose drag drift the OD models
+    (:func:`~roe_sep.core.od.batch.drag_de_drift`). The argument of latitude is kept."""
+    from ..relmotion.maneuvers import delta_roe
+
+    de = delta_roe(-np.asarray(carrier.dv2_rtn, dtype=float), carrier.u2, carrier.a, carrier.n)[2:4]
+    ev = chief[1] * np.array([math.cos(chief[4]), math.sin(chief[4])]) + de
+    out = np.array(chief, dtype=float)
+    u = chief[4] + chief[5]
+    out[1], out[4] = float(np.hypot(*ev)), float(math.atan2(ev[1], ev[0]))
+    out[5] = u - out[4]
+    return out
+
+
 def scenario_pairs(members, seed):
     """Initial pair states ``(members, 12)`` at :data:`T0`, carrier and picosatellite ballistic coefficients
     ``(members,)``, the atmosphere, the carrier's mean elements at T0 and the drag model (default scenario)."""
@@ -134,7 +151,7 @@ def scenario_pairs(members, seed):
     carrier, mc = design(sc.separation), sc.monte_carlo
     raan = float(raan_from_ltan(9.5, julian_date(DEFAULT_EPOCH_UTC)))
     chief0 = chief_from_u(carrier.a, carrier.inc, raan, math.radians(50.0))
-    chief = propagate_chief(chief0, T0)
+    chief = carrier_after_drift_stop(propagate_chief(chief0, T0), carrier)
     rng = np.random.default_rng(seed)
     roe = (INITIAL_A_ROE[0] + INITIAL_A_ROE[1] * rng.standard_normal((members, 6))) / carrier.a
     deputy = roe_to_kepler(np.broadcast_to(chief, (members, 6)), roe)
