@@ -25,6 +25,7 @@ from ..core.acquisition.planner import AcquisitionConfig, parse_axes
 from ..core.deployment.sweep import MODELS, USSA76_DENSITY_400KM
 from ..core.od.radar import DEFAULT_EPOCH_UTC, julian_date
 from ..core.safety.anomaly import AnomalyLimits
+from ..core.safety.ejection_check import CAMERA_SIGMA_DEG
 from ..core.safety.monitor import MonitorLimits
 from ..core.truth.contingency import NAMES as CONTINGENCIES
 from ..core.truth.contingency import NONE as NO_CONTINGENCY
@@ -216,8 +217,8 @@ PLANNER = (
           "(core.safety.ejection_check); a weak ejection withdraws the blind drift-stop (an empty plan: the "
           "acquisition then starts from the first OD); false: the drift-stop flies whatever the camera sees "
           "(docs/contingencies.md)"),
-    Param("camera_sigma_deg", "double", 0.02, "1-sigma bearing error per axis the test assumes (the simulator's "
-          "camera_sigma_deg)", "deg", range=(1.0e-5, 5.0)),
+    Param("camera_sigma_deg", "double", CAMERA_SIGMA_DEG, "1-sigma bearing error per axis the test assumes (the "
+          "simulator's camera_sigma_deg, the same default; change both together)", "deg", range=(1.0e-5, 5.0)),
     Param("camera_model_floor", "double", 1.0, "1-sigma position error of the bearing model against the nonlinear "
           "truth (measured below 0.9 m over the 2 h before the drift-stop), an angle of floor / range added to the "
           "camera's", "m", range=(0.0, 1000.0)),
@@ -246,8 +247,9 @@ SIM = (
     Param("truth_period", "double", 60.0, "sim-time period of the truth topics", "s", range=(0.1, 86400.0)),
     Param("camera_period", "double", 60.0, "sim time between the carrier camera's bearings of the picosatellite "
           "(/sim/camera/bearing, from the release on; 0: no camera)", "s", range=(0.0, 3600.0)),
-    Param("camera_sigma_deg", "double", 0.02, "1-sigma bearing error of the carrier camera per axis (centroid and "
-          "attitude knowledge; an assumption, no seed gives it); the noise is its own stream of the seed", "deg",
+    Param("camera_sigma_deg", "double", CAMERA_SIGMA_DEG, "1-sigma bearing error of the carrier camera per axis "
+          "(centroid and attitude knowledge; an assumption, no seed gives it); the noise is its own stream of the "
+          "seed; the planner's camera_sigma_deg assumes the same default", "deg",
           range=(0.0, 5.0)),
     Param("camera_duration", "double", 14400.0, "the camera tracks the picosatellite this long after the release "
           "(the blind drift-stop of the default design is 2.4 h after it)", "s", range=(0.0, 1.0e7)),

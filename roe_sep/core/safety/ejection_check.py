@@ -57,6 +57,11 @@ FRACTIONS = np.round(np.arange(0.0, 2.0 + 1e-9, 0.01), 2)
 """The grid of apparent fractions f1 / g the test fits (0.01 steps)."""
 
 
+CAMERA_SIGMA_DEG = 0.02
+"""deg, 1-sigma bearing error per axis of the carrier camera: the simulator's sensor and what the planner's test
+assumes by default (centroid and attitude knowledge; an assumption, no seed gives it)."""
+
+
 @dataclass(frozen=True)
 class EjectionCheck:
     """The camera's verdict on the ejection: the best-fitting apparent fraction ``f1`` (f1 / g, the SPL's fraction
