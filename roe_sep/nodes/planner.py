@@ -119,7 +119,7 @@ class PlannerNode(ManagedNode):
                      stamp=lambda m: time_to_sec(m.epoch), what="executed maneuver")
         ls.subscribe(Vector3Stamped, interfaces.CAMERA_TOPIC, self.on_bearing, interfaces.STREAM,
                      what="camera bearing")
-        self.in_force = None  # (event, k, p, drift-stop epoch [s]) of the drift-stop plan in force
+        self.in_force = None  # (event, k (None: the default), p [m/s], drift-stop epoch [s]) of the plan in force
         self.drift_stops = []  # epochs [s] of the executed drift-stops on record
         self.released = None  # s, the deployer's release (the executed ejection's epoch on record)
         self.record_since = None  # steady s: the executed ejection arrived (a restarted planner's record recovered)
@@ -147,7 +147,7 @@ class PlannerNode(ManagedNode):
         self.plan_pub.publish(plan)
         self.plans += 1
         if self.strategy != "multi_impulse":
-            self.in_force = (event, None, None, time_to_sec(plan.maneuvers[0].epoch))
+            self.in_force = (event, None, plan.p_reduction, time_to_sec(plan.maneuvers[0].epoch))
         burn = plan.maneuvers[0]
         self.get_logger().info(
             f"drift-stop planned at t = {time_to_sec(burn.epoch):.1f} s, carrier dv RTN = "
@@ -245,8 +245,6 @@ class PlannerNode(ManagedNode):
             return
         self.retried.add(key)
         k = self.k if k is None else k
-        base = self.make_plan(event, k=k, p=p)
-        p = base.p_reduction
         chief = event.chief
         period = 2.0 * math.pi / float(arg_latitude_rate(chief.semi_major_axis, chief.inclination, self.j2))
         orbits = max(1, math.ceil((t + self.retry_margin - t_stop) / period - 1e-9))
