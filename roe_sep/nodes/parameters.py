@@ -212,6 +212,16 @@ PLANNER = (
     Param("retry_margin", "double", 11400.0, "the replacement drift-stop is at least this long after the finding "
           "(two orbits: the uplink at a ground contact, as the ic_planner's planning_margin)", "s",
           range=(0.0, 864000.0)),
+    Param("drift_stop_makeup", "bool", True, "a drift-stop executed off its command (the record's burn more than "
+          "makeup_z sigmas of the thruster's magnitude error off in magnitude, or more than makeup_pointing_deg off "
+          "in direction: the safety monitor's burn_magnitude, burn_pointing) is completed by the rest, commanded "
+          "minus executed, whole orbits later at its argument of latitude, at least retry_margin after the finding "
+          "(Eq. 2 is linear in the burn at a given u); false: the acquisition alone takes it out "
+          "(docs/contingencies.md)"),
+    Param("makeup_z", "double", _ANOM.magnitude_z, "sigmas of the thruster's magnitude error beyond which an executed "
+          "drift-stop is completed (the safety monitor's burn_magnitude_z)", range=(0.5, 100.0)),
+    Param("makeup_pointing_deg", "double", _ANOM.pointing_deg, "direction error beyond which an executed drift-stop "
+          "is completed (the safety monitor's burn_pointing_deg)", "deg", range=(0.001, 90.0)),
     Param("weak_ejection_hold", "bool", True, "the carrier camera's bearings (/sim/camera/bearing) from the release "
           "to hold_lead before the drift-stop are tested against the commanded ejection "
           "(core.safety.ejection_check); a weak ejection withdraws the blind drift-stop (an empty plan: the "

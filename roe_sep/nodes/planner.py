@@ -17,14 +17,19 @@ Two contingency mitigations (docs/contingencies.md, "What the closed loop does a
   Eqs. 9, 18) is re-published whole orbits later, at its argument of latitude, the first such epoch at least
   ``retry_margin`` after the finding, stamped with the finding's epoch: a new plan, checked by the safety monitor
   like any other; the along-track separation grows meanwhile at the post-ejection rate (Eq. 13).
+* ``drift_stop_makeup``: when the record's drift-stop departs from its command (magnitude beyond ``makeup_z``
+  sigmas of the thruster's error, direction beyond ``makeup_pointing_deg``: the monitor's ``burn_magnitude``,
+  ``burn_pointing``), the rest, commanded minus executed, flies whole orbits later at the same argument of latitude
+  (seed 002 Eq. 2 is linear in the burn at a given u: the two burns together give the designed e/i vectors and
+  drift), the first such epoch at least ``retry_margin`` after the finding: ``drift_stop_completed``.
 * ``weak_ejection_hold``: the carrier camera's bearings of the picosatellite (``/sim/camera/bearing``, the
   simulator's sensor: unit lines of sight with their noise; the planner never reads the truth) from the release to
   ``hold_lead`` before the drift-stop are tested against the commanded ejection
   (:func:`~roe_sep.core.safety.ejection_check.check_ejection`: the bearings see the SPL's fraction over the drag's,
   f1 / g; held when they exclude every nominal pair); a weak ejection withdraws the drift-stop: an empty plan,
   after which the ic_planner starts the acquisition from the first OD. Each finding is a WARN
-  ``roe_sep/planner/contingency`` on ``/diagnostics`` (value ``contingency``: ``drift_stop_replaced`` or
-  ``weak_ejection``, ``epoch_s``).
+  ``roe_sep/planner/contingency`` on ``/diagnostics`` (value ``contingency``: ``drift_stop_replaced``,
+  ``drift_stop_completed`` or ``weak_ejection``, ``epoch_s``).
 
 A restarted planner re-publishes the plan of the latched ejection event and recovers what was executed from the
 latched executed-maneuver record before it may find a drift-stop missing (:meth:`PlannerNode.record_recovered`).
@@ -44,10 +49,13 @@ from .. import interfaces
 from ..core.config import ConfigError, load_scenario
 from ..core.montecarlo.sweep import p_best
 from ..core.relmotion.dynamics import arg_latitude_rate, drag_da_dot, propagate_chief, raan_rate
+from ..core.relmotion.orbit import angle_between
 from ..core.relmotion.roe import wrap_angle
+from ..core.safety.anomaly import magnitude_z
 from ..core.safety.ejection_check import check_ejection, nominal_fraction
 from ..core.separation.double_impulse import design, plan_drift_stop, reduction_bounds
 from ..core.separation.multi_impulse import MultiImpulseConfig, multi_config, plan_carrier_burns
+from ..core.truth.secular import error_references
 from .convert import elements_to_array, maneuver_msg, roe_to_msg, sec_to_time, time_to_sec, vector_to_array
 from .diagnostics import ERROR, OK, WARN, publish_status
 from .lockstep import Lockstep
@@ -86,6 +94,9 @@ class PlannerNode(ManagedNode):
         self.retry = declare(self, "drift_stop_retry")
         self.retry_tolerance = declare(self, "retry_tolerance")
         self.retry_margin = declare(self, "retry_margin")
+        self.makeup = declare(self, "drift_stop_makeup")
+        self.makeup_z = declare(self, "makeup_z")
+        self.makeup_pointing = math.radians(declare(self, "makeup_pointing_deg"))
         self.hold = declare(self, "weak_ejection_hold")
         self.camera_sigma = math.radians(declare(self, "camera_sigma_deg"))
         self.camera_floor = declare(self, "camera_model_floor")
@@ -121,6 +132,7 @@ class PlannerNode(ManagedNode):
                      what="camera bearing")
         self.in_force = None  # (event, k (None: the default), p [m/s], drift-stop epoch [s]) of the plan in force
         self.drift_stops = []  # epochs [s] of the executed drift-stops on record
+        self.executed_stops = []  # (epoch [s], carrier dv RTN (3,) [m/s]) of the executed drift-stops on record
         self.released = None  # s, the deployer's release (the executed ejection's epoch on record)
         self.record_since = None  # steady s: the executed ejection arrived (a restarted planner's record recovered)
         self.bearings = []  # (t [s], measured unit line of sight (3,)) of the camera
@@ -161,6 +173,7 @@ class PlannerNode(ManagedNode):
         t = time_to_sec(m.epoch)
         if m.spacecraft == "carrier" and m.purpose == "drift_stop":
             self.drift_stops.append(t)
+            self.executed_stops.append((t, vector_to_array(m.dv_rtn)))
         elif m.purpose == "ejection" and self.released is None:
             self.released = t  # the release switch: when, not how fast
             self.record_since = time.monotonic()
@@ -191,6 +204,8 @@ class PlannerNode(ManagedNode):
                 self.camera_decision(t)
             if self.retry and self.in_force is not None:
                 self.check_missing(t)
+            if self.makeup and self.in_force is not None:
+                self.check_executed(t)
         except ValueError as exc:
             self.get_logger().error(f"drift-stop check failed: {exc}")
             publish_status(self, self.diag_pub, ERROR, f"drift-stop check failed: {exc}", self._values())
@@ -257,6 +272,46 @@ class PlannerNode(ManagedNode):
         self.finding("drift_stop_replaced", t, f"no drift-stop on record {t - t_stop:.0f} s after its epoch "
                      f"t = {t_stop:.1f} s: the same drift-stop {orbits} orbit(s) later, at t = {t_new:.1f} s",
                      {"planned_epoch_s": f"{t_stop:.1f}", "replacement_epoch_s": f"{t_new:.1f}"})
+
+    def check_executed(self, t):
+        """Complete the drift-stop in force when the record's drift-stop departs from its command: the rest,
+        commanded minus executed, whole orbits later at the same argument of latitude."""
+        event, k, p, t_stop = self.in_force
+        done = [(e, dv) for e, dv in self.executed_stops if e >= t_stop - self.retry_tolerance]
+        if not done or self.strategy == "multi_impulse" or not self.record_recovered():
+            return
+        if len(done) > 1:  # a completion already flew (a restarted planner's record)
+            self.in_force = None
+            return
+        t_exec, dv_exec = done[0]
+        plan = self.make_plan(event, k=k, p=p)
+        burn = plan.maneuvers[0]
+        dv_cmd = vector_to_array(burn.dv_rtn)
+        ref = error_references(["drift_stop"], [dv_cmd], plan.p_reduction)[0]
+        z = magnitude_z(dv_exec, dv_cmd, ref, self.scenario.separation.thruster_sigma)
+        off = float(angle_between(dv_exec, dv_cmd))
+        self.in_force = None  # one drift-stop, checked once
+        if (z is None or abs(z) <= self.makeup_z) and off <= self.makeup_pointing:
+            return
+        chief = event.chief
+        period = 2.0 * math.pi / float(arg_latitude_rate(chief.semi_major_axis, chief.inclination, self.j2))
+        t_cmd = time_to_sec(burn.epoch)
+        orbits = max(1, math.ceil((t + self.retry_margin - t_cmd) / period - 1e-9))
+        t_new = t_cmd + orbits * period
+        rest = dv_cmd - dv_exec
+        out = ManeuverPlan(strategy="double_impulse", ejection_epoch=event.header.stamp, p_reduction=0.0)
+        out.header.stamp = sec_to_time(t)  # a new plan, from the finding on
+        out.header.frame_id = interfaces.CARRIER_RTN_FRAME
+        out.maneuvers = [maneuver_msg(t_new, burn.mean_arg_latitude, rest, "carrier", "drift_stop")]
+        out.aimed = plan.aimed
+        self.plan_pub.publish(out)
+        self.plans += 1
+        self.finding("drift_stop_completed", t, f"the drift-stop at t = {t_exec:.1f} s executed "
+                     f"{float(np.linalg.norm(dv_exec)):.4f} m/s of {float(np.linalg.norm(dv_cmd)):.4f} m/s "
+                     f"({'n/a' if z is None else f'{z:+.1f}'} sigma, {math.degrees(off):.2f} deg off): the rest, "
+                     f"{float(np.linalg.norm(rest)):.4f} m/s, {orbits} orbit(s) later at t = {t_new:.1f} s",
+                     {"executed_epoch_s": f"{t_exec:.1f}", "completion_epoch_s": f"{t_new:.1f}",
+                      "rest_m_s": f"{float(np.linalg.norm(rest)):.4f}"})
 
     def on_plan_request(self, request, response):
         """PlanSeparation service: design the separation for a requested configuration (zero = default)."""

@@ -77,6 +77,35 @@ class PlannedBurn:
     missing: bool = False  # burn_missing raised
 
 
+def magnitude_z(executed: ArrayLike, commanded: ArrayLike, reference: ArrayLike | None,
+                thruster_sigma: float) -> float | None:
+    """The executed burn's magnitude error in sigmas of the thruster's: (|executed| - |commanded|) / (sigma |ref|),
+    ``ref`` the burn the magnitude error acts on (seed 002 Eq. 22; a reduced drift-stop's error on its unreduced
+    burn, Eq. 18, :func:`~roe_sep.core.truth.secular.error_references`; None: the commanded burn); None for a zero
+    burn or sigma.
+
+    Parameters
+    ----------
+    executed, commanded : array_like, shape (3,)
+        The burn as executed and as commanded [m/s].
+    reference : array_like, shape (3,), or None
+        The reference burn [m/s].
+    thruster_sigma : float
+        The relative 1-sigma magnitude error of the thruster.
+
+    Returns
+    -------
+    float or None
+        The z-score.
+    """
+    cmd = float(np.linalg.norm(commanded))
+    ref = float(np.linalg.norm(reference)) if reference is not None else cmd
+    sigma = thruster_sigma * ref
+    if not (cmd > 0.0 and sigma > 0.0):
+        return None
+    return (float(np.linalg.norm(executed)) - cmd) / sigma
+
+
 def ei_transition(a: float, inc: float, dt: float, j2: bool) -> np.ndarray:
     """The 4x4 transition of the e/i vectors over ``dt`` [s] in the secular model (J2 turns the relative
     eccentricity vector; :func:`~roe_sep.core.relmotion.dynamics.propagate` is linear in the ROE without drag).
@@ -207,10 +236,8 @@ class AnomalyWatch:
                                  f"{epoch - b.epoch:.0f} s late", {"planned_epoch_s": b.epoch,
                                                                    "delay_s": epoch - b.epoch}))
         cmd = float(np.linalg.norm(b.dv))
-        ref = float(np.linalg.norm(b.reference)) if b.reference is not None else cmd
-        sigma = self.thruster_sigma * ref
-        if cmd > 0.0 and sigma > 0.0:
-            z = (float(np.linalg.norm(dv)) - cmd) / sigma
+        z = magnitude_z(dv, b.dv, b.reference, self.thruster_sigma)
+        if z is not None:
             if abs(z) > lim.magnitude_z:
                 out.append(Detection("burn_magnitude", epoch, f"{b.purpose} burn at t = {epoch:.0f} s executed "
                                      f"{float(np.linalg.norm(dv)):.4f} m/s of {cmd:.4f} m/s ({z:+.1f} sigma)",
