@@ -240,3 +240,11 @@ def test_a_broken_link_is_caught(tmp_path):
                     encoding="utf-8")
     assert broken_links(page) == ["#no-heading: no heading #no-heading", "missing.md: no such file",
                                   "x.png: no such file"]
+
+
+def test_the_contingency_table_is_the_recorded_one():
+    """docs/contingencies.md shows the table studies/contingency_table.py wrote from the campaigns
+    (bench/results/contingency_table.md), row for row."""
+    recorded = (ROOT / "bench/results/contingency_table.md").read_text(encoding="utf-8").splitlines()
+    page = (ROOT / "docs/contingencies.md").read_text(encoding="utf-8").splitlines()
+    assert recorded and [line for line in recorded if line not in page] == []
