@@ -29,6 +29,16 @@ def violations_before(bag, t_end):
     return seen
 
 
+def run_with(tmp_path, block, **kwargs):
+    """Seed 5 with the scenario's ``contingency:`` block ``block`` (YAML lines), completed: the report and its
+    findings by name."""
+    config = tmp_path / "contingency.yaml"
+    config.write_text("contingency:\n" + "".join(f"  {line}\n" for line in block), encoding="utf-8")
+    rep = run(config=config, out=tmp_path / "run", seed=5, timeout=1500, **kwargs)
+    assert rep["run"]["completed"], rep["run"]["reason"]
+    return rep, {d["name"]: d for d in rep["contingencies_detected"]}
+
+
 @pytest.fixture(scope="module")
 def missed(tmp_path_factory):
     out = tmp_path_factory.mktemp("missed")
@@ -72,12 +82,8 @@ def test_drift_stop_missed_whole_run_safe(missed):
 def test_spl_weak_holds_the_blind_drift_stop_and_stays_safe(tmp_path):
     """f1 = 0.3: the blind drift-stop would reverse the drift into an approach (50 m in the secular model); the
     camera's bearings fit f1 = 0.3, the drift-stop is withdrawn before its epoch and the pair drifts apart."""
-    config = tmp_path / "weak.yaml"
-    config.write_text("contingency:\n  name: spl_weak\n  spl_fraction: 0.3\n", encoding="utf-8")
-    rep = run(config=config, out=tmp_path / "run", seed=5, timeout=1500)
-    assert rep["run"]["completed"], rep["run"]["reason"]
+    rep, detected = run_with(tmp_path, ["name: spl_weak", "spl_fraction: 0.3"])
     assert rep["contingency"]["parameters"]["spl_fraction"] == 0.3
-    detected = {d["name"]: d for d in rep["contingencies_detected"]}
     assert "weak_ejection" in detected and detected["weak_ejection"]["epoch"] < 9156.4
     assert "f1 = 0.2" in detected["weak_ejection"]["text"] or "f1 = 0.3" in detected["weak_ejection"]["text"]
     assert "drift_stop" not in [m["purpose"] for m in rep["maneuvers"]]
@@ -113,12 +119,8 @@ def test_drift_stop_delayed_is_detected_and_replaced(tmp_path):
     """Seed 002 Table 1 safety #4: a drift-stop one orbit late must cause no collision before passive safety. The
     monitor finds it missing at its epoch; the planner's replacement (whole orbits later, after the uplink margin)
     replaces the late burn still pending on board, so exactly one drift-stop flies, and every criterion holds."""
-    config = tmp_path / "late.yaml"
-    config.write_text("contingency:\n  name: drift_stop_delayed\n  delay_orbits: 1\n", encoding="utf-8")
-    rep = run(config=config, out=tmp_path / "run", seed=5, timeout=1500)
-    assert rep["run"]["completed"], rep["run"]["reason"]
+    rep, detected = run_with(tmp_path, ["name: drift_stop_delayed", "delay_orbits: 1"])
     assert rep["contingency"]["name"] == "drift_stop_delayed" and rep["contingency"]["parameters"]["delay_orbits"] == 1
-    detected = {d["name"]: d for d in rep["contingencies_detected"]}
     assert "burn_missing" in detected and 9156.4 < detected["burn_missing"]["epoch"] < 9156.4 + 600.0
     assert "drift_stop_replaced" in detected
     stops = [m for m in rep["maneuvers"] if m["purpose"] == "drift_stop"]
@@ -132,12 +134,8 @@ def test_radar_pass_missed_is_reported_and_the_od_waits(tmp_path):
     """Seed 001 Sec. 5: TIRA passes lost, no backup. The station reports each lost pass (radar_pass_missed), the
     first OD comes from the passes after them, and the acquisition still reaches the ICs (one day more of run time:
     the IC epoch moves with the first OD)."""
-    config = tmp_path / "lost.yaml"
-    config.write_text("contingency:\n  name: radar_pass_missed\n  passes: 2\n", encoding="utf-8")
-    rep = run(config=config, out=tmp_path / "run", seed=5, timeout=1500, duration=345600.0)
-    assert rep["run"]["completed"], rep["run"]["reason"]
+    rep, detected = run_with(tmp_path, ["name: radar_pass_missed", "passes: 2"], duration=345600.0)
     assert len(rep["contingency"]["events"]) == 2
-    detected = {d["name"]: d for d in rep["contingencies_detected"]}
     lost = detected["radar_pass_missed"]
     assert lost["count"] == 2 and "TIRA pass 1" in lost["text"]
     assert rep["od"]["epoch"] > 75600.0  # the nominal first OD (test_golden) needs the lost passes
@@ -149,11 +147,7 @@ def test_radar_pass_missed_is_reported_and_the_od_waits(tmp_path):
 def test_radar_bias_is_detected_in_the_residuals(tmp_path):
     """A 50 m range bias at TIRA (five range sigmas): the monitor finds the OD's post-fit residuals beyond their
     chi-square bound (od_residuals); the run stays safe."""
-    config = tmp_path / "bias.yaml"
-    config.write_text("contingency:\n  name: radar_bias\n  bias_m: 50.0\n", encoding="utf-8")
-    rep = run(config=config, out=tmp_path / "run", seed=5, timeout=1500)
-    assert rep["run"]["completed"], rep["run"]["reason"]
+    rep, detected = run_with(tmp_path, ["name: radar_bias", "bias_m: 50.0"])
     assert rep["contingency"]["parameters"]["bias_m"] == 50.0
-    detected = {d["name"]: d for d in rep["contingencies_detected"]}
     assert "od_residuals" in detected and detected["od_residuals"]["epoch"] >= rep["od"]["epoch"]
     assert rep["safe"] is True, rep["violations_seen"]

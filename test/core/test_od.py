@@ -250,6 +250,14 @@ def test_chief_decay_is_the_slope_of_the_carriers_mean_a(scenario):
     assert float(drift_growth(x, decayed, None)) == 0.0
 
 
+
+def noise_free_fit(batch, chief, x_true, model):
+    """``batch`` with the carrier elements ``chief`` and the noise-free measurements of ``x_true`` under the drag
+    ``model``, and the batch's fit from 0.9 x_true."""
+    moved = RadarBatch(**{**batch.__dict__, "chief": chief})
+    moved = RadarBatch(**{**moved.__dict__, "z": predict(x_true, moved, batch.t[-1], model=model)})
+    return moved, batch_least_squares(moved, model=model, x0=x_true * 0.9)
+
 def test_batch_with_the_drag_model_recovers_a_growing_drift(scenario):
     """Measurements of a drift rate that grows (the carrier decaying 165 m/day): the batch with the drag model
     recovers the state at t_est, the rate there included; the constant-rate batch does not, by far more than the
@@ -259,10 +267,7 @@ def test_batch_with_the_drag_model_recovers_a_growing_drift(scenario):
     chief = batch.chief + np.outer(rate * (batch.t - batch.t[-1]), [1, 0, 0, 0, 0, 0])
     model = DragModel(63822.0, 1.5217)
     x_true = np.append(ROE0, 40.0 * DA_DOT)  # a strong drift: -1.2 km/day of a*da, what a weak drift-stop leaves
-    grown = RadarBatch(**{**batch.__dict__, "chief": chief})
-    z = predict(x_true, grown, batch.t[-1], model=model)
-    grown = RadarBatch(**{**grown.__dict__, "z": z})
-    fit = batch_least_squares(grown, model=model, x0=x_true * 0.9)
+    grown, fit = noise_free_fit(batch, chief, x_true, model)
     np.testing.assert_allclose(fit.x[:6] * A, x_true[:6] * A, atol=1e-4)
     assert fit.x[6] == pytest.approx(x_true[6], rel=1e-9)
     constant = batch_least_squares(grown)
@@ -351,10 +356,7 @@ def test_batch_recovers_the_relative_e_vector_that_drag_moves_with_an_eccentric_
     chief[:, 5] -= chief[:, 4]
     model = DragModel(63822.0, 1.5217)
     x_true = np.append(ROE0, 40.0 * DA_DOT)
-    ecc = RadarBatch(**{**batch.__dict__, "chief": chief})
-    z = predict(x_true, ecc, batch.t[-1], model=model)
-    ecc = RadarBatch(**{**ecc.__dict__, "z": z})
-    fit = batch_least_squares(ecc, model=model, x0=x_true * 0.9)
+    ecc, fit = noise_free_fit(batch, chief, x_true, model)
     np.testing.assert_allclose(fit.x[:6] * A, x_true[:6] * A, atol=1e-4)
     assert fit.x[6] == pytest.approx(x_true[6], rel=1e-8)
     original = od_batch.drag_de_drift
