@@ -4,8 +4,10 @@ from a ground segment as radar measurements.
 Out (``output_dir``, the runner sets OUT/ccsds; '' = ``ccsds_YYYY_MM_DD-HH_MM_SS`` in the working directory): the
 same set as ``roe-sep export`` (:mod:`roe_sep.ndm.dataset`), from the same topics. An OPM pair (RTN and EME2000
 maneuvers) as soon as the safety monitor approves a plan, the executed-burns OPM after each burn, and the OEM, TDM
-and CDM every ``write_period`` s of sim time (0: never) and at shutdown (the XML OEM of a whole run takes about 2 s
-to serialize, so not at every message). Every file is written atomically (temporary file + rename).
+and CDM every ``write_period`` s of sim time (0: never), at most every ``min_write_interval`` s of wall time, and at
+shutdown (the XML OEM of a whole run takes about 2 s to serialize, so not at every message; under the
+as-fast-as-possible lockstep clock a simulated day passes in seconds, and the periodic updates were about 1.4 of a
+default run's 12 CPU-s). Every file is written atomically (temporary file + rename).
 
 In (``input_dir``, '' = off): every ``*.xml``, ``*.kvn`` or ``*.tdm`` file that appears there is read as a TDM
 (:func:`roe_sep.ndm.messages.read_tdm`, sim time from ``epoch_utc``) and its measurements are published on
@@ -51,6 +53,12 @@ EXTERNAL_RADAR_TOPIC = interfaces.EXTERNAL_RADAR_TOPIC
 INPUT_SUFFIXES = (".xml", ".kvn", ".tdm", ".txt")
 
 
+def periodic_due(sim_since, write_period, wall_since, min_write_interval):
+    """Whether the OEM/TDM/CDM update is due: ``write_period`` s of sim time (> 0) and ``min_write_interval`` s of
+    wall time since the last one (``*_since``)."""
+    return write_period > 0 and sim_since >= write_period and wall_since >= min_write_interval
+
+
 class GroundBridgeNode(Node):
     def __init__(self):
         super().__init__("ground_bridge")
@@ -61,6 +69,7 @@ class GroundBridgeNode(Node):
         scenario_file = declare(self, "scenario_file")
         isp = declare(self, "carrier_isp")
         self.write_period = declare(self, "write_period")
+        self.min_write_interval = declare(self, "min_write_interval")
         inp = declare(self, "input_dir")
         poll = declare(self, "poll_period")
         sigma_range = declare(self, "default_sigma_range_m")
@@ -73,7 +82,8 @@ class GroundBridgeNode(Node):
         self.t = 0.0
         self.live = LiveSet(self.out, self.fmt, self.opts, lambda: self.t, self._not_written)
         self.dirty = False  # something the periodic files depend on arrived
-        self.last_periodic = 0.0
+        self.last_periodic = 0.0  # sim time of the last periodic update
+        self.last_periodic_wall = time.monotonic()  # and its wall time (the node's start before the first)
         self.files_in = 0
         self.files_rejected = 0
         self.input = Path(inp) if inp else None
@@ -134,8 +144,11 @@ class GroundBridgeNode(Node):
 
     def on_clock(self, msg: Clock):
         self.t = time_to_sec(msg.clock)
-        if self.dirty and self.write_period > 0 and self.t - self.last_periodic >= self.write_period:
+        wall = time.monotonic()
+        if self.dirty and periodic_due(self.t - self.last_periodic, self.write_period,
+                                       wall - self.last_periodic_wall, self.min_write_interval):
             self.last_periodic = self.t
+            self.last_periodic_wall = wall
             self.dirty = False
             self.live.request(periodic=True)
 

@@ -457,6 +457,10 @@ GROUND_BRIDGE = (
           range=(1.0, 1.0e4)),
     Param("write_period", "double", 86400.0, "sim time between OEM/TDM/CDM updates (0: only the final set at "
           "shutdown)", "s", range=(0.0, 2.592e6)),
+    Param("min_write_interval", "double", 10.0, "least wall time between two OEM/TDM/CDM updates (an update due "
+          "by write_period waits for it; under the as-fast-as-possible lockstep clock a simulated day passes in "
+          "about 2 s, and each update rewrites the whole run's XML OEM); 0: every write_period", "s",
+          range=(0.0, 86400.0)),
     Param("input_dir", "string", "", "directory watched for TDM files ('' = no input)"),
     Param("poll_period", "double", 1.0, "wall time between scans of input_dir", "s", range=(0.01, 3600.0)),
     Param("default_sigma_range_m", "double", 10.0, "range sigma of a TDM without one", "m", range=(1.0e-3, 1.0e4)),

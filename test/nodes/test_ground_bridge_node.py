@@ -150,3 +150,13 @@ def test_ground_bridge_writes_opms_and_feeds_tdm_files_to_radar_od(tmp_path, bag
 def test_bad_parameters_exit_2(tmp_path):
     code, log = wait_exit(start_node("ground_bridge", "-p", f"output_dir:={tmp_path}", "-p", "format:=json"))
     assert code == 2 and "format" in log, log
+
+
+def test_a_periodic_update_waits_for_both_the_sim_period_and_the_wall_interval():
+    from roe_sep.nodes.ground_bridge import periodic_due
+
+    assert periodic_due(86400.0, 86400.0, 10.0, 10.0)
+    assert not periodic_due(86399.0, 86400.0, 60.0, 10.0)  # a day of sim time not yet passed
+    assert not periodic_due(86400.0, 86400.0, 2.0, 10.0)  # a fast lockstep run: 2 s of wall time since the last
+    assert periodic_due(86400.0, 86400.0, 0.0, 0.0)  # min_write_interval 0: every write_period
+    assert not periodic_due(1e9, 0.0, 1e9, 0.0)  # write_period 0: only the final set
