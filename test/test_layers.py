@@ -167,3 +167,12 @@ def test_the_checks_can_fail():
     assert layer("roe_sep.cli.design") > layer("roe_sep.core.config")
     assert layer("roe_sep.core.relmotion.roe") == 1 and layer("roe_sep.nodes.sim") == 3
     assert reachable({"report": {"x"}, "x": {"nodes.sim"}, "nodes.sim": set()}, "report") == {"x", "nodes.sim"}
+
+
+def test_a_run_process_does_not_import_what_it_does_not_use():
+    """The runner and the node processes import neither ``scipy.stats`` nor ``scipy.optimize`` at start-up (about
+    0.5 CPU-s per process; the modules that need them import them where they are used, docs/benchmarks.md)."""
+    code = ("import sys, roe_sep.run, roe_sep.cli, roe_sep.nodes.suite; "
+            "print(sorted(m for m in ('scipy.stats', 'scipy.optimize', 'scipy.special') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True)
+    assert out.stdout.strip() == "[]"
