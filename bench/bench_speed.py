@@ -8,15 +8,16 @@ change of the machine's load hits both alike:
   wall time, the CPU time of the whole process tree (user + system of every process, from the children's rusage:
   each process is waited for by its parent) and the peak resident set of the tree (sum over the processes alive at
   one sample of ``/proc``, every 0.2 s: :mod:`proctree`);
-* ``roe-sep campaign --runs N --workers W --no-bags --no-figures`` (``--campaign-runs 0``: none): runs per hour by
-  wall time, CPU-s per run over the tree (Dask's start-up included: a small campaign overstates it), peak RSS;
+* ``roe-sep campaign --runs N --workers W --no-bags --no-figures`` (``--campaign-runs 0``: none; ``--bags yes``
+  keeps the bags, ``both`` runs both pairs): runs per hour by wall time, CPU-s per run over the tree (Dask's start-up
+  included: a small campaign overstates it), peak RSS of the tree;
 * identity: every run's ``report.json`` without ``run`` (how the run went on this machine) and the campaign's
   ``runs.csv`` without its machine columns (:data:`roe_sep.campaign.table.RUN_FIELDS`) must be the same for both.
 
-The planner's stored start-up sweep (``ROE_SEP_CACHE_DIR``) is filled once before the measurement for the new code
-(it is what a second cold run finds); the base code has no such store.
+The planner's stored start-up sweep (``ROE_SEP_CACHE_DIR``) is filled once before the measurement for each version
+(what a second cold run finds; its key has a digest of the core's source, so each version has its own).
 
-    nice -n 15 python bench/bench_speed.py --base $(git merge-base HEAD odg) --new . --repeat 3 --campaign-runs 6 \\
+    python bench/bench_speed.py --base 52bc6b4 --new . --repeat 5 --campaign-runs 100 --bags both \\
         --workers 2 --domains 31-39 --out bench/results/bench_speed.json
 """
 
@@ -99,6 +100,8 @@ def main(argv=None):
     ap.add_argument("--repeat", type=int, default=3, help="cold runs per version (median)")
     ap.add_argument("--campaign-runs", type=int, default=4, help="runs of the campaign per version (0: none)")
     ap.add_argument("--campaign-seed", type=int, default=1000)
+    ap.add_argument("--bags", choices=("no", "yes", "both"), default="no",
+                    help="campaigns without bags (--no-bags), with them, or both (a pair of campaigns each)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--domains", default="31-39", help="DDS domains LO-HI (the runs take the first, the campaigns "
                                                        "the range)")
@@ -113,11 +116,14 @@ def main(argv=None):
     py = sys.executable
     result = {"base": args.base, "new": args.new, "seed": args.seed, "load_average_start": os.getloadavg()}
 
-    # fill the new code's stored start-up sweep (a cold run of a machine that ran the scenario before)
-    subprocess.run([py, "-c", "from roe_sep.core.config import load_scenario\n"
-                    "from roe_sep.nodes.parameters import table\nfrom roe_sep.nodes.planner import startup_p\n"
-                    "d = table('planner')\nstartup_p(load_scenario(None), d['mc_samples'].default, "
-                    "d['mc_seed'].default)"], env=environment(trees["new"], lo, cache), cwd=trees["new"], check=False)
+    # fill each version's stored start-up sweep (a cold run of a machine that ran the scenario before; the key has a
+    # digest of the core's source, so each version has its own)
+    for side in ("base", "new"):
+        subprocess.run([py, "-c", "from roe_sep.core.config import load_scenario\n"
+                        "from roe_sep.nodes.parameters import table\nfrom roe_sep.nodes.planner import startup_p\n"
+                        "d = table('planner')\nstartup_p(load_scenario(None), d['mc_samples'].default, "
+                        "d['mc_seed'].default)"], env=environment(trees[side], lo, cache), cwd=trees[side],
+                       check=False)
 
     runs = {"base": [], "new": []}
     for k in range(args.repeat):
@@ -133,24 +139,25 @@ def main(argv=None):
     reports = [report_of(m["report"]) for side in runs for m in runs[side]]
     result["run_reports_identical"] = all(r == reports[0] for r in reports)
 
-    if args.campaign_runs:
+    modes = {"no": (False,), "yes": (True,), "both": (False, True)}[args.bags] if args.campaign_runs else ()
+    for bags in modes:
         camp = {}
         for side in ("base", "new"):
-            out = work / f"campaign_{side}"
+            out = work / f"campaign_{side}{'_bags' if bags else ''}"
             cmd = [py, "-m", "roe_sep.cli", "campaign", "--runs", str(args.campaign_runs), "--seed",
-                   str(args.campaign_seed), "--workers", str(args.workers), "--no-bags", "--no-figures",
-                   "--domains", args.domains, "--out", str(out)]
+                   str(args.campaign_seed), "--workers", str(args.workers), *(() if bags else ("--no-bags",)),
+                   "--no-figures", "--domains", args.domains, "--out", str(out)]
             m = measured(cmd, environment(trees[side], lo, cache), trees[side], interval=0.5)
             m["runs_per_hour"] = args.campaign_runs / m["wall_s"] * 3600.0
             m["cpu_s_per_run"] = m["cpu_s"] / args.campaign_runs
             m["rows"] = str(out / "runs.csv")
             camp[side] = m
-            print(f"campaign {side}: {args.campaign_runs} runs, wall {m['wall_s']:.1f} s ({m['runs_per_hour']:.0f} "
-                  f"runs/h), CPU {m['cpu_s']:.1f} s ({m['cpu_s_per_run']:.2f} per run), peak RSS "
-                  f"{m['peak_rss_mb']:.0f} MB, exit {m['returncode']}", file=sys.stderr, flush=True)
+            print(f"campaign {side}{' with bags' if bags else ''}: {args.campaign_runs} runs, wall {m['wall_s']:.1f} s "
+                  f"({m['runs_per_hour']:.0f} runs/h), CPU {m['cpu_s']:.1f} s ({m['cpu_s_per_run']:.2f} per run), "
+                  f"peak RSS {m['peak_rss_mb']:.0f} MB, exit {m['returncode']}", file=sys.stderr, flush=True)
         camp["rows_identical"] = rows_of(camp["base"]["rows"]) == rows_of(camp["new"]["rows"])
-        camp["runs"], camp["workers"] = args.campaign_runs, args.workers
-        result["campaign"] = camp
+        camp["runs"], camp["workers"], camp["bags"] = args.campaign_runs, args.workers, bags
+        result["campaign_bags" if bags else "campaign"] = camp
     result["load_average_end"] = os.getloadavg()
 
     b, n = result["run"]["base"], result["run"]["new"]
@@ -162,13 +169,16 @@ def main(argv=None):
              f"{n['peak_rss_mb']:.0f} MB",
              f"  new/base: wall {n['wall_s'] / b['wall_s']:.2f}, CPU {n['cpu_s'] / b['cpu_s']:.2f}; reports identical "
              f"(every key but run): {result['run_reports_identical']}"]
-    if args.campaign_runs:
-        c = result["campaign"]
-        lines += [f"campaign {args.campaign_runs} runs, {args.workers} workers, no bags:",
+    for key in ("campaign", "campaign_bags"):
+        if key not in result:
+            continue
+        c = result[key]
+        lines += [f"campaign {args.campaign_runs} runs, {args.workers} workers, {'with' if c['bags'] else 'no'} bags:",
                   *(f"  {side}: {c[side]['runs_per_hour']:.0f} runs/h, {c[side]['cpu_s_per_run']:.2f} CPU-s per run "
                     f"(Dask start-up included), peak RSS {c[side]['peak_rss_mb']:.0f} MB" for side in ("base", "new")),
-                  f"  new/base CPU per run {c['new']['cpu_s_per_run'] / c['base']['cpu_s_per_run']:.2f}; rows "
-                  f"identical: {c['rows_identical']}"]
+                  f"  new/base runs per hour {c['new']['runs_per_hour'] / c['base']['runs_per_hour']:.2f}, CPU per run "
+                  f"{c['new']['cpu_s_per_run'] / c['base']['cpu_s_per_run']:.2f}; rows identical: "
+                  f"{c['rows_identical']}"]
     result["summary"] = lines
     print("\n".join(lines))
     if args.out:
