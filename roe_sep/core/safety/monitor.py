@@ -126,8 +126,10 @@ def assess(roe0: ArrayLike, t0: float, chief: Chief, limits: MonitorLimits, burn
     # ejection begins at zero distance by construction); one that never leaves it is measured throughout
     outside = np.nonzero(dist >= limits.keep_out)[0]
     returning = dist[outside[0]:] if outside.size else dist
-    last_burn = max([b.epoch for b in burns if b.epoch >= t0], default=t0)
-    start = trajectory(roe0, t0, burns, np.array([last_burn]), chief, j2, da_dot)[0]
+    burn_epochs = [b.epoch for b in burns if b.epoch >= t0]
+    last_burn = max(burn_epochs, default=t0)
+    # without a burn the state at last_burn = t0 is the first sample (times[0] is t0: the same propagation)
+    start = trajectory(roe0, t0, burns, np.array([last_burn]), chief, j2, da_dot)[0] if burn_epochs else roes[0]
     crossing, _ = nearest_crossing(start, chief.u_at(last_burn, j2), t_end - last_burn, a, chief.inc, j2, da_dot)
     end = roes[-1] * a
     res = Assessment(
