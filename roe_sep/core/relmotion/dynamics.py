@@ -266,8 +266,8 @@ def propagate_elements(elements: Sequence[ArrayLike], dt: ArrayLike, a: float, i
     return da + da_dot * dt, dl_new, dex_new, dey_new, dix + 0.0 * dt, diy_new
 
 
-def propagate_in_plane(da: ArrayLike, dex: ArrayLike, dey: ArrayLike, dt: ArrayLike, a: float, inc: float, j2: bool = True,
-                       da_dot: ArrayLike = 0.0) -> tuple:
+def propagate_in_plane(da: ArrayLike, dex: ArrayLike, dey: ArrayLike, dt: ArrayLike, a: float, inc: float,
+                       j2: bool = True, da_dot: ArrayLike = 0.0) -> tuple:
     """The da, dex and dey of :func:`propagate_elements` alone (what the radial motion R/a = da - dex cos u -
     dey sin u needs), with its arithmetic: the same values to the bit, without forming dl, dix and diy.
 

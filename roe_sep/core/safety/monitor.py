@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..relmotion.orbit import orbital_period
-from ..relmotion.roe import roe_to_rtn
+from ..relmotion.roe import rtn_position
 from ..relmotion.trajectory import Burn, Chief, trajectory
 from .metrics import approaching, fov_limit, min_rn_distance, nearest_crossing
 
@@ -120,7 +120,7 @@ def assess(roe0: ArrayLike, t0: float, chief: Chief, limits: MonitorLimits, burn
     n_samples = max(2, int(limits.samples_per_orbit * (t_end - t0) / orbital_period(a)) + 1)
     times = np.linspace(t0, t_end, n_samples)
     roes = trajectory(roe0, t0, burns, times, chief, j2, da_dot)
-    pos, _ = roe_to_rtn(roes, chief.u_at(times, j2))
+    pos = rtn_position(roes, chief.u_at(times, j2))
     dist = np.linalg.norm(pos, axis=-1) * a
     # keep-out counts returns: from the first sample outside the sphere on (a trajectory that starts at an
     # ejection begins at zero distance by construction); one that never leaves it is measured throughout
