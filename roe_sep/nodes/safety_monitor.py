@@ -171,10 +171,10 @@ class SafetyMonitorNode(ManagedNode):
         try:
             t = time_to_sec(msg.header.stamp)
             roe = msg_to_roe(msg)
-            if not (math.isfinite(t) and np.all(np.isfinite(roe))):
+            if not (math.isfinite(t) and np.isfinite(roe).all()):
                 raise ValueError("non-finite state")
             self.detect("sim time", lambda: self.watch.at(t))
-            if t - self.last_truth < self.period or not np.any(roe):  # nothing to assess before the release
+            if t - self.last_truth < self.period or not roe.any():  # nothing to assess before the release
                 return
             self.last_truth = t
             chief = chief_of(msg, t)

@@ -127,6 +127,10 @@ def segments_at(arcs: list, times: ArrayLike, t0: float, chief: Chief, j2: bool 
         Dimensionless ROE at ``times``.
     """
     times = np.asarray(times, dtype=float)
+    if len(arcs) == 1 and times.ndim == 1:  # one coast arc (no burn): every sample of it, as the loop below
+        t_state, state, hi = arcs[0]
+        if (times < hi).all():
+            return propagate(state, times - t_state, chief.a, chief.inc, j2, da_dot)
     out = np.empty(times.shape + (6,))
     lo = -np.inf
     for k, (t_state, state, hi) in enumerate(arcs):
