@@ -51,6 +51,7 @@ import dataclasses
 import math
 import traceback
 
+import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
 from roe_sep_msgs.msg import ImpulsiveManeuver, ManeuverPlan, OrbitDetermination
 
@@ -147,6 +148,7 @@ class IcPlannerNode(ManagedNode):
         self.replan_pending = False  # a departing burn's re-plan waits for a committed burn (the next burn re-plans)
         self.summary = {}
         self.plans = 0
+        self.arcs = {}  # radar_arc's results by (OD chief elements, OD epoch and t_F)
         publish_status(self, self.diag_pub, OK, "waiting for an OD estimate", self._values())
 
     def _values(self):
@@ -449,10 +451,17 @@ class IcPlannerNode(ManagedNode):
         if not (self.trim and self.final_od_arc):
             return None
         t_od = time_to_sec(msg.estimate.header.stamp)
-        passes = radar_passes(elements_to_array(msg.estimate.chief), t_od, t_final - 2.0 * SECONDS_PER_DAY,
-                              t_final + 3.0 * CLUSTER_GAP, self.jd0, j2=self.cfg.j2)
-        # the last pass before t_F ends the arc, three passes (not its cluster's last pass: see the trim module)
-        return final_od_arc(passes, t_final, self.final_od_arc)
+        kep = elements_to_array(msg.estimate.chief)
+        # one OD and IC epoch give one arc: decide and make_plan (and every re-plan from the same OD) ask again
+        key = (kep.tobytes(), np.array([t_od, t_final], dtype=float).tobytes())
+        if key not in self.arcs:
+            passes = radar_passes(kep, t_od, t_final - 2.0 * SECONDS_PER_DAY, t_final + 3.0 * CLUSTER_GAP, self.jd0,
+                                  j2=self.cfg.j2)
+            # the last pass before t_F ends the arc, three passes (not its cluster's last pass: see the trim module)
+            if len(self.arcs) >= 16:
+                self.arcs.clear()
+            self.arcs[key] = final_od_arc(passes, t_final, self.final_od_arc)
+        return self.arcs[key]
 
     def start_state(self, msg: OrbitDetermination, now):
         """The best knowledge at max(OD epoch, now, the latest burn on record): the estimate plus every carrier burn

@@ -212,11 +212,11 @@ class RadarODNode(ManagedNode):
         kep = elements_to_array(msg.chief)
         t = time_to_sec(msg.header.stamp)
         a = kep[0]
-        if not (np.all(np.isfinite(kep)) and R_EARTH + 1e5 < a < R_EARTH + 5e6 and 0.0 <= kep[1] < 0.1
+        if not (np.isfinite(kep).all() and R_EARTH + 1e5 < a < R_EARTH + 5e6 and 0.0 <= kep[1] < 0.1
                 and 0.0 <= kep[2] <= math.pi):
             raise ValueError(f"chief elements are not a near-circular low Earth orbit: {kep.tolist()}")
         roe = msg_to_roe(msg)
-        if not np.all(np.isfinite(roe)):
+        if not np.isfinite(roe).all():
             raise ValueError(f"ROE are not finite: {(roe * a).tolist()} m")
         return t, roe, kep
 

@@ -35,7 +35,7 @@ from ..core.constants import ARCSEC
 from ..core.relmotion.dynamics import drag_da_dot
 from ..core.relmotion.maneuvers import delta_roe
 from ..core.relmotion.orbit import mean_motion
-from ..core.relmotion.trajectory import Chief, state_at
+from ..core.relmotion.trajectory import Chief, burn_segments, segments_at, state_at
 from ..core.safety.anomaly import AnomalyLimits, AnomalyWatch
 from ..core.safety.monitor import MonitorLimits, assess
 from .convert import msg_to_roe, plan_burns, sec_to_time, time_to_sec, vector_to_array
@@ -52,6 +52,18 @@ class Knowledge:
 
     def __init__(self, roe, t, chief: Chief, da_dot):
         self.roe, self.t, self.chief, self.da_dot = roe, t, chief, da_dot
+        self.arcs = None  # (burns, burn_segments) of the state under the burns executed since t (state_now)
+
+    def state_now(self, executed, t_now, j2):
+        """The ROE at ``t_now`` under the ``executed`` burns after ``t``: :func:`state_at`, with the coast arcs kept
+        while no burn is added (an assessment per truth sample: one propagation each, the same values)."""
+        burns = [b for b in executed if b.epoch > self.t]
+        if self.arcs is None or self.arcs[0] != burns:
+            self.arcs = (burns, burn_segments(self.roe, self.t, burns, self.chief, j2, self.da_dot))
+        arcs = self.arcs[1]
+        if not t_now >= max(self.t, arcs[-1][0]):  # before t (an error) or before a burn: as it always was
+            return state_at(self.roe, self.t, burns, t_now, self.chief, j2, self.da_dot)
+        return segments_at(arcs[-1:], np.array([t_now]), self.t, self.chief, j2, self.da_dot)[0]
 
 
 def chief_of(msg: RelativeOrbitalElements, t):
@@ -159,10 +171,10 @@ class SafetyMonitorNode(ManagedNode):
         try:
             t = time_to_sec(msg.header.stamp)
             roe = msg_to_roe(msg)
-            if not (math.isfinite(t) and np.all(np.isfinite(roe))):
+            if not (math.isfinite(t) and np.isfinite(roe).all()):
                 raise ValueError("non-finite state")
             self.detect("sim time", lambda: self.watch.at(t))
-            if t - self.last_truth < self.period or not np.any(roe):  # nothing to assess before the release
+            if t - self.last_truth < self.period or not roe.any():  # nothing to assess before the release
                 return
             self.last_truth = t
             chief = chief_of(msg, t)
@@ -177,8 +189,7 @@ class SafetyMonitorNode(ManagedNode):
         if k is None or t_now - self.last_estimate < self.period:
             return
         self.last_estimate = t_now
-        burns = [b for b in self.executed if b.epoch > k.t]
-        roe = state_at(k.roe, k.t, burns, t_now, k.chief, self.j2, k.da_dot)
+        roe = k.state_now(self.executed, t_now, self.j2)
         chief = Chief(k.chief.a, k.chief.inc, float(k.chief.u_at(t_now, self.j2)), t_now)
         self.publish("estimate", t_now, assess(roe, t_now, chief, self.limits, j2=self.j2, da_dot=k.da_dot))
 

@@ -354,12 +354,13 @@ def mean_roe_map(a, u):
     return jac
 
 
-def model_roe(x, batch: RadarBatch, t_est, j2=True, drag=True, model=None, decay=None):
+def model_roe(x, batch: RadarBatch, t_est, j2=True, drag=True, model=None, decay=None, ecc=None):
     """Mean ROE ``(..., m, 6)`` at the measurement epochs of states ``x`` ``(..., 7)`` at ``t_est``:
     :func:`propagate_state` (a, i of the chief at the batch's latest epoch; J2; the drift rate's growth of the drag
     ``model``, :func:`drift_growth`, none without one) plus drag's short-periodic de at each epoch's mean argument
-    of latitude (:func:`drag_short_period_de`); ``drag`` False: no drag term. ``decay``: the carrier's
-    :func:`chief_decay` when the caller has it."""
+    of latitude (:func:`drag_short_period_de`); ``drag`` False: no drag term. ``decay`` and ``ecc``: the carrier's
+    :func:`chief_decay` and :func:`chief_eccentricity` at ``t_est`` when the caller has them (constants of the
+    batch: a Gauss-Newton fit computes them once)."""
     x = np.asarray(x, dtype=float)
     a, inc = _chief_a_inc(batch)
     growth = drift_growth(x, batch, model if drag else None, decay)[..., None]
@@ -367,7 +368,7 @@ def model_roe(x, batch: RadarBatch, t_est, j2=True, drag=True, model=None, decay
     if not drag:
         return roe
     if model is not None:
-        ecc, ecc_rate = chief_eccentricity(batch, t_est)
+        ecc, ecc_rate = chief_eccentricity(batch, t_est) if ecc is None else ecc
         roe[..., 2:4] += drag_de_drift(x[..., None, :], roe[..., 2:4], batch.t - t_est, a, model.scale_height, ecc,
                                        ecc_rate, chief_decay(batch) if decay is None else decay, growth)
     u = batch.chief[:, 4] + batch.chief[:, 5]
@@ -375,10 +376,10 @@ def model_roe(x, batch: RadarBatch, t_est, j2=True, drag=True, model=None, decay
     return roe
 
 
-def predict(x, batch: RadarBatch, t_est, j2=True, drag=True, model=None, decay=None):
+def predict(x, batch: RadarBatch, t_est, j2=True, drag=True, model=None, decay=None, ecc=None):
     """h(x): modeled [range, az, el] ``(..., m, 3)`` for states ``x`` ``(..., 7)`` at epoch ``t_est``: the mean ROE
     of :func:`model_roe` observed with :func:`observe`."""
-    roe = model_roe(x, batch, t_est, j2, drag, model, decay)
+    roe = model_roe(x, batch, t_est, j2, drag, model, decay, ecc)
     return observe(roe, batch.chief, batch.theta, batch.site_ef, batch.site_enu)
 
 
@@ -388,11 +389,11 @@ def state_steps(a):
     return np.array([1.0] * 6 + [1e-6]) / a
 
 
-def jacobian(x, batch: RadarBatch, t_est, j2=True, drag=True, model=None, decay=None):
+def jacobian(x, batch: RadarBatch, t_est, j2=True, drag=True, model=None, decay=None, ecc=None):
     """H = dh/dx ``(m, 3, 7)`` by central differences (h(x + s e_j) - h(x - s e_j)) / 2 s, azimuth wrapped."""
     s = state_steps(_chief_a_inc(batch)[0])
     pert = np.concatenate([np.diag(s), -np.diag(s)]) + np.asarray(x, dtype=float)
-    z = predict(pert, batch, t_est, j2, drag, model, decay)  # (14, m, 3)
+    z = predict(pert, batch, t_est, j2, drag, model, decay, ecc)  # (14, m, 3)
     diff = measurement_residual(z[:STATE_SIZE], z[STATE_SIZE:])  # (7, m, 3)
     return np.moveaxis(diff / (2.0 * s[:, None, None]), 0, -1)
 
@@ -453,9 +454,10 @@ def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_ite
     w = 1.0 / np.asarray(batch.sigma, dtype=float).reshape(-1)
     a_chief = _chief_a_inc(batch)[0]
     decay = chief_decay(batch)
+    ecc = chief_eccentricity(batch, t_est) if drag and model is not None else None  # constants of the batch
 
     def whitened(x):
-        r = measurement_residual(batch.z, predict(x, batch, t_est, j2, drag, model, decay)).reshape(-1) * w
+        r = measurement_residual(batch.z, predict(x, batch, t_est, j2, drag, model, decay, ecc)).reshape(-1) * w
         if prior is None:
             return r, None
         r_p, h_p = prior.residual_row(x, a_chief)
@@ -463,7 +465,7 @@ def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_ite
 
     for iteration in range(1, max_iterations + 1):
         r, h_p = whitened(x)
-        h = jacobian(x, batch, t_est, j2, drag, model, decay).reshape(-1, STATE_SIZE) * w[:, None]
+        h = jacobian(x, batch, t_est, j2, drag, model, decay, ecc).reshape(-1, STATE_SIZE) * w[:, None]
         if h_p is not None:
             h = np.vstack([h, h_p])
         scale = np.linalg.norm(h, axis=0)
@@ -481,7 +483,7 @@ def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_ite
             break
     else:
         raise ValueError(f"Gauss-Newton did not converge in {max_iterations} iterations")
-    r = measurement_residual(batch.z, predict(x, batch, t_est, j2, drag, model, decay)).reshape(-1) * w
+    r = measurement_residual(batch.z, predict(x, batch, t_est, j2, drag, model, decay, ecc)).reshape(-1) * w
     cov = (vt.T / sv**2) @ vt / np.outer(scale, scale)  # at the last step's Jacobian (a priori row included)
     k = np.argmax(batch.t)
     chief_est = propagate_chief(batch.chief[k], t_est - batch.t[k])

@@ -14,7 +14,10 @@ With da(t) = da0 + da_dot t the integrals are closed form; with J2 off and drag 
 Eqs. (23)-(24): a dl = 3/(4 n^2) dB rho v^2 (u - u0)^2 and a da = -(1/n^2) dB rho v^2 (u - u0).
 """
 
+import functools
+import math
 from collections.abc import Sequence
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -72,11 +75,23 @@ def arg_latitude_rate(a: ArrayLike, inc: ArrayLike, j2: bool = True) -> np.ndarr
     numpy.ndarray
         du/dt [rad/s], the broadcast shape of ``a`` and ``inc``.
     """
+    if isinstance(a, float) and isinstance(inc, float):  # a chief's: once per (a, i, j2), the same value
+        return _arg_latitude_rate_cached(a, inc, bool(j2), math.copysign(1.0, a), math.copysign(1.0, inc))
+    return _arg_latitude_rate(a, inc, j2)
+
+
+def _arg_latitude_rate(a, inc, j2):
     n = mean_motion(a)
     if not j2:
         return n
     c2 = np.cos(inc) ** 2
     return n + j2_kappa(a) * ((3.0 * c2 - 1.0) + (5.0 * c2 - 1.0))
+
+
+@functools.lru_cache(maxsize=64)
+def _arg_latitude_rate_cached(a, inc, j2, _sign_a, _sign_inc):
+    # the signs are part of the key: -0.0 == 0.0 would otherwise share an entry
+    return _arg_latitude_rate(a, inc, j2)
 
 
 def ballistic_coefficient(cd: ArrayLike, area: ArrayLike, mass: ArrayLike) -> np.ndarray | float:
@@ -239,23 +254,110 @@ def propagate_elements(elements: Sequence[ArrayLike], dt: ArrayLike, a: float, i
     dt = np.asarray(dt, dtype=float)
     da_dot = np.asarray(da_dot, dtype=float)
     da, dl, dex, dey, dix, diy = elements
-    n = mean_motion(a)
+    rates = secular_rates(a, inc, j2)
     da_int = da * dt + 0.5 * da_dot * dt**2
     if j2:
-        kap = j2_kappa(a)
-        p_fac = 3.0 * np.cos(inc) ** 2 - 1.0
-        s2i = np.sin(2.0 * inc)
-        dl_rate_da = -(1.5 * n + 7.0 * kap * p_fac)
-        dl_new = dl + dl_rate_da * da_int - 7.0 * kap * s2i * dix * dt
-        diy_new = diy + 3.5 * kap * s2i * da_int + 2.0 * kap * np.sin(inc) ** 2 * dix * dt
-        phi = eccentricity_vector_rotation_rate(a, inc) * dt
-        cph, sph = np.cos(phi), np.sin(phi)
-        dex_new, dey_new = dex * cph - dey * sph, dex * sph + dey * cph
+        dl_new = dl + rates.dl_da * da_int - rates.dl_dix * dix * dt
+        diy_new = diy + rates.diy_da * da_int + rates.diy_dix * dix * dt
     else:
-        dl_new = dl - 1.5 * n * da_int
+        dl_new = dl - rates.dl_da * da_int
         diy_new = diy + 0.0 * dt
-        dex_new, dey_new = dex + 0.0 * dt, dey + 0.0 * dt
+    dex_new, dey_new = _rotate_e(dex, dey, dt, rates)
     return da + da_dot * dt, dl_new, dex_new, dey_new, dix + 0.0 * dt, diy_new
+
+
+def propagate_in_plane(da: ArrayLike, dex: ArrayLike, dey: ArrayLike, dt: ArrayLike, a: float, inc: float,
+                       j2: bool = True, da_dot: ArrayLike = 0.0) -> tuple:
+    """The da, dex and dey of :func:`propagate_elements` alone (what the radial motion R/a = da - dex cos u -
+    dey sin u needs), with its arithmetic: the same values to the bit, without forming dl, dix and diy.
+
+    Parameters
+    ----------
+    da, dex, dey : array_like
+        The dimensionless elements, each of a shape that broadcasts with ``dt``.
+    dt : array_like
+        Propagation time [s].
+    a : float
+        The chief's semi-major axis [m].
+    inc : float
+        The chief's inclination [rad].
+    j2 : bool
+        With the J2 secular rates.
+    da_dot : array_like
+        Constant differential-drag rate of da [1/s].
+
+    Returns
+    -------
+    tuple of three numpy.ndarray
+        The propagated ``(da, dex, dey)``, each of the broadcast shape.
+    """
+    dt = np.asarray(dt, dtype=float)
+    da_dot = np.asarray(da_dot, dtype=float)
+    dex_new, dey_new = _rotate_e(dex, dey, dt, secular_rates(a, inc, j2))
+    return da + da_dot * dt, dex_new, dey_new
+
+
+class SecularRates(NamedTuple):
+    """The coefficients of :func:`propagate_elements` for one chief (a, i): d(dl)/d(da) rate
+    -(3/2 n + 7 kappa P) (3/2 n without J2, subtracted), 7 kappa sin 2i, 7/2 kappa sin 2i, 2 kappa sin^2 i and the
+    e-vector rotation rate kappa Q [1/s] (None without J2)."""
+
+    dl_da: float
+    dl_dix: float | None
+    diy_da: float | None
+    diy_dix: float | None
+    e_rotation: float | None
+
+
+def secular_rates(a: ArrayLike, inc: ArrayLike, j2: bool = True) -> SecularRates:
+    """The coefficients of :func:`propagate_elements` for one chief: computed once per (a, i, j2) for scalar floats
+    (the values of the expressions of the module docstring, evaluated as :func:`propagate_elements` always did),
+    afresh for arrays.
+
+    Parameters
+    ----------
+    a : array_like
+        The chief's semi-major axis [m].
+    inc : array_like
+        The chief's inclination [rad]; broadcast with ``a``.
+    j2 : bool
+        With the J2 secular rates.
+
+    Returns
+    -------
+    SecularRates
+        The coefficients (scalars for scalar ``a`` and ``inc``, else arrays of their broadcast shape).
+    """
+    if isinstance(a, float) and isinstance(inc, float):
+        return _secular_rates_cached(a, inc, bool(j2), math.copysign(1.0, a), math.copysign(1.0, inc))
+    return _secular_rates(a, inc, j2)
+
+
+@functools.lru_cache(maxsize=64)
+def _secular_rates_cached(a, inc, j2, _sign_a, _sign_inc):
+    # the signs are part of the key: -0.0 == 0.0 would otherwise share an entry
+    return _secular_rates(a, inc, j2)
+
+
+def _secular_rates(a, inc, j2):
+    n = mean_motion(a)
+    if not j2:
+        return SecularRates(1.5 * n, None, None, None, None)
+    kap = j2_kappa(a)
+    p_fac = 3.0 * np.cos(inc) ** 2 - 1.0
+    s2i = np.sin(2.0 * inc)
+    # left to right as in 7.0 * kap * s2i * dix * dt: the scalar factors first
+    return SecularRates(-(1.5 * n + 7.0 * kap * p_fac), 7.0 * kap * s2i, 3.5 * kap * s2i,
+                        2.0 * kap * np.sin(inc) ** 2, eccentricity_vector_rotation_rate(a, inc))
+
+
+def _rotate_e(dex, dey, dt, rates):
+    """The relative e vector after ``dt``: rotated at kappa Q with J2, unchanged (broadcast) without."""
+    if rates.e_rotation is None:
+        return dex + 0.0 * dt, dey + 0.0 * dt
+    phi = rates.e_rotation * dt
+    cph, sph = np.cos(phi), np.sin(phi)
+    return dex * cph - dey * sph, dex * sph + dey * cph
 
 
 def propagate_chief(kep: ArrayLike, dt: ArrayLike, j2: bool = True) -> np.ndarray:

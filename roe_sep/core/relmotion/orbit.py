@@ -1,5 +1,8 @@
 """Absolute near-circular orbit relations of the chief (carrier)."""
 
+import functools
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -13,6 +16,14 @@ def semi_major_axis(altitude: ArrayLike) -> np.ndarray:
 
 def mean_motion(a: ArrayLike) -> np.ndarray:
     """Keplerian mean motion n = sqrt(mu / a^3) [rad/s] for semi-major axis ``a`` [m] (any shape)."""
+    if isinstance(a, float):  # a chief's: computed once per value (the same expression)
+        return _mean_motion_cached(a, math.copysign(1.0, a))
+    return np.sqrt(MU_EARTH / np.asarray(a, dtype=float) ** 3)
+
+
+@functools.lru_cache(maxsize=64)
+def _mean_motion_cached(a, _sign):
+    # the sign is part of the key: -0.0 == 0.0 would otherwise share an entry
     return np.sqrt(MU_EARTH / np.asarray(a, dtype=float) ** 3)
 
 

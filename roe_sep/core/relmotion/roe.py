@@ -74,10 +74,22 @@ def roe_to_rtn(roe: ArrayLike, u: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     ``dl`` is the current relative mean longitude (its secular drift is the propagator's job). Returns the
     dimensionless ``(r/a, v/(a n))``, each ``(..., 3)``: multiply by a and a*n for meters and m/s.
     """
+    return _roe_to_rtn(roe, u, True)
+
+
+def rtn_position(roe: ArrayLike, u: ArrayLike) -> np.ndarray:
+    """The position r/a ``(..., 3)`` of :func:`roe_to_rtn` alone (its expressions, the same values), for callers
+    that need no velocity."""
+    return _roe_to_rtn(roe, u, False)[0]
+
+
+def _roe_to_rtn(roe, u, velocity):
     r = np.asarray(roe, dtype=float)
     da, dl, dex, dey, dix, diy = np.moveaxis(r, -1, 0)
     s, c = np.sin(u), np.cos(u)
     pos = np.stack([da - dex * c - dey * s, dl + 2.0 * dex * s - 2.0 * dey * c, dix * s - diy * c], axis=-1)
+    if not velocity:
+        return pos, None
     vel = np.stack([dex * s - dey * c, -1.5 * da + 2.0 * dex * c + 2.0 * dey * s, dix * c + diy * s], axis=-1)
     return pos, vel
 

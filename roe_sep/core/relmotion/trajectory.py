@@ -71,21 +71,72 @@ def trajectory(roe0: ArrayLike, t0: float, burns: Iterable[Burn], times: ArrayLi
     times = np.asarray(times, dtype=float)
     if np.any(times < t0):
         raise ValueError("trajectory times must not precede t0")
+    return segments_at(burn_segments(roe0, t0, burns, chief, j2, da_dot), times, t0, chief, j2, da_dot)
+
+
+def burn_segments(roe0: ArrayLike, t0: float, burns: Iterable[Burn], chief: Chief, j2: bool = True,
+                  da_dot: float = 0.0) -> list:
+    """The coast arcs of :func:`trajectory`: ``[(t_start, state, t_end)]``, the state at ``t0`` until the first
+    burn (>= ``t0``), then the post-burn state at each burn's epoch until the next one (the last until ``inf``).
+
+    A caller that samples the same ``roe0`` and burns at several times keeps these and samples them with
+    :func:`segments_at` (the values of :func:`trajectory`, to the bit).
+
+    Parameters
+    ----------
+    roe0, t0, burns, chief, j2, da_dot
+        As for :func:`trajectory`.
+
+    Returns
+    -------
+    list of (float, numpy.ndarray, float)
+        Start epoch [s], dimensionless ROE ``(6,)`` there, end epoch [s] of each arc.
+    """
     order = sorted((b for b in burns if b.epoch >= t0), key=lambda b: b.epoch)
-    out = np.empty(times.shape + (6,))
     state, t_state = np.asarray(roe0, dtype=float), float(t0)
     n = mean_motion(chief.a)
-    edges = [b.epoch for b in order] + [np.inf]
+    arcs = []
+    for b in order:
+        arcs.append((t_state, state, b.epoch))
+        state = propagate(state, b.epoch - t_state, chief.a, chief.inc, j2, da_dot)
+        state = state + delta_roe(np.asarray(b.dv_rel, dtype=float), chief.u_at(b.epoch, j2), chief.a, n)
+        t_state = b.epoch
+    arcs.append((t_state, state, np.inf))
+    return arcs
+
+
+def segments_at(arcs: list, times: ArrayLike, t0: float, chief: Chief, j2: bool = True,
+                da_dot: float = 0.0) -> np.ndarray:
+    """ROE ``(len(times), 6)`` at ``times`` [s] (all >= ``t0``, unchecked) on the arcs of :func:`burn_segments`:
+    each sample propagated from the start of its arc (a sample exactly at a burn epoch sees the post-burn state).
+
+    Parameters
+    ----------
+    arcs : list
+        :func:`burn_segments` of ``roe0`` at ``t0``.
+    times : array_like, shape (m,)
+        Epochs [s] of the output.
+    t0 : float
+        Epoch of ``roe0`` [s].
+    chief, j2, da_dot
+        As for :func:`trajectory`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (m, 6)
+        Dimensionless ROE at ``times``.
+    """
+    times = np.asarray(times, dtype=float)
+    if len(arcs) == 1 and times.ndim == 1:  # one coast arc (no burn): every sample of it, as the loop below
+        t_state, state, hi = arcs[0]
+        if (times < hi).all():
+            return propagate(state, times - t_state, chief.a, chief.inc, j2, da_dot)
+    out = np.empty(times.shape + (6,))
     lo = -np.inf
-    for k, hi in enumerate(edges):
+    for k, (t_state, state, hi) in enumerate(arcs):
         sel = (times >= max(lo, t0)) & (times < hi) if k else (times < hi)
         if np.any(sel):
             out[sel] = propagate(state, times[sel] - t_state, chief.a, chief.inc, j2, da_dot)
-        if k < len(order):
-            b = order[k]
-            state = propagate(state, b.epoch - t_state, chief.a, chief.inc, j2, da_dot)
-            state = state + delta_roe(np.asarray(b.dv_rel, dtype=float), chief.u_at(b.epoch, j2), chief.a, n)
-            t_state = b.epoch
         lo = hi
     return out
 

@@ -3,7 +3,7 @@
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..relmotion.dynamics import arg_latitude_rate, propagate, propagate_elements
+from ..relmotion.dynamics import arg_latitude_rate, propagate, propagate_elements, propagate_in_plane
 from ..relmotion.orbit import mean_motion
 from ..relmotion.roe import roe_to_rtn, wrap_angle
 
@@ -103,7 +103,7 @@ def nearest_crossing(roe0: ArrayLike, u0: ArrayLike, duration: float, a: float, 
     lead = (-1,) + (1,) * len(batch)
     with np.errstate(invalid="ignore", divide="ignore"):  # circular (de = 0) samples give NaN: masked below
         t_rev = (period * np.arange(int(np.ceil(duration / period)) + 1)).reshape(lead)
-        da_s, _, dex_s, dey_s, _, _ = propagate_elements(el, t_rev, a, inc, j2, dad)
+        da_s, dex_s, dey_s = propagate_in_plane(el[0], el[2], el[3], t_rev, a, inc, j2, dad)
         de, phi = np.hypot(dex_s, dey_s), np.arctan2(dey_s, dex_s)
         psi = np.arccos(np.clip(da_s / de, -1.0, 1.0))
         u_start = u0 + u_dot * t_rev
@@ -112,7 +112,7 @@ def nearest_crossing(roe0: ArrayLike, u0: ArrayLike, duration: float, a: float, 
         # one candidate of each kind per revolution, within half a revolution of that revolution's start
         t = np.concatenate([t_rev, t_rev]) + wrap_angle(cand - u_start2) / u_dot
         for _ in range(iterations):
-            da, _, dex, dey, _, _ = propagate_elements(el, t, a, inc, j2, dad)
+            da, dex, dey = propagate_in_plane(el[0], el[2], el[3], t, a, inc, j2, dad)
             u = u0 + u_dot * t
             s, c = np.sin(u), np.cos(u)
             pos_r = da - dex * c - dey * s

@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..relmotion.orbit import orbital_period
-from ..relmotion.roe import roe_to_rtn
+from ..relmotion.roe import rtn_position
 from ..relmotion.trajectory import Burn, Chief, trajectory
 from .metrics import approaching, fov_limit, min_rn_distance, nearest_crossing
 
@@ -120,14 +120,16 @@ def assess(roe0: ArrayLike, t0: float, chief: Chief, limits: MonitorLimits, burn
     n_samples = max(2, int(limits.samples_per_orbit * (t_end - t0) / orbital_period(a)) + 1)
     times = np.linspace(t0, t_end, n_samples)
     roes = trajectory(roe0, t0, burns, times, chief, j2, da_dot)
-    pos, _ = roe_to_rtn(roes, chief.u_at(times, j2))
+    pos = rtn_position(roes, chief.u_at(times, j2))
     dist = np.linalg.norm(pos, axis=-1) * a
     # keep-out counts returns: from the first sample outside the sphere on (a trajectory that starts at an
     # ejection begins at zero distance by construction); one that never leaves it is measured throughout
     outside = np.nonzero(dist >= limits.keep_out)[0]
     returning = dist[outside[0]:] if outside.size else dist
-    last_burn = max([b.epoch for b in burns if b.epoch >= t0], default=t0)
-    start = trajectory(roe0, t0, burns, np.array([last_burn]), chief, j2, da_dot)[0]
+    burn_epochs = [b.epoch for b in burns if b.epoch >= t0]
+    last_burn = max(burn_epochs, default=t0)
+    # without a burn the state at last_burn = t0 is the first sample (times[0] is t0: the same propagation)
+    start = trajectory(roe0, t0, burns, np.array([last_burn]), chief, j2, da_dot)[0] if burn_epochs else roes[0]
     crossing, _ = nearest_crossing(start, chief.u_at(last_burn, j2), t_end - last_burn, a, chief.inc, j2, da_dot)
     end = roes[-1] * a
     res = Assessment(
