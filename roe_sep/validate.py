@@ -50,8 +50,38 @@ def elements(field, el):
         _finite(_join(field, name), getattr(el, name), -100.0, 100.0, "a finite angle [rad]")
 
 
+_NUMBER = (int, float)
+_ELEMENT_BOUNDS = ((R_EARTH + 1.0e5, R_EARTH + 5.0e6), (0.0, 0.1), (0.0, math.pi), (-100.0, 100.0),
+                   (-100.0, 100.0), (-100.0, 100.0))  # elements(): a, e, i, raan, arg_perigee, mean_arg_latitude
+
+
+def _roe_ok(msg) -> bool:
+    """True when :func:`roe` accepts ``msg``: its tests in its order, without building the field names (every bound
+    is finite, so ``lo <= value <= hi`` fails for NaN and infinities as ``_finite`` does). False (or an exception)
+    sends the message through :func:`roe` itself, which raises what it raises."""
+    t = msg.header.stamp
+    if t.sec < 0 or not 0 <= t.nanosec < NANOSECONDS_PER_SECOND:
+        return False
+    el = msg.chief
+    values = (el.semi_major_axis, el.eccentricity, el.inclination, el.raan, el.arg_perigee, el.mean_arg_latitude)
+    for value, (lo, hi) in zip(values, _ELEMENT_BOUNDS):
+        if not (isinstance(value, _NUMBER) and lo <= value <= hi):
+            return False
+    for value in (msg.a_da, msg.a_dl, msg.a_dex, msg.a_dey, msg.a_dix, msg.a_diy):
+        if not (isinstance(value, _NUMBER) and -MAX_ROE_M <= value <= MAX_ROE_M):
+            return False
+    cov = msg.covariance
+    cov = cov.tolist() if hasattr(cov, "tolist") else list(cov)
+    return len(cov) in (0, 36) and all(map(math.isfinite, cov))
+
+
 def roe(field, msg):
     """RelativeOrbitalElements: stamp, chief and a*ROE [m] plausible; covariance 36 finite entries or empty."""
+    try:
+        if _roe_ok(msg):
+            return
+    except Exception:  # noqa: BLE001 -- the checks below raise it again, or say what is wrong
+        pass
     time_of(_join(field, "header.stamp"), msg.header.stamp)
     elements(_join(field, "chief"), msg.chief)
     for name in ("a_da", "a_dl", "a_dex", "a_dey", "a_dix", "a_diy"):

@@ -55,6 +55,17 @@ def roe_to_msg(roe, chief: OrbitalElements, stamp: Time, frame_id=interfaces.CAR
     return msg
 
 
+def truth_rows(kep, roe) -> tuple[list, list]:
+    """The fields of :func:`array_to_elements` (``[a, e, i, raan, argp, u]``, angles wrapped) and of :func:`roe_to_msg`
+    (a*ROE [m]) for each row of the mean elements ``kep`` ``(T, 6)`` and the dimensionless ``roe`` ``(T, 6)``, as lists
+    of Python floats: one vectorised pass whose element-wise operations are those of the per-row functions, so every
+    value is the same to the last bit."""
+    kep = np.asarray(kep, dtype=float).reshape(-1, 6)
+    roe = np.asarray(roe, dtype=float).reshape(-1, 6)
+    chief = np.concatenate([kep[:, :3], wrap_angle(kep[:, 3:5]), wrap_angle(kep[:, 4:5] + kep[:, 5:6])], axis=1)
+    return chief.tolist(), (roe * kep[:, :1]).tolist()
+
+
 def msg_to_roe(msg: RelativeOrbitalElements) -> np.ndarray:
     """Message -> dimensionless ROE."""
     return np.array([getattr(msg, n) for n in ROE_FIELDS], dtype=float) / msg.chief.semi_major_axis

@@ -81,6 +81,7 @@ class RecorderNode(Node):
         self.steps = collections.deque(maxlen=64)  # (counts, lo, hi) of the latest step messages, in order
         self.steps_seen = 0  # step messages appended to self.steps so far (the serial of the next one)
         self.first_step = {}  # topic -> serial of the first step that may attribute its next held message
+        self.last_counted = {}  # topic -> serial of the latest step message that counts it
         self.received = collections.Counter()
         self.held = collections.defaultdict(collections.deque)  # topic -> (n, data, source) not attributed yet
         self.last_log = {}  # topic -> last log time [ns] (monotone per channel)
@@ -170,7 +171,10 @@ class RecorderNode(Node):
     def on_step(self, step: LockstepStep):
         t = step.header.stamp.sec * 1_000_000_000 + step.header.stamp.nanosec
         lo = int(round(step.period_start * 1e9)) if step.round == 0 else t
-        self.steps.append((dict(zip(step.topics, step.counts)), min(lo, t), t))
+        counts = dict(zip(step.topics, step.counts))
+        self.steps.append((counts, min(lo, t), t))
+        for topic in counts:
+            self.last_counted[topic] = self.steps_seen
         self.steps_seen += 1
         if self.pending:  # received before the clock started (start-up statuses): published before this step
             self._write_pending(min(lo, t))
@@ -182,11 +186,12 @@ class RecorderNode(Node):
         if topic == interfaces.CLOCK_TOPIC:
             self._write_monotone(topic, data, _stamp_ns(data), source)
             return
-        if not any(topic in counts for counts, _, _ in self.steps):
+        # a step message still held counts the topic (the serial of the latest that does, against the oldest held)
+        if self.last_counted.get(topic, -1) < self.steps_seen - len(self.steps):
             self._write_monotone(topic, data, self.step_time, source)
             return
-        self.received[topic] += 1
-        self.held[topic].append((self.received[topic], data, source))
+        n = self.received[topic] = self.received[topic] + 1
+        self.held[topic].append((n, data, source))
         self._release(topic)
 
     def _release(self, topic):
@@ -196,19 +201,19 @@ class RecorderNode(Node):
         the step where its previous one was found instead of scanning every step held from the oldest on."""
         held = self.held[topic]
         steps = self.steps
-        base = self.steps_seen - len(steps)  # serial of steps[0]
+        count = len(steps)
+        base = self.steps_seen - count  # serial of steps[0]
         k = max(self.first_step.get(topic, 0), base) - base
         while held:
             n, data, source = held[0]
-            while k < len(steps) and steps[k][0].get(topic, 0) < n:
+            while k < count and steps[k][0].get(topic, 0) < n:
                 k += 1
             self.first_step[topic] = base + k
-            if k == len(steps):
+            if k == count:
                 return
-            window = steps[k][1:]
+            _, lo, hi = steps[k]
             held.popleft()
-            stamp = _stamp_ns(data)
-            self._write_monotone(topic, data, min(max(stamp, window[0]), window[1]), source)
+            self._write_monotone(topic, data, min(max(_stamp_ns(data), lo), hi), source)
 
     def _write_monotone(self, topic, data, log_ns, source):
         log_ns = max(int(log_ns), self.last_log.get(topic, 0))
@@ -281,9 +286,11 @@ def _stamp_ns(data: bytes) -> int:
     clock's value) [ns]; 0 if the data is too short. Only used to place a log time inside its step."""
     if len(data) < 12:
         return 0
-    endian = "<" if data[1] == 1 else ">"
-    sec, nsec = struct.unpack(endian + "iI", data[4:12])
+    sec, nsec = (_STAMP_LE if data[1] == 1 else _STAMP_BE).unpack_from(data, 4)
     return sec * 1_000_000_000 + nsec
+
+
+_STAMP_LE, _STAMP_BE = struct.Struct("<iI"), struct.Struct(">iI")  # a stamp (int32 sec, uint32 nanosec) in CDR
 
 
 def main(args=None):

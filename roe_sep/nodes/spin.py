@@ -3,11 +3,12 @@
 One life cycle (:func:`serve`) for a node alone (:func:`run`, the ``main()`` of each node, the lifecycle manager's
 too) and for several nodes on one executor (:mod:`roe_sep.nodes.suite`); nothing waits outside the spin:
 
-* rclpy's own signal handler is off. SIGINT/SIGTERM only set a flag that the loop checks between short
-  ``spin_once`` calls: a signal never interrupts a callback halfway, and the context is never shut down under an
-  executor that is building its wait set (rclpy's handler does that, and the executor then raises
-  ``RCLError: the given context is not valid`` instead of exiting cleanly). The EventsExecutor's C++ ``spin()``
-  would not let Python's handlers run at all.
+* rclpy's own signal handler is off. SIGINT/SIGTERM only set a flag that the loop checks between short slices of
+  spinning (:data:`SLICE`, ``spin_until_future_complete`` on a future that never completes: the executor runs the
+  callbacks of a slice without returning to this loop for each one): a signal never interrupts a callback halfway,
+  and the context is never shut down under an executor that is building its wait set (rclpy's handler does that,
+  and the executor then raises ``RCLError: the given context is not valid`` instead of exiting cleanly). The
+  EventsExecutor's C++ ``spin()`` would not let Python's handlers run at all.
 * After the stop request the process **drains**: messages DDS already delivered to it are still handled, so the
   recorder logs the last status a simulator published just before it was stopped, and the ground_bridge's final
   CCSDS set includes it. A node that counts what it receives (an int attribute ``messages_received``) keeps the
@@ -26,12 +27,14 @@ import traceback
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.signals import SignalHandlerOptions
+from rclpy.task import Future
 
 from ..errors import RosArgumentsError
 from .params import ParameterError, help_requested, node_table, print_usage
 
 DRAIN_IDLE = 0.3  # s (wall) without a new message that ends the drain
 DRAIN_MAX = 10.0  # s (wall), at most
+SLICE = 0.1  # s (wall) of spinning between two checks of the stop request, the context and ``until``
 
 
 def ros_arguments_error(exc, args=None) -> str:
@@ -73,10 +76,10 @@ def received(nodes) -> int:
 
 
 def spin(executor, nodes=(), until=None, errors=None) -> int:
-    """Spin ``executor`` until SIGINT/SIGTERM, a context shutdown or ``until()`` (optional, checked between
-    callbacks) is true, then drain (module docstring; with ``until``, only when it ended the spin: the nodes that
-    publish are then in this process and would keep the drain going). Returns 1 if a callback raised (traceback
-    printed, and its last line appended to ``errors`` if given), else 0."""
+    """Spin ``executor`` until SIGINT/SIGTERM, a context shutdown or ``until()`` (optional, checked every
+    :data:`SLICE` s of wall time) is true, then drain (module docstring; with ``until``, only when it ended the
+    spin: the nodes that publish are then in this process and would keep the drain going). Returns 1 if a callback
+    raised (traceback printed, and its last line appended to ``errors`` if given), else 0."""
     stop = []
 
     def on_signal(signum, frame):  # noqa: ARG001
@@ -86,7 +89,7 @@ def spin(executor, nodes=(), until=None, errors=None) -> int:
         signal.signal(sig, on_signal)
     try:
         while not stop and rclpy.ok() and not (until is not None and until()):
-            executor.spin_once(timeout_sec=0.1)
+            executor.spin_until_future_complete(Future(), timeout_sec=SLICE)
         counted = [n for n in nodes if hasattr(n, "messages_received")]
         # with ``until`` the closed loop runs in this process and keeps stepping: a signal ends the run at once
         if counted and rclpy.ok() and not (stop and until is not None):
