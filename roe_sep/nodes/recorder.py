@@ -34,13 +34,14 @@ from ..bag import BagError, definitions
 from ..bag import qos as bag_qos
 from ..bag.writer import BagWriter
 from .diagnostics import ERROR, OK, WARN, publish_status
-from .lockstep import STEP_QOS
 from .params import ParameterError, declare
 
 DISCOVERY_PERIOD = 0.5  # s, wall time
 DIAGNOSTICS_PERIOD = 1.0  # s, wall time
 SUBSCRIPTION_DEPTH = 1000
 PENDING_LIMIT = 10000  # messages held while waiting for the first /clock
+STEP_READER = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=SUBSCRIPTION_DEPTH,
+                         reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
 
 
 def absolute(name: str) -> str:
@@ -78,7 +79,10 @@ class RecorderNode(Node):
         self._last_error_log = 0.0
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
         # lockstep: log times from the simulator's steps (see on_step)
-        self.steps = collections.deque(maxlen=64)  # (counts, lo, hi) of the latest step messages, in order
+        # (counts, lo, hi) of the latest step messages, in order; as deep as the topics' readers: the recorder is no
+        # lockstep participant, so under load it may fall behind the simulator by many steps, and a step message lost
+        # (a 10-deep reader) or dropped from here logs the messages it counts at a later step's time
+        self.steps = collections.deque(maxlen=SUBSCRIPTION_DEPTH)
         self.steps_seen = 0  # step messages appended to self.steps so far (the serial of the next one)
         self.first_step = {}  # topic -> serial of the first step that may attribute its next held message
         self.last_counted = {}  # topic -> serial of the latest step message that counts it
@@ -86,7 +90,7 @@ class RecorderNode(Node):
         self.held = collections.defaultdict(collections.deque)  # topic -> (n, data, source) not attributed yet
         self.last_log = {}  # topic -> last log time [ns] (monotone per channel)
         self.step_time = None  # ns, sim time of the latest step
-        self.create_subscription(LockstepStep, interfaces.LOCKSTEP_STEP_TOPIC, self.on_step, STEP_QOS)
+        self.create_subscription(LockstepStep, interfaces.LOCKSTEP_STEP_TOPIC, self.on_step, STEP_READER)
         wall = Clock(clock_type=ClockType.STEADY_TIME)
         self.create_timer(DISCOVERY_PERIOD, self.discover, clock=wall)
         self.create_timer(float(self.flush_period), self.flush, clock=wall)
