@@ -90,6 +90,11 @@ def _child(argv, log, parent):
 
 def serve():
     """The server loop (``python -m roe_sep.campaign.forkserver``): read requests from stdin, answer on stdout."""
+    # freed NumPy temporaries stay in the heap, inherited by every fork (allocation only, the numbers unchanged;
+    # first, so that the warm sweep's streaming does not set the Monte Carlo's threshold)
+    from ..core.montecarlo.allocator import CLOSED_LOOP_TRIM_THRESHOLD, keep_freed_memory
+
+    keep_freed_memory(CLOSED_LOOP_TRIM_THRESHOLD)
     # What a run imports, imported once here (never initialised: rclpy.init happens in the forked run).
     import rclpy  # noqa: F401
 

@@ -20,12 +20,20 @@ M_TRIM_THRESHOLD = -1
 M_MMAP_THRESHOLD = -3
 MMAP_THRESHOLD = 32 * 1024 * 1024  # glibc's largest accepted value on 64-bit (HEAP_MAX_SIZE / 2)
 TRIM_THRESHOLD = 1024 * 1024 * 1024
+CLOSED_LOOP_TRIM_THRESHOLD = 64 * 1024 * 1024  # a closed-loop run's: see keep_freed_memory
 
 _state = {"done": False, "active": False}
 
 
-def keep_freed_memory() -> bool:
-    """Tune glibc's allocator as described in the module docstring (once per process); True if it took effect."""
+def keep_freed_memory(trim_threshold: int = TRIM_THRESHOLD) -> bool:
+    """Tune glibc's allocator as described in the module docstring (once per process: the first call's
+    ``trim_threshold`` [bytes] holds); True if it took effect.
+
+    A campaign's closed-loop runs (forked from :mod:`roe_sep.campaign.forkserver`) take
+    :data:`CLOSED_LOOP_TRIM_THRESHOLD`: without the tuning a run took about 260,000 page faults (0.7 CPU-s of system
+    time, 20 runs of seeds 1000-1019), with it 73,000 and 0.35 CPU-s, at the same peak memory of the campaign's
+    process tree (proportional set 823 against 804 MB); a 1 GiB threshold saved a little more (54,000 faults) for
+    60 MB more per run."""
     if _state["done"]:
         return _state["active"]
     _state["done"] = True
@@ -36,5 +44,5 @@ def keep_freed_memory() -> bool:
         return False
     mallopt.argtypes, mallopt.restype = (ctypes.c_int, ctypes.c_int), ctypes.c_int
     _state["active"] = bool(mallopt(M_MMAP_THRESHOLD, MMAP_THRESHOLD)) and bool(mallopt(M_TRIM_THRESHOLD,
-                                                                                        TRIM_THRESHOLD))
+                                                                                        int(trim_threshold)))
     return _state["active"]
