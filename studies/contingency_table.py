@@ -23,7 +23,12 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from roe_sep import interfaces  # noqa: E402
-from roe_sep.campaign.contingency_table import EXPECTED_DETECTIONS, markdown, summarize  # noqa: E402
+from roe_sep.campaign.contingency_table import (  # noqa: E402
+    EXPECTED_DETECTIONS,
+    compact_markdown,
+    markdown,
+    summarize,
+)
 from roe_sep.campaign.table import Table  # noqa: E402
 from roe_sep.core.safety.monitor import MonitorLimits  # noqa: E402
 from roe_sep.plots.campaign import fig_distance_grid, fig_distance_vs_time  # noqa: E402
@@ -63,6 +68,7 @@ def main(argv=None):
     p.add_argument("--case", action="append", required=True, metavar="LABEL=DIR",
                    help="a campaign directory and its label in the table (repeat; in table order)")
     p.add_argument("--md", type=Path, help="write the Markdown table here")
+    p.add_argument("--compact-md", type=Path, help="write the README's short table here")
     p.add_argument("--json", type=Path, help="write the rows as strict JSON here")
     p.add_argument("--figures", type=Path, help="write one distance-vs-time figure per case into this directory")
     p.add_argument("--grid", type=Path, help="write the cases' figures as the panels of one figure here")
@@ -100,6 +106,8 @@ def main(argv=None):
         fig_distance_grid(panels, args.grid, keep_out)
     if args.md:
         args.md.write_text(markdown(summaries), encoding="utf-8")
+    if args.compact_md:
+        args.compact_md.write_text(compact_markdown(summaries), encoding="utf-8")
     text = json.dumps(summaries, indent=1, allow_nan=False)
     if args.json:
         args.json.write_text(text + "\n", encoding="utf-8")

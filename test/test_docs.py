@@ -13,6 +13,7 @@
 - Every relative link and image points to an existing file, every ``#anchor`` to a heading of its page.
 """
 
+import json
 import os
 import re
 import shlex
@@ -240,6 +241,18 @@ def test_a_broken_link_is_caught(tmp_path):
                     encoding="utf-8")
     assert broken_links(page) == ["#no-heading: no heading #no-heading", "missing.md: no such file",
                                   "x.png: no such file"]
+
+
+def test_the_readme_contingency_table_is_the_recorded_one():
+    """The README's short table is :func:`compact_markdown` of the recorded rows (bench/results/contingency_table.json),
+    as studies/contingency_table.py --compact-md wrote it."""
+    from roe_sep.campaign.contingency_table import compact_markdown
+
+    rows = json.loads((ROOT / "bench/results/contingency_table.json").read_text(encoding="utf-8"))
+    table = compact_markdown(rows)
+    assert (ROOT / "bench/results/contingency_table_compact.md").read_text(encoding="utf-8") == table
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    assert table in readme, "README.md's contingency table differs from the recorded rows"
 
 
 def test_the_contingency_table_is_the_recorded_one():

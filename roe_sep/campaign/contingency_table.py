@@ -99,6 +99,23 @@ def _num(v, fmt):
     return "--" if v is None else format(v, fmt)
 
 
+def compact_markdown(summaries):
+    """The README's short form of :func:`markdown`: per case the safe runs, the closest approach [m], the runs at the
+    ICs, the carrier dv p50 / p95 [m/s] and the runs the ground saw ('–' for a case without a contingency)."""
+    lines = ["| case | safe | closest approach [m] | ICs reached | carrier Δv p50 / p95 [m/s] | seen by the ground |",
+             "|---|---|---|---|---|---|"]
+    for s in summaries:
+        dv50, dv95 = s["dv_total_m_s_p50_p95"]
+        seen = "–" if s["p_detected"] is None else _count(s["p_detected"])
+        lines.append(f"| {s['label']} | {_count(s['p_safe'])} | {_num(s['min_distance_min_m'], '.0f')} | "
+                     f"{_count(s['p_ic_reached'])} | {_num(dv50, '.3f')} / {_num(dv95, '.3f')} | {seen} |")
+    return "\n".join(lines) + "\n"
+
+
+def _count(prop):
+    return "--" if prop is None else f"{prop['k']}/{prop['n']}"
+
+
 def markdown(summaries):
     """The Markdown table of :func:`summarize` rows."""
     head = ("| case | runs | P(safe) | collisions (d < 1 m) | closest approach p0.1 / min [m] | P(ICs reached) | "
