@@ -236,10 +236,23 @@ for exe in "${EXES[@]}"; do
     > "$OUT/run_$exe.log" 2>&1 &
   PIDS+=($!)
 done
-sleep 12
+# until every node is in the graph (at most 90 s: ten interpreters start at once on the 2 cores, and a loaded
+# machine took longer than the 17 s a fixed wait gave); the listing below is then the one reported
+deadline=$((SECONDS + 90))
+while :; do
+  seen="$(timeout 60 ros2 node list --no-daemon --spin-time 3 2>/dev/null || true)"
+  missing=()
+  for exe in "${EXES[@]}"; do grep -qx "/$exe" <<< "$seen" || missing+=("$exe"); done
+  [ "${#missing[@]}" -eq 0 ] || [ "$SECONDS" -ge "$deadline" ] && break
+  sleep 1
+done
 {
 section "node list (every executable started with ros2 run)"
 r2 node list --no-daemon --spin-time 5
+for exe in "${missing[@]}"; do  # what a node that never appeared said
+  printf '\n---- not seen after 90 s: %s (its log, last lines)\n' "$exe"
+  tail -n 20 "$OUT/run_$exe.log" || true
+done
 section "topic list"
 r2 topic list --no-daemon --spin-time 3 -t
 section "lifecycle"
