@@ -10,7 +10,8 @@ change of the machine's load hits both alike:
   one sample of ``/proc``, every 0.2 s: :mod:`proctree`);
 * ``roe-sep campaign --runs N --workers W --no-bags --no-figures`` (``--campaign-runs 0``: none; ``--bags yes``
   keeps the bags, ``both`` runs both pairs): runs per hour by wall time, CPU-s per run over the tree (Dask's start-up
-  included: a small campaign overstates it), peak RSS of the tree;
+  included: a small campaign overstates it), peak RSS of the tree (the sum over its processes, and their
+  proportional set, which counts the pages forked runs share with their server once: :func:`proctree.pss`);
 * identity: every run's ``report.json`` without ``run`` (how the run went on this machine) and the campaign's
   ``runs.csv`` without its machine columns (:data:`roe_sep.campaign.table.RUN_FIELDS`) must be the same for both.
 
@@ -50,20 +51,24 @@ def extract(rev, into):
 
 
 def measured(cmd, env, cwd, interval=0.2):
-    """Run ``cmd`` in ``cwd``; wall [s], CPU of the process tree [s], peak RSS of the tree [MB], return code.
+    """Run ``cmd`` in ``cwd``; wall [s], CPU of the process tree [s], peak RSS and proportional set of the tree
+    [MB], return code.
     ``cwd`` is the version's tree: ``python -m`` puts the working directory first on ``sys.path``, before
     ``PYTHONPATH``, and every node process inherits it."""
     before = os.times()
     t0 = time.monotonic()
     proc = subprocess.Popen(cmd, env=env, cwd=cwd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    peak = 0
+    peak = peak_pss = 0
     while proc.poll() is None:
-        peak = max(peak, sum(v[0] for v in proctree.sample(proc.pid).values()))
+        tree = proctree.sample(proc.pid)
+        peak = max(peak, sum(v[0] for v in tree.values()))
+        peak_pss = max(peak_pss, sum(proctree.pss(pid) for pid in tree))
         time.sleep(interval)
     wall = time.monotonic() - t0
     after = os.times()
     cpu = (after.children_user - before.children_user) + (after.children_system - before.children_system)
-    return {"wall_s": wall, "cpu_s": cpu, "peak_rss_mb": peak / 2**20, "returncode": proc.returncode}
+    return {"wall_s": wall, "cpu_s": cpu, "peak_rss_mb": peak / 2**20, "peak_pss_mb": peak_pss / 2**20,
+            "returncode": proc.returncode}
 
 
 def environment(tree, domain, cache):
@@ -88,7 +93,8 @@ def rows_of(path):
 
 
 def summary(samples):
-    return {key: statistics.median(s[key] for s in samples) for key in ("wall_s", "cpu_s", "peak_rss_mb")} | {
+    return {key: statistics.median(s[key] for s in samples) for key in ("wall_s", "cpu_s", "peak_rss_mb",
+                                                                          "peak_pss_mb")} | {
         "all": samples}
 
 
@@ -154,7 +160,8 @@ def main(argv=None):
             camp[side] = m
             print(f"campaign {side}{' with bags' if bags else ''}: {args.campaign_runs} runs, wall {m['wall_s']:.1f} s "
                   f"({m['runs_per_hour']:.0f} runs/h), CPU {m['cpu_s']:.1f} s ({m['cpu_s_per_run']:.2f} per run), "
-                  f"peak RSS {m['peak_rss_mb']:.0f} MB, exit {m['returncode']}", file=sys.stderr, flush=True)
+                  f"peak RSS {m['peak_rss_mb']:.0f} MB (proportional {m['peak_pss_mb']:.0f} MB), exit "
+                  f"{m['returncode']}", file=sys.stderr, flush=True)
         camp["rows_identical"] = rows_of(camp["base"]["rows"]) == rows_of(camp["new"]["rows"])
         camp["runs"], camp["workers"], camp["bags"] = args.campaign_runs, args.workers, bags
         result["campaign_bags" if bags else "campaign"] = camp
@@ -175,7 +182,8 @@ def main(argv=None):
         c = result[key]
         lines += [f"campaign {args.campaign_runs} runs, {args.workers} workers, {'with' if c['bags'] else 'no'} bags:",
                   *(f"  {side}: {c[side]['runs_per_hour']:.0f} runs/h, {c[side]['cpu_s_per_run']:.2f} CPU-s per run "
-                    f"(Dask start-up included), peak RSS {c[side]['peak_rss_mb']:.0f} MB" for side in ("base", "new")),
+                    f"(Dask start-up included), peak RSS {c[side]['peak_rss_mb']:.0f} MB (proportional "
+                    f"{c[side]['peak_pss_mb']:.0f} MB)" for side in ("base", "new")),
                   f"  new/base runs per hour {c['new']['runs_per_hour'] / c['base']['runs_per_hour']:.2f}, CPU per run "
                   f"{c['new']['cpu_s_per_run'] / c['base']['cpu_s_per_run']:.2f}; rows identical: "
                   f"{c['rows_identical']}"]

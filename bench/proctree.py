@@ -1,5 +1,6 @@
 """Run a command and sample its whole process tree every ``--interval`` seconds from /proc (Linux): peak resident
-set of the tree (sum over every process alive at one sample), each process's own peak (VmHWM), and the tree's CPU
+set of the tree (sum over every process alive at one sample) and its proportional set (``Pss``, shared pages counted
+once: :func:`pss`), each process's own peak (VmHWM), and the tree's CPU
 time (utime + stime of every process, its last sample; the tree total is also cross-checked with the children's
 rusage of the command). Writes one JSON object (``--out`` or stdout).
 
@@ -73,6 +74,17 @@ def sample(root):
     return out
 
 
+def pss(pid) -> int:
+    """Proportional set size of a process [bytes] (``Pss`` of ``/proc/PID/smaps_rollup``: each shared page counted
+    once over the processes that share it), 0 when it cannot be read. The honest total of a tree of forked processes,
+    whose RSS sum counts the pages they share with their parent once per process."""
+    try:
+        with open(f"/proc/{pid}/smaps_rollup") as f:
+            return next((int(line.split()[1]) * 1024 for line in f if line.startswith("Pss:")), 0)
+    except OSError:
+        return 0
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--interval", type=float, default=1.0)
@@ -84,13 +96,14 @@ def main(argv=None):
     sink = open(args.stdout, "w") if args.stdout else subprocess.DEVNULL
     t0 = time.time()
     proc = subprocess.Popen(cmd, stdout=sink)
-    peak_tree, peak_at, last, hwm, samples = 0, 0.0, {}, {}, 0
+    peak_tree, peak_at, peak_pss, last, hwm, samples = 0, 0.0, 0, {}, {}, 0
     while proc.poll() is None:
         s = sample(proc.pid)
         samples += 1
         tot = sum(v[0] for v in s.values())
         if tot > peak_tree:
             peak_tree, peak_at = tot, time.time() - t0
+        peak_pss = max(peak_pss, sum(pss(pid) for pid in s))
         for pid, v in s.items():
             last[pid] = v
             hwm[pid] = max(hwm.get(pid, 0), v[3], v[0])
@@ -105,6 +118,7 @@ def main(argv=None):
         "cpu_s_tree_sampled": sum(v[1] for v in last.values()),
         "peak_rss_tree_mb": peak_tree / 2**20,
         "peak_rss_tree_at_s": peak_at,
+        "peak_pss_tree_mb": peak_pss / 2**20,
         "max_rss_children_rusage_mb": ru.ru_maxrss / 1024,
         "processes": [{"pid": pid, "name": last[pid][2], "peak_rss_mb": hwm[pid] / 2**20, "cpu_s": last[pid][1]}
                       for pid in sorted(last)],
