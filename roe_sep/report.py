@@ -29,7 +29,7 @@ from .core.safety.metrics import min_rn_distance
 from .core.safety.monitor import ERROR_CRITERIA, MonitorLimits, in_fov
 from .stamps import time_to_sec
 
-ROE_KEYS = ("a_da", "a_dl", "a_dex", "a_dey", "a_dix", "a_diy")
+ROE_KEYS = validate.ROE_FIELDS
 
 
 def read_topics(bag_dir, topics):

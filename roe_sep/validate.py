@@ -22,6 +22,8 @@ MAX_DV = 10.0  # m/s: far above any impulse of the scenario (SPL 1.4-1.5 m/s, ca
 MAX_ROE_M = 1.0e7  # m: a*delta alpha of a relative orbit still worth the name
 MAX_BURNS = 1000
 SPACECRAFT = ("carrier", "picosatellite")
+ROE_FIELDS = ("a_da", "a_dl", "a_dex", "a_dey", "a_dix", "a_diy")
+"""The a*ROE fields [m] of RelativeOrbitalElements (and of an OD estimate), in the core's ROE order."""
 
 
 def _join(field, name):
@@ -40,19 +42,23 @@ def time_of(field, t):
     return time_to_sec(t)
 
 
+ELEMENT_BOUNDS = (  # OrbitalElements field, its range, what it must be
+    ("semi_major_axis", R_EARTH + 1.0e5, R_EARTH + 5.0e6, "a low-Earth-orbit semi-major axis [m]"),
+    ("eccentricity", 0.0, 0.1, "a near-circular eccentricity in [0, 0.1]"),
+    ("inclination", 0.0, math.pi, "an inclination in [0, pi] rad"),
+    ("raan", -100.0, 100.0, "a finite angle [rad]"),
+    ("arg_perigee", -100.0, 100.0, "a finite angle [rad]"),
+    ("mean_arg_latitude", -100.0, 100.0, "a finite angle [rad]"),
+)
+
+
 def elements(field, el):
-    """OrbitalElements of a near-circular low Earth orbit."""
-    _finite(_join(field, "semi_major_axis"), el.semi_major_axis, R_EARTH + 1.0e5, R_EARTH + 5.0e6,
-            "a low-Earth-orbit semi-major axis [m]")
-    _finite(_join(field, "eccentricity"), el.eccentricity, 0.0, 0.1, "a near-circular eccentricity in [0, 0.1]")
-    _finite(_join(field, "inclination"), el.inclination, 0.0, math.pi, "an inclination in [0, pi] rad")
-    for name in ("raan", "arg_perigee", "mean_arg_latitude"):
-        _finite(_join(field, name), getattr(el, name), -100.0, 100.0, "a finite angle [rad]")
+    """OrbitalElements of a near-circular low Earth orbit (:data:`ELEMENT_BOUNDS`)."""
+    for name, lo, hi, must in ELEMENT_BOUNDS:
+        _finite(_join(field, name), getattr(el, name), lo, hi, must)
 
 
 _NUMBER = (int, float)
-_ELEMENT_BOUNDS = ((R_EARTH + 1.0e5, R_EARTH + 5.0e6), (0.0, 0.1), (0.0, math.pi), (-100.0, 100.0),
-                   (-100.0, 100.0), (-100.0, 100.0))  # elements(): a, e, i, raan, arg_perigee, mean_arg_latitude
 
 
 def _roe_ok(msg) -> bool:
@@ -63,11 +69,12 @@ def _roe_ok(msg) -> bool:
     if t.sec < 0 or not 0 <= t.nanosec < NANOSECONDS_PER_SECOND:
         return False
     el = msg.chief
-    values = (el.semi_major_axis, el.eccentricity, el.inclination, el.raan, el.arg_perigee, el.mean_arg_latitude)
-    for value, (lo, hi) in zip(values, _ELEMENT_BOUNDS):
+    for name, lo, hi, _ in ELEMENT_BOUNDS:
+        value = getattr(el, name)
         if not (isinstance(value, _NUMBER) and lo <= value <= hi):
             return False
-    for value in (msg.a_da, msg.a_dl, msg.a_dex, msg.a_dey, msg.a_dix, msg.a_diy):
+    for name in ROE_FIELDS:
+        value = getattr(msg, name)
         if not (isinstance(value, _NUMBER) and -MAX_ROE_M <= value <= MAX_ROE_M):
             return False
     cov = msg.covariance
@@ -84,7 +91,7 @@ def roe(field, msg):
         pass
     time_of(_join(field, "header.stamp"), msg.header.stamp)
     elements(_join(field, "chief"), msg.chief)
-    for name in ("a_da", "a_dl", "a_dex", "a_dey", "a_dix", "a_diy"):
+    for name in ROE_FIELDS:
         _finite(_join(field, name), getattr(msg, name), -MAX_ROE_M, MAX_ROE_M)
     cov = list(msg.covariance)
     if len(cov) not in (0, 36) or not all(math.isfinite(c) for c in cov):

@@ -17,10 +17,9 @@ import numpy as np
 
 from ..core.safety.metrics import min_rn_distance
 from ..core.safety.monitor import ERROR_CRITERIA
-from ..report import IC_CHECKS
+from ..report import IC_CHECKS, ROE_KEYS
 
 CRITERIA = (*ERROR_CRITERIA, "min_distance", "plans_approved", "ic_reached")
-ROE_KEYS = ("a_da", "a_dl", "a_dex", "a_dey", "a_dix", "a_diy")
 FIELDS = (
     "seed", "status", "failure", "reason", "safe", *(f"crit_{c}" for c in CRITERIA),
     *(f"ic_{c}" for c in IC_CHECKS), "ic_a_da_m", "ic_pred_a_da_m", "ic_trim", "ic_trim_dv_m_s",

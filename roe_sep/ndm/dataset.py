@@ -16,6 +16,7 @@ from .. import interfaces
 from ..core.relmotion.dynamics import propagate, propagate_chief
 from ..core.relmotion.roe import roe_to_rtn
 from ..stamps import time_to_sec
+from ..validate import ROE_FIELDS
 from . import frames
 from .messages import (
     Burn,
@@ -31,8 +32,6 @@ from .messages import (
     write_message,
 )
 from .options import TOPICS, Options, RunMessages  # noqa: F401  (re-exported)
-
-ROE_FIELDS = ("a_da", "a_dl", "a_dex", "a_dey", "a_dix", "a_diy")
 
 
 def kepler(el) -> np.ndarray:

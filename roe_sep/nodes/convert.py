@@ -9,8 +9,8 @@ from .. import interfaces
 from ..core.relmotion.roe import wrap_angle
 from ..core.truth.execution import relative_impulse
 from ..stamps import sec_nanosec, time_to_sec
+from ..validate import ROE_FIELDS
 
-ROE_FIELDS = ("a_da", "a_dl", "a_dex", "a_dey", "a_dix", "a_diy")
 KEPLER_FIELDS = ("semi_major_axis", "eccentricity", "inclination", "raan", "arg_perigee", "mean_arg_latitude")
 
 
