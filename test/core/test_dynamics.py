@@ -104,3 +104,42 @@ def test_sun_synchronous_inclination_hand_value():
     assert np.degrees(raan_rate(A, INC)) * 86400 * 365.2422 == pytest.approx(360.0, rel=1e-12)
     with pytest.raises(ValueError, match="no sun-synchronous orbit"):
         sun_synchronous_inclination(semi_major_axis(8000e3))
+
+
+def test_a_chiefs_rates_are_computed_once_per_value_and_equal_the_array_ones():
+    from roe_sep.core.relmotion.dynamics import secular_rates
+    from roe_sep.core.relmotion.orbit import per_chief
+
+    a, inc = 6893137.0, np.radians(97.459)
+    # the cached scalars are the values of the same expressions on arrays, to the bit
+    assert mean_motion(a) == mean_motion(np.array([a]))[0]
+    for j2 in (True, False):
+        assert arg_latitude_rate(a, inc, j2) == arg_latitude_rate(np.array([a]), np.array([inc]), j2)[0]
+        scalar, array = secular_rates(a, inc, j2), secular_rates(np.array([a]), np.array([inc]), j2)
+        assert [v for v in scalar] == [None if v is None else v[0] for v in array]
+    calls = []
+
+    @per_chief(2)
+    def f(x, y, flag):
+        calls.append((x, y, flag))
+        return np.copysign(x, y) if flag else x + y
+
+    assert f(1.0, 2.0, 1) == f(1.0, 2.0, True) == 1.0 and len(calls) == 1  # flags as bools: one entry
+    assert f(1.0, -0.0, True) == -1.0 and f(1.0, 0.0, True) == 1.0  # -0.0 and 0.0 are separate entries
+    assert len(calls) == 3
+    f(np.array([1.0]), 2.0, True)
+    f(np.array([1.0]), 2.0, True)  # arrays are computed every time
+    assert len(calls) == 5
+
+
+def test_the_in_plane_propagation_is_propagate_elements_da_dex_dey():
+    from roe_sep.core.relmotion.dynamics import propagate_elements, propagate_in_plane
+
+    rng = np.random.default_rng(3)
+    el = rng.normal(0.0, 1e-4, (6, 50))
+    dt = rng.uniform(0.0, 86400.0, 50)
+    for j2 in (True, False):
+        full = propagate_elements(el, dt, 6893137.0, 1.7, j2, -1e-12)
+        part = propagate_in_plane(el[0], el[2], el[3], dt, 6893137.0, 1.7, j2, -1e-12)
+        for x, y in zip(part, (full[0], full[2], full[3])):
+            assert np.array_equal(x, y)

@@ -14,8 +14,6 @@ With da(t) = da0 + da_dot t the integrals are closed form; with J2 off and drag 
 Eqs. (23)-(24): a dl = 3/(4 n^2) dB rho v^2 (u - u0)^2 and a da = -(1/n^2) dB rho v^2 (u - u0).
 """
 
-import functools
-import math
 from collections.abc import Sequence
 from typing import NamedTuple
 
@@ -23,7 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..constants import EARTH_ROTATION, J2, R_EARTH, SECONDS_PER_DAY
-from .orbit import circular_speed, mean_motion
+from .orbit import circular_speed, mean_motion, per_chief
 
 
 def j2_kappa(a: ArrayLike) -> np.ndarray:
@@ -75,23 +73,16 @@ def arg_latitude_rate(a: ArrayLike, inc: ArrayLike, j2: bool = True) -> np.ndarr
     numpy.ndarray
         du/dt [rad/s], the broadcast shape of ``a`` and ``inc``.
     """
-    if isinstance(a, float) and isinstance(inc, float):  # a chief's: once per (a, i, j2), the same value
-        return _arg_latitude_rate_cached(a, inc, bool(j2), math.copysign(1.0, a), math.copysign(1.0, inc))
     return _arg_latitude_rate(a, inc, j2)
 
 
+@per_chief(2)  # a chief's: once per (a, i, j2)
 def _arg_latitude_rate(a, inc, j2):
     n = mean_motion(a)
     if not j2:
         return n
     c2 = np.cos(inc) ** 2
     return n + j2_kappa(a) * ((3.0 * c2 - 1.0) + (5.0 * c2 - 1.0))
-
-
-@functools.lru_cache(maxsize=64)
-def _arg_latitude_rate_cached(a, inc, j2, _sign_a, _sign_inc):
-    # the signs are part of the key: -0.0 == 0.0 would otherwise share an entry
-    return _arg_latitude_rate(a, inc, j2)
 
 
 def ballistic_coefficient(cd: ArrayLike, area: ArrayLike, mass: ArrayLike) -> np.ndarray | float:
@@ -262,8 +253,8 @@ def propagate_elements(elements: Sequence[ArrayLike], dt: ArrayLike, a: float, i
     else:
         dl_new = dl - rates.dl_da * da_int
         diy_new = diy + 0.0 * dt
-    dex_new, dey_new = _rotate_e(dex, dey, dt, rates)
-    return da + da_dot * dt, dl_new, dex_new, dey_new, dix + 0.0 * dt, diy_new
+    da_new, dex_new, dey_new = _in_plane(da, dex, dey, dt, da_dot, rates)
+    return da_new, dl_new, dex_new, dey_new, dix + 0.0 * dt, diy_new
 
 
 def propagate_in_plane(da: ArrayLike, dex: ArrayLike, dey: ArrayLike, dt: ArrayLike, a: float, inc: float,
@@ -292,9 +283,12 @@ def propagate_in_plane(da: ArrayLike, dex: ArrayLike, dey: ArrayLike, dt: ArrayL
         The propagated ``(da, dex, dey)``, each of the broadcast shape.
     """
     dt = np.asarray(dt, dtype=float)
-    da_dot = np.asarray(da_dot, dtype=float)
-    dex_new, dey_new = _rotate_e(dex, dey, dt, secular_rates(a, inc, j2))
-    return da + da_dot * dt, dex_new, dey_new
+    return _in_plane(da, dex, dey, dt, np.asarray(da_dot, dtype=float), secular_rates(a, inc, j2))
+
+
+def _in_plane(da, dex, dey, dt, da_dot, rates):
+    """da under the drag drift and the e vector turned by J2: the in-plane part of :func:`propagate_elements`."""
+    return (da + da_dot * dt, *_rotate_e(dex, dey, dt, rates))
 
 
 class SecularRates(NamedTuple):
@@ -328,17 +322,10 @@ def secular_rates(a: ArrayLike, inc: ArrayLike, j2: bool = True) -> SecularRates
     SecularRates
         The coefficients (scalars for scalar ``a`` and ``inc``, else arrays of their broadcast shape).
     """
-    if isinstance(a, float) and isinstance(inc, float):
-        return _secular_rates_cached(a, inc, bool(j2), math.copysign(1.0, a), math.copysign(1.0, inc))
     return _secular_rates(a, inc, j2)
 
 
-@functools.lru_cache(maxsize=64)
-def _secular_rates_cached(a, inc, j2, _sign_a, _sign_inc):
-    # the signs are part of the key: -0.0 == 0.0 would otherwise share an entry
-    return _secular_rates(a, inc, j2)
-
-
+@per_chief(2)
 def _secular_rates(a, inc, j2):
     n = mean_motion(a)
     if not j2:

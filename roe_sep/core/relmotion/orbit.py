@@ -2,6 +2,7 @@
 
 import functools
 import math
+from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -14,16 +15,37 @@ def semi_major_axis(altitude: ArrayLike) -> np.ndarray:
     return R_EARTH + np.asarray(altitude, dtype=float)
 
 
+def per_chief(n_floats: int) -> Callable[[Callable], Callable]:
+    """Decorator: ``fn(x_1, ..., x_n, *flags)`` computed once per value for a chief's scalar floats (its a, i) and
+    the flags (``bool``), afresh when any of the first ``n_floats`` arguments is not a float (arrays of samples).
+    The cached value is the one ``fn`` returns (the same expressions); the floats' signs are part of the key, since
+    -0.0 == 0.0 would otherwise share an entry."""
+
+    def decorate(fn):
+        @functools.lru_cache(maxsize=64)
+        def cached(_signs, floats, flags):
+            return fn(*floats, *flags)
+
+        @functools.wraps(fn)
+        def call(*args):
+            floats = args[:n_floats]
+            if all(isinstance(x, float) for x in floats):
+                return cached(tuple(math.copysign(1.0, x) for x in floats), floats, tuple(map(bool, args[n_floats:])))
+            return fn(*args)
+
+        return call
+
+    return decorate
+
+
 def mean_motion(a: ArrayLike) -> np.ndarray:
-    """Keplerian mean motion n = sqrt(mu / a^3) [rad/s] for semi-major axis ``a`` [m] (any shape)."""
-    if isinstance(a, float):  # a chief's: computed once per value (the same expression)
-        return _mean_motion_cached(a, math.copysign(1.0, a))
-    return np.sqrt(MU_EARTH / np.asarray(a, dtype=float) ** 3)
+    """Keplerian mean motion n = sqrt(mu / a^3) [rad/s] for semi-major axis ``a`` [m] (any shape; a chief's float
+    once per value, :func:`per_chief`)."""
+    return _mean_motion(a)
 
 
-@functools.lru_cache(maxsize=64)
-def _mean_motion_cached(a, _sign):
-    # the sign is part of the key: -0.0 == 0.0 would otherwise share an entry
+@per_chief(1)
+def _mean_motion(a):
     return np.sqrt(MU_EARTH / np.asarray(a, dtype=float) ** 3)
 
 
