@@ -131,7 +131,6 @@ class PlannerNode(ManagedNode):
         ls.subscribe(Vector3Stamped, interfaces.CAMERA_TOPIC, self.on_bearing, interfaces.STREAM,
                      what="camera bearing")
         self.in_force = None  # (event, k (None: the default), p [m/s], drift-stop epoch [s]) of the plan in force
-        self.drift_stops = []  # epochs [s] of the executed drift-stops on record
         self.executed_stops = []  # (epoch [s], carrier dv RTN (3,) [m/s]) of the executed drift-stops on record
         self.released = None  # s, the deployer's release (the executed ejection's epoch on record)
         self.record_since = None  # steady s: the executed ejection arrived (a restarted planner's record recovered)
@@ -172,7 +171,6 @@ class PlannerNode(ManagedNode):
     def on_executed(self, m: ImpulsiveManeuver):
         t = time_to_sec(m.epoch)
         if m.spacecraft == "carrier" and m.purpose == "drift_stop":
-            self.drift_stops.append(t)
             self.executed_stops.append((t, vector_to_array(m.dv_rtn)))
         elif m.purpose == "ejection" and self.released is None:
             self.released = t  # the release switch: when, not how fast
@@ -250,19 +248,25 @@ class PlannerNode(ManagedNode):
                      f"at t = {t_stop:.0f} s withdrawn, the acquisition starts from the first OD",
                      {"f1": f"{check.f1:.3f}", "gain": f"{check.gain:.2f}", "samples": check.samples})
 
+    def orbits_later(self, event, t, t_burn):
+        """Whole orbits after ``t_burn`` [s] (at least one) to the first epoch ``retry_margin`` after the finding at
+        ``t`` [s], and the orbit's period [s] (du/dt of the event's chief): where a replaced or completed drift-stop
+        flies at its argument of latitude."""
+        chief = event.chief
+        period = 2.0 * math.pi / float(arg_latitude_rate(chief.semi_major_axis, chief.inclination, self.j2))
+        return max(1, math.ceil((t + self.retry_margin - t_burn) / period - 1e-9)), period
+
     def check_missing(self, t):
         """Replace the drift-stop in force when the record shows none ``retry_tolerance`` after its epoch."""
         event, k, p, t_stop = self.in_force
         key = round(t_stop, 3)
         if t <= t_stop + self.retry_tolerance or key in self.retried or not self.record_recovered():
             return
-        if any(e >= t_stop - self.retry_tolerance for e in self.drift_stops):
+        if any(e >= t_stop - self.retry_tolerance for e, _ in self.executed_stops):
             return
         self.retried.add(key)
         k = self.k if k is None else k
-        chief = event.chief
-        period = 2.0 * math.pi / float(arg_latitude_rate(chief.semi_major_axis, chief.inclination, self.j2))
-        orbits = max(1, math.ceil((t + self.retry_margin - t_stop) / period - 1e-9))
+        orbits, _ = self.orbits_later(event, t, t_stop)
         plan = self.make_plan(event, k=k + 2 * orbits, p=p)
         plan.header.stamp = sec_to_time(t)  # a new plan, from the finding on
         self.plan_pub.publish(plan)
@@ -293,10 +297,8 @@ class PlannerNode(ManagedNode):
         self.in_force = None  # one drift-stop, checked once
         if (z is None or abs(z) <= self.makeup_z) and off <= self.makeup_pointing:
             return
-        chief = event.chief
-        period = 2.0 * math.pi / float(arg_latitude_rate(chief.semi_major_axis, chief.inclination, self.j2))
         t_cmd = time_to_sec(burn.epoch)
-        orbits = max(1, math.ceil((t + self.retry_margin - t_cmd) / period - 1e-9))
+        orbits, period = self.orbits_later(event, t, t_cmd)
         t_new = t_cmd + orbits * period
         rest = dv_cmd - dv_exec
         out = ManeuverPlan(strategy="double_impulse", ejection_epoch=event.header.stamp, p_reduction=0.0)
