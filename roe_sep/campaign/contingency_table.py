@@ -92,7 +92,7 @@ def _p(prop):
     if prop is None:
         return "--"
     lo, hi = prop["ci95"]
-    return f"{prop['k']}/{prop['n']} [{lo:.3f}, {hi:.3f}]"
+    return f"{_count(prop)} [{lo:.3f}, {hi:.3f}]"
 
 
 def _num(v, fmt):
