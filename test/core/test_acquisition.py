@@ -282,3 +282,38 @@ def test_no_burns_keeps_an_interval_free_of_burns():
     assert quiet.t_final == free.t_final and quiet.n_burns >= 1
     assert not np.any((quiet.epochs >= arc[0]) & (quiet.epochs <= arc[1]))
     check_plan(quiet, TYPICAL, CHIEF, DA_DOT, CFG)
+
+
+# --- the LP handed to HiGHS directly is linprog's to the bit ---------------------------------------------
+
+@pytest.mark.parametrize("roe0,dad,cfg,raises", [
+    (TYPICAL, DA_DOT, CFG, False),
+    (roe_from(120.0, -18000.0, 350.0, 2.0, 250.0, -0.4), 0.0, CFG, False),  # following, approaching
+    (roe_from(-60.0, 40000.0, 700.0, 0.3, 500.0, 2.5), DA_DOT, dataclasses.replace(CFG, axes="TN"), False),
+    (roe_from(-180, 25000.0, 500, -1.6, 100.0, 1.5), DA_DOT, dataclasses.replace(CFG, axes="T"), True),  # infeasible
+])
+def test_direct_highs_solve_equals_linprog(monkeypatch, roe0, dad, cfg, raises):
+    """Every LP of a plan (the e/i iterations and, for an infeasible one, the diagnosis), solved by
+    :func:`roe_sep.core.acquisition.highs.solve_lp` and by ``linprog(method="highs")``: the same status, solution,
+    objective and iteration count, bit for bit."""
+    import roe_sep.core.acquisition.planner as planner
+
+    solve, seen = planner._linprog, []
+
+    def both(pb, cols, ihat, **flags):
+        direct = solve(pb, cols, ihat, **flags)
+        ref = solve(pb, cols, ihat, use_linprog=True, **flags)
+        seen.append((direct.status, ref.status))
+        assert direct.status == ref.status
+        if ref.status == 0:
+            assert np.array_equal(direct.x, ref.x) and direct.fun == ref.fun and direct.nit == ref.nit
+        return direct
+
+    monkeypatch.setattr(planner, "_linprog", both)
+    if raises:
+        with pytest.raises(AcquisitionInfeasible):
+            plan_acquisition(roe0, CHIEF, dad, cfg)
+        assert any(s == 2 for s, _ in seen)
+    else:
+        plan_acquisition(roe0, CHIEF, dad, cfg)
+        assert seen and all(s == 0 for s, _ in seen)

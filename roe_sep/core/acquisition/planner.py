@@ -73,6 +73,7 @@ from ..relmotion.orbit import mean_motion
 from ..relmotion.trajectory import Burn, Chief, trajectory
 from ..safety.metrics import fov_limit, min_rn_distance
 from .lp_transfer import carrier_burn_effects, grid_epochs, grid_response, parse_axes, response_at, sagitta
+from .highs import solve_lp
 
 R_EARTH_MIN = 6.4e6  # m, a semi-major axis below this is not a valid LEO chief
 QUANTA_SLACK = 4  # a quantized solution within this many quanta of the LP optimum ends the search
@@ -397,9 +398,9 @@ def _assemble(pb: _Problem, cols, ihat, exact, path=True, target=True, ei=True):
     return cost, lo_v, hi_v, a_mat, np.array(lb, dtype=float), np.array(ub, dtype=float)
 
 
-def _linprog(pb, cols, ihat, **flags):
+def _linprog(pb, cols, ihat, use_linprog=False, **flags):
+    """The continuous LP in linprog's form (a_ub v <= b_ub, a_eq v = b_eq), solved by :func:`.highs.solve_lp`."""
     from scipy import sparse
-    from scipy.optimize import linprog
 
     cost, lo_v, hi_v, a_mat, lb, ub = _assemble(pb, cols, ihat, exact=True, **flags)
     eq = lb == ub
@@ -407,8 +408,7 @@ def _linprog(pb, cols, ihat, **flags):
     low = ~eq & np.isfinite(lb)
     a_ub = sparse.vstack([a_mat[np.flatnonzero(up)], -a_mat[np.flatnonzero(low)]]).tocsr()
     b_ub = np.concatenate([ub[up], -lb[low]])
-    return linprog(cost, A_ub=a_ub, b_ub=b_ub, A_eq=a_mat[np.flatnonzero(eq)], b_eq=ub[eq],
-                   bounds=np.column_stack([lo_v, hi_v]), method="highs")
+    return solve_lp(cost, a_ub, b_ub, a_mat[np.flatnonzero(eq)], ub[eq], lo_v, hi_v, use_linprog=use_linprog)
 
 
 def _milp(pb, cols, ihat):
