@@ -122,6 +122,12 @@ def _fail(x):
     return x
 
 
+def _worker_setting(key):
+    import dask
+
+    return dask.config.get(key)
+
+
 @pytest.mark.slow
 def test_ordered_map_in_process_and_errors():
     assert list(ordered_map(None, _square, range(5), 1)) == [1, 2, 5, 10, 17]
@@ -136,6 +142,9 @@ def test_ordered_map_in_process_and_errors():
         with pytest.raises(ArithmeticError):
             list(ordered_map(client, _fail, range(5), batch=2))
         assert auto_batch(client, 5000) == 78 and auto_batch(client, 10) == 1 and auto_batch(None, 5000) == 1
+        # the embedded cluster's workers run without what only a dashboard shows (engine.QUIET)
+        assert set(client.run(_worker_setting, "distributed.worker.profile.enabled").values()) == {False}
+        assert set(client.run(_worker_setting, "distributed.admin.system-monitor.disk").values()) == {False}
     with pytest.raises(ValueError, match="exclude"):
         with cluster(workers=2, scheduler="tcp://127.0.0.1:1"):
             pass
