@@ -63,7 +63,7 @@ with :func:`~roe_sep.core.relmotion.trajectory.trajectory` (an independent path 
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -256,6 +256,7 @@ class _Problem:
     s: float  # sign of dl
     quanta_max: int  # largest burn in quanta
     ei_floor: float  # m
+    rows: dict = field(default_factory=dict, repr=False)  # _path_and_burn_rows by candidate columns (the memo)
 
 
 def _unit(v, what):
@@ -360,24 +361,14 @@ def _assemble(pb: _Problem, cols, ihat, exact, path=True, target=True, ei=True):
 
     blocks = [sparse.csr_matrix(np.array(rows))]
     lb, ub = list(lbs), list(ubs)
+    path_blocks, path_lb, burn_block, burn_ub = _path_and_burn_rows(pb, cols)
     if path:  # s a dl >= a_dl_min at every grid epoch (plus the sagitta between epochs)
-        for mat in (pb.path, pb.path_pre):
-            if mat is None:
-                continue
-            sub = mat[:, cols]
-            blocks.append(sparse.hstack([sparse.csr_matrix(np.hstack([sub, -sub])),
-                                         sparse.csr_matrix((len(sub), 3))]))
-            lb += list(pb.path_floor - pb.free_path)
-            ub += [np.inf] * len(sub)
-    # per-burn magnitude: |dvR| + |dvT| + |dvN| <= max_burn_dv bounds the Euclidean norm (exact for one axis)
-    groups, member = np.unique(pb.epoch_of[cols], return_inverse=True)
-    one = np.ones(n_s)
-    per_epoch = sparse.csr_matrix((np.concatenate([one, one]),
-                                   (np.concatenate([member, member]), np.arange(2 * n_s))),
-                                  shape=(len(groups), 2 * n_s))
-    blocks.append(sparse.hstack([per_epoch, sparse.csr_matrix((len(groups), 3))]))
-    lb += [-np.inf] * len(groups)
-    ub += [pb.quanta_max] * len(groups)
+        blocks += path_blocks
+        lb += path_lb
+        ub += [np.inf] * len(path_lb)
+    blocks.append(burn_block)
+    lb += [-np.inf] * len(burn_ub)
+    ub += burn_ub
     a_mat = sparse.vstack(blocks).tocsr()
 
     lo_v = np.zeros(nv)
@@ -396,6 +387,36 @@ def _assemble(pb: _Problem, cols, ihat, exact, path=True, target=True, ei=True):
         lo_v[i_mu] = lo_v[i_nu] = hi_v[i_mu] = hi_v[i_nu] = 0.0
     cost = np.concatenate([np.ones(2 * n_s), np.zeros(3)])
     return cost, lo_v, hi_v, a_mat, np.array(lb, dtype=float), np.array(ub, dtype=float)
+
+
+def _path_and_burn_rows(pb: _Problem, cols):
+    """The rows of :func:`_assemble` that the e/i direction leaves alone, over v = [p, m, L, mu, nu] for the
+    candidate columns ``cols``: the path rows (s a dl >= a_dl_min at every grid epoch, post- and pre-burn) with
+    their lower bounds, and the per-burn magnitude rows with their upper bounds. Memoised in ``pb.rows`` (the LP is
+    solved again for each e/i direction, and a plan's diagnosis relaxes other groups): the same matrices each time.
+    """
+    key = np.asarray(cols).tobytes()
+    if key in pb.rows:
+        return pb.rows[key]
+    from scipy import sparse
+
+    n_s = len(cols)
+    path_blocks, path_lb = [], []
+    for mat in (pb.path, pb.path_pre):
+        if mat is None:
+            continue
+        sub = mat[:, cols]
+        path_blocks.append(sparse.hstack([sparse.csr_matrix(np.hstack([sub, -sub])), sparse.csr_matrix((len(sub), 3))]))
+        path_lb += list(pb.path_floor - pb.free_path)
+    # per-burn magnitude: |dvR| + |dvT| + |dvN| <= max_burn_dv bounds the Euclidean norm (exact for one axis)
+    groups, member = np.unique(pb.epoch_of[cols], return_inverse=True)
+    one = np.ones(n_s)
+    per_epoch = sparse.csr_matrix((np.concatenate([one, one]),
+                                   (np.concatenate([member, member]), np.arange(2 * n_s))),
+                                  shape=(len(groups), 2 * n_s))
+    burn_block = sparse.hstack([per_epoch, sparse.csr_matrix((len(groups), 3))])
+    pb.rows[key] = out = (path_blocks, path_lb, burn_block, [pb.quanta_max] * len(groups))
+    return out
 
 
 def _linprog(pb, cols, ihat, use_linprog=False, **flags):
