@@ -140,6 +140,21 @@ def final_status(array):
         s.message == "scenario complete" or s.message.startswith("scenario aborted"))), None)
 
 
+FINAL_MARK = b"scenario "  # in the serialized bytes of every final status (CDR strings are their UTF-8 bytes)
+
+
+def final_status_of(data: bytes):
+    """:func:`final_status` of a serialized ``DiagnosticArray`` (a raw subscription's message), decoded only when its
+    bytes contain :data:`FINAL_MARK`: the observer reads every status of a run (about 950) and decodes the few that
+    may be the final one."""
+    if FINAL_MARK not in data:
+        return None
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.serialization import deserialize_message
+
+    return final_status(deserialize_message(data, DiagnosticArray))
+
+
 def wait_for_completion(duration, deployment, timeout, progress):
     """Spin a small observer node until the simulator reports the scenario complete (or aborted) on
     ``/diagnostics``; returns (reached, reason). ``/clock`` only feeds the progress line.
@@ -159,12 +174,13 @@ def wait_for_completion(duration, deployment, timeout, progress):
     node = rclpy.create_node("roe_sep_run")
     now = {"t": 0.0, "end": None}
 
-    def on_status(array):
-        now["end"] = final_status(array) or now["end"]
+    def on_status(data):
+        now["end"] = final_status_of(data) or now["end"]
 
     node.create_subscription(Clock, interfaces.CLOCK_TOPIC,
                              lambda m: now.update(t=time_to_sec(m.clock)), 10)
-    node.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, on_status, interfaces.DIAGNOSTICS)
+    node.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, on_status, interfaces.DIAGNOSTICS,
+                             raw=True)
     start = time.monotonic()
     shown = -1
     try:
@@ -314,10 +330,11 @@ def _run_in_process(nodes, params_file, log_dir, duration, timeout, progress, ex
     def observer():
         node = rclpy.node.Node("roe_sep_run")
 
-        def on_status(array):
-            state["end"] = final_status(array) or state["end"]
+        def on_status(data):
+            state["end"] = final_status_of(data) or state["end"]
 
-        node.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, on_status, interfaces.DIAGNOSTICS)
+        node.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, on_status, interfaces.DIAGNOSTICS,
+                                 raw=True)
         if progress:
             node.create_subscription(Clock, interfaces.CLOCK_TOPIC,
                                      lambda m: state.update(t=time_to_sec(m.clock)), 10)

@@ -28,6 +28,7 @@ from roe_sep_msgs.msg import LockstepAck, LockstepStep
 
 from .. import interfaces
 from ..errors import BadMessage
+from ..stamps import sec_nanosec
 from ..validate import validator_for
 from .convert import sec_to_time, time_to_sec
 from .diagnostics import ERROR, OK, publish_status
@@ -92,6 +93,10 @@ class Lockstep:
         node.create_subscription(LockstepStep, interfaces.LOCKSTEP_STEP_TOPIC, self.on_step_msg, STEP_QOS)
         self.ack_pub = node.create_publisher(LockstepAck, interfaces.LOCKSTEP_ACK_TOPIC, ACK_QOS) \
             if acknowledge else None
+        self._ack_msg = LockstepAck()  # refilled for every acknowledgement (_ack)
+        self._inputs_version = 0  # counts the changes of ``inputs`` (the acknowledgement's list is rebuilt after one)
+        self._ack_keys = None  # (_inputs_version, topics published) the acknowledgement's lists were built for
+        self._ack_topics = []
 
     # ------------------------------------------------------------------ declaration
     def subscribe(self, msg_type, topic, callback, qos, stamp=header_stamp, what=None):
@@ -99,6 +104,7 @@ class Lockstep:
         order for messages with equal stamps). Every message is validated first (:mod:`.validate`); a bad one,
         or one whose callback raises, is reported on ``/diagnostics`` and the node goes on."""
         self.inputs[topic] = (self._guarded(topic, callback), len(self.inputs), stamp)
+        self._inputs_version += 1
         self.validators[topic] = validator_for(msg_type)
         self.what[topic] = what or f"message on {topic}"
         # a deep reader queue: a counted message must never be overwritten before it is taken (a flood of bad
@@ -115,6 +121,7 @@ class Lockstep:
         if sub is not None:
             self.node.destroy_subscription(sub)
         self.inputs.pop(topic, None)
+        self._inputs_version += 1
         self.buffer.pop(topic, None)
 
     def publisher(self, msg_type, topic, qos):
@@ -215,12 +222,20 @@ class Lockstep:
             self.on_round_done()
 
     def _ack(self, step):
+        """Acknowledge ``step``'s round with the counts of what this node published so far. One message, refilled
+        for every round (rclpy serializes it when it is published): the node's name, its inputs and its topics are
+        set again only when they change (a subscription or a publisher added or removed)."""
         if self.ack_pub is None:
             return
-        topics = sorted(self.published)
-        ack = LockstepAck(node=self.name, step=step.step, round=step.round, inputs=sorted(self.inputs),
-                          topics=topics, published=[self.published[t] for t in topics])
-        ack.header.stamp = sec_to_time(time_to_sec(step.header.stamp))
+        ack, published = self._ack_msg, self.published
+        if self._ack_keys != (self._inputs_version, len(published)):
+            self._ack_keys = (self._inputs_version, len(published))
+            self._ack_topics = sorted(published)
+            ack.node, ack.inputs, ack.topics = self.name, sorted(self.inputs), self._ack_topics
+        ack.step, ack.round = step.step, step.round
+        ack.published = [published[t] for t in self._ack_topics]
+        stamp = ack.header.stamp
+        stamp.sec, stamp.nanosec = sec_nanosec(time_to_sec(step.header.stamp))
         self.ack_pub.publish(ack)
 
     def now(self, fallback):
@@ -246,7 +261,9 @@ class Coordinator:
         self.lockstep.on_round_done = self.round_check
         self.step_pub = sim.create_publisher(LockstepStep, interfaces.LOCKSTEP_STEP_TOPIC, STEP_QOS)
         sim.create_subscription(LockstepAck, interfaces.LOCKSTEP_ACK_TOPIC, self.on_ack, ACK_QOS)
+        self.participant_set = frozenset(participants)
         self.acks = {}  # participant -> its latest LockstepAck
+        self.acked = set()  # the participants whose latest acknowledgement is of the current round (_acked)
         self.step_index, self.round, self.t_prev = 0, 0, 0.0
         self.round_counts = {}
         self.round_sent = None  # wall time the current round was published (None: not started)
@@ -304,11 +321,17 @@ class Coordinator:
         return ack is not None and (ack.step, ack.round) == (self.step_index, self.round)
 
     def on_ack(self, ack: LockstepAck):
-        if ack.node not in self.participants:
+        node = ack.node
+        if node not in self.participant_set:
             return
-        prev = self.acks.get(ack.node)
-        if prev is None or (ack.step, ack.round) >= (prev.step, prev.round):
-            self.acks[ack.node] = ack
+        key = (ack.step, ack.round)
+        prev = self.acks.get(node)
+        if prev is None or key >= (prev.step, prev.round):
+            self.acks[node] = ack
+            if key == (self.step_index, self.round):
+                self.acked.add(node)
+            else:
+                self.acked.discard(node)
         self.round_check()
 
     def _totals(self):
@@ -326,6 +349,7 @@ class Coordinator:
                            counts=[int(totals[t]) for t in topics], final=final)
         msg.header.stamp = sec_to_time(self.sim.t)
         self.step_msg, self.round_counts = msg, totals
+        self.acked = {p for p in self.participants if self._acked(p)}  # of the new round: none acknowledged it yet
         self.round_sent = self.round_resent = time.monotonic()
         self.steps_published += 1
         self.step_pub.publish(msg)
@@ -340,7 +364,7 @@ class Coordinator:
             return
         if self.lockstep.last != (self.step_index, self.round):
             return
-        if not all(self._acked(p) for p in self.participants):
+        if len(self.acked) < len(self.participant_set):  # the set holds _acked(p) for every p, kept by on_ack
             return
         totals = self._totals()
         read = set(self.lockstep.inputs)

@@ -298,3 +298,34 @@ def test_final_od_decision_from_the_ic_planner_status():
                                         "threshold": 1.17, "t_final": 258669.8}
     assert final_od_decision(diags[:1]) is None
     assert final_od_decision([status("roe_sep/ic_planner", final_trim=False, final_trim_dv="x")]) is None
+
+
+def test_the_observer_decodes_only_the_statuses_that_may_be_final():
+    """``final_status_of`` (the runs' observers, a raw /diagnostics subscription) gives ``final_status`` of the
+    decoded array for every status of the reference bag and for final ones made here, and the statuses without
+    :data:`FINAL_MARK` in their bytes are never final."""
+    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+    from rclpy.serialization import deserialize_message, serialize_message
+
+    from roe_sep.report import read_topics
+    from roe_sep.run import FINAL_MARK, final_status, final_status_of
+
+    arrays = [serialize_message(DiagnosticArray(status=[DiagnosticStatus(name=name, message=text)]))
+              for name in ("roe_sep/sim", "roe_sep/planner")
+              for text in ("scenario complete", "scenario aborted: lockstep: no acknowledgement", "scenario",
+                           "running", "scenario complete ", "Scenario complete", "scénario aborted")]
+    bag = ROOT / "bags" / "default_run"
+    for _, d in read_topics(bag, (interfaces.DIAGNOSTICS_TOPIC,))[interfaces.DIAGNOSTICS_TOPIC]:
+        array = DiagnosticArray(status=[DiagnosticStatus(
+            level=bytes([s.level]) if isinstance(s.level, int) else s.level, name=s.name, message=s.message,
+            hardware_id=s.hardware_id, values=[KeyValue(key=kv.key, value=kv.value) for kv in s.values])
+            for s in d.status])
+        array.header.stamp.sec, array.header.stamp.nanosec = d.header.stamp.sec, d.header.stamp.nanosec
+        arrays.append(serialize_message(array))
+    finals = 0
+    for data in arrays:
+        expected = final_status(deserialize_message(data, DiagnosticArray))
+        assert final_status_of(data) == expected
+        assert expected is None or FINAL_MARK in data
+        finals += expected is not None
+    assert finals >= 3
