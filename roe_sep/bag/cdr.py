@@ -14,6 +14,7 @@ does not cover -- big-endian data, ``wstring``, a definition mcap_ros2 cannot de
 read (cut off) -- is decoded by mcap_ros2 itself, so a message decodes, or fails, exactly as mcap_ros2 has it.
 """
 
+import functools
 import keyword
 import struct
 
@@ -328,4 +329,11 @@ def decoder(schema, message_encoding: str):
         return None
     if not _COMPILE:  # pragma: no cover
         return DecoderFactory().decoder_for(message_encoding, schema)
-    return Decoder(schema.name, schema.data.decode())
+    return _decoder(schema.name, schema.data.decode())
+
+
+@functools.lru_cache(maxsize=64)
+def _decoder(schema_name: str, schema_text: str) -> Decoder:
+    """One :class:`Decoder` per schema text in a process (compiling one costs about a millisecond; a campaign's
+    worker builds the report of every run)."""
+    return Decoder(schema_name, schema_text)
