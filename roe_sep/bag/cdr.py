@@ -278,6 +278,50 @@ class _Compiler:
         return self.namespace["decode"], source
 
 
+def fixed_layout(msgdefs, schema_name: str, sample: bytes):
+    """Where each primitive of a message lies in ``sample`` (little-endian CDR) when every field is fixed-size but
+    strings: ``(fields, strings, end)`` with ``fields`` ``[(path, offset, struct code, count or None)]`` (``path``
+    like ``header.stamp.sec``), ``strings`` the offsets of the strings' length words and ``end`` the offset after
+    the last field. Every message of this schema with the same length words (and length) has this layout: a
+    topic of such messages reads as one NumPy record array. Unsupported for sequences, arrays of messages and
+    what :class:`Decoder` does not compile."""
+    fields, strings = [], []
+    o = 4
+
+    def walk(msgdef, prefix, stack):
+        nonlocal o
+        key = str(msgdef.base_type)
+        if len(stack) > MAX_INLINE or key in stack:
+            raise Unsupported(f"{key} contains itself")
+        if not msgdef.fields:
+            o += 1
+        for field in msgdef.fields:
+            ftype, path = field.type, prefix + field.name
+            if not ftype.is_primitive_type():
+                nested = msgdefs.get(f"{ftype.pkg_name}/{ftype.type}")
+                if nested is None or ftype.is_array:
+                    raise Unsupported(f"{path}: {ftype}")
+                walk(nested, path + ".", (*stack, key))
+            elif ftype.type == "string" and not ftype.is_array:
+                o += -(o - 4) % 4
+                strings.append(o)
+                o += 4 + struct.unpack_from("<I", sample, o)[0]
+            elif ftype.type in PRIMITIVES and (not ftype.is_array or ftype.is_fixed_size_array()
+                                                and ftype.array_size is not None):
+                code, size = PRIMITIVES[ftype.type]
+                if ftype.is_array and ftype.type in BYTES:
+                    code, size = "s", 1
+                o += -(o - 4) % size
+                n = ftype.array_size if ftype.is_array else None
+                fields.append((path, o, code, n))
+                o += size * (n or 1)
+            else:
+                raise Unsupported(f"{path}: {ftype}")
+
+    walk(msgdefs[schema_name], "", ())
+    return fields, strings, o
+
+
 def definitions(schema_name: str, schema_text: str) -> dict:
     """The parsed definitions of a schema as mcap_ros2's decoder has them (``{name: MessageSpecification}``, nested
     types by full and short name, ``builtin_interfaces/Time`` and ``Duration`` unless the schema defines them);

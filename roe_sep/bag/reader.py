@@ -98,23 +98,30 @@ def messages(path, topics=None):
                           msg.publish_time, msg.sequence)
 
 
-def decoded_messages(file, topics) -> list:
+RawMessage = collections.namedtuple("RawMessage", "schema decode data")
+RawMessage.__doc__ = """A message of :func:`decoded_messages` left undecoded (``raw`` topics): its MCAP schema
+record, its decoder (``decode(data)`` is the message) and its serialized ``data``."""
+
+
+def decoded_messages(file, topics, raw=()) -> list:
     """``[(topic, log_time ns, message)]`` of the messages on ``topics`` in an ``.mcap`` file, in log-time order,
     decoded with the file's own schemas: what mcap_ros2's ``read_ros2_messages(file, topics)`` yields, the same
     messages in the same order, the same objects, or the same exception. The chunks are walked without a Python
     object per record (:func:`~roe_sep.bag.scan.chunk_records`) and only the messages on ``topics`` are decoded,
     by code compiled from their schemas (:mod:`roe_sep.bag.cdr`); a file this does not read as mcap would (no
-    summary or chunk index, an irregular chunk, ...) is read by mcap_ros2 itself."""
+    summary or chunk index, an irregular chunk, ...) is read by mcap_ros2 itself. The messages on the topics in
+    ``raw`` may come as :class:`RawMessage` (their decoding left to the caller, who must raise what decoding
+    raises: only the other messages were decoded here)."""
     topics = list(topics)
     try:
-        return _decoded_messages(file, topics)
+        return _decoded_messages(file, topics, frozenset(raw))
     except Exception:  # noqa: BLE001 -- mcap_ros2 reads it, or raises what it raises
         from mcap_ros2.reader import read_ros2_messages
 
         return [(m.channel.topic, m.log_time_ns, m.ros_msg) for m in read_ros2_messages(str(file), topics=topics)]
 
 
-def _decoded_messages(file, topics):
+def _decoded_messages(file, topics, raw=frozenset()):
     """:func:`decoded_messages` by the chunk index; Irregular (or any exception) where mcap's SeekingReader could
     read differently."""
     from mcap.data_stream import ReadDataStream
@@ -162,7 +169,10 @@ def _decoded_messages(file, topics):
             decode = decoders[channel.schema_id] = decoder(schema, channel.message_encoding)
             if decode is None:
                 raise Irregular(f"no decoder for channel {channel_id}")
-        out.append((channel.topic, log_time, decode(data)))
+        if channel.topic in raw:
+            out.append((channel.topic, log_time, RawMessage(summary.schemas[channel.schema_id], decode, data)))
+        else:
+            out.append((channel.topic, log_time, decode(data)))
     return out
 
 
