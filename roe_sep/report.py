@@ -14,6 +14,8 @@ the monitor), ``contingency`` (the contingency injected, as applied by the simul
 :func:`contingencies_detected`).
 """
 
+import contextlib
+import gc
 import json
 import math
 from pathlib import Path
@@ -32,52 +34,169 @@ from .stamps import time_to_sec
 ROE_KEYS = validate.ROE_FIELDS
 
 
-def read_topics(bag_dir, topics):
-    """``{topic: [(log_time_s, msg), ...]}`` decoded with the bag's own ros2msg schemas (mcap_ros2)."""
-    from mcap_ros2.reader import read_ros2_messages
+def read_topics(bag_dir, topics, raw=()):
+    """``{topic: [(log_time_s, msg), ...]}`` decoded with the bag's own ros2msg schemas (what mcap_ros2 decodes,
+    :func:`roe_sep.bag.reader.decoded_messages`); on the topics in ``raw`` a message may be a
+    :class:`~roe_sep.bag.reader.RawMessage` (serialized, with its decoder)."""
+    from .bag.reader import decoded_messages
 
     files = sorted(Path(bag_dir).glob("*.mcap"))
     if not files:
         raise FileNotFoundError(f"no .mcap file in {bag_dir}")
     out = {t: [] for t in topics}
     for path in files:
-        for m in read_ros2_messages(str(path), topics=list(topics)):
-            out[m.channel.topic].append((m.log_time_ns * 1e-9, m.ros_msg))
+        for topic, log_time, msg in decoded_messages(path, topics, raw):
+            out[topic].append((log_time * 1e-9, msg))
     return out
+
+
+class Truth:
+    """The truth samples (RelativeOrbitalElements) of a run that :func:`roe_sep.validate.truth` accepts, in
+    log-time order, as arrays: ``stamps`` (list, s: :func:`~roe_sep.stamps.time_to_sec` of each stamp) and
+    ``times`` (the same, an array), ``roe`` (N, 6) a*ROE [m], the chief's ``a`` [m] and ``inc`` [rad] (lists, as
+    decoded), ``u`` [rad] and ``a_da`` [m] (arrays), ``final_roe`` (the last sample's a*ROE as decoded, None
+    without one). Built from decoded messages (:meth:`of_messages`) or straight from the serialized messages of
+    a fixed layout (:func:`read_truth`): the same values either way."""
+
+    def __init__(self, stamps, roe, a, inc, u, final_roe):
+        self.stamps, self.times = stamps, np.array(stamps, dtype=float)
+        self.roe = np.asarray(roe, dtype=float).reshape(-1, 6)
+        self.a, self.inc, self.u = a, inc, np.asarray(u, dtype=float)
+        self.a_da = self.roe[:, 0]
+        self.final_roe = final_roe
+
+    def __len__(self):
+        return len(self.stamps)
+
+    @classmethod
+    def of_messages(cls, truth):
+        """From ``[(log_time, msg), ...]`` (already validated)."""
+        msgs = [m for _, m in truth]
+        return cls([time_to_sec(m.header.stamp) for m in msgs], [[getattr(m, k) for k in ROE_KEYS] for m in msgs],
+                   [m.chief.semi_major_axis for m in msgs], [m.chief.inclination for m in msgs],
+                   [m.chief.mean_arg_latitude for m in msgs],
+                   [getattr(msgs[-1], k) for k in ROE_KEYS] if msgs else None)
+
+
+def _truth(truth):
+    """A :class:`Truth` (as it is, or of ``[(log_time, msg), ...]``)."""
+    return truth if isinstance(truth, Truth) else Truth.of_messages(truth)
+
+
+_TRUTH_FIELDS = {"header.stamp.sec": ("i", "I"), "header.stamp.nanosec": ("i", "I"), "covariance": ("d",),
+                 **{k: ("d",) for k in ROE_KEYS}, **{f"chief.{k}": ("d",) for k, *_ in validate.ELEMENT_BOUNDS}}
+_DTYPE = {"d": "<f8", "i": "<i4", "I": "<u4"}
+
+
+def read_truth(items):
+    """The :class:`Truth` of the truth topic's ``[(log_time, msg or RawMessage), ...]`` (:func:`read_topics` with
+    the topic ``raw``): when every message is serialized with one schema of fixed layout (fixed-size fields and
+    strings of the same lengths, :func:`roe_sep.bag.cdr.fixed_layout`) they are read as one NumPy record array and
+    validated by :func:`roe_sep.validate.roe_accepted`, no object per message; else each is decoded in order (and
+    raises what decoding raises) and validated by :func:`roe_sep.validate.truth`."""
+    from .bag.reader import RawMessage
+
+    arrays = _truth_arrays([m for _, m in items])
+    if arrays is not None:
+        return arrays
+    decoded = [(t, m.decode(m.data) if isinstance(m, RawMessage) else m) for t, m in items]
+    return Truth.of_messages(_valid_items(interfaces.TRUTH_ROE_TOPIC, decoded))
+
+
+def _truth_arrays(raws):
+    """:func:`read_truth` of a fixed layout, None where it does not apply (the messages then go one by one)."""
+    from .bag import cdr
+    from .bag.reader import RawMessage
+
+    if not raws or not all(isinstance(r, RawMessage) for r in raws):
+        return None
+    first = raws[0]
+    if not isinstance(first.decode, cdr.Decoder) or any(
+            r.decode is not first.decode or (r.schema.name, r.schema.data) != (first.schema.name, first.schema.data)
+            for r in raws):
+        return None
+    size = len(first.data)
+    if any(len(r.data) != size or not r.data[1] & 1 for r in raws):  # one length, little-endian CDR
+        return None
+    try:
+        first.decode(first.data)  # the layout's sample decodes (in bounds, its strings UTF-8)
+        fields, strings, end = cdr.fixed_layout(first.decode.msgdefs, first.schema.name, first.data)
+    except Exception:  # noqa: BLE001 -- Unsupported, or a message mcap_ros2 refuses: one by one
+        return None
+    if end > size:
+        return None
+    for offset in strings:  # the same string lengths, hence one layout; the strings themselves decode
+        head = first.data[offset:offset + 4]
+        n = int.from_bytes(head, "little")
+        text = slice(offset + 4, offset + 4 + n - 1) if n > 1 else slice(0, 0)
+        for r in raws:
+            if r.data[offset:offset + 4] != head:
+                return None
+            if r.data[text] != first.data[text]:
+                try:
+                    r.data[text].decode("utf-8")
+                except UnicodeDecodeError:
+                    return None
+    layout = {path: (off, code, count) for path, off, code, count in fields}
+    names, formats, offsets = [], [], []
+    for path, codes in _TRUTH_FIELDS.items():
+        off, code, count = layout.get(path, (None, None, None))
+        if code not in codes or count != (36 if path == "covariance" else None):
+            return None
+        names.append(path)
+        formats.append((_DTYPE[code], (count,)) if count else _DTYPE[code])
+        offsets.append(off)
+    arr = np.frombuffer(b"".join(r.data for r in raws),
+                        dtype=np.dtype({"names": names, "formats": formats, "offsets": offsets, "itemsize": size}))
+    ok = validate.roe_accepted(arr["header.stamp.sec"], arr["header.stamp.nanosec"],
+                               {k: arr[f"chief.{k}"] for k, *_ in validate.ELEMENT_BOUNDS},
+                               {k: arr[k] for k in ROE_KEYS}, arr["covariance"])
+    arr = arr[ok]
+    roe = np.stack([arr[k] for k in ROE_KEYS], axis=-1).reshape(-1, 6)
+    return Truth([s + n * 1e-9 for s, n in zip(arr["header.stamp.sec"].tolist(),
+                                                arr["header.stamp.nanosec"].tolist())],
+                 roe, arr["chief.semi_major_axis"].tolist(), arr["chief.inclination"].tolist(),
+                 arr["chief.mean_arg_latitude"], roe[-1].tolist() if len(roe) else None)
 
 
 def truth_at(truth, t, truth_da_dot):
     """Truth a*ROE [m] at ``t`` from the last truth sample at or before it (the simulator publishes one right after
-    every burn, so none lies in between) and the true drag drift [m/day]; None without a sample."""
-    before = [m for _, m in truth if time_to_sec(m.header.stamp) <= t]
-    if not before or not math.isfinite(truth_da_dot):
+    every burn, so none lies in between) and the true drag drift [m/day]; None without a sample. ``truth``: a
+    :class:`Truth` or ``[(log_time, msg), ...]``."""
+    truth = _truth(truth)
+    before = np.flatnonzero(truth.times <= t)
+    if not before.size or not math.isfinite(truth_da_dot):
         return None
-    ref = before[-1]
-    a = ref.chief.semi_major_axis
-    roe = np.array([getattr(ref, k) for k in ROE_KEYS]) / a
-    return propagate(roe, t - time_to_sec(ref.header.stamp), a, ref.chief.inclination, True,
-                     truth_da_dot / a / 86400.0) * a
+    i = int(before[-1])
+    a = truth.a[i]
+    roe = truth.roe[i] / a
+    return propagate(roe, t - truth.stamps[i], a, truth.inc[i], True, truth_da_dot / a / 86400.0) * a
+
+
+CHECKS = {interfaces.TRUTH_ROE_TOPIC: validate.truth, interfaces.EXECUTED_TOPIC: validate.executed,
+          interfaces.OD_TOPIC: validate.orbit_determination, interfaces.DRIFT_STOP_PLAN_TOPIC: validate.plan,
+          interfaces.ACQUISITION_PLAN_TOPIC: validate.plan, interfaces.PLAN_CHECK_TOPIC: validate.safety_status,
+          interfaces.SAFETY_TOPIC: validate.safety_status}
+
+
+def _valid_items(topic, msgs, checks=CHECKS):
+    """The ``(log_time, msg)`` of a topic that its check (:data:`CHECKS`) accepts."""
+    check = checks.get(topic)
+    kept = []
+    for item in msgs:
+        try:
+            if check is not None:
+                check(item[1])
+        except ValueError:
+            continue
+        kept.append(item)
+    return kept
 
 
 def valid_only(data):
     """Drop what the nodes themselves reject (:mod:`roe_sep.validate`): a bag records every message on a topic,
     also a foreign publisher's garbage, which must not enter the report."""
-    checks = {interfaces.TRUTH_ROE_TOPIC: validate.truth, interfaces.EXECUTED_TOPIC: validate.executed,
-              interfaces.OD_TOPIC: validate.orbit_determination, interfaces.DRIFT_STOP_PLAN_TOPIC: validate.plan,
-              interfaces.ACQUISITION_PLAN_TOPIC: validate.plan, interfaces.PLAN_CHECK_TOPIC: validate.safety_status,
-              interfaces.SAFETY_TOPIC: validate.safety_status}
-    out = {}
-    for topic, msgs in data.items():
-        check = checks.get(topic)
-        kept = []
-        for item in msgs:
-            try:
-                if check is not None:
-                    check(item[1])
-            except ValueError:
-                continue
-            kept.append(item)
-        out[topic] = kept
+    out = {topic: _valid_items(topic, msgs) for topic, msgs in data.items()}
     out[interfaces.PLAN_CHECK_TOPIC] = [(t, m) for t, m in out[interfaces.PLAN_CHECK_TOPIC]
                                         if m.source.startswith("plan:")]
     return out
@@ -89,9 +208,10 @@ def planner_model_error(plans, truth, truth_da_dot):
     never see the truth: this is their model error plus, for the blind drift-stop, the ejection's dispersion."""
     if not plans:
         return None
+    truth = _truth(truth)
     aimed = plans[-1][1].aimed
     t = time_to_sec(aimed.header.stamp)
-    if not truth or t > time_to_sec(truth[-1][1].header.stamp):
+    if not len(truth) or t > truth.stamps[-1]:
         return None  # aimed beyond the end of the run: no truth there
     true = truth_at(truth, t, truth_da_dot)
     if true is None:
@@ -134,13 +254,13 @@ def truth_secular_drift(truth, t, burn_epochs):
     """The truth's secular a*da [m] and drift rate [m/s] at ``t`` (:func:`~roe_sep.core.od.ensemble.secular_drift`,
     the comparand of the OD's secular state) over the truth samples after the latest burn at or before ``t`` up to
     ``t``; None over too short a span."""
+    truth = _truth(truth)
     start = max((b for b in burn_epochs if b <= t), default=-math.inf)
-    span = [m for _, m in truth if start < time_to_sec(m.header.stamp) <= t]
-    if not span:
+    span = np.flatnonzero((start < truth.times) & (truth.times <= t))
+    if not span.size:
         return None
-    ts = np.array([time_to_sec(m.header.stamp) for m in span])
-    period = 2.0 * math.pi / float(mean_motion(span[-1].chief.semi_major_axis))
-    return secular_drift(ts, [m.a_da for m in span], t, period, [m.chief.mean_arg_latitude for m in span])
+    period = 2.0 * math.pi / float(mean_motion(truth.a[int(span[-1])]))
+    return secular_drift(truth.times[span], truth.a_da[span], t, period, truth.u[span])
 
 
 def od_solution(msg, truth, truth_da_dot, burn_epochs=None):
@@ -273,11 +393,33 @@ def predicted_ic_drift(final_od, ic_model_error):
     return ic_model_error["predicted"][0] if ic_model_error else None
 
 
+@contextlib.contextmanager
+def paused_gc():
+    """No cyclic garbage collection inside: building a report makes some 100,000 objects (the decoded messages)
+    that all live until it is built, and every full collection meanwhile would only walk them and the rest of the
+    heap again (a third of the report's CPU time). Collection resumes on exit (if it was on)."""
+    if not gc.isenabled():
+        yield
+        return
+    gc.disable()
+    try:
+        yield
+    finally:
+        gc.enable()
+
+
 def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()):
+    with paused_gc():
+        return _build_report(bag_dir, duration, limits)
+
+
+def _build_report(bag_dir, duration, limits):
     topics = (interfaces.EXECUTED_TOPIC, interfaces.TRUTH_ROE_TOPIC, interfaces.DIAGNOSTICS_TOPIC,
               interfaces.SAFETY_TOPIC, interfaces.PLAN_CHECK_TOPIC, interfaces.OD_TOPIC,
               interfaces.ACQUISITION_PLAN_TOPIC, interfaces.DRIFT_STOP_PLAN_TOPIC)
-    data = valid_only(read_topics(bag_dir, topics))
+    data = read_topics(bag_dir, topics, raw=(interfaces.TRUTH_ROE_TOPIC,))
+    truth = read_truth(data.pop(interfaces.TRUTH_ROE_TOPIC))
+    data = valid_only(data)
 
     maneuvers = []
     for _, m in data[interfaces.EXECUTED_TOPIC]:
@@ -292,9 +434,7 @@ def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()
     ejection = next((m for m in maneuvers if m["purpose"] == "ejection"), None)
     ic_burns = [m for m in carrier if m["purpose"] == "ic_acquisition"]
 
-    truth = data[interfaces.TRUTH_ROE_TOPIC]
-    final = truth[-1][1] if truth else None
-    final_roe = [getattr(final, k) for k in ROE_KEYS] if final else None
+    final_roe = truth.final_roe
 
     sim_status = [s for _, d in data[interfaces.DIAGNOSTICS_TOPIC] for s in d.status if s.name == "roe_sep/sim"]
     late = [s.message for s in sim_status if "executed late" in s.message or "not executed" in s.message]
@@ -347,7 +487,7 @@ def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()
         # ejection to the IC epoch, when the truth meets the ICs there (None: not reached, or no plan or ejection)
         "time_to_ic": (ic["epoch"] - ejection["epoch"]) if (ic and ic["reached"] and ejection) else None,
         "final_roe": final_roe,
-        "final_epoch": time_to_sec(final.header.stamp) if final else None,
+        "final_epoch": truth.stamps[-1] if len(truth) else None,
         "min_distance": min_distance if math.isfinite(min_distance) else None,  # None: no approach after departure
         "min_distance_epoch": float(values.get("min_distance_time_s", "nan")),
         "truth_drag_a_da_dot_m_per_day": truth_da_dot,

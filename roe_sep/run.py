@@ -385,6 +385,13 @@ def report_from_bag(bag_dir, out, duration, recorder_code):
     """The run report from the bag; when the recorder died (or the bag is unfinished) the bag is recovered first
     (``roe-sep bag recover``) and the report says how much was lost. Never raises: a report that cannot be built
     says why, with ``safe: null``."""
+    from .report import paused_gc
+
+    with paused_gc():
+        return _report_from_bag(bag_dir, out, duration, recorder_code)
+
+
+def _report_from_bag(bag_dir, out, duration, recorder_code):
     from .bag import BagError, info
     from .bag.recover import recover, summary_line
     from .report import build_report

@@ -82,6 +82,22 @@ def _roe_ok(msg) -> bool:
     return len(cov) in (0, 36) and all(map(math.isfinite, cov))
 
 
+def roe_accepted(sec, nanosec, chief, values, covariance):
+    """Which messages :func:`roe` accepts, for a topic of RelativeOrbitalElements read as arrays (a bag's fixed
+    layout, :func:`roe_sep.bag.cdr.fixed_layout`): stamp ``sec`` and ``nanosec`` (N,), ``chief`` ``{name: (N,)}``
+    of :data:`ELEMENT_BOUNDS`, ``values`` ``{name: (N,)}`` of :data:`ROE_FIELDS` (float64) and ``covariance``
+    (N, 36): the tests of :func:`_roe_ok`, element-wise (every bound is finite: a comparison fails for NaN and
+    infinities as there). A boolean (N,) array."""
+    import numpy as np
+
+    ok = (np.asarray(sec) >= 0) & (np.asarray(nanosec) >= 0) & (np.asarray(nanosec) < NANOSECONDS_PER_SECOND)
+    for name, lo, hi, _ in ELEMENT_BOUNDS:
+        ok &= (lo <= chief[name]) & (chief[name] <= hi)
+    for name in ROE_FIELDS:
+        ok &= (-MAX_ROE_M <= values[name]) & (values[name] <= MAX_ROE_M)
+    return ok & np.isfinite(covariance).all(axis=-1)
+
+
 def roe(field, msg):
     """RelativeOrbitalElements: stamp, chief and a*ROE [m] plausible; covariance 36 finite entries or empty."""
     try:

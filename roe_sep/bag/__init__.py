@@ -2,8 +2,9 @@
 
 Modules, one job each: :mod:`.definitions` (schema text and type hash of a message type), :mod:`.qos` (QoS
 profiles <-> rosbag2 dictionaries), :mod:`.metadata` (``metadata.yaml``), :mod:`.writer` (the MCAP bag writer),
-:mod:`.scan` (record scan of an unfinished file), :mod:`.reader` (topics, messages,
-:func:`info`), :mod:`.recover` (rebuild a bag from an unfinished file) and
+:mod:`.scan` (record scan of an unfinished file), :mod:`.cdr` (decoders compiled from a bag's own
+schemas), :mod:`.reader` (topics, messages, decoded messages, :func:`info`), :mod:`.recover` (rebuild a bag from an
+unfinished file) and
 :mod:`.replay` (``roe-sep replay``, the only one that needs rclpy). The recorder node is
 :mod:`roe_sep.nodes.recorder`.
 """

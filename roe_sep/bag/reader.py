@@ -13,22 +13,40 @@ from mcap.reader import make_reader
 from ..checks import one_line
 from ..errors import BagError
 from . import metadata
-from .scan import Scan
+from .scan import MESSAGE_HEAD, MESSAGE_HEAD_SIZE, Irregular, Scan, chunk_data, chunk_records
 
 Message = collections.namedtuple("Message", "topic type data log_time publish_time sequence")
 
 
 def resolve(path):
     """``(bag directory or None, .mcap file)`` for a bag directory or an ``.mcap`` file; BagError if neither."""
+    bag_dir, file, _ = _resolve(path)
+    return bag_dir, file
+
+
+def _read_metadata(bag_dir):
+    """``(metadata.read(bag_dir), None)``, or ``(None, the exception it raised)``."""
+    try:
+        return metadata.read(bag_dir), None
+    except Exception as exc:  # noqa: BLE001  (the callers say what is wrong with it)
+        return None, exc
+
+
+def _resolve(path):
+    """:func:`resolve` and what it read of ``metadata.yaml`` (:func:`_read_metadata`; None when not read)."""
     p = Path(path)
     if p.is_file():
-        return None, p
+        return None, p, None
     if not p.is_dir():
         raise BagError(f"{path}: no such bag (expected a bag directory or an .mcap file)")
     names = []
+    meta = None
     if (p / metadata.FILE_NAME).is_file():
+        meta = _read_metadata(p)
         try:
-            names = [n for n in metadata.read(p).get("relative_file_paths") or [] if isinstance(n, str)]
+            if meta[1] is not None:
+                raise meta[1]
+            names = [n for n in meta[0].get("relative_file_paths") or [] if isinstance(n, str)]
         except Exception:  # noqa: BLE001  (a damaged metadata.yaml: fall back to the directory listing; info says so)
             names = []
     files = [p / n for n in names if (p / n).is_file()] or sorted(f for f in p.glob("*.mcap") if f.is_file())
@@ -36,7 +54,7 @@ def resolve(path):
         raise BagError(f"{path}: not a bag (no .mcap file in the directory)")
     if len(files) > 1:
         raise BagError(f"{path}: split bags are not supported ({len(files)} .mcap files)")
-    return p, files[0]
+    return p, files[0], meta
 
 
 def _summary(fh, file):
@@ -80,9 +98,87 @@ def messages(path, topics=None):
                           msg.publish_time, msg.sequence)
 
 
+RawMessage = collections.namedtuple("RawMessage", "schema decode data")
+RawMessage.__doc__ = """A message of :func:`decoded_messages` left undecoded (``raw`` topics): its MCAP schema
+record, its decoder (``decode(data)`` is the message) and its serialized ``data``."""
+
+
+def decoded_messages(file, topics, raw=()) -> list:
+    """``[(topic, log_time ns, message)]`` of the messages on ``topics`` in an ``.mcap`` file, in log-time order,
+    decoded with the file's own schemas: what mcap_ros2's ``read_ros2_messages(file, topics)`` yields, the same
+    messages in the same order, the same objects, or the same exception. The chunks are walked without a Python
+    object per record (:func:`~roe_sep.bag.scan.chunk_records`) and only the messages on ``topics`` are decoded,
+    by code compiled from their schemas (:mod:`roe_sep.bag.cdr`); a file this does not read as mcap would (no
+    summary or chunk index, an irregular chunk, ...) is read by mcap_ros2 itself. The messages on the topics in
+    ``raw`` may come as :class:`RawMessage` (their decoding left to the caller, who must raise what decoding
+    raises: only the other messages were decoded here)."""
+    topics = list(topics)
+    try:
+        return _decoded_messages(file, topics, frozenset(raw))
+    except Exception:  # noqa: BLE001 -- mcap_ros2 reads it, or raises what it raises
+        from mcap_ros2.reader import read_ros2_messages
+
+        return [(m.channel.topic, m.log_time_ns, m.ros_msg) for m in read_ros2_messages(str(file), topics=topics)]
+
+
+def _decoded_messages(file, topics, raw=frozenset()):
+    """:func:`decoded_messages` by the chunk index; Irregular (or any exception) where mcap's SeekingReader could
+    read differently."""
+    from mcap.data_stream import ReadDataStream
+    from mcap.records import Chunk
+
+    from .cdr import decoder
+
+    wanted_topics = set(topics)
+    with open(file, "rb") as fh:
+        summary = make_reader(fh).get_summary()
+        if summary is None or not summary.chunk_indexes:
+            raise Irregular("no chunk index")  # mcap reads such a file linearly
+        channels = summary.channels
+        wanted = {cid for cid, ch in channels.items() if ch.topic in wanted_topics}
+        # the chunks mcap reads: those whose message indexes name a wanted channel, or without message indexes
+        chunks = [ci for ci in summary.chunk_indexes
+                  if not ci.message_index_offsets
+                  or any(channels[cid].topic in wanted_topics for cid in ci.message_index_offsets)]
+        if len({ci.chunk_start_offset for ci in chunks}) != len(chunks):
+            raise Irregular("a chunk indexed twice")
+        found = []
+        unpack = MESSAGE_HEAD.unpack_from
+        for ci in chunks:
+            fh.seek(ci.chunk_start_offset + 9)
+            data = chunk_data(Chunk.read(ReadDataStream(fh)))
+            for opcode, start, end, _ in chunk_records(data):
+                if opcode != 5:  # Opcode.MESSAGE
+                    continue
+                channel_id, _, log_time, _ = unpack(data, start)
+                if channel_id not in channels:
+                    raise Irregular(f"message on an unknown channel {channel_id}")
+                if log_time < ci.message_start_time:  # mcap's log-time merge assumes the chunk's start time
+                    raise Irregular("message logged before its chunk's start time")
+                if channel_id in wanted:
+                    found.append((log_time, ci.chunk_start_offset, start, channel_id,
+                                  data[start + MESSAGE_HEAD_SIZE:end]))
+    found.sort(key=lambda x: x[:3])  # mcap's order: log time, then the position in the file
+    decoders = {}  # per schema id, as mcap_ros2's DecoderFactory caches them
+    out = []
+    for log_time, _, _, channel_id, data in found:
+        channel = channels[channel_id]
+        decode = decoders.get(channel.schema_id)
+        if decode is None:
+            schema = summary.schemas[channel.schema_id] if channel.schema_id else None
+            decode = decoders[channel.schema_id] = decoder(schema, channel.message_encoding)
+            if decode is None:
+                raise Irregular(f"no decoder for channel {channel_id}")
+        if channel.topic in raw:
+            out.append((channel.topic, log_time, RawMessage(summary.schemas[channel.schema_id], decode, data)))
+        else:
+            out.append((channel.topic, log_time, decode(data)))
+    return out
+
+
 def _scan(file):
     """Every record of the file, CRCs checked: (scan, channels by id, schemas by id, per-channel counts, start, end)."""
-    scan = Scan(file)
+    scan = Scan(file, message_counts=True)
     chans_by_id, schemas, per = {}, {}, collections.Counter()
     start = end = None
     for rec in scan.records():
@@ -95,6 +191,10 @@ def _scan(file):
             per[rec.channel_id] += 1
             start = rec.log_time if start is None else min(start, rec.log_time)
             end = rec.log_time if end is None else max(end, rec.log_time)
+        elif kind == "MessageCounts" and rec.counts:  # a chunk's messages
+            per.update(rec.counts)
+            start = rec.start if start is None else min(start, rec.start)
+            end = rec.end if end is None else max(end, rec.end)
     return scan, chans_by_id, schemas, per, start, end
 
 
@@ -114,14 +214,17 @@ def _summary_problems(file, per, count) -> list:
     return problems
 
 
-def _metadata_problems(bag_dir, count, result) -> list:
-    """A bag directory's metadata.yaml: present, readable, and the same message count as the file."""
+def _metadata_problems(bag_dir, count, result, read=None) -> list:
+    """A bag directory's metadata.yaml: present, readable, and the same message count as the file. ``read``:
+    what :func:`_read_metadata` returned for it (read here when None)."""
     if bag_dir is None:
         return []
     if not (bag_dir / metadata.FILE_NAME).is_file():
         return [f"no {metadata.FILE_NAME} in {bag_dir} (`roe-sep bag recover` writes one)"]
+    meta, exc = read or _read_metadata(bag_dir)
     try:
-        meta = metadata.read(bag_dir)
+        if exc is not None:
+            raise exc
         result["ros_distro"] = meta.get("ros_distro")
         n = int(meta.get("message_count"))
     except Exception as exc:  # noqa: BLE001  (any damage: bad YAML, missing keys, wrong types)
@@ -139,7 +242,7 @@ def info(path) -> dict:
     `roe-sep bag recover` keeps everything before the cut) or ``corrupt`` (unreadable bytes inside the file);
     ``problems``: every inconsistency found (summary vs records, metadata.yaml), empty for a sound bag.
     """
-    bag_dir, file = resolve(path)
+    bag_dir, file, meta = _resolve(path)
     result = {"path": str(bag_dir or file), "file": str(file), "storage_identifier": metadata.STORAGE_ID,
               "size_bytes": file.stat().st_size}
     scan, chans_by_id, schemas, per, start, end = _scan(file)
@@ -152,7 +255,7 @@ def info(path) -> dict:
     else:
         result.update(recoverable_bytes=scan.valid_bytes, damage=scan.reason)
         problems.append(f"{scan.kind}: {scan.reason}; {scan.size - scan.valid_bytes} of {scan.size} bytes unreadable")
-    problems += _metadata_problems(bag_dir, count, result)
+    problems += _metadata_problems(bag_dir, count, result, meta)
     if count == 0:
         start = end = 0
     result.update(
