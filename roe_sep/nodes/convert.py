@@ -3,13 +3,14 @@
 import numpy as np
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Vector3
-from roe_sep_msgs.msg import ImpulsiveManeuver, OrbitalElements, RelativeOrbitalElements
+from roe_sep_msgs.msg import ImpulsiveManeuver, OrbitalElements, RelativeOrbitalElements, RelativeState
 
 from .. import interfaces
 from ..core.relmotion.roe import wrap_angle
 from ..core.truth.execution import relative_impulse
 from ..stamps import sec_nanosec, time_to_sec
 from ..validate import ROE_FIELDS
+from .cdr import Serialized
 
 KEPLER_FIELDS = ("semi_major_axis", "eccentricity", "inclination", "raan", "arg_perigee", "mean_arg_latitude")
 
@@ -55,15 +56,47 @@ def roe_to_msg(roe, chief: OrbitalElements, stamp: Time, frame_id=interfaces.CAR
     return msg
 
 
-def truth_rows(kep, roe) -> tuple[list, list]:
+def truth_fields(kep, roe) -> tuple[np.ndarray, np.ndarray]:
     """The fields of :func:`array_to_elements` (``[a, e, i, raan, argp, u]``, angles wrapped) and of :func:`roe_to_msg`
-    (a*ROE [m]) for each row of the mean elements ``kep`` ``(T, 6)`` and the dimensionless ``roe`` ``(T, 6)``, as lists
-    of Python floats: one vectorised pass whose element-wise operations are those of the per-row functions, so every
+    (a*ROE [m]) for each row of the mean elements ``kep`` ``(T, 6)`` and the dimensionless ``roe`` ``(T, 6)``, two
+    ``(T, 6)`` arrays: one vectorised pass whose element-wise operations are those of the per-row functions, so every
     value is the same to the last bit."""
     kep = np.asarray(kep, dtype=float).reshape(-1, 6)
     roe = np.asarray(roe, dtype=float).reshape(-1, 6)
     chief = np.concatenate([kep[:, :3], wrap_angle(kep[:, 3:5]), wrap_angle(kep[:, 4:5] + kep[:, 5:6])], axis=1)
-    return chief.tolist(), (roe * kep[:, :1]).tolist()
+    return chief, roe * kep[:, :1]
+
+
+class TruthMessages:
+    """The simulator's truth topics, serialized: for each sample the RelativeOrbitalElements (frame
+    :data:`~roe_sep.interfaces.TRUTH_FRAME`, the chief of :func:`array_to_elements`, the a*ROE of :func:`roe_to_msg`,
+    zero covariance) and the RelativeState (frame :data:`~roe_sep.interfaces.CARRIER_RTN_FRAME`, the true relative
+    position and velocity) stamped with its epoch, as the bytes rclpy serializes from those messages
+    (:class:`~.cdr.Serialized`, the fields of all samples written in one vectorised pass)."""
+
+    def __init__(self):
+        roe, rtn = RelativeOrbitalElements(), RelativeState()
+        roe.header.frame_id = interfaces.TRUTH_FRAME
+        rtn.header.frame_id = interfaces.CARRIER_RTN_FRAME
+        stamp = {"sec": ("header.stamp.sec",), "nanosec": ("header.stamp.nanosec",)}
+        self.roe = Serialized(roe, {**stamp, "chief": tuple(f"chief.{n}" for n in KEPLER_FIELDS), "roe": ROE_FIELDS})
+        self.rtn = Serialized(rtn, {**stamp, "position": ("position.x", "position.y", "position.z"),
+                                    "velocity": ("velocity.x", "velocity.y", "velocity.z")})
+
+    def __call__(self, epochs, samples) -> list[tuple[bytes, bytes]]:
+        """``(roe, rtn)`` serialized messages at each of ``epochs`` [s] from the truth's ``samples`` at them, ``(kep
+        (T, 6), dimensionless roe (T, 6), (pos (T, 3) [m], vel (T, 3) [m/s]))``."""
+        kep, roe, (pos, vel) = samples
+        chief, a_roe = truth_fields(kep, roe)
+        stamps = [sec_nanosec(t) for t in epochs]
+        roe_rows, rtn_rows = self.roe.rows(len(stamps)), self.rtn.rows(len(stamps))
+        for rows in (roe_rows, rtn_rows):
+            rows["sec"] = [sec for sec, _ in stamps]
+            rows["nanosec"] = [nanosec for _, nanosec in stamps]
+        roe_rows["chief"], roe_rows["roe"] = chief, a_roe
+        rtn_rows["position"] = np.asarray(pos, dtype=float).reshape(-1, 3)
+        rtn_rows["velocity"] = np.asarray(vel, dtype=float).reshape(-1, 3)
+        return list(zip(Serialized.messages(roe_rows), Serialized.messages(rtn_rows)))
 
 
 def msg_to_roe(msg: RelativeOrbitalElements) -> np.ndarray:

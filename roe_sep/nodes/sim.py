@@ -25,7 +25,6 @@ import json
 import math
 import time
 
-import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Vector3Stamped
 from rclpy.clock import Clock as RclpyClock
@@ -49,13 +48,12 @@ from ..core.separation.double_impulse import InfeasibleDesignError, design
 from ..core.truth.contingency import resolve as resolve_contingency
 from ..core.truth.execution import BurnExecution
 from ..core.truth.simulated import Camera, SimulatedTruth, camera_rng, dispersed_truth
-from ..stamps import sec_nanosec
 from .convert import (
+    TruthMessages,
     array_to_vector,
     maneuver_msg,
     sec_to_time,
     time_to_sec,
-    truth_rows,
     vector_to_array,
 )
 from .diagnostics import ERROR, OK, WARN, publish_status
@@ -154,11 +152,7 @@ class SimNode(Node):
         self.clock_pub = self.create_publisher(Clock, interfaces.CLOCK_TOPIC, 10)
         self.roe_pub = ls.publisher(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, interfaces.STREAM)
         self.rtn_pub = ls.publisher(RelativeState, interfaces.TRUTH_RTN_TOPIC, interfaces.STREAM)
-        # the truth's two messages, refilled for every sample (_publish_truth)
-        self._roe_msg = RelativeOrbitalElements()
-        self._roe_msg.header.frame_id = interfaces.TRUTH_FRAME
-        self._rtn_msg = RelativeState()
-        self._rtn_msg.header.frame_id = interfaces.CARRIER_RTN_FRAME
+        self._truth_messages = TruthMessages()  # the truth's two messages of each sample, serialized
         self.camera_pub = ls.publisher(Vector3Stamped, interfaces.CAMERA_TOPIC, interfaces.STREAM)
         self.exec_pub = ls.publisher(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, interfaces.EXECUTED)
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
@@ -257,27 +251,11 @@ class SimNode(Node):
 
     # ------------------------------------------------------------------ outputs
     def _publish_truth(self, epochs, samples):
-        """The truth topics at each of ``epochs`` [s] from the truth's ``samples`` at them: the fields of every sample
-        converted in one vectorised pass (:func:`~.convert.truth_rows`) into the two messages kept for it, which are
-        refilled and published again (rclpy serializes a message when it is published)."""
-        kep, roe, (pos, vel) = samples
-        chief_rows, roe_rows = truth_rows(kep, roe)
-        pos_rows = np.asarray(pos, dtype=float).reshape(-1, 3).tolist()
-        vel_rows = np.asarray(vel, dtype=float).reshape(-1, 3).tolist()
-        msg, state = self._roe_msg, self._rtn_msg
-        chief, roe_stamp, p, v, rtn_stamp = msg.chief, msg.header.stamp, state.position, state.velocity, \
-            state.header.stamp
-        for t, el, r, pj, vj in zip(epochs, chief_rows, roe_rows, pos_rows, vel_rows):
-            sec, nanosec = sec_nanosec(t)
-            roe_stamp.sec = rtn_stamp.sec = sec
-            roe_stamp.nanosec = rtn_stamp.nanosec = nanosec
-            (chief.semi_major_axis, chief.eccentricity, chief.inclination, chief.raan, chief.arg_perigee,
-             chief.mean_arg_latitude) = el
-            msg.a_da, msg.a_dl, msg.a_dex, msg.a_dey, msg.a_dix, msg.a_diy = r
-            self.roe_pub.publish(msg)
-            p.x, p.y, p.z = pj
-            v.x, v.y, v.z = vj
-            self.rtn_pub.publish(state)
+        """The truth topics at each of ``epochs`` [s] from the truth's ``samples`` at them: the messages of all samples
+        serialized in one vectorised pass (:class:`~.convert.TruthMessages`), published sample by sample."""
+        for roe, rtn in self._truth_messages(epochs, samples):
+            self.roe_pub.publish(roe)
+            self.rtn_pub.publish(rtn)
 
     def _publish_bearings(self, epochs, los):
         """The camera's measured lines of sight (carrier RTN, noise included) at ``epochs`` [s]."""

@@ -100,3 +100,77 @@ def test_plans_replace_pending_burns_never_fly_a_burn_twice_and_wait_for_their_c
     late = ex.execute(ex.take(ex.due(5000.0)[0]))
     assert late.epoch == 4500.0 and reports[-1] == ("WARN", "trim burn executed late at t = 4500 s (planned 4000 s)")
     assert execution(require_approval=False)[0].needs_check(burn) is False
+
+
+class PerStep:
+    """A model without its ``integrated_to``: SimulatedTruth evaluates its samples step by step."""
+
+    def __init__(self, model):
+        self.model = model
+
+    def __getattr__(self, name):
+        if name == "integrated_to":
+            raise AttributeError(name)
+        return getattr(self.model, name)
+
+
+STEPS = {600.0: np.arange(600.0, 11000.0, 600.0).tolist(), 250.0: np.arange(250.0, 11000.0, 250.0).tolist()}
+
+
+@pytest.mark.parametrize("step", [600.0, 250.0])
+def test_nonlinear_samples_evaluated_ahead_are_each_steps_to_the_bit(step):
+    """With a NonlinearTruth the samples up to the end of the integrated span are evaluated in one pass and the
+    steps take theirs from it; a burn drops those after it. Every sample (epochs, elements, ROE, RTN) is the
+    per-step evaluation's to the bit: across hour ends, a burn between truth epochs, one on a truth epoch and on the
+    hour (whose sample before the burn is published, then the one after it, as the simulator does)."""
+    from roe_sep.core.truth.nonlinear import Atmosphere, NonlinearTruth
+
+    chief0 = chief_from_u(D.a, D.inc, 0.3, D.u1)
+    burns = [(1234.5678, [-1.33, -0.16, 0.44], "picosatellite"), (5000.25, [0.01, -0.02, 0.0], "carrier"),
+             (7200.0, [0.0, 0.03, 0.01], "carrier"), (9060.0, [0.0, -0.01, 0.0], "picosatellite")]
+
+    def run(ahead):
+        model = NonlinearTruth(chief0, 0.0, 0.0079, 0.0230, Atmosphere.normalised(1e-12, chief0))
+        out = []
+        truth = SimulatedTruth(model if ahead else PerStep(model), 60.0, 10.0, 1000.0,
+                               lambda e, s: out.append((list(e), [np.asarray(a).tobytes() for a in
+                                                                   (s[0], s[1], *s[2])])), lambda: None)
+        pending = list(burns)
+        for t_to in STEPS[step]:
+            while pending and pending[0][0] <= t_to:  # as BurnExecution.execute and the sim node
+                epoch, dv, spacecraft = pending.pop(0)
+                truth.advance(epoch)
+                model.apply(epoch, relative_impulse(dv, spacecraft), spacecraft)
+                truth.publish([epoch])
+            truth.advance(t_to)
+        return out, truth.closest.min_dist
+
+    ahead, per_step = run(True), run(False)
+    assert ahead == per_step
+    samples = ahead[0]
+    assert sum(len(e) for e, _ in samples) == int(STEPS[step][-1] // 60.0) + 1 + len(burns)
+    epochs = [t for e, _ in samples for t in e]
+    assert epochs.count(7200.0) == epochs.count(9060.0) == 2  # before and after the burn on it
+
+
+def test_nonlinear_distances_from_the_pass_ahead_are_each_windows():
+    """NonlinearTruth.distances evaluates |r| on its grid up to the end of the integrated span and the next windows
+    on that grid take theirs from it: every window's times and distances are its own evaluation's to the bit, also
+    for windows off the grid (after a burn, ending on one) and after a burn (which drops the pass)."""
+    from roe_sep.core.truth.nonlinear import Atmosphere, NonlinearTruth, relative_rtn
+
+    chief0 = chief_from_u(D.a, D.inc, 0.3, D.u1)
+    model = NonlinearTruth(chief0, 0.0, 0.0079, 0.0230, Atmosphere.normalised(1e-12, chief0))
+    model.apply(100.3, relative_impulse([-1.33, -0.16, 0.44], "picosatellite"))
+    ends = [700.0, 1300.0, 1900.0, 3600.0, 4200.0, 4800.0, 5400.0, 5650.25, 6200.0, 6800.0, 7300.0]
+    t, hits = 100.3, 0
+    for t_to in ends:
+        passes = model._distances
+        times, dist = model.distances(t, t_to, 10.0)
+        hits += model._distances is passes
+        assert times.tolist() == np.append(np.arange(t, t_to, 10.0), t_to).tolist()
+        assert dist.tobytes() == np.linalg.norm(relative_rtn(model.states(times))[0], axis=-1).tobytes()
+        if t_to in (4800.0, 5650.25):  # a burn on the pass's grid, one off it
+            model.apply(t_to, relative_impulse([0.0, 0.05, 0.0], "carrier"), "carrier")
+        t = t_to
+    assert hits == 3  # to 1900 and 3600 (the pass from 700) and 4800 (from 3600); not 5400 after the burn

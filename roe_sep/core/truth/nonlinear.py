@@ -648,6 +648,14 @@ def mean_roe(state: ArrayLike) -> np.ndarray:
     return kepler_to_roe(kep[..., 0, :], kep[..., 1, :])
 
 
+def _relative_position(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The chief's RTN -> inertial rotation M ``(..., 3, 3)`` of pair states ``s`` ``(..., 12)`` and the deputy's
+    position relative to the chief in it, M^T (r_d - r_c) ``(..., 3)`` [m] (:func:`relative_rtn`'s first half)."""
+    rc = s[..., 0:3]
+    rot = rtn_matrix(rc, s[..., 3:6])
+    return rot, np.einsum("...ji,...j->...i", rot, s[..., 6:9] - rc)
+
+
 def relative_rtn(state: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Deputy position [m] and velocity [m/s] relative to the chief in the chief's rotating RTN frame.
 
@@ -655,11 +663,14 @@ def relative_rtn(state: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """
     s = np.asarray(state, dtype=float)
     rc, vc = s[..., 0:3], s[..., 3:6]
-    rot = rtn_matrix(rc, vc)
-    dr = np.einsum("...ji,...j->...i", rot, s[..., 6:9] - rc)
+    rot, dr = _relative_position(s)
     dv = np.einsum("...ji,...j->...i", rot, s[..., 9:12] - vc)
     w = np.linalg.norm(np.cross(rc, vc), axis=-1) / np.sum(rc * rc, axis=-1)
-    return dr, dv - np.stack([-w * dr[..., 1], w * dr[..., 0], np.zeros_like(w)], axis=-1)
+    # dv - omega x r_rel, omega x r_rel = (-w dr_T, w dr_R, 0): the two non-zero components subtracted in place (the
+    # radial one minus 0.0 is itself)
+    dv[..., 0] -= -w * dr[..., 1]
+    dv[..., 1] -= w * dr[..., 0]
+    return dr, dv
 
 
 # ---------------------------------------------------------------- single pair
@@ -942,6 +953,14 @@ class NonlinearTruth:
         self._ta.state[:] = pair_state(self.chief0, self.chief0)
         self._ta.pars[:] = _pars(b_chief, b_chief, atmosphere)
         self._segments = []  # (t_from, t_to, heyoka continuous output)
+        self.revision = 0  # burns applied: what was evaluated before a burn is stale after it
+        self._distances = None  # (revision, step, times, |r| at them) of distances' last pass
+
+    def integrated_to(self, t: float) -> float:
+        """Integrate up to (at least) ``t`` [s] and return the end of the integrated span: the truth at any time up to
+        it is dense output, without integrating further (until the next burn, :attr:`revision`)."""
+        self._extend(t)
+        return float(self._ta.time)
 
     @property
     def a(self) -> float:
@@ -969,9 +988,14 @@ class NonlinearTruth:
         """Pair states ``(..., 12)`` at ``times`` [s] (scalar or array, each >= the previous query's earliest)."""
         t = np.asarray(times, dtype=float)
         flat = t.reshape(-1)
-        self._extend(flat.max())
-        self._segments = [s for s in self._segments if s[1] >= flat.min()]
+        t_min, t_max = flat.min(), flat.max()
+        self._extend(t_max)
+        self._segments = [s for s in self._segments if s[1] >= t_min]
         out = np.empty((flat.size, 12))
+        if self._segments and self._segments[0][0] <= t_min and t_max <= self._segments[0][1]:
+            # all in the first segment kept (the usual step): the first segment holding each time, in one call
+            out[:] = np.asarray(self._segments[0][2](flat)).reshape(-1, 12)
+            return out.reshape(t.shape + (12,))
         done = np.zeros(flat.size, bool)
         for lo, hi, co in self._segments:
             sel = ~done & (flat >= lo) & (flat <= hi)
@@ -1012,6 +1036,10 @@ class NonlinearTruth:
     def distances(self, t_from: float, t_to: float, step: float) -> tuple[np.ndarray, np.ndarray]:
         """Times and |r| [m] over ``[t_from, t_to]`` every ``step`` seconds (and at both ends).
 
+        |r| is evaluated in one pass on the grid of ``step`` from ``t_from`` to the end of the integrated span (the
+        hour's end); the next windows on that grid (the simulator's next steps) take theirs from it, until a burn.
+        Each distance is its own time's value to the bit whatever the pass (the evaluation is element-wise).
+
         Parameters
         ----------
         t_from, t_to : float
@@ -1025,7 +1053,20 @@ class NonlinearTruth:
             Times [s] and distances [m].
         """
         times = np.append(np.arange(t_from, t_to, step), t_to)
-        return times, np.linalg.norm(self.rtn_at(times)[0], axis=-1)
+        n = times.size
+        if self._distances is not None and self._distances[:2] == (self.revision, step):
+            grid, dist = self._distances[2:]
+            i = int(np.searchsorted(grid, times[0]))
+            if i + n <= grid.size and np.array_equal(grid[i:i + n], times):
+                return times, dist[i:i + n]
+        end = self.integrated_to(t_to)
+        grid = np.append(np.arange(t_from, end, step), end)  # its first n times are the window's (same arange)...
+        if grid.size < n or not np.array_equal(grid[:n], times):  # ... unless t_to is off the grid: the window alone
+            grid = times
+        dist = np.linalg.norm(_relative_position(self.states(grid))[1], axis=-1)
+        dist.flags.writeable = False
+        self._distances = (self.revision, step, grid, dist)
+        return times, dist[:n]
 
     def apply(self, t: float, dv_rel: ArrayLike, spacecraft: str = "picosatellite") -> None:
         """Execute a burn at ``t``: ``dv_rel`` is the relative impulse of the seed convention (the picosatellite's
@@ -1056,3 +1097,4 @@ class NonlinearTruth:
             self._ta.pars[1] = self.b_deputy
         self.separated = True
         self._segments = []
+        self.revision += 1

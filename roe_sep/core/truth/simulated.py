@@ -200,7 +200,13 @@ class SimulatedTruth:
     """The truth's timeline: :meth:`advance` moves ``model`` to a sim time, hands the truth samples of every
     ``truth_period`` epoch on the way to ``on_samples(epochs, (kep, roe, (pos, vel)))``, tracks the closest approach
     on a ``distance_step`` grid and calls ``on_hour()`` at every full hour of sim time at its own epoch, so that every
-    output is the same whatever the step size."""
+    output is the same whatever the step size.
+
+    A model with a dense output (:class:`~.nonlinear.NonlinearTruth`: ``integrated_to``, ``revision``) has the
+    samples of every epoch up to the end of its integrated span evaluated in one vectorised pass when the first of
+    them is due (an hour of samples, not a step's), each step taking its own from them; a burn (a new ``revision``)
+    drops those after it. Every sample is the value of its own epoch, whatever the pass it was evaluated in (the
+    evaluation is element-wise), so the samples are those of a pass per step to the bit."""
 
     def __init__(self, model, truth_period, distance_step, departure, on_samples, on_hour):
         self.model = model
@@ -211,6 +217,7 @@ class SimulatedTruth:
         self.next_truth = 0.0
         self.next_status = STATUS_PERIOD
         self.camera = None  # a Camera observing on the way (the simulator's)
+        self._ahead = None  # (model revision, epochs, their samples, index of the next step's first epoch)
 
     def advance(self, t_to: float) -> None:
         """Move the truth to ``t_to`` [s]."""
@@ -230,7 +237,7 @@ class SimulatedTruth:
             epochs.append(self.next_truth)
             self.next_truth += self.truth_period
         if epochs:
-            self.publish(epochs)
+            self.on_samples(epochs, self._step_samples(epochs))
         if self.camera is not None:
             self.camera.observe(self.model, self.t, t_to)
         self.t = t_to
@@ -238,3 +245,29 @@ class SimulatedTruth:
     def publish(self, epochs: Sequence[float]) -> None:
         """The truth samples at each of ``epochs`` [s] (evaluated in one vectorized pass) to ``on_samples``."""
         self.on_samples(epochs, self.model.samples(np.asarray(epochs, dtype=float)))
+
+    def _step_samples(self, epochs: list) -> tuple:
+        """The samples of a step's truth ``epochs`` (the next ones of the grid): from the pass over the epochs up to
+        the end of the model's integrated span (see the class), evaluated again when the step's are not in it."""
+        model = self.model
+        if not hasattr(model, "integrated_to"):
+            return model.samples(np.asarray(epochs, dtype=float))
+        n = len(epochs)
+        if self._ahead is not None:
+            revision, grid, samples, i = self._ahead
+            if revision == model.revision and grid[i:i + n] == epochs:
+                self._ahead = (revision, grid, samples, i + n)
+                kep, roe, (pos, vel) = samples
+                return kep[i:i + n], roe[i:i + n], (pos[i:i + n], vel[i:i + n])
+        end = model.integrated_to(epochs[-1])
+        grid = list(epochs)
+        t = self.next_truth  # the grid goes on as _advance_to continues it
+        while t <= end:
+            grid.append(t)
+            t += self.truth_period
+        samples = model.samples(np.asarray(grid, dtype=float))
+        kep, roe, (pos, vel) = samples
+        for a in (kep, roe, pos, vel):  # the steps get views of them
+            a.flags.writeable = False
+        self._ahead = (model.revision, grid, samples, n)
+        return kep[:n], roe[:n], (pos[:n], vel[:n])
