@@ -26,3 +26,35 @@ def publish_status(node, publisher, level, message, values=None, hardware_id="ro
     else:
         array.header.stamp = node.get_clock().now().to_msg()
     publisher.publish(array)
+
+
+class StatusMessages:
+    """:func:`publish_status` for one status name whose values always have the same keys, in the same order: the
+    messages built once and refilled at each publication (rclpy serializes a message when it is published, so the
+    published bytes are those of a new message with these fields; a node that publishes a status at every
+    assessment spares the construction of the array, its header, the status and its key/value pairs)."""
+
+    def __init__(self, node, publisher, keys, hardware_id="roe_sep", part=""):
+        self.node, self.publisher = node, publisher
+        self.keys = tuple(str(k) for k in keys)
+        self.pairs = [KeyValue(key=k, value="") for k in self.keys]
+        name = f"roe_sep/{node.get_name()}" + (f"/{part}" if part else "")
+        self.status = DiagnosticStatus(name=name, hardware_id=hardware_id, values=self.pairs)
+        self.array = DiagnosticArray(status=[self.status])
+
+    def publish(self, level, message, values):
+        """As ``publish_status(node, publisher, level, message, values, hardware_id, part)``; ``values`` has the
+        keys given at construction, in their order (ValueError otherwise)."""
+        if tuple(str(k) for k in values) != self.keys:
+            raise ValueError(f"status values {list(values)} are not the keys {list(self.keys)}")
+        if isinstance(level, int):  # the message field is a byte
+            level = bytes([level])
+        self.status.level, self.status.message = level, message
+        for pair, v in zip(self.pairs, values.values()):
+            pair.value = str(v)
+        lockstep = getattr(self.node, "lockstep", None)
+        if lockstep is not None and lockstep.active and lockstep.time is not None:
+            self.array.header.stamp = sec_to_time(lockstep.time)
+        else:
+            self.array.header.stamp = self.node.get_clock().now().to_msg()
+        self.publisher.publish(self.array)

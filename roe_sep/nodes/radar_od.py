@@ -30,6 +30,7 @@ Parameters: :data:`roe_sep.nodes.parameters.RADAR_OD` (``radar_od --help``, docs
 import bisect
 import json
 import math
+import operator
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
@@ -45,25 +46,28 @@ from ..core.od.batch import DragModel, DriftPrior, RadarBatch, batch_least_squar
 from ..core.od.radar import (
     Station,
     add_noise,
+    deputy_earth_fixed,
     gmst,
     julian_date,
-    observe,
+    look_angles,
     relative_distance,
     truth_da_rate,
     visible,
 )
 from ..core.relmotion.dynamics import propagate, propagate_chief
-from ..core.relmotion.roe import wrap_angle
+from ..core.relmotion.roe import rtn_position, wrap_angle
 from ..core.truth.contingency import RADAR_SIDE, RadarContingency
 from ..core.truth.contingency import resolve as resolve_contingency
 from ..core.truth.nonlinear import vallado_band
-from .convert import array_to_elements, elements_to_array, msg_to_roe, roe_to_msg, sec_to_time, time_to_sec
+from ..validate import ROE_FIELDS
+from .convert import array_to_elements, elements_to_array, roe_to_msg, sec_to_time, time_to_sec
 from .diagnostics import ERROR, OK, WARN, publish_status
 from .lockstep import Lockstep
 from .managed import ManagedNode
 from .params import ParameterError, declare, require
 
 CHUNK = 10000  # measurement epochs propagated at once
+_ROE_VALUES = operator.attrgetter(*ROE_FIELDS)  # a message's a*ROE [m], in ROE order
 
 
 class RadarODNode(ManagedNode):
@@ -148,6 +152,7 @@ class RadarODNode(ManagedNode):
         self.t_last = None  # last processed measurement epoch [s]
         self.last_burn = -math.inf
         self.burn_epochs = []  # every executed burn's epoch [s]
+        self.burns_sorted = []  # the same, sorted
         self.open_pass = [False] * len(self.stations)
         self.pass_seen = [0] * len(self.stations)  # epochs of the open pass the station should have measured
         self.pass_start = [0.0] * len(self.stations)  # epoch [s] of the open pass's first such epoch
@@ -208,22 +213,30 @@ class RadarODNode(ManagedNode):
 
     @staticmethod
     def parse_truth(msg: RelativeOrbitalElements):
-        """(t, dimensionless ROE, chief elements); ValueError on NaN or an impossible orbit."""
-        kep = elements_to_array(msg.chief)
+        """(t, dimensionless ROE, chief elements); ValueError on NaN or an impossible orbit.
+
+        The tests on the message's floats: the chief's a, e and i in their bounds (so finite), its other elements
+        finite; the ROE finite exactly when the a*ROE are (divided by an a of the bounds). The arrays are those of
+        :func:`elements_to_array` and :func:`msg_to_roe`."""
+        c = msg.chief
+        kep = elements_to_array(c)
         t = time_to_sec(msg.header.stamp)
-        a = kep[0]
-        if not (np.isfinite(kep).all() and R_EARTH + 1e5 < a < R_EARTH + 5e6 and 0.0 <= kep[1] < 0.1
-                and 0.0 <= kep[2] <= math.pi):
+        a, e, inc, raan, argp, u = (c.semi_major_axis, c.eccentricity, c.inclination, c.raan, c.arg_perigee,
+                                    c.mean_arg_latitude)
+        if not (R_EARTH + 1e5 < a < R_EARTH + 5e6 and 0.0 <= e < 0.1 and 0.0 <= inc <= math.pi
+                and math.isfinite(raan) and math.isfinite(argp) and math.isfinite(u - argp)):
             raise ValueError(f"chief elements are not a near-circular low Earth orbit: {kep.tolist()}")
-        roe = msg_to_roe(msg)
-        if not np.isfinite(roe).all():
-            raise ValueError(f"ROE are not finite: {(roe * a).tolist()} m")
+        a_roe = _ROE_VALUES(msg)
+        roe = np.array(a_roe, dtype=float) / a  # msg_to_roe
+        if not all(map(math.isfinite, a_roe)):
+            raise ValueError(f"ROE are not finite: {(roe * kep[0]).tolist()} m")
         return t, roe, kep
 
     def on_maneuver(self, msg: ImpulsiveManeuver):
         self.flush_tracks()  # the measurements before the burn see the burn history they saw when simulated
         t = time_to_sec(msg.epoch)
         self.burn_epochs.append(t)
+        bisect.insort(self.burns_sorted, t)
         if t > self.last_burn:
             self.last_burn = t
             if self.last_solution is not None and self.last_solution[0].t_est <= t:
@@ -318,31 +331,46 @@ class RadarODNode(ManagedNode):
         rate = np.repeat([self.truth_rate(c[1][0], c[1][1]) for c in calls], sizes)
         roe = propagate(roe_tr, epochs - t_tr, kep_tr[:, 0], kep_tr[:, 2], True, rate)
         theta = gmst(self.jd0 + epochs / SECONDS_PER_DAY)
-        sep = relative_distance(roe, kep_tr[:, 0], chief[:, 4] + chief[:, 5])
-        z = [observe(roe, chief, theta, self.site_ef[s], self.site_enu[s]) for s in range(len(self.stations))]
-        seen = [visible(zs[:, 2], self.mask) for zs in z]
+        # the relative position serves the separation and every station's observe(): formed once, as each forms it
+        rel = rtn_position(roe, chief[:, 4] + chief[:, 5])
+        sep = relative_distance(roe, kep_tr[:, 0], None, rel)
+        r_ef = deputy_earth_fixed(roe, chief, theta, rel)
+        z = [look_angles(r_ef, self.site_ef[s], self.site_enu[s]) for s in range(len(self.stations))]
+        # the pass logic reads the epochs, the separation and the visibility one epoch at a time: as Python
+        # values (the same floats and truth values), not NumPy scalars
+        seen = [visible(zs[:, 2], self.mask).tolist() for zs in z]
+        epochs, sep = epochs.tolist(), sep.tolist()
         start = 0
-        for (ep, truth, now), n in zip(calls, sizes):
+        for (_, truth, now), n in zip(calls, sizes):
             rows = slice(start, start + n)
             start += n
-            self._passes(ep, truth[0], now, chief[rows], theta[rows], sep[rows], [zs[rows] for zs in z],
+            self._passes(epochs[rows], truth[0], now, chief[rows], theta[rows], sep[rows], [zs[rows] for zs in z],
                          [vs[rows] for vs in seen])
 
     def truth_rate(self, t, roe):
         """The truth's drift of da [1/s] into its sample (``t``, ``roe``) from the sample before it
-        (:func:`~roe_sep.core.od.radar.truth_da_rate`); 0 for the first sample or across a burn."""
+        (:func:`~roe_sep.core.od.radar.truth_da_rate`); 0 for the first sample or across a burn (one in
+        (t_before, t]: the first burn epoch after t_before, in the sorted epochs, is <= t)."""
         k = bisect.bisect_left(self.history_t, t)
-        if k == 0 or any(self.history_t[k - 1] < b <= t for b in self.burn_epochs):
+        if k == 0:
+            return 0.0
+        b = bisect.bisect_right(self.burns_sorted, self.history_t[k - 1])
+        if b < len(self.burns_sorted) and self.burns_sorted[b] <= t:
             return 0.0
         return truth_da_rate(self.history_t[k - 1], self.history_roe[k - 1], t, roe)
 
     def _passes(self, epochs, t_tr, now, chief, theta, sep, z, seen):
-        """Open and close passes, measure, estimate: one :meth:`track` call's epochs, station by station."""
+        """Open and close passes, measure, estimate: one :meth:`track` call's epochs, station by station
+        (``epochs``, ``sep`` and ``seen`` as lists)."""
         close_seen = False
+        min_sep = self.min_sep
         for s in range(len(self.stations)):
-            close_seen |= bool(np.any(seen[s] & (sep < self.min_sep)))
+            seen_s = seen[s]
+            if not (self.open_pass[s] or any(seen_s)):
+                continue  # nothing in view, no pass open: nothing below would happen
+            close_seen |= any(v and d < min_sep for v, d in zip(seen_s, sep))
             for j, t in enumerate(epochs):
-                if seen[s][j] and sep[j] >= self.min_sep:
+                if seen_s[j] and sep[j] >= min_sep:
                     if not self.open_pass[s]:
                         self.open_pass[s] = True
                         self.pass_ids[s] += 1

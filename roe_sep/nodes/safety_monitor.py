@@ -19,6 +19,7 @@ import json
 import math
 
 import numpy as np
+from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray
 from roe_sep_msgs.msg import (
     EjectionEvent,
@@ -39,12 +40,13 @@ from ..core.relmotion.trajectory import Chief, burn_segments, segments_at, state
 from ..core.safety.anomaly import AnomalyLimits, AnomalyWatch
 from ..core.safety.monitor import MonitorLimits, assess
 from .convert import msg_to_roe, plan_burns, sec_to_time, time_to_sec, vector_to_array
-from .diagnostics import WARN, publish_status
+from .diagnostics import WARN, StatusMessages, publish_status
 from .lockstep import Lockstep
 from .managed import ManagedNode
 from .params import ParameterError, declare
 
 PLAN_TOPICS = (interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.ACQUISITION_PLAN_TOPIC)
+DIAG_KEYS = ("t_s", "along_track_m", "min_distance_m", "min_rn_m", "nearest_crossing_m")  # an assessment's status
 
 
 class Knowledge:
@@ -112,6 +114,7 @@ class SafetyMonitorNode(ManagedNode):
         self.status_pub = ls.publisher(SafetyStatus, interfaces.SAFETY_TOPIC, interfaces.STREAM)
         self.check_pub = ls.publisher(SafetyStatus, interfaces.PLAN_CHECK_TOPIC, interfaces.EXECUTED)
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
+        self.status_msgs, self.diag_msgs = {}, {}  # publish()'s messages, per publisher and per status part
         ls.subscribe(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, self.on_executed, interfaces.EXECUTED,
                      stamp=lambda m: time_to_sec(m.epoch), what="executed maneuver")
         ls.subscribe(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, self.on_truth, interfaces.STREAM,
@@ -129,19 +132,29 @@ class SafetyMonitorNode(ManagedNode):
         return float(drag_da_dot(mc.delta_b, mc.density, a)) if mc.drag else 0.0
 
     def publish(self, source, t, res, plan_stamp=None, pub=None):
-        msg = SafetyStatus(source=source, safe=res.safe, approaching=res.approaching,
-                           along_track_separation=res.along_track_separation, distance=res.distance,
-                           min_rn_distance=res.min_rn_distance, nearest_crossing=res.nearest_crossing,
-                           evaporated=res.evaporated, in_fov=res.in_fov, violations=list(res.failed))
+        """The assessment on ``pub`` (default ``/safety/status``) and its diagnostic status. Each publisher's
+        SafetyStatus and each part's diagnostic messages are built once and refilled, every field set at every
+        publication (rclpy serializes at publish: the bytes of new messages)."""
+        pub = pub or self.status_pub
+        msg = self.status_msgs.get(id(pub))
+        if msg is None:
+            msg = self.status_msgs[id(pub)] = SafetyStatus()
+        msg.source, msg.safe, msg.approaching = source, res.safe, res.approaching
+        msg.along_track_separation, msg.distance = res.along_track_separation, res.distance
+        msg.min_rn_distance, msg.nearest_crossing = res.min_rn_distance, res.nearest_crossing
+        msg.evaporated, msg.in_fov, msg.violations = res.evaporated, res.in_fov, list(res.failed)
         msg.header.stamp = sec_to_time(t)
-        if plan_stamp is not None:
-            msg.plan_stamp = plan_stamp
-        (pub or self.status_pub).publish(msg)
+        msg.plan_stamp = Time() if plan_stamp is None else plan_stamp
+        pub.publish(msg)
         text = "all criteria pass" if not res.failed else "failed: " + ", ".join(res.failed)
-        publish_status(self, self.diag_pub, res.level, f"{source}: {text}", {
+        part = source.split(":")[0]
+        diag = self.diag_msgs.get(part)
+        if diag is None:
+            diag = self.diag_msgs[part] = StatusMessages(self, self.diag_pub, DIAG_KEYS, part=part)
+        diag.publish(res.level, f"{source}: {text}", {
             "t_s": f"{t:.0f}", "along_track_m": f"{res.along_track_separation:.1f}",
             "min_distance_m": f"{res.min_distance:.1f}", "min_rn_m": f"{res.min_rn_distance:.1f}",
-            "nearest_crossing_m": f"{res.nearest_crossing:.1f}"}, part=source.split(":")[0])
+            "nearest_crossing_m": f"{res.nearest_crossing:.1f}"})
 
     def reject(self, what, exc):
         self.get_logger().error(f"{what} rejected: {exc}")

@@ -27,7 +27,7 @@ from datetime import datetime, timezone
 import numpy as np
 
 from ..constants import MU_EARTH, R_EARTH, SECONDS_PER_DAY
-from ..relmotion.roe import rtn_position
+from ..relmotion.roe import components, rtn_position, stack_last
 
 WGS84_A = R_EARTH
 """WGS-84 semi-major axis [m]."""
@@ -162,8 +162,9 @@ def earth_rotation_matrix(theta):
     ``(..., 3, 3)``: x_ef = cos th x + sin th y, y_ef = -sin th x + cos th y, z_ef = z."""
     th = np.asarray(theta, dtype=float)
     c, s = np.cos(th), np.sin(th)
-    z, one = np.zeros_like(th), np.ones_like(th)
-    return np.stack([np.stack([c, s, z], -1), np.stack([-s, c, z], -1), np.stack([z, z, one], -1)], axis=-2)
+    m = np.zeros(th.shape + (3, 3))  # the stacked rows (c, s, 0), (-s, c, 0), (0, 0, 1), filled in place
+    m[..., 0, 0], m[..., 0, 1], m[..., 1, 0], m[..., 1, 1], m[..., 2, 2] = c, s, -s, c, 1.0
+    return m
 
 
 def chief_position_velocity(a, inc, raan, u):
@@ -175,9 +176,8 @@ def chief_position_velocity(a, inc, raan, u):
     """
     a, inc, raan, u = (np.asarray(v, dtype=float) for v in (a, inc, raan, u))
     co, so, ci, si, cu, su = np.cos(raan), np.sin(raan), np.cos(inc), np.sin(inc), np.cos(u), np.sin(u)
-    r = a[..., None] * np.stack([co * cu - so * su * ci, so * cu + co * su * ci, su * si], axis=-1)
-    v = np.sqrt(MU_EARTH / a)[..., None] * np.stack([-co * su - so * cu * ci, -so * su + co * cu * ci, cu * si],
-                                                     axis=-1)
+    r = a[..., None] * stack_last([co * cu - so * su * ci, so * cu + co * su * ci, su * si])
+    v = np.sqrt(MU_EARTH / a)[..., None] * stack_last([-co * su - so * cu * ci, -so * su + co * cu * ci, cu * si])
     return r, v
 
 
@@ -187,7 +187,7 @@ def rtn_matrix(r, v):
     er = r / np.linalg.norm(r, axis=-1, keepdims=True)
     h = _cross(r, v)
     en = h / np.linalg.norm(h, axis=-1, keepdims=True)
-    return np.stack([er, _cross(en, er), en], axis=-1)
+    return stack_last([er, _cross(en, er), en])
 
 
 def _cross(a, b):
@@ -195,7 +195,7 @@ def _cross(a, b):
     a0 b1 - a1 b0), the same values, without its general-axis set-up (a few microseconds a call)."""
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
     b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+    return stack_last([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
 
 
 def chief_from_kepler(kep):
@@ -204,21 +204,23 @@ def chief_from_kepler(kep):
     return k[..., 0], k[..., 2], k[..., 3], k[..., 4] + k[..., 5]
 
 
-def deputy_position(roe, chief_kep):
+def deputy_position(roe, chief_kep, rel=None):
     """Inertial position [m] of the picosatellite: chief + RTN relative position.
 
     r = r_chief + [R T N] (a * roe_to_rtn(roe, u)[0]), with the chief from :func:`chief_position_velocity` at its
     mean elements ``chief_kep`` ``[a, e, i, raan, argp, M]``; ``roe`` dimensionless. Broadcasts over leading axes.
+    ``rel``: ``rtn_position(roe, u)`` when the caller has it (u = argp + M of ``chief_kep``).
     """
     a, inc, raan, u = chief_from_kepler(chief_kep)
     rc, vc = chief_position_velocity(a, inc, raan, u)
-    rel = rtn_position(roe, u) * a[..., None]
+    rel = (rtn_position(roe, u) if rel is None else rel) * a[..., None]
     return rc + np.einsum("...ij,...j->...i", rtn_matrix(rc, vc), rel)
 
 
-def relative_distance(roe, a, u):
-    """|relative position| [m] of the linear ROE map, a |roe_to_rtn(roe, u)[0]|: the radar separability distance."""
-    return np.linalg.norm(rtn_position(roe, u), axis=-1) * np.asarray(a, dtype=float)
+def relative_distance(roe, a, u, rel=None):
+    """|relative position| [m] of the linear ROE map, a |roe_to_rtn(roe, u)[0]|: the radar separability distance
+    (``rel``: ``rtn_position(roe, u)`` when the caller has it)."""
+    return np.linalg.norm(rtn_position(roe, u) if rel is None else rel, axis=-1) * np.asarray(a, dtype=float)
 
 
 def look_angles(r_ef, site_ef, site_enu):
@@ -228,9 +230,9 @@ def look_angles(r_ef, site_ef, site_enu):
     az = atan2(E, N), el = atan2(U, sqrt(E^2 + N^2)). Returns ``(..., 3)`` = [range, az, el].
     """
     d = np.asarray(r_ef, dtype=float) - np.asarray(site_ef, dtype=float)
-    e, n, up = np.moveaxis(np.einsum("...ij,...j->...i", site_enu, d), -1, 0)
-    return np.stack([np.sqrt(e * e + n * n + up * up), np.mod(np.arctan2(e, n), 2.0 * np.pi),
-                     np.arctan2(up, np.hypot(e, n))], axis=-1)
+    e, n, up = components(np.einsum("...ij,...j->...i", site_enu, d))
+    return stack_last([np.sqrt(e * e + n * n + up * up), np.mod(np.arctan2(e, n), 2.0 * np.pi),
+                       np.arctan2(up, np.hypot(e, n))])
 
 
 def look_position(z, site_ef, site_enu):
@@ -248,8 +250,13 @@ def observe(roe, chief_kep, theta, site_ef, site_enu):
     :func:`deputy_position` -> Earth-fixed with :func:`earth_rotation_matrix` (sidereal angle ``theta``, e.g.
     :func:`gmst`) -> :func:`look_angles`. Broadcasts over leading axes (epochs, samples).
     """
-    r_ef = np.einsum("...ij,...j->...i", earth_rotation_matrix(theta), deputy_position(roe, chief_kep))
-    return look_angles(r_ef, site_ef, site_enu)
+    return look_angles(deputy_earth_fixed(roe, chief_kep, theta), site_ef, site_enu)
+
+
+def deputy_earth_fixed(roe, chief_kep, theta, rel=None):
+    """The Earth-fixed position [m] of the picosatellite that :func:`observe` looks at: :func:`deputy_position`
+    rotated by :func:`earth_rotation_matrix` (the same for every station: formed once for several)."""
+    return np.einsum("...ij,...j->...i", earth_rotation_matrix(theta), deputy_position(roe, chief_kep, rel))
 
 
 def chief_elevation(chief_kep, theta, site_ef, site_enu):

@@ -22,11 +22,17 @@ from numpy.typing import ArrayLike
 
 from ..constants import EARTH_ROTATION, J2, R_EARTH, SECONDS_PER_DAY
 from .orbit import circular_speed, mean_motion, per_chief
+from .roe import components, stack_last
 
 
 def j2_kappa(a: ArrayLike) -> np.ndarray:
     """kappa = 3/4 n J2 (R_E/a)^2 [rad/s], the J2 secular rate scale of a circular orbit of semi-major axis ``a``."""
-    return 0.75 * mean_motion(a) * J2 * (R_EARTH / np.asarray(a, dtype=float)) ** 2
+    return _kappa(a, mean_motion(a))
+
+
+def _kappa(a, n):
+    """:func:`j2_kappa` with the mean motion ``n`` of ``a`` given (its expression)."""
+    return 0.75 * n * J2 * (R_EARTH / np.asarray(a, dtype=float)) ** 2
 
 
 def raan_rate(a: ArrayLike, inc: ArrayLike) -> np.ndarray:
@@ -82,7 +88,7 @@ def _arg_latitude_rate(a, inc, j2):
     if not j2:
         return n
     c2 = np.cos(inc) ** 2
-    return n + j2_kappa(a) * ((3.0 * c2 - 1.0) + (5.0 * c2 - 1.0))
+    return n + _kappa(a, n) * ((3.0 * c2 - 1.0) + (5.0 * c2 - 1.0))
 
 
 def ballistic_coefficient(cd: ArrayLike, area: ArrayLike, mass: ArrayLike) -> np.ndarray | float:
@@ -212,7 +218,7 @@ def propagate(roe: ArrayLike, dt: ArrayLike, a: float, inc: float, j2: bool = Tr
         The propagated ROE, the broadcast shape of ``roe``, ``dt`` and ``da_dot``.
     """
     r = np.asarray(roe, dtype=float)
-    return np.stack(propagate_elements(np.moveaxis(r, -1, 0), dt, a, inc, j2, da_dot), axis=-1)
+    return stack_last(propagate_elements(components(r), dt, a, inc, j2, da_dot))
 
 
 def propagate_elements(elements: Sequence[ArrayLike], dt: ArrayLike, a: float, inc: float, j2: bool = True,
@@ -242,18 +248,26 @@ def propagate_elements(elements: Sequence[ArrayLike], dt: ArrayLike, a: float, i
     tuple of six numpy.ndarray
         The propagated ``(da, dl, dex, dey, dix, diy)``, each of the broadcast shape.
     """
-    dt = np.asarray(dt, dtype=float)
-    da_dot = np.asarray(da_dot, dtype=float)
+    return _elements(elements, np.asarray(dt, dtype=float), np.asarray(da_dot, dtype=float),
+                     secular_rates(a, inc, j2))
+
+
+def _elements(elements, dt, da_dot, rates, out_of_plane=True):
+    """:func:`propagate_elements` with the chief's :class:`SecularRates` given (a caller that propagates several
+    times with one chief looks them up once); ``dt`` must be an ndarray (0-d for one time): ``dt**2`` of an array is
+    ``dt * dt``, of a scalar float ``pow(dt, 2)``, which can differ in the last bit. ``out_of_plane`` False: dix and
+    diy are not formed (None), the other four are the same values."""
     da, dl, dex, dey, dix, diy = elements
-    rates = secular_rates(a, inc, j2)
+    j2 = rates.e_rotation is not None
     da_int = da * dt + 0.5 * da_dot * dt**2
     if j2:
         dl_new = dl + rates.dl_da * da_int - rates.dl_dix * dix * dt
-        diy_new = diy + rates.diy_da * da_int + rates.diy_dix * dix * dt
     else:
         dl_new = dl - rates.dl_da * da_int
-        diy_new = diy + 0.0 * dt
     da_new, dex_new, dey_new = _in_plane(da, dex, dey, dt, da_dot, rates)
+    if not out_of_plane:
+        return da_new, dl_new, dex_new, dey_new, None, None
+    diy_new = diy + rates.diy_da * da_int + rates.diy_dix * dix * dt if j2 else diy + 0.0 * dt
     return da_new, dl_new, dex_new, dey_new, dix + 0.0 * dt, diy_new
 
 
@@ -330,12 +344,13 @@ def _secular_rates(a, inc, j2):
     n = mean_motion(a)
     if not j2:
         return SecularRates(1.5 * n, None, None, None, None)
-    kap = j2_kappa(a)
-    p_fac = 3.0 * np.cos(inc) ** 2 - 1.0
+    kap = _kappa(a, n)  # j2_kappa(a), and below its cos^2 i once: the values of the functions, each formed once
+    c2 = np.cos(inc) ** 2
+    p_fac = 3.0 * c2 - 1.0
     s2i = np.sin(2.0 * inc)
     # left to right as in 7.0 * kap * s2i * dix * dt: the scalar factors first
     return SecularRates(-(1.5 * n + 7.0 * kap * p_fac), 7.0 * kap * s2i, 3.5 * kap * s2i,
-                        2.0 * kap * np.sin(inc) ** 2, eccentricity_vector_rotation_rate(a, inc))
+                        2.0 * kap * np.sin(inc) ** 2, kap * (5.0 * c2 - 1.0))  # the last: the e-vector rotation
 
 
 def _rotate_e(dex, dey, dt, rates):
@@ -372,10 +387,14 @@ def propagate_chief(kep: ArrayLike, dt: ArrayLike, j2: bool = True) -> np.ndarra
     n = mean_motion(a)
     out = np.broadcast_to(k, np.broadcast_shapes(k.shape, dt.shape + (6,))).copy()
     if j2:
-        kap = j2_kappa(a)
-        out[..., 3] = k[..., 3] + raan_rate(a, inc) * dt
-        out[..., 4] = k[..., 4] + kap * (5.0 * np.cos(inc) ** 2 - 1.0) * dt
-        out[..., 5] = k[..., 5] + (n + kap * (3.0 * np.cos(inc) ** 2 - 1.0)) * dt
+        # raan_rate's -2 kappa cos i, the e-vector and mean-anomaly rates: their expressions, kappa (j2_kappa),
+        # cos i and cos^2 i formed once
+        kap = _kappa(a, n)
+        c = np.cos(inc)
+        c2 = c ** 2
+        out[..., 3] = k[..., 3] + -2.0 * kap * c * dt
+        out[..., 4] = k[..., 4] + kap * (5.0 * c2 - 1.0) * dt
+        out[..., 5] = k[..., 5] + (n + kap * (3.0 * c2 - 1.0)) * dt
     else:
         out[..., 5] = k[..., 5] + n * dt
     return out

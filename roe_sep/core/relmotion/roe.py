@@ -85,13 +85,35 @@ def rtn_position(roe: ArrayLike, u: ArrayLike) -> np.ndarray:
 
 def _roe_to_rtn(roe, u, velocity):
     r = np.asarray(roe, dtype=float)
-    da, dl, dex, dey, dix, diy = np.moveaxis(r, -1, 0)
+    da, dl, dex, dey, dix, diy = components(r)
     s, c = np.sin(u), np.cos(u)
-    pos = np.stack([da - dex * c - dey * s, dl + 2.0 * dex * s - 2.0 * dey * c, dix * s - diy * c], axis=-1)
+    pos = stack_last([da - dex * c - dey * s, dl + 2.0 * dex * s - 2.0 * dey * c, dix * s - diy * c])
     if not velocity:
         return pos, None
-    vel = np.stack([dex * s - dey * c, -1.5 * da + 2.0 * dex * c + 2.0 * dey * s, dix * c + diy * s], axis=-1)
+    vel = stack_last([dex * s - dey * c, -1.5 * da + 2.0 * dex * c + 2.0 * dey * s, dix * c + diy * s])
     return pos, vel
+
+
+def components(x: np.ndarray) -> tuple:
+    """What iterating ``numpy.moveaxis(x, -1, 0)`` gives, without its set-up: the views ``x[..., k]`` along the last
+    axis (the NumPy floats of a 1-D ``x``, as iteration gives them: not 0-d arrays, whose ``** 2`` is ``x * x``
+    where a float's is ``pow``)."""
+    if x.ndim == 1:
+        return tuple(x)
+    return tuple(x[..., k] for k in range(x.shape[-1]))
+
+
+def stack_last(parts: list) -> np.ndarray:
+    """``numpy.stack(parts, axis=-1)``: the same values in a new C-contiguous array; for float64 arrays (or NumPy
+    floats) of one shape without its general set-up, else by ``numpy.stack`` itself (which also raises for
+    differing shapes)."""
+    shape = getattr(parts[0], "shape", None)
+    if shape is not None and all(getattr(p, "dtype", None) == np.float64 and p.shape == shape for p in parts):
+        out = np.empty(shape + (len(parts),))
+        for k, p in enumerate(parts):
+            out[..., k] = p
+        return out
+    return np.stack(parts, axis=-1)
 
 
 def rtn_to_roe(pos: ArrayLike, vel: ArrayLike, u: ArrayLike) -> np.ndarray:

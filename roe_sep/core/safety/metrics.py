@@ -1,9 +1,21 @@
 """Passive-safety and visibility metrics of a relative orbit (seeds 000/002)."""
 
+import math
+from typing import NamedTuple
+
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..relmotion.dynamics import arg_latitude_rate, propagate, propagate_elements, propagate_in_plane
+from ..relmotion.dynamics import (
+    SecularRates,
+    _elements,
+    _in_plane,
+    arg_latitude_rate,
+    propagate,
+    propagate_elements,
+    propagate_in_plane,
+    secular_rates,
+)
 from ..relmotion.orbit import mean_motion
 from ..relmotion.roe import roe_to_rtn, wrap_angle
 
@@ -25,6 +37,33 @@ def min_rn_distance(roe: ArrayLike) -> np.ndarray:
     denom = np.sqrt(de2 + di2 + plus * minus)
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.where(denom > 0.0, np.sqrt(2.0) * np.abs(dot) / denom, 0.0)
+
+
+def min_rn_distance_one(dex: float, dey: float, dix: float, diy: float) -> float:
+    """:func:`min_rn_distance` of one state given as the floats of its e/i components: the same expressions in the
+    same order, evaluated on floats (IEEE sums, products, quotients and square roots are correctly rounded: the
+    same bits as the array's), without the array set-up.
+
+    Parameters
+    ----------
+    dex, dey, dix, diy : float
+        The relative eccentricity and inclination vectors' components (dimensionless, or a*ROE in m).
+
+    Returns
+    -------
+    float
+        Eq. (25), in the unit of the components; 0 where it is undefined, as :func:`min_rn_distance`.
+    """
+    dot = dex * dix + dey * diy
+    de2, di2 = dex * dex + dey * dey, dix * dix + diy * diy
+    px, py, mx, my = dex + dix, dey + diy, dex - dix, dey - diy
+    plus = math.sqrt(px * px + py * py)
+    minus = math.sqrt(mx * mx + my * my)
+    denom = math.sqrt(de2 + di2 + plus * minus)
+    return _SQRT2 * abs(dot) / denom if denom > 0.0 else 0.0
+
+
+_SQRT2 = float(np.sqrt(2.0))
 
 
 def fov_limit(dl: ArrayLike, half_angle: ArrayLike) -> np.ndarray:
@@ -89,6 +128,8 @@ def nearest_crossing(roe0: ArrayLike, u0: ArrayLike, duration: float, a: float, 
     """
     r0 = np.asarray(roe0, dtype=float)
     batch = r0.shape[:-1]
+    if not batch and np.ndim(u0) == 0 and np.ndim(da_dot) == 0:
+        return nearest_crossing_one(r0, u0, duration, ChiefRates.of(a, inc, j2), da_dot, t_min, iterations)
     u0 = np.broadcast_to(np.asarray(u0, dtype=float), batch)
     dad = np.broadcast_to(np.asarray(da_dot, dtype=float), batch)
     u_dot = arg_latitude_rate(a, inc, j2)
@@ -135,4 +176,111 @@ def nearest_crossing(roe0: ArrayLike, u0: ArrayLike, duration: float, a: float, 
         pos_min, _ = roe_to_rtn(propagate(r0, t_min, a, inc, j2, dad), u0 + u_dot * t_min)
         best = np.where(flat, np.abs(pos_min[..., 1]), best)
         t_best = np.where(flat, t_min, t_best)
+    return best, t_best
+
+
+class ChiefRates(NamedTuple):
+    """What the relative dynamics of one chief use again and again: a [m], i [rad], J2 on/off, its
+    :func:`~roe_sep.core.relmotion.dynamics.secular_rates`, du/dt and n (the values of those functions)."""
+
+    a: float
+    inc: float
+    j2: bool
+    rates: SecularRates
+    u_dot: float
+    n: float
+
+    @classmethod
+    def of(cls, a: float, inc: float, j2: bool = True) -> "ChiefRates":
+        """The chief's rates (each the value of its function: cached per chief for floats).
+
+        Parameters
+        ----------
+        a : float
+            The chief's semi-major axis [m].
+        inc : float
+            The chief's inclination [rad].
+        j2 : bool
+            With the J2 secular rates.
+
+        Returns
+        -------
+        ChiefRates
+            a, inc, j2, :func:`secular_rates`, :func:`arg_latitude_rate` and :func:`mean_motion`.
+        """
+        return cls(a, inc, j2, secular_rates(a, inc, j2), arg_latitude_rate(a, inc, j2), mean_motion(a))
+
+
+def nearest_crossing_one(r0: ArrayLike, u0: float, duration: float, chief: ChiefRates, da_dot: float = 0.0,
+                         t_min: float | None = None, iterations: int = 3) -> tuple[np.floating, np.ndarray]:
+    """:func:`nearest_crossing` of one state, the chief's rates given: the same operations on the same values,
+    element by element, without the batch's broadcasting and gathers (a state assessment's transits are 2-3
+    revolutions, a few candidates: the wrappers were most of the cost). An element is the same whether computed in
+    a batch or alone (elementwise operations), and the nearest transit is picked by argmin, as the batch does along
+    its candidates.
+
+    Parameters
+    ----------
+    r0 : array_like, shape (6,)
+        Dimensionless ROE at t = 0.
+    u0 : float
+        The chief's mean argument of latitude at t = 0 [rad].
+    duration : float
+        End of the window [s].
+    chief : ChiefRates
+        The chief's a, i, J2 flag and rates (:meth:`ChiefRates.of`).
+    da_dot : float
+        Differential-drag rate of da [1/s].
+    t_min : float, optional
+        Start of the window [s] (exclusive); default a tenth of an orbit.
+    iterations : int
+        Newton iterations per transit candidate.
+
+    Returns
+    -------
+    t_abs : numpy.floating
+        The dimensionless |T|/a of the nearest transit (``inf`` if none), as :func:`nearest_crossing` returns it
+        for one state.
+    t : numpy.ndarray, shape ()
+        Its time [s] (``nan`` if none).
+    """
+    a, inc, j2, rates, u_dot, n = chief
+    r0 = np.asarray(r0, dtype=float)
+    period = 2.0 * np.pi / u_dot
+    if t_min is None:
+        t_min = 0.1 * period
+    u0 = float(u0)
+    dad = np.asarray(da_dot, dtype=float)
+    el = r0.tolist()
+    da0, dex0, dey0 = el[0], el[2], el[3]
+    with np.errstate(invalid="ignore", divide="ignore"):  # circular (de = 0) states give NaN: masked below
+        t_rev = period * np.arange(int(np.ceil(duration / period)) + 1)
+        da_s, dex_s, dey_s = _in_plane(da0, dex0, dey0, t_rev, dad, rates)
+        de, phi = np.hypot(dex_s, dey_s), np.arctan2(dey_s, dex_s)
+        psi = np.arccos((da_s / de).clip(-1.0, 1.0))
+        u_start = u0 + u_dot * t_rev
+        cand = np.concatenate([phi + psi, phi - psi])
+        u_start2 = np.concatenate([u_start, u_start])
+        t = np.concatenate([t_rev, t_rev]) + wrap_angle(cand - u_start2) / u_dot
+        for _ in range(iterations):
+            da, dex, dey = _in_plane(da0, dex0, dey0, t, dad, rates)
+            u = u0 + u_dot * t
+            s, c = np.sin(u), np.cos(u)
+            pos_r = da - dex * c - dey * s
+            vel_r = dex * s - dey * c
+            t = t - pos_r / (vel_r * n)
+        da, dl, dex, dey, _, _ = _elements(el, t, dad, rates, out_of_plane=False)
+        u = u0 + u_dot * t
+        s, c = np.sin(u), np.cos(u)
+        pos_r = da - dex * c - dey * s
+        pos_t = dl + 2.0 * dex * s - 2.0 * dey * c
+    ok = np.isfinite(t) & (t > t_min) & (t <= duration) & (np.abs(pos_r) < 1e-9)
+    t_abs = np.where(ok, np.abs(pos_t), np.inf)
+    idx = t_abs.argmin()
+    best = t_abs[idx]
+    t_best = np.where(np.isfinite(best), t[idx], np.nan)
+    if abs(el[0]) < 1e-12 and np.hypot(el[2], el[3]) < 1e-12:  # no radial motion: as nearest_crossing
+        pos_min, _ = roe_to_rtn(propagate(r0, t_min, a, inc, j2, dad), u0 + u_dot * t_min)
+        best = np.where(True, np.abs(pos_min[..., 1]), best)
+        t_best = np.where(True, t_min, t_best)
     return best, t_best

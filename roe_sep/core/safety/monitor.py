@@ -14,16 +14,16 @@ Criteria (each a named pass/fail; ``ERROR`` ones decide ``safe``):
 * ``fov`` (WARN): inside the camera field of view and range (seed 002 Eq. 11, |a dl| <= ``a_dl_max``).
 """
 
+import functools
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..relmotion.orbit import orbital_period
-from ..relmotion.roe import rtn_position
+from ..relmotion.dynamics import _elements
 from ..relmotion.trajectory import Burn, Chief, trajectory
-from .metrics import approaching, fov_limit, min_rn_distance, nearest_crossing
+from .metrics import ChiefRates, fov_limit, min_rn_distance_one, nearest_crossing_one
 
 ERROR_CRITERIA = ("keep_out", "passive_safety", "evaporation")
 WARN_CRITERIA = ("drift_direction", "radar_separability", "fov")
@@ -82,6 +82,50 @@ def in_fov(roe: ArrayLike, limits: MonitorLimits) -> np.ndarray:
     return (dl <= limits.a_dl_max) & (de <= fov_limit(dl, limits.fov_half_r)) & (di <= fov_limit(dl, limits.fov_half_n))
 
 
+@functools.lru_cache(maxsize=16)
+def _arange(num: int) -> np.ndarray:
+    y = np.arange(0, num, dtype=float)
+    y.flags.writeable = False
+    return y
+
+
+def linspace(start: float, stop: float, num: int) -> np.ndarray:
+    """``numpy.linspace(start, stop, num)`` for scalar ``start``, ``stop`` and ``num`` >= 2, with its arithmetic:
+    ``arange(num) * step + start`` (``step = (stop - start) / (num - 1)``; a zero step as ``/ div * delta``),
+    the last sample ``stop``; without its general set-up (array conversion, dtype and axis handling).
+
+    Parameters
+    ----------
+    start, stop : float
+        The first and last sample.
+    num : int
+        The number of samples, at least 2.
+
+    Returns
+    -------
+    numpy.ndarray, shape (num,)
+        The samples, those of ``numpy.linspace`` to the bit.
+    """
+    div = num - 1
+    delta = float(stop) - float(start)
+    step = delta / div
+    if step == 0:
+        y = _arange(num) / div
+        y *= delta
+    else:
+        y = _arange(num) * step
+    y += float(start)
+    y[-1] = stop
+    return y
+
+
+def _in_fov_one(end: list, limits: MonitorLimits) -> bool:
+    """:func:`in_fov` of one a*ROE state given as six floats: its expressions, element by element."""
+    dl = abs(end[1])
+    return bool(dl <= limits.a_dl_max and np.hypot(end[2], end[3]) <= fov_limit(dl, limits.fov_half_r)
+                and np.hypot(end[4], end[5]) <= fov_limit(dl, limits.fov_half_n))
+
+
 def assess(roe0: ArrayLike, t0: float, chief: Chief, limits: MonitorLimits, burns: Iterable[Burn] = (),
            t_end: float | None = None, j2: bool = True, da_dot: float = 0.0) -> Assessment:
     """Assess the trajectory from dimensionless ``roe0`` at ``t0`` [s] under ``burns`` up to ``t_end``.
@@ -115,32 +159,52 @@ def assess(roe0: ArrayLike, t0: float, chief: Chief, limits: MonitorLimits, burn
     Assessment
         The distances [m] and the failed criteria.
     """
-    a = chief.a
+    a, inc = chief.a, chief.inc
+    rates = ChiefRates.of(a, inc, j2)  # the chief's rates, looked up once for the calls below
     t_end = t0 + limits.window if t_end is None else t_end
-    n_samples = max(2, int(limits.samples_per_orbit * (t_end - t0) / orbital_period(a)) + 1)
-    times = np.linspace(t0, t_end, n_samples)
-    roes = trajectory(roe0, t0, burns, times, chief, j2, da_dot)
-    pos = rtn_position(roes, chief.u_at(times, j2))
-    dist = np.linalg.norm(pos, axis=-1) * a
+    n_samples = max(2, int(limits.samples_per_orbit * (t_end - t0) / (2.0 * np.pi / rates.n)) + 1)  # per orbit
+    times = linspace(t0, t_end, n_samples)
+    burn_epochs = [b.epoch for b in burns if b.epoch >= t0]
+    if burn_epochs or not (times < np.inf).all():
+        # under burns: the trajectory's arcs; its columns are the elements below
+        roes = trajectory(roe0, t0, burns, times, chief, j2, da_dot)
+        el = tuple(roes.T)
+        last_burn = max(burn_epochs, default=t0)
+        start = trajectory(roe0, t0, burns, np.array([last_burn]), chief, j2, da_dot)[0] if burn_epochs \
+            else roes[0]
+    else:
+        # one coast arc: the trajectory's propagation from roe0 (segments_at), its six elements kept apart
+        if (times < t0).any():
+            raise ValueError("trajectory times must not precede t0")
+        el = _elements(tuple(np.asarray(roe0, dtype=float)), times - float(t0), np.asarray(da_dot, dtype=float),
+                       rates.rates)
+        last_burn = t0
+        start = np.array([e[0] for e in el])  # the state at t0 (times[0] is t0): the same propagation
+    # rtn_position of the samples (its expressions) and their norm as numpy.linalg.norm forms it along the last
+    # axis, sqrt((R^2 + T^2) + N^2), without stacking the (n, 6) states and the (n, 3) positions
+    da, dl, dex, dey, dix, diy = el
+    u = chief.u0 + rates.u_dot * (times - chief.t0)  # chief.u_at(times, j2)
+    sn, cs = np.sin(u), np.cos(u)
+    pos_r = da - dex * cs - dey * sn
+    pos_t = dl + 2.0 * dex * sn - 2.0 * dey * cs
+    pos_n = dix * sn - diy * cs
+    dist = np.sqrt(pos_r * pos_r + pos_t * pos_t + pos_n * pos_n) * a
     # keep-out counts returns: from the first sample outside the sphere on (a trajectory that starts at an
     # ejection begins at zero distance by construction); one that never leaves it is measured throughout
     outside = np.nonzero(dist >= limits.keep_out)[0]
     returning = dist[outside[0]:] if outside.size else dist
-    burn_epochs = [b.epoch for b in burns if b.epoch >= t0]
-    last_burn = max(burn_epochs, default=t0)
-    # without a burn the state at last_burn = t0 is the first sample (times[0] is t0: the same propagation)
-    start = trajectory(roe0, t0, burns, np.array([last_burn]), chief, j2, da_dot)[0] if burn_epochs else roes[0]
-    crossing, _ = nearest_crossing(start, chief.u_at(last_burn, j2), t_end - last_burn, a, chief.inc, j2, da_dot)
-    end = roes[-1] * a
+    u_last = chief.u0 + rates.u_dot * (float(last_burn) - chief.t0)  # chief.u_at(last_burn, j2)
+    crossing, _ = nearest_crossing_one(start, u_last, t_end - last_burn, rates, da_dot)
+    end = [float(e[-1] * a) for e in el]  # the end state in m, the criteria's expressions on its floats
     res = Assessment(
-        approaching=bool(approaching(end)),
-        along_track_separation=float(roes[0][1] * a),
+        approaching=bool(end[0] * end[1] > 0.0),
+        along_track_separation=float(dl[0] * a),
         distance=float(dist[0]),
         min_distance=float(returning.min()),
-        min_rn_distance=float(min_rn_distance(end)),
+        min_rn_distance=min_rn_distance_one(*end[2:]),
         nearest_crossing=float(crossing * a),
         evaporated=bool(abs(end[1]) > limits.evaporation),
-        in_fov=bool(in_fov(end, limits)),
+        in_fov=_in_fov_one(end, limits),
     )
     checks = {
         "keep_out": res.min_distance >= limits.keep_out,
