@@ -88,19 +88,24 @@ class BagWriter:
 
     def write(self, topic: str, data: bytes, log_time: int, publish_time=None, sequence=None):
         """Append one serialized (CDR) message; times in ns (node clock: sim time under ``use_sim_time``)."""
-        if topic not in self._channels:
-            raise BagError(f"topic {topic} was not added to the bag")
+        try:
+            channel = self._channels[topic]
+        except KeyError:
+            raise BagError(f"topic {topic} was not added to the bag") from None
         log_time = int(log_time)
         if sequence is None:
-            self._sequence[topic] += 1
-            sequence = self._sequence[topic]
-        self._mcap.add_message(self._channels[topic], log_time=log_time, data=bytes(data),
-                               publish_time=int(log_time if publish_time is None else publish_time),
-                               sequence=int(sequence) & 0xFFFFFFFF)
+            sequence = self._sequence[topic] = self._sequence[topic] + 1
+        # positional: (channel_id, log_time, data, publish_time, sequence), mcap's Writer.add_message order
+        self._mcap.add_message(channel, log_time, bytes(data),
+                               int(log_time if publish_time is None else publish_time), int(sequence) & 0xFFFFFFFF)
         self.topics[topic]["message_count"] += 1
         self.message_count += 1
-        self.start_time = log_time if self.start_time is None else min(self.start_time, log_time)
-        self.end_time = log_time if self.end_time is None else max(self.end_time, log_time)
+        if self.start_time is None:
+            self.start_time = self.end_time = log_time
+        elif log_time < self.start_time:  # the min and max of the log times, without two builtin calls a message
+            self.start_time = log_time
+        elif log_time > self.end_time:
+            self.end_time = log_time
         self._dirty = True
 
     # -- durability ----------------------------------------------------------------------------------------------

@@ -91,6 +91,52 @@ def test_writer_bag_directory(tmp_path):
     assert raw["rosbag2_bagfile_information"]["custom_data"] is None
 
 
+class _PreviousWriter(BagWriter):
+    """BagWriter.write as it was before its per-message bookkeeping was trimmed (the reference of the test below)."""
+
+    def write(self, topic, data, log_time, publish_time=None, sequence=None):
+        if topic not in self._channels:
+            raise BagError(f"topic {topic} was not added to the bag")
+        log_time = int(log_time)
+        if sequence is None:
+            self._sequence[topic] += 1
+            sequence = self._sequence[topic]
+        self._mcap.add_message(self._channels[topic], log_time=log_time, data=bytes(data),
+                               publish_time=int(log_time if publish_time is None else publish_time),
+                               sequence=int(sequence) & 0xFFFFFFFF)
+        self.topics[topic]["message_count"] += 1
+        self.message_count += 1
+        self.start_time = log_time if self.start_time is None else min(self.start_time, log_time)
+        self.end_time = log_time if self.end_time is None else max(self.end_time, log_time)
+        self._dirty = True
+
+
+def test_writer_write_equals_previous_write_to_the_byte(tmp_path):
+    """Log times out of order (new minimum, new maximum, in between, equal), explicit publish times and sequences
+    (one past 2**32), bytearray data: the same .mcap and metadata.yaml bytes, the same counts and times."""
+    writers = [cls(tmp_path / name) for cls, name in ((BagWriter, "new"), (_PreviousWriter, "old"))]
+    calls = [("/a", b"x" * 40, 500, None, None), ("/b", bytearray(b"yz"), 300, 7, None),
+             ("/a", b"", 900, None, 2**32 + 5), ("/b", b"q" * 9, 600, None, None), ("/a", b"r", 300.0, 11, 3),
+             ("/b", b"s" * 70_000, 900, None, None), ("/a", b"t", 100, None, None), ("/b", b"u", 950, 1, None)]
+    for w in writers:
+        w.add_topic("/a", "std_msgs/msg/String", (), "RIHS01_a", "string data")
+        w.add_topic("/b", "std_msgs/msg/String", (), "RIHS01_b", "string data")
+        for call in calls:
+            w.write(*call)
+        with pytest.raises(BagError, match="not added"):
+            w.write("/c", b"", 1)
+    new, old = writers
+    assert (new.start_time, new.end_time, new.message_count, new._sequence, new.topics) == (
+        old.start_time, old.end_time, old.message_count, old._sequence, old.topics)
+    assert (new.start_time, new.end_time) == (100, 950)
+    for w in writers:
+        w.close()
+    for name in ("new_0.mcap", "metadata.yaml"):
+        a = (tmp_path / "new" / name).read_bytes()
+        b = (tmp_path / "old" / name.replace("new", "old")).read_bytes()
+        assert a.replace(b"new_0.mcap", b"old_0.mcap") == b
+
+
 def test_recover_any_truncation(tmp_path):
     w, flushed = _write_bag(tmp_path / "bag")
     w.close()
