@@ -217,10 +217,14 @@ class RecorderNode(Node):
                 return
             _, lo, hi = steps[k]
             held.popleft()
-            self._write_monotone(topic, data, min(max(_stamp_ns(data), lo), hi), source)
+            log_ns = _stamp_ns(data)  # clamped to [lo, hi] (lo <= hi: on_step stores min(lo, t), t)
+            self._write_monotone(topic, data, lo if log_ns < lo else hi if log_ns > hi else log_ns, source)
 
     def _write_monotone(self, topic, data, log_ns, source):
-        log_ns = max(int(log_ns), self.last_log.get(topic, 0))
+        log_ns = int(log_ns)
+        last = self.last_log.get(topic, 0)
+        if log_ns < last:  # never before the channel's previous log time
+            log_ns = last
         self.last_log[topic] = log_ns
         self.writer.write(topic, data, log_ns, source or log_ns)
 
