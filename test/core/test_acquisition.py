@@ -26,6 +26,7 @@ from roe_sep.core.acquisition.planner import (
     drift_nulling_dv_bound,
     ei_magnitude_floor,
     plan_acquisition,
+    signed_rows,
     verify,
 )
 from roe_sep.core.relmotion.dynamics import arg_latitude_rate, drag_da_dot, propagate
@@ -317,3 +318,24 @@ def test_direct_highs_solve_equals_linprog(monkeypatch, roe0, dad, cfg, raises):
     else:
         plan_acquisition(roe0, CHIEF, dad, cfg)
         assert seen and all(s == 0 for s, _ in seen)
+
+
+def test_signed_rows_equal_the_two_block_construction_to_the_bit():
+    """[sub, -sub, 0] from one dense-to-CSR conversion of sub: the same CSR arrays (shape, indptr, indices, data
+    bytes, dtypes) as converting [sub, -sub] and appending an empty (R, 3) block, zeros (also -0.0) left out in both;
+    empty rows and an all-zero block included."""
+    from scipy import sparse
+
+    rng = np.random.default_rng(7)
+    for rows, cols in ((1, 1), (5, 3), (4, 6), (60, 40), (300, 120)):
+        sub = np.tril(rng.normal(size=(rows, cols)) * 10.0 ** rng.integers(-12, 6, size=(rows, cols)))
+        sub[rng.random((rows, cols)) < 0.1] = -0.0
+        if cols == 6:
+            sub[:] = 0.0  # no nonzero at all
+        sub[rows // 2] = 0.0  # an empty row
+        ref = sparse.hstack([sparse.csr_matrix(np.hstack([sub, -sub])), sparse.csr_matrix((len(sub), 3))])
+        got = signed_rows(sub)
+        assert got.format == ref.format == "csr" and got.shape == ref.shape == (rows, 2 * cols + 3)
+        for name in ("indptr", "indices", "data"):
+            a, b = getattr(got, name), getattr(ref, name)
+            assert a.dtype == b.dtype and a.tobytes() == b.tobytes()

@@ -389,6 +389,26 @@ def _assemble(pb: _Problem, cols, ihat, exact, path=True, target=True, ei=True):
     return cost, lo_v, hi_v, a_mat, np.array(lb, dtype=float), np.array(ub, dtype=float)
 
 
+def signed_rows(sub):
+    """The rows ``[sub, -sub, 0]`` over v = [p, m, L, mu, nu] (three zero columns for L, mu, nu) of the dense
+    ``sub`` ``(R, n)`` as a CSR matrix of its nonzeros. ``sub`` is converted once and each row's nonzeros are laid
+    out twice, at their columns then at ``n`` + their columns negated: the same arrays (indptr, indices, data) as
+    converting the dense ``[sub, -sub]`` (whose nonzeros per row are those of ``sub``, then the same negated) and
+    appending an empty ``(R, 3)`` block, without building and scanning the doubled dense block."""
+    from scipy import sparse
+
+    a = sparse.csr_matrix(sub)
+    n = sub.shape[1]
+    count = np.diff(a.indptr)  # nonzeros per row
+    first = np.arange(a.nnz) + np.repeat(a.indptr[:-1], count)  # entry p of row r at 2 indptr[r] + (p - indptr[r])
+    second = first + np.repeat(count, count)  # its negated copy, after the row's first copies
+    indices = np.empty(2 * a.nnz, dtype=a.indices.dtype)
+    data = np.empty(2 * a.nnz)
+    indices[first], indices[second] = a.indices, a.indices + n
+    data[first], data[second] = a.data, -a.data
+    return sparse.csr_matrix((data, indices, 2 * a.indptr), shape=(len(sub), 2 * n + 3))
+
+
 def _path_and_burn_rows(pb: _Problem, cols):
     """The rows of :func:`_assemble` that the e/i direction leaves alone, over v = [p, m, L, mu, nu] for the
     candidate columns ``cols``: the path rows (s a dl >= a_dl_min at every grid epoch, post- and pre-burn) with
@@ -406,7 +426,7 @@ def _path_and_burn_rows(pb: _Problem, cols):
         if mat is None:
             continue
         sub = mat[:, cols]
-        path_blocks.append(sparse.hstack([sparse.csr_matrix(np.hstack([sub, -sub])), sparse.csr_matrix((len(sub), 3))]))
+        path_blocks.append(signed_rows(sub))
         path_lb += list(pb.path_floor - pb.free_path)
     # per-burn magnitude: |dvR| + |dvT| + |dvN| <= max_burn_dv bounds the Euclidean norm (exact for one axis)
     groups, member = np.unique(pb.epoch_of[cols], return_inverse=True)
