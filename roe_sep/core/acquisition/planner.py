@@ -72,8 +72,8 @@ from ..relmotion.dynamics import arg_latitude_rate, propagate
 from ..relmotion.orbit import mean_motion
 from ..relmotion.trajectory import Burn, Chief, trajectory
 from ..safety.metrics import fov_limit, min_rn_distance
-from .lp_transfer import carrier_burn_effects, grid_epochs, grid_response, parse_axes, response_at, sagitta
 from .highs import solve_lp
+from .lp_transfer import carrier_burn_effects, grid_epochs, grid_response, parse_axes, response_at, sagitta
 
 R_EARTH_MIN = 6.4e6  # m, a semi-major axis below this is not a valid LEO chief
 QUANTA_SLACK = 4  # a quantized solution within this many quanta of the LP optimum ends the search
