@@ -158,6 +158,11 @@ class GroundBridgeNode(Node):
         if rclpy.ok():
             self._status(ERROR, f"CCSDS set not written: {exc}")
 
+    def executor_stopped(self):
+        """No callback runs any more (:func:`roe_sep.nodes.spin.serve`): the messages are complete, the final set
+        starts in the writer thread while the process's other nodes shut down (the recorder closes its bag)."""
+        self.live.finish()
+
     def destroy_node(self):
         """The final, complete set (:meth:`~roe_sep.ndm.live.LiveSet.close`)."""
         self.live.close()

@@ -152,6 +152,8 @@ def serve(factories, args=None, make_executor=SingleThreadedExecutor, until=None
     finally:
         if executor is not None:
             executor.shutdown()
+            for node in nodes:  # shutdown work that may start now that no callback runs (the ground_bridge's)
+                getattr(node, "executor_stopped", lambda: None)()
         for node in sorted(reversed(nodes), key=lambda n: n.get_name() != "recorder"):
             node.destroy_node()
         rclpy.try_shutdown()
