@@ -7,7 +7,9 @@ maneuvers) as soon as the safety monitor approves a plan, the executed-burns OPM
 and CDM every ``write_period`` s of sim time (0: never), at most every ``min_write_interval`` s of wall time, and at
 shutdown (the XML OEM of a whole run takes about 2 s to serialize, so not at every message; under the
 as-fast-as-possible lockstep clock a simulated day passes in seconds, and the periodic updates were about 1.4 of a
-default run's 12 CPU-s). Every file is written atomically (temporary file + rename).
+default run's 12 CPU-s). The final set starts as soon as the executor stops (``executor_stopped``, while the
+process's recorder closes its bag) and ``destroy_node`` waits for it. Every file is written atomically (temporary
+file + rename).
 
 In (``input_dir``, '' = off): every ``*.xml``, ``*.kvn`` or ``*.tdm`` file that appears there is read as a TDM
 (:func:`roe_sep.ndm.messages.read_tdm`, sim time from ``epoch_utc``) and its measurements are published on
