@@ -45,6 +45,22 @@ def roe_of(msg) -> np.ndarray:
     return np.array([getattr(msg, k) for k in ROE_FIELDS], dtype=float) / msg.chief.semi_major_axis
 
 
+def kepler_rows(els) -> np.ndarray:
+    """:func:`kepler` of each OrbitalElements message, ``(n, 6)``: the same floats, in one array operation."""
+    x = np.array([(el.semi_major_axis, el.eccentricity, el.inclination, el.raan, el.arg_perigee,
+                   el.mean_arg_latitude) for el in els], dtype=float).reshape(-1, 6)
+    x[:, 5] -= x[:, 4]
+    return x
+
+
+def roe_rows(msgs) -> np.ndarray:
+    """:func:`roe_of` of each RelativeOrbitalElements message, ``(n, 6)``: the same floats, in one array
+    operation."""
+    x = np.array([tuple(getattr(m, k) for k in ROE_FIELDS) + (m.chief.semi_major_axis,) for m in msgs],
+                 dtype=float).reshape(-1, 7)
+    return x[:, :6] / x[:, 6:]
+
+
 def vec(v) -> np.ndarray:
     return np.array([v.x, v.y, v.z], dtype=float)
 
@@ -56,8 +72,9 @@ class Truth:
     def __init__(self, msgs):
         rows = sorted(((time_to_sec(m.header.stamp), k, m) for k, m in enumerate(msgs)), key=lambda r: (r[0], r[1]))
         self.t = np.array([r[0] for r in rows])
-        self.roe = np.array([roe_of(r[2]) for r in rows]).reshape(-1, 6)
-        self.chief = np.array([kepler(r[2].chief) for r in rows]).reshape(-1, 6)
+        ms = [r[2] for r in rows]
+        self.roe = roe_rows(ms)
+        self.chief = kepler_rows([m.chief for m in ms])
 
     def __len__(self):
         return self.t.size

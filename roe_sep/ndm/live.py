@@ -20,6 +20,7 @@ class LiveSet:
         self.lock = threading.Lock()
         self.requests = queue.Queue()
         self.written = {}  # file stem -> sim time of the last write
+        self.finishing = False  # the final set is queued (:meth:`finish`)
         self.writer = threading.Thread(target=self._writer, name="ccsds_writer", daemon=True)
         self.writer.start()
 
@@ -31,9 +32,16 @@ class LiveSet:
         """Queue a write: the OPMs, and with ``periodic`` the OEM, TDM and CDM too."""
         self.requests.put(periodic)
 
+    def finish(self):
+        """Start the final, complete set (no message may be added any more): the writer thread finishes its queue,
+        then writes everything once more, while the caller goes on with its own shutdown (:meth:`close` waits)."""
+        if not self.finishing:
+            self.finishing = True
+            self.requests.put(None)
+
     def close(self):
-        """The final, complete set: the writer thread finishes its queue, then writes everything once more."""
-        self.requests.put(None)
+        """The final, complete set (:meth:`finish`, if not started yet), written when this returns."""
+        self.finish()
         self.writer.join()
 
     def _writer(self):

@@ -7,7 +7,9 @@ maneuvers) as soon as the safety monitor approves a plan, the executed-burns OPM
 and CDM every ``write_period`` s of sim time (0: never), at most every ``min_write_interval`` s of wall time, and at
 shutdown (the XML OEM of a whole run takes about 2 s to serialize, so not at every message; under the
 as-fast-as-possible lockstep clock a simulated day passes in seconds, and the periodic updates were about 1.4 of a
-default run's 12 CPU-s). Every file is written atomically (temporary file + rename).
+default run's 12 CPU-s). The final set starts as soon as the executor stops (``executor_stopped``, while the
+process's recorder closes its bag) and ``destroy_node`` waits for it. Every file is written atomically (temporary
+file + rename).
 
 In (``input_dir``, '' = off): every ``*.xml``, ``*.kvn`` or ``*.tdm`` file that appears there is read as a TDM
 (:func:`roe_sep.ndm.messages.read_tdm`, sim time from ``epoch_utc``) and its measurements are published on
@@ -157,6 +159,11 @@ class GroundBridgeNode(Node):
         self.get_logger().error(f"CCSDS set not written: {exc.__class__.__name__}: {exc}")
         if rclpy.ok():
             self._status(ERROR, f"CCSDS set not written: {exc}")
+
+    def executor_stopped(self):
+        """No callback runs any more (:func:`roe_sep.nodes.spin.serve`): the messages are complete, the final set
+        starts in the writer thread while the process's other nodes shut down (the recorder closes its bag)."""
+        self.live.finish()
 
     def destroy_node(self):
         """The final, complete set (:meth:`~roe_sep.ndm.live.LiveSet.close`)."""

@@ -117,8 +117,10 @@ def serve(factories, args=None, make_executor=SingleThreadedExecutor, until=None
     """The whole life of a process: :func:`init`; construct the nodes of ``factories`` (``[(label, factory)]``, in
     order); the nodes on one executor from ``make_executor()``; :func:`spin` with the drain (until a signal, or
     ``until()`` is true: :func:`roe_sep.run.run` in one process, a lifecycle manager whose start-up failed); then the
-    executor shut down and the nodes destroyed, the recorder first (the bag is complete before another node spends
-    seconds on its own shutdown work, e.g. the ground_bridge's final CCSDS set), the others in reverse order.
+    executor shut down, each node's ``executor_stopped()`` called if it has one (work that may start once no
+    callback runs any more: the ground_bridge's final CCSDS set, in its writer thread), and the nodes destroyed,
+    the recorder first (the bag is complete before another node spends seconds on its own shutdown work, e.g.
+    waiting for the ground_bridge's final CCSDS set), the others in reverse order.
 
     Exit code 2 when rcl refuses the ROS arguments (a missing or malformed ``--params-file``) or a node refuses its
     parameters (``[ERROR] label: ...``, or without the label when it is None),
@@ -152,6 +154,8 @@ def serve(factories, args=None, make_executor=SingleThreadedExecutor, until=None
     finally:
         if executor is not None:
             executor.shutdown()
+            for node in nodes:  # shutdown work that may start now that no callback runs (the ground_bridge's)
+                getattr(node, "executor_stopped", lambda: None)()
         for node in sorted(reversed(nodes), key=lambda n: n.get_name() != "recorder"):
             node.destroy_node()
         rclpy.try_shutdown()

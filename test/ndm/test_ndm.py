@@ -24,7 +24,7 @@ from roe_sep.core.relmotion.roe import kepler_to_roe, roe_to_kepler
 from roe_sep.core.truth.nonlinear import vallado_band
 from roe_sep.ndm import frames
 from roe_sep.ndm import messages as ndm
-from roe_sep.ndm.dataset import Options, Truth, approved, vec
+from roe_sep.ndm.dataset import Options, Truth, approved, kepler, kepler_rows, roe_of, roe_rows, vec
 from roe_sep.nodes.parameters import table
 from roe_sep.stamps import time_to_sec
 
@@ -172,6 +172,18 @@ def set_names(run):
     plans = [f"plan{k:02d}_{p.strategy}{frame}.opm" for k, (_, p) in enumerate(approved(run), start=1)
              for frame in ("", "_eme2000")]
     return [*plans, "executed_carrier.opm", "ephemeris.oem", "radar.tdm", "closest_approach.cdm"]
+
+
+def test_truth_rows_equal_the_per_message_arrays_to_the_bit(run):
+    """roe_rows/kepler_rows (Truth's arrays) are roe_of/kepler of each message, bit for bit, and empty for none."""
+    msgs = run[interfaces.TRUTH_ROE_TOPIC]
+    assert len(msgs) > 100
+    want = np.array([roe_of(m) for m in msgs])
+    assert np.array_equal(roe_rows(msgs).view(np.uint64), want.view(np.uint64))
+    want = np.array([kepler(m.chief) for m in msgs])
+    assert np.array_equal(kepler_rows([m.chief for m in msgs]).view(np.uint64), want.view(np.uint64))
+    assert roe_rows([]).shape == (0, 6) and kepler_rows([]).shape == (0, 6)
+    assert len(Truth([])) == 0
 
 
 def test_export_writes_the_set_and_it_reads_back(exported, run):
@@ -615,3 +627,31 @@ def test_the_set_validates_against_the_official_ndm_xml_schemas(exported, run):
             assert schema_location(p) == ndm.SCHEMA_LOCATION, p.name
     opm = _xml_of(out / f"plan01_double_impulse.opm.{fmt}", fmt)
     assert errors(schema, opm.replace('<MAN_DELTA_MASS units="kg">-', '<MAN_DELTA_MASS units="kg">'))
+
+
+def test_live_set_final_set_started_early_is_the_export(tmp_path, run):
+    """LiveSet.finish starts the final set (once, however often called), close waits for it: the files are the
+    export's (apart from CREATION_DATE)."""
+    from roe_sep.ndm.dataset import write_set
+    from roe_sep.ndm.live import LiveSet
+
+    errors = []
+    live = LiveSet(tmp_path / "live", "xml", Options(), lambda: 1.0, errors.append)
+    (tmp_path / "live").mkdir()
+    for topic, msgs in run.by_topic.items():
+        for m in msgs:
+            live.add(topic, m)
+    live.finish()
+    live.finish()
+    live.close()
+    assert not errors and not live.writer.is_alive() and live.requests.empty()
+    write_set(run, tmp_path / "export", "xml")
+
+    def text(p):
+        return [line for line in p.read_text().splitlines() if "CREATION_DATE" not in line]
+
+    names = sorted(p.name for p in (tmp_path / "export").iterdir())
+    assert sorted(p.name for p in (tmp_path / "live").iterdir()) == names and set(live.written) == {
+        n[:-4] for n in names}
+    for n in names:
+        assert text(tmp_path / "live" / n) == text(tmp_path / "export" / n)
