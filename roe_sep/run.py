@@ -9,8 +9,10 @@ Waits until the simulator reports the scenario complete, stops the nodes with SI
 bag closes cleanly) and writes ``report.json`` from the recorded bag.
 """
 
+import collections
 import os
 import signal
+import struct
 import subprocess
 import sys
 import time
@@ -155,14 +157,27 @@ def final_status_of(data: bytes):
     return final_status(deserialize_message(data, DiagnosticArray))
 
 
+_Stamp = collections.namedtuple("_Stamp", "sec nanosec")
+
+
+def stamp_of(data: bytes) -> float:
+    """The time [s] in the first 8 bytes after the CDR encapsulation of a serialized message that starts with a
+    ``builtin_interfaces/Time`` (a ``rosgraph_msgs/Clock``, the header stamp of a ``DiagnosticArray``): read from a
+    raw subscription's bytes, without building the message."""
+    return time_to_sec(_Stamp._make(struct.unpack_from("<iI" if data[1] & 1 else ">iI", data, 4)))
+
+
 def wait_for_completion(duration, deployment, timeout, progress):
     """Spin a small observer node until the simulator reports the scenario complete (or aborted) on
-    ``/diagnostics``; returns (reached, reason). ``/clock`` only feeds the progress line.
+    ``/diagnostics``; returns (reached, reason). The sim time of the timeout's reason is the latest status stamp
+    (sim time); ``/clock`` (every step: thousands of wake-ups) is only subscribed to for the progress line. One
+    executor for the whole wait (``rclpy.spin_once`` adds and removes the node at every call).
 
     The observer joins the nodes' DDS domain on loopback: rclpy reads both from this process's environment, which
     may carry neither (a plain shell), so the deployment's values are set here before ``rclpy.init``."""
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.executors import SingleThreadedExecutor
     from rosgraph_msgs.msg import Clock
 
     from . import interfaces
@@ -175,17 +190,23 @@ def wait_for_completion(duration, deployment, timeout, progress):
     now = {"t": 0.0, "end": None}
 
     def on_status(data):
+        now["t"] = max(now["t"], stamp_of(data))
         now["end"] = final_status_of(data) or now["end"]
 
-    node.create_subscription(Clock, interfaces.CLOCK_TOPIC,
-                             lambda m: now.update(t=time_to_sec(m.clock)), 10)
+    def on_clock(data):
+        now["t"] = max(now["t"], stamp_of(data))
+
+    if progress:
+        node.create_subscription(Clock, interfaces.CLOCK_TOPIC, on_clock, 10, raw=True)
     node.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, on_status, interfaces.DIAGNOSTICS,
                              raw=True)
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
     start = time.monotonic()
     shown = -1
     try:
         while True:
-            rclpy.spin_once(node, timeout_sec=0.1)
+            executor.spin_once(timeout_sec=0.1)
             if now["end"] is not None:
                 return now["end"] == "scenario complete", now["end"]
             dead = deployment.dead()
@@ -200,6 +221,7 @@ def wait_for_completion(duration, deployment, timeout, progress):
     finally:
         if progress:
             print(file=sys.stderr)
+        executor.shutdown()
         node.destroy_node()
         rclpy.try_shutdown()
 

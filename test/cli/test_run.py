@@ -329,3 +329,22 @@ def test_the_observer_decodes_only_the_statuses_that_may_be_final():
         assert expected is None or FINAL_MARK in data
         finals += expected is not None
     assert finals >= 3
+
+
+def test_the_observer_reads_the_stamp_from_the_bytes():
+    """``stamp_of`` (the observer's sim time, from a raw /clock or /diagnostics subscription) is ``time_to_sec`` of
+    the decoded clock and of the decoded array's header stamp."""
+    from builtin_interfaces.msg import Time
+    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+    from rclpy.serialization import serialize_message
+    from rosgraph_msgs.msg import Clock
+
+    from roe_sep.run import stamp_of
+    from roe_sep.stamps import time_to_sec
+
+    for sec, nanosec in ((0, 0), (86399, 999999999), (-1, 750000000), (2**31 - 1, 1)):
+        t = Time(sec=sec, nanosec=nanosec)
+        assert stamp_of(serialize_message(Clock(clock=t))) == time_to_sec(t)
+        array = DiagnosticArray(status=[DiagnosticStatus(name="roe_sep/sim", message="scenario complete")])
+        array.header.stamp = t
+        assert stamp_of(serialize_message(array)) == time_to_sec(t)
