@@ -10,7 +10,7 @@ from ..core.relmotion.roe import wrap_angle
 from ..core.truth.execution import relative_impulse
 from ..stamps import sec_nanosec, time_to_sec
 from ..validate import ROE_FIELDS
-from .cdr import Serialized
+from .serialized import Serialized
 
 KEPLER_FIELDS = ("semi_major_axis", "eccentricity", "inclination", "raan", "arg_perigee", "mean_arg_latitude")
 
@@ -72,7 +72,7 @@ class TruthMessages:
     :data:`~roe_sep.interfaces.TRUTH_FRAME`, the chief of :func:`array_to_elements`, the a*ROE of :func:`roe_to_msg`,
     zero covariance) and the RelativeState (frame :data:`~roe_sep.interfaces.CARRIER_RTN_FRAME`, the true relative
     position and velocity) stamped with its epoch, as the bytes rclpy serializes from those messages
-    (:class:`~.cdr.Serialized`, the fields of all samples written in one vectorised pass)."""
+    (:class:`~.serialized.Serialized`, the fields of all samples written in one vectorised pass)."""
 
     def __init__(self):
         roe, rtn = RelativeOrbitalElements(), RelativeState()

@@ -1,4 +1,4 @@
-"""Messages serialized by filling a template's bytes (roe_sep.nodes.cdr) and the simulator's truth messages
+"""Messages serialized by filling a template's bytes (roe_sep.nodes.serialized) and the simulator's truth messages
 (roe_sep.nodes.convert.TruthMessages): the bytes rclpy serializes from the typed messages, padding zero."""
 
 import math
@@ -12,8 +12,8 @@ from rclpy.serialization import serialize_message  # noqa: E402
 from roe_sep_msgs.msg import ManeuverPlan, RelativeOrbitalElements, RelativeState  # noqa: E402
 
 from roe_sep import interfaces  # noqa: E402
-from roe_sep.nodes.cdr import Serialized, layout  # noqa: E402
 from roe_sep.nodes.convert import TruthMessages, array_to_elements, roe_to_msg, sec_to_time  # noqa: E402
+from roe_sep.nodes.serialized import Serialized, layout  # noqa: E402
 
 ROE_PADDING = list(range(22, 28))  # after the 4 + 4 + 4 + 6 bytes of stamp and "truth": a_da 8-aligned in the body
 
