@@ -16,7 +16,9 @@ change of the machine's load hits both alike:
   ``runs.csv`` without its machine columns (:data:`roe_sep.campaign.table.RUN_FIELDS`) must be the same for both.
 
 The planner's stored start-up sweep (``ROE_SEP_CACHE_DIR``) is filled once before the measurement for each version
-(what a second cold run finds; its key has a digest of the core's source, so each version has its own).
+(what a second cold run finds; its key has a digest of the core's source, so each version has its own). Each tree's
+``roe_sep`` is byte-compiled first (``compileall``): an installed package, or a user's second run, imports compiled
+modules, and a shell with ``PYTHONDONTWRITEBYTECODE`` would otherwise compile every module in every process.
 
     python bench/bench_speed.py --base 52bc6b4 --new . --repeat 5 --campaign-runs 100 --bags both \\
         --workers 2 --domains 31-39 --out bench/results/bench_speed.json
@@ -118,6 +120,8 @@ def main(argv=None):
     work = Path(tempfile.mkdtemp(prefix="roe_sep_bench_speed_")) if args.keep is None else args.keep
     work.mkdir(parents=True, exist_ok=True)
     trees = {"base": extract(args.base, work / "base"), "new": extract(args.new, work / "new")}
+    for tree in trees.values():  # what an installed package or a second run imports: compiled modules
+        subprocess.run([sys.executable, "-m", "compileall", "-q", str(tree / "roe_sep")], check=True)
     cache = work / "cache"
     py = sys.executable
     result = {"base": args.base, "new": args.new, "seed": args.seed, "load_average_start": os.getloadavg()}
