@@ -91,6 +91,16 @@ class BagError(RoeSepError):
     """A bag cannot be read or written; the message says which path and why."""
 
 
+class UnsupportedSchema(RoeSepError):
+    """A bag schema that the compiled decoder (:mod:`roe_sep.bag.cdr`) does not cover; mcap_ros2 decodes it instead
+    (caught where raised, never shown)."""
+
+
+class IrregularBag(RoeSepError):
+    """A part of an MCAP file that the fast reader (:mod:`roe_sep.bag.scan`, :mod:`roe_sep.bag.reader`) does not read
+    as mcap's own reader would; mcap's reader reads it instead (caught where raised, never shown)."""
+
+
 class DefinitionNotFound(RoeSepError, LookupError):
     """No installed ``.msg`` file for a type."""
 

@@ -121,7 +121,7 @@ def _truth_arrays(raws):
     try:
         first.decode(first.data)  # the layout's sample decodes (in bounds, its strings UTF-8)
         fields, strings, end = cdr.fixed_layout(first.decode.msgdefs, first.schema.name, first.data)
-    except Exception:  # noqa: BLE001 -- Unsupported, or a message mcap_ros2 refuses: one by one
+    except Exception:  # noqa: BLE001 -- UnsupportedSchema, or a message mcap_ros2 refuses: one by one
         return None
     if end > size:
         return None

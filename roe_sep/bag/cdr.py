@@ -20,6 +20,8 @@ import struct
 
 from mcap.well_known import MessageEncoding, SchemaEncoding
 
+from ..errors import UnsupportedSchema
+
 try:  # the definitions and message classes of mcap_ros2 (not its public API): the same reading of a schema
     from mcap_ros2 import _dynamic
     from mcap_ros2.decoder import DecoderFactory, McapROS2DecodeError
@@ -36,10 +38,6 @@ PRIMITIVES = {"bool": ("?", 1), "byte": ("B", 1), "char": ("b", 1), "int8": ("b"
               "uint64": ("Q", 8), "float32": ("f", 4), "float64": ("d", 8)}
 BYTES = ("byte", "uint8")  # arrays of these decode to bytes (mcap_ros2's uint8_array), the others to lists
 MAX_INLINE = 32  # nested messages inlined deeper than this: give up (a definition that contains itself)
-
-
-class Unsupported(Exception):
-    """The compiled decoder does not cover this definition; mcap_ros2 decodes it."""
 
 
 class _Function:
@@ -155,7 +153,7 @@ class _Function:
             self.unknown()
             return
         if name not in PRIMITIVES:
-            raise Unsupported(f"{name}[]")
+            raise UnsupportedSchema(f"{name}[]")
         code, size = PRIMITIVES[name]
         if name in BYTES:
             self.emit(f"{target} = b[o:o + n]")
@@ -178,19 +176,19 @@ class _Function:
         """The fields of ``msgdef`` into the object ``target`` (inlined)."""
         key = str(msgdef.base_type)
         if len(stack) > MAX_INLINE or key in stack:
-            raise Unsupported(f"{key} contains itself")
+            raise UnsupportedSchema(f"{key} contains itself")
         stack = (*stack, key)
         if not msgdef.fields:
             self.pad_byte()
         for field in msgdef.fields:
             ftype = field.type
             if not field.name.isidentifier() or keyword.iskeyword(field.name):
-                raise Unsupported(f"field name {field.name!r}")
+                raise UnsupportedSchema(f"field name {field.name!r}")
             dest = f"{target}.{field.name}"
             if not ftype.is_primitive_type():
                 nested = self.c.msgdefs.get(f"{ftype.pkg_name}/{ftype.type}")
                 if nested is None:
-                    raise Unsupported(f"no definition of {ftype.pkg_name}/{ftype.type}")
+                    raise UnsupportedSchema(f"no definition of {ftype.pkg_name}/{ftype.type}")
                 if ftype.is_array:
                     fn = self.c.element(nested)
                     if ftype.is_fixed_size_array() and ftype.array_size is not None:
@@ -224,7 +222,7 @@ class _Function:
                 code, size = PRIMITIVES[ftype.type]
                 self.fixed(code, size, dest)
             else:  # wstring, time, duration: mcap_ros2 raises NotImplementedError
-                raise Unsupported(ftype.type)
+                raise UnsupportedSchema(ftype.type)
 
 
 class _Compiler:
@@ -247,7 +245,7 @@ class _Compiler:
         if key not in self.classes:
             self.classes[key] = (msgdef, self.const(_dynamic._message_class(msgdef, self.class_cache), "C"))
         elif self.classes[key][0] is not msgdef:  # two definitions of one type name: mcap_ros2's order decides
-            raise Unsupported(f"two definitions of {key}")
+            raise UnsupportedSchema(f"two definitions of {key}")
         return self.classes[key][1]
 
     def element(self, msgdef):
@@ -283,7 +281,7 @@ def fixed_layout(msgdefs, schema_name: str, sample: bytes):
     strings: ``(fields, strings, end)`` with ``fields`` ``[(path, offset, struct code, count or None)]`` (``path``
     like ``header.stamp.sec``), ``strings`` the offsets of the strings' length words and ``end`` the offset after
     the last field. Every message of this schema with the same length words (and length) has this layout: a
-    topic of such messages reads as one NumPy record array. Unsupported for sequences, arrays of messages and
+    topic of such messages reads as one NumPy record array. UnsupportedSchema for sequences, arrays of messages and
     what :class:`Decoder` does not compile."""
     fields, strings = [], []
     o = 4
@@ -292,7 +290,7 @@ def fixed_layout(msgdefs, schema_name: str, sample: bytes):
         nonlocal o
         key = str(msgdef.base_type)
         if len(stack) > MAX_INLINE or key in stack:
-            raise Unsupported(f"{key} contains itself")
+            raise UnsupportedSchema(f"{key} contains itself")
         if not msgdef.fields:
             o += 1
         for field in msgdef.fields:
@@ -300,7 +298,7 @@ def fixed_layout(msgdefs, schema_name: str, sample: bytes):
             if not ftype.is_primitive_type():
                 nested = msgdefs.get(f"{ftype.pkg_name}/{ftype.type}")
                 if nested is None or ftype.is_array:
-                    raise Unsupported(f"{path}: {ftype}")
+                    raise UnsupportedSchema(f"{path}: {ftype}")
                 walk(nested, path + ".", (*stack, key))
             elif ftype.type == "string" and not ftype.is_array:
                 o += -(o - 4) % 4
@@ -316,7 +314,7 @@ def fixed_layout(msgdefs, schema_name: str, sample: bytes):
                 fields.append((path, o, code, n))
                 o += size * (n or 1)
             else:
-                raise Unsupported(f"{path}: {ftype}")
+                raise UnsupportedSchema(f"{path}: {ftype}")
 
     walk(msgdefs[schema_name], "", ())
     return fields, strings, o
@@ -352,7 +350,7 @@ class Decoder:
         self.fast, self.source = None, None
         try:
             self.fast, self.source = _Compiler(msgdefs, cache).top(msgdefs[schema_name])
-        except Exception:  # noqa: BLE001 -- Unsupported, or anything mcap_ros2 would refuse too: it decodes
+        except Exception:  # noqa: BLE001 -- UnsupportedSchema, or anything mcap_ros2 would refuse too: it decodes
             self.fast, self.source = None, None
 
     def __call__(self, data):

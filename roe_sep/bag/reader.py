@@ -11,9 +11,9 @@ from pathlib import Path
 from mcap.reader import make_reader
 
 from ..checks import one_line
-from ..errors import BagError
+from ..errors import BagError, IrregularBag
 from . import metadata
-from .scan import MESSAGE_HEAD, MESSAGE_HEAD_SIZE, Irregular, Scan, chunk_data, chunk_records
+from .scan import MESSAGE_HEAD, MESSAGE_HEAD_SIZE, Scan, chunk_data, chunk_records
 
 Message = collections.namedtuple("Message", "topic type data log_time publish_time sequence")
 
@@ -122,7 +122,7 @@ def decoded_messages(file, topics, raw=()) -> list:
 
 
 def _decoded_messages(file, topics, raw=frozenset()):
-    """:func:`decoded_messages` by the chunk index; Irregular (or any exception) where mcap's SeekingReader could
+    """:func:`decoded_messages` by the chunk index; IrregularBag (or any exception) where mcap's SeekingReader could
     read differently."""
     from mcap.data_stream import ReadDataStream
     from mcap.records import Chunk
@@ -133,7 +133,7 @@ def _decoded_messages(file, topics, raw=frozenset()):
     with open(file, "rb") as fh:
         summary = make_reader(fh).get_summary()
         if summary is None or not summary.chunk_indexes:
-            raise Irregular("no chunk index")  # mcap reads such a file linearly
+            raise IrregularBag("no chunk index")  # mcap reads such a file linearly
         channels = summary.channels
         wanted = {cid for cid, ch in channels.items() if ch.topic in wanted_topics}
         # the chunks mcap reads: those whose message indexes name a wanted channel, or without message indexes
@@ -141,7 +141,7 @@ def _decoded_messages(file, topics, raw=frozenset()):
                   if not ci.message_index_offsets
                   or any(channels[cid].topic in wanted_topics for cid in ci.message_index_offsets)]
         if len({ci.chunk_start_offset for ci in chunks}) != len(chunks):
-            raise Irregular("a chunk indexed twice")
+            raise IrregularBag("a chunk indexed twice")
         found = []
         unpack = MESSAGE_HEAD.unpack_from
         for ci in chunks:
@@ -152,9 +152,9 @@ def _decoded_messages(file, topics, raw=frozenset()):
                     continue
                 channel_id, _, log_time, _ = unpack(data, start)
                 if channel_id not in channels:
-                    raise Irregular(f"message on an unknown channel {channel_id}")
+                    raise IrregularBag(f"message on an unknown channel {channel_id}")
                 if log_time < ci.message_start_time:  # mcap's log-time merge assumes the chunk's start time
-                    raise Irregular("message logged before its chunk's start time")
+                    raise IrregularBag("message logged before its chunk's start time")
                 if channel_id in wanted:
                     found.append((log_time, ci.chunk_start_offset, start, channel_id,
                                   data[start + MESSAGE_HEAD_SIZE:end]))
@@ -168,7 +168,7 @@ def _decoded_messages(file, topics, raw=frozenset()):
             schema = summary.schemas[channel.schema_id] if channel.schema_id else None
             decode = decoders[channel.schema_id] = decoder(schema, channel.message_encoding)
             if decode is None:
-                raise Irregular(f"no decoder for channel {channel_id}")
+                raise IrregularBag(f"no decoder for channel {channel_id}")
         if channel.topic in raw:
             out.append((channel.topic, log_time, RawMessage(summary.schemas[channel.schema_id], decode, data)))
         else:

@@ -15,7 +15,7 @@ from mcap.records import Channel, Chunk, Message, MessageIndex, Schema
 from mcap.stream_reader import StreamReader, get_chunk_data_stream
 
 from ..checks import one_line
-from ..errors import BagError
+from ..errors import BagError, IrregularBag
 
 MAGIC = b"\x89MCAP0\r\n"
 _FOOTER = 0x02
@@ -23,10 +23,6 @@ MAX_RECORD = 1 << 32  # bytes: a longer record length is corruption, not a chunk
 _HEAD = struct.Struct("<BQ")  # opcode, length of a record
 MESSAGE_HEAD = struct.Struct("<HIQQ")  # channel id, sequence, log time, publish time of a Message record
 MESSAGE_HEAD_SIZE = MESSAGE_HEAD.size  # 22 bytes, then the message data
-
-
-class Irregular(Exception):
-    """A chunk that :func:`chunk_records` does not walk: mcap's own reader reads it (as it reads it)."""
 
 
 def chunk_records(data: bytes):
@@ -39,24 +35,24 @@ def chunk_records(data: bytes):
     unpack_head = _HEAD.unpack_from
     while pos < n:
         if pos + 9 > n:
-            raise Irregular(f"record header cut off at chunk byte {pos}")
+            raise IrregularBag(f"record header cut off at chunk byte {pos}")
         opcode, length = unpack_head(data, pos)
         start = pos + 9
         end = start + length
         if end > n:
-            raise Irregular(f"record at chunk byte {pos} runs past the chunk")
+            raise IrregularBag(f"record at chunk byte {pos} runs past the chunk")
         record = None
         if opcode == Opcode.MESSAGE:
             if length < MESSAGE_HEAD_SIZE:
-                raise Irregular(f"message at chunk byte {pos} shorter than its header")
+                raise IrregularBag(f"message at chunk byte {pos} shorter than its header")
         elif opcode in (Opcode.CHANNEL, Opcode.SCHEMA):
             stream = ReadDataStream(io.BytesIO(data[start:end]))
             try:
                 record = (Channel if opcode == Opcode.CHANNEL else Schema).read(stream)
             except Exception as exc:  # noqa: BLE001
-                raise Irregular(f"record at chunk byte {pos}: {type(exc).__name__}") from None
+                raise IrregularBag(f"record at chunk byte {pos}: {type(exc).__name__}") from None
             if stream.count != length:
-                raise Irregular(f"record at chunk byte {pos} does not fill its length")
+                raise IrregularBag(f"record at chunk byte {pos} does not fill its length")
         yield opcode, start, end, record
         pos = end
 
