@@ -4,9 +4,13 @@ campaign (the planner's start-up Monte Carlo, :func:`roe_sep.core.montecarlo.swe
 run. A run so starts in a few milliseconds instead of paying about 1.5 CPU-s of imports and 0.7 CPU-s of sweep.
 
 Nothing leaks between runs: every run is still a process of its own, forked from a server that never ran a node and
-never initialised rclpy (no DDS participant, no thread, no context exists in it when it forks), so each run starts
-from the same state, the one a fresh ``python -m roe_sep.campaign.child`` reaches after its imports. The memoised
-sweep is a pure function of frozen inputs (the same float whether computed here or in the run). The run is the same
+never initialised rclpy (no DDS participant, no Python thread, no context exists in it when it forks), so each run
+starts from the same state, the one a fresh ``python -m roe_sep.campaign.child`` reaches after its imports. The
+memoised sweep and truth integrator are pure functions of frozen inputs (the same floats whether computed here or in
+the run). Two native thread pools exist in the server when it forks, and a run does not depend on them: OpenBLAS's
+(NumPy's import; it re-creates its pool in a child, ``pthread_atfork``) and TBB's worker, left by heyoka's parallel
+compilation of the integrator template. A run deep-copies that template; a run that compiles another integrator
+does it on its own thread (TBB's caller runs the tasks: a forked child compiled one in 0.7 s, checked). The run is the same
 code path (:func:`roe_sep.campaign.child.main`), in a process group of its own with its output in its log file; the
 worker kills that group on a timeout. The kernel ends a run when its fork server dies and the fork server when its
 worker dies (``PR_SET_PDEATHSIG``, :mod:`roe_sep.children`).
