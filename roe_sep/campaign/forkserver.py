@@ -10,10 +10,10 @@ memoised sweep and truth integrator are pure functions of frozen inputs (the sam
 the run). Two native thread pools exist in the server when it forks, and a run does not depend on them: OpenBLAS's
 (NumPy's import; it re-creates its pool in a child, ``pthread_atfork``) and TBB's worker, left by heyoka's parallel
 compilation of the integrator template. A run deep-copies that template; a run that compiles another integrator
-does it on its own thread (TBB's caller runs the tasks: a forked child compiled one in 0.7 s, checked). The run is the same
-code path (:func:`roe_sep.campaign.child.main`), in a process group of its own with its output in its log file; the
-worker kills that group on a timeout. The kernel ends a run when its fork server dies and the fork server when its
-worker dies (``PR_SET_PDEATHSIG``, :mod:`roe_sep.children`).
+does it on its own thread (TBB's caller runs the tasks: a forked child compiled one in 0.7 s, checked).
+The run is the same code path (:func:`roe_sep.campaign.child.main`), in a process group of its own with its output
+in its log file; the worker kills that group on a timeout. The kernel ends a run when its fork server dies and the
+fork server when its worker dies (``PR_SET_PDEATHSIG``, :mod:`roe_sep.children`).
 
 Protocol (JSON lines; the server is single-threaded and polls, so forking is safe):
 
