@@ -12,8 +12,6 @@ from ..relmotion.dynamics import (
     _in_plane,
     arg_latitude_rate,
     propagate,
-    propagate_elements,
-    propagate_in_plane,
     secular_rates,
 )
 from ..relmotion.orbit import mean_motion
@@ -132,51 +130,10 @@ def nearest_crossing(roe0: ArrayLike, u0: ArrayLike, duration: float, a: float, 
         return nearest_crossing_one(r0, u0, duration, ChiefRates.of(a, inc, j2), da_dot, t_min, iterations)
     u0 = np.broadcast_to(np.asarray(u0, dtype=float), batch)
     dad = np.broadcast_to(np.asarray(da_dot, dtype=float), batch)
-    u_dot = arg_latitude_rate(a, inc, j2)
-    n = mean_motion(a)
-    period = 2.0 * np.pi / u_dot
-    if t_min is None:
-        t_min = 0.1 * period
-    # Layout: candidates on the leading axis, samples last (long, contiguous inner loops), the six elements apart
-    # (no strided (..., 6) views, no stack); only the R and T components of roe_to_rtn are formed, with its
-    # expressions, so the values are those of propagate + roe_to_rtn to the bit.
+    # the six elements apart, contiguous (no strided (..., 6) views, no stack)
     el = tuple(np.ascontiguousarray(r0[..., k]) for k in range(6))
-    lead = (-1,) + (1,) * len(batch)
-    with np.errstate(invalid="ignore", divide="ignore"):  # circular (de = 0) samples give NaN: masked below
-        t_rev = (period * np.arange(int(np.ceil(duration / period)) + 1)).reshape(lead)
-        da_s, dex_s, dey_s = propagate_in_plane(el[0], el[2], el[3], t_rev, a, inc, j2, dad)
-        de, phi = np.hypot(dex_s, dey_s), np.arctan2(dey_s, dex_s)
-        psi = np.arccos(np.clip(da_s / de, -1.0, 1.0))
-        u_start = u0 + u_dot * t_rev
-        cand = np.concatenate([phi + psi, phi - psi], axis=0)
-        u_start2 = np.concatenate([u_start, u_start], axis=0)
-        # one candidate of each kind per revolution, within half a revolution of that revolution's start
-        t = np.concatenate([t_rev, t_rev]) + wrap_angle(cand - u_start2) / u_dot
-        for _ in range(iterations):
-            da, dex, dey = propagate_in_plane(el[0], el[2], el[3], t, a, inc, j2, dad)
-            u = u0 + u_dot * t
-            s, c = np.sin(u), np.cos(u)
-            pos_r = da - dex * c - dey * s
-            vel_r = dex * s - dey * c
-            t = t - pos_r / (vel_r * n)
-        da, dl, dex, dey, _, _ = propagate_elements(el, t, a, inc, j2, dad)
-        u = u0 + u_dot * t
-        s, c = np.sin(u), np.cos(u)
-        pos_r = da - dex * c - dey * s
-        pos_t = dl + 2.0 * dex * s - 2.0 * dey * c
-    ok = np.isfinite(t) & (t > t_min) & (t <= duration) & (np.abs(pos_r) < 1e-9)
-    t_abs = np.where(ok, np.abs(pos_t), np.inf)
-    idx = np.argmin(t_abs, axis=0)[None]
-    best = np.take_along_axis(t_abs, idx, axis=0)[0]
-    t_best = np.where(np.isfinite(best), np.take_along_axis(t, idx, axis=0)[0], np.nan)
-    # an orbit with no radial motion at all (da = 0, de = 0) stays in the R = 0 plane: it "transits" everywhere,
-    # at the along-track distance it has at t_min
     flat = (np.abs(r0[..., 0]) < 1e-12) & (np.hypot(r0[..., 2], r0[..., 3]) < 1e-12)
-    if np.any(flat):
-        pos_min, _ = roe_to_rtn(propagate(r0, t_min, a, inc, j2, dad), u0 + u_dot * t_min)
-        best = np.where(flat, np.abs(pos_min[..., 1]), best)
-        t_best = np.where(flat, t_min, t_best)
-    return best, t_best
+    return _crossing(r0, el, u0, dad, duration, ChiefRates.of(a, inc, j2), t_min, iterations, len(batch), flat)
 
 
 class ChiefRates(NamedTuple):
@@ -244,26 +201,34 @@ def nearest_crossing_one(r0: ArrayLike, u0: float, duration: float, chief: Chief
     t : numpy.ndarray, shape ()
         Its time [s] (``nan`` if none).
     """
-    a, inc, j2, rates, u_dot, n = chief
     r0 = np.asarray(r0, dtype=float)
+    el = r0.tolist()
+    flat = abs(el[0]) < 1e-12 and np.hypot(el[2], el[3]) < 1e-12
+    return _crossing(r0, el, float(u0), np.asarray(da_dot, dtype=float), duration, chief, t_min, iterations, 0, flat)
+
+
+def _crossing(r0, el, u0, dad, duration, chief: "ChiefRates", t_min, iterations, n_batch, flat):
+    """The body of :func:`nearest_crossing` and :func:`nearest_crossing_one`: ``el`` the six elements apart (arrays
+    of the batch's shape, or the floats of one state), ``n_batch`` the batch's dimensions, ``flat`` where there is
+    no radial motion (a boolean array, or one bool). Candidates lie on a leading axis, samples last."""
+    a, inc, j2, rates, u_dot, n = chief
     period = 2.0 * np.pi / u_dot
     if t_min is None:
         t_min = 0.1 * period
-    u0 = float(u0)
-    dad = np.asarray(da_dot, dtype=float)
-    el = r0.tolist()
     da0, dex0, dey0 = el[0], el[2], el[3]
-    with np.errstate(invalid="ignore", divide="ignore"):  # circular (de = 0) states give NaN: masked below
-        t_rev = period * np.arange(int(np.ceil(duration / period)) + 1)
+    lead = (-1,) + (1,) * n_batch
+    with np.errstate(invalid="ignore", divide="ignore"):  # circular (de = 0) samples give NaN: masked below
+        t_rev = (period * np.arange(int(np.ceil(duration / period)) + 1)).reshape(lead)
         da_s, dex_s, dey_s = _in_plane(da0, dex0, dey0, t_rev, dad, rates)
         de, phi = np.hypot(dex_s, dey_s), np.arctan2(dey_s, dex_s)
-        psi = np.arccos((da_s / de).clip(-1.0, 1.0))
+        psi = np.arccos(np.clip(da_s / de, -1.0, 1.0))
         u_start = u0 + u_dot * t_rev
-        cand = np.concatenate([phi + psi, phi - psi])
-        u_start2 = np.concatenate([u_start, u_start])
+        cand = np.concatenate([phi + psi, phi - psi], axis=0)
+        u_start2 = np.concatenate([u_start, u_start], axis=0)
+        # one candidate of each kind per revolution, within half a revolution of that revolution's start
         t = np.concatenate([t_rev, t_rev]) + wrap_angle(cand - u_start2) / u_dot
-        for _ in range(iterations):
-            da, dex, dey = _in_plane(da0, dex0, dey0, t, dad, rates)
+        for _ in range(iterations):  # Newton on R = 0 with the full secular model (only the R and T components of
+            da, dex, dey = _in_plane(da0, dex0, dey0, t, dad, rates)  # roe_to_rtn, with its expressions)
             u = u0 + u_dot * t
             s, c = np.sin(u), np.cos(u)
             pos_r = da - dex * c - dey * s
@@ -276,11 +241,13 @@ def nearest_crossing_one(r0: ArrayLike, u0: float, duration: float, chief: Chief
         pos_t = dl + 2.0 * dex * s - 2.0 * dey * c
     ok = np.isfinite(t) & (t > t_min) & (t <= duration) & (np.abs(pos_r) < 1e-9)
     t_abs = np.where(ok, np.abs(pos_t), np.inf)
-    idx = t_abs.argmin()
-    best = t_abs[idx]
-    t_best = np.where(np.isfinite(best), t[idx], np.nan)
-    if abs(el[0]) < 1e-12 and np.hypot(el[2], el[3]) < 1e-12:  # no radial motion: as nearest_crossing
+    idx = np.argmin(t_abs, axis=0)[None]
+    best = np.take_along_axis(t_abs, idx, axis=0)[0]
+    t_best = np.where(np.isfinite(best), np.take_along_axis(t, idx, axis=0)[0], np.nan)
+    # an orbit with no radial motion at all (da = 0, de = 0) stays in the R = 0 plane: it "transits" everywhere,
+    # at the along-track distance it has at t_min
+    if np.any(flat):
         pos_min, _ = roe_to_rtn(propagate(r0, t_min, a, inc, j2, dad), u0 + u_dot * t_min)
-        best = np.where(True, np.abs(pos_min[..., 1]), best)
-        t_best = np.where(True, t_min, t_best)
+        best = np.where(flat, np.abs(pos_min[..., 1]), best)
+        t_best = np.where(flat, t_min, t_best)
     return best, t_best
