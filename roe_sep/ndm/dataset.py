@@ -35,18 +35,18 @@ from .options import TOPICS, Options, RunMessages  # noqa: F401  (re-exported)
 
 
 def kepler(el) -> np.ndarray:
-    """``[a, e, i, raan, argp, M]`` of an OrbitalElements message (M = u - argp)."""
-    return np.array([el.semi_major_axis, el.eccentricity, el.inclination, el.raan, el.arg_perigee,
-                     el.mean_arg_latitude - el.arg_perigee], dtype=float)
+    """``[a, e, i, raan, argp, M]`` of an OrbitalElements message (M = u - argp): :func:`kepler_rows` of one."""
+    return kepler_rows([el])[0]
 
 
 def roe_of(msg) -> np.ndarray:
-    """Dimensionless ROE of a RelativeOrbitalElements message."""
-    return np.array([getattr(msg, k) for k in ROE_FIELDS], dtype=float) / msg.chief.semi_major_axis
+    """Dimensionless ROE of a RelativeOrbitalElements message: :func:`roe_rows` of one."""
+    return roe_rows([msg])[0]
 
 
 def kepler_rows(els) -> np.ndarray:
-    """:func:`kepler` of each OrbitalElements message, ``(n, 6)``: the same floats, in one array operation."""
+    """``[a, e, i, raan, argp, M]`` (M = u - argp) of each OrbitalElements message, ``(n, 6)``, in one array
+    operation."""
     x = np.array([(el.semi_major_axis, el.eccentricity, el.inclination, el.raan, el.arg_perigee,
                    el.mean_arg_latitude) for el in els], dtype=float).reshape(-1, 6)
     x[:, 5] -= x[:, 4]
@@ -54,8 +54,7 @@ def kepler_rows(els) -> np.ndarray:
 
 
 def roe_rows(msgs) -> np.ndarray:
-    """:func:`roe_of` of each RelativeOrbitalElements message, ``(n, 6)``: the same floats, in one array
-    operation."""
+    """Dimensionless ROE (a*ROE / a) of each RelativeOrbitalElements message, ``(n, 6)``, in one array operation."""
     x = np.array([tuple(getattr(m, k) for k in ROE_FIELDS) + (m.chief.semi_major_axis,) for m in msgs],
                  dtype=float).reshape(-1, 7)
     return x[:, :6] / x[:, 6:]

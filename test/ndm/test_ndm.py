@@ -175,13 +175,18 @@ def set_names(run):
 
 
 def test_truth_rows_equal_the_per_message_arrays_to_the_bit(run):
-    """roe_rows/kepler_rows (Truth's arrays) are roe_of/kepler of each message, bit for bit, and empty for none."""
+    """roe_rows/kepler_rows (Truth's arrays; roe_of/kepler are one row of them) are the per-message formulas, each
+    message's fields through NumPy alone, bit for bit, and empty for none."""
     msgs = run[interfaces.TRUTH_ROE_TOPIC]
     assert len(msgs) > 100
-    want = np.array([roe_of(m) for m in msgs])
+    want = np.array([np.array([m.a_da, m.a_dl, m.a_dex, m.a_dey, m.a_dix, m.a_diy], dtype=float)
+                     / m.chief.semi_major_axis for m in msgs])
     assert np.array_equal(roe_rows(msgs).view(np.uint64), want.view(np.uint64))
-    want = np.array([kepler(m.chief) for m in msgs])
+    assert all(np.array_equal(roe_of(m).view(np.uint64), w.view(np.uint64)) for m, w in zip(msgs[:50], want))
+    want = np.array([np.array([c.semi_major_axis, c.eccentricity, c.inclination, c.raan, c.arg_perigee,
+                               c.mean_arg_latitude - c.arg_perigee], dtype=float) for c in (m.chief for m in msgs)])
     assert np.array_equal(kepler_rows([m.chief for m in msgs]).view(np.uint64), want.view(np.uint64))
+    assert all(np.array_equal(kepler(m.chief).view(np.uint64), w.view(np.uint64)) for m, w in zip(msgs[:50], want))
     assert roe_rows([]).shape == (0, 6) and kepler_rows([]).shape == (0, 6)
     assert len(Truth([])) == 0
 
