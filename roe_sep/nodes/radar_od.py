@@ -60,7 +60,7 @@ from ..core.truth.contingency import RADAR_SIDE, RadarContingency
 from ..core.truth.contingency import resolve as resolve_contingency
 from ..core.truth.nonlinear import vallado_band
 from ..validate import ROE_FIELDS
-from .convert import array_to_elements, elements_to_array, roe_to_msg, sec_to_time, time_to_sec
+from .convert import array_to_elements, elements_to_array, msg_to_roe, roe_to_msg, sec_to_time, time_to_sec
 from .diagnostics import ERROR, OK, WARN, publish_status
 from .lockstep import Lockstep
 from .managed import ManagedNode
@@ -226,9 +226,8 @@ class RadarODNode(ManagedNode):
         if not (R_EARTH + 1e5 < a < R_EARTH + 5e6 and 0.0 <= e < 0.1 and 0.0 <= inc <= math.pi
                 and math.isfinite(raan) and math.isfinite(argp) and math.isfinite(u - argp)):
             raise ValueError(f"chief elements are not a near-circular low Earth orbit: {kep.tolist()}")
-        a_roe = _ROE_VALUES(msg)
-        roe = np.array(a_roe, dtype=float) / a  # msg_to_roe
-        if not all(map(math.isfinite, a_roe)):
+        roe = msg_to_roe(msg)
+        if not all(map(math.isfinite, _ROE_VALUES(msg))):
             raise ValueError(f"ROE are not finite: {(roe * kep[0]).tolist()} m")
         return t, roe, kep
 
