@@ -11,13 +11,25 @@ def publish_status(node, publisher, level, message, values=None, hardware_id="ro
     """Publish one DiagnosticStatus named ``roe_sep/<node name>[/<part>]`` with ``values`` as key/value strings.
 
     Stamped with ``stamp`` [s] if given, else the sim time of the node's current lockstep step, else its clock."""
-    name = f"roe_sep/{node.get_name()}" + (f"/{part}" if part else "")
-    if isinstance(level, int):  # the message field is a byte
-        level = bytes([level])
-    status = DiagnosticStatus(level=level, name=name, message=message,
+    status = DiagnosticStatus(level=_level(level), name=_status_name(node, part), message=message,
                               hardware_id=hardware_id,
                               values=[KeyValue(key=str(k), value=str(v)) for k, v in (values or {}).items()])
     array = DiagnosticArray(status=[status])
+    _stamp(node, array, stamp)
+    publisher.publish(array)
+
+
+def _status_name(node, part):
+    return f"roe_sep/{node.get_name()}" + (f"/{part}" if part else "")
+
+
+def _level(level):
+    return bytes([level]) if isinstance(level, int) else level  # the message field is a byte
+
+
+def _stamp(node, array, stamp=None):
+    """The array's header stamp: ``stamp`` [s] if given, else the sim time of the node's current lockstep step, else
+    its clock."""
     lockstep = getattr(node, "lockstep", None)
     if stamp is None and lockstep is not None and lockstep.active and lockstep.time is not None:
         stamp = lockstep.time
@@ -25,7 +37,6 @@ def publish_status(node, publisher, level, message, values=None, hardware_id="ro
         array.header.stamp = sec_to_time(stamp)
     else:
         array.header.stamp = node.get_clock().now().to_msg()
-    publisher.publish(array)
 
 
 class StatusMessages:
@@ -38,8 +49,7 @@ class StatusMessages:
         self.node, self.publisher = node, publisher
         self.keys = tuple(str(k) for k in keys)
         self.pairs = [KeyValue(key=k, value="") for k in self.keys]
-        name = f"roe_sep/{node.get_name()}" + (f"/{part}" if part else "")
-        self.status = DiagnosticStatus(name=name, hardware_id=hardware_id, values=self.pairs)
+        self.status = DiagnosticStatus(name=_status_name(node, part), hardware_id=hardware_id, values=self.pairs)
         self.array = DiagnosticArray(status=[self.status])
 
     def publish(self, level, message, values):
@@ -47,14 +57,8 @@ class StatusMessages:
         keys given at construction, in their order (ValueError otherwise)."""
         if tuple(str(k) for k in values) != self.keys:
             raise ValueError(f"status values {list(values)} are not the keys {list(self.keys)}")
-        if isinstance(level, int):  # the message field is a byte
-            level = bytes([level])
-        self.status.level, self.status.message = level, message
+        self.status.level, self.status.message = _level(level), message
         for pair, v in zip(self.pairs, values.values()):
             pair.value = str(v)
-        lockstep = getattr(self.node, "lockstep", None)
-        if lockstep is not None and lockstep.active and lockstep.time is not None:
-            self.array.header.stamp = sec_to_time(lockstep.time)
-        else:
-            self.array.header.stamp = self.node.get_clock().now().to_msg()
+        _stamp(self.node, self.array)
         self.publisher.publish(self.array)
