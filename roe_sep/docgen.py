@@ -2,12 +2,12 @@
 the message and service table, read from ``msg_defs``. ``python -m roe_sep.docgen`` rewrites the marked blocks;
 ``--check`` only compares them and exits 1 when the documentation is stale (``test/test_docs.py`` does the same).
 
-Topics: every ``create_publisher``/``create_subscription``/``create_service`` call of a node module
-(``roe_sep/nodes/<node>.py``) and every ``publisher``/``subscribe`` call of its lockstep helper, with the message
-type, topic name and QoS profile evaluated in the module's own namespace (a ``for`` loop over a literal tuple of
-subscriptions is unrolled). Calls of the lockstep helper module itself belong to every lockstep participant
-(:data:`roe_sep.graph.PARTICIPANTS`). Topics whose name is only known at run time (the recorder and
-``foxglove_view`` follow every topic) cannot be listed and are said so beside the table.
+Topics: every ``create_publisher``/``create_subscription``/``create_service`` call (and ``subscribe_decoded(node,
+...)``) of a node module (``roe_sep/nodes/<node>.py``) and every ``publisher``/``subscribe`` call of its lockstep
+helper, with the message type, topic name and QoS profile evaluated in the module's own namespace (a ``for`` loop
+over a literal tuple of subscriptions is unrolled). Calls of the lockstep helper module itself belong to every
+lockstep participant (:data:`roe_sep.graph.PARTICIPANTS`). Topics whose name is only known at run time (the recorder
+and ``foxglove_view`` follow every topic) cannot be listed and are said so beside the table.
 
 Messages: each field of ``msg_defs/msg/*.msg`` and ``msg_defs/srv/*.srv`` with the comment on its line (unit
 first), each file's leading comment as its description.
@@ -30,6 +30,8 @@ NODE_MODULES = graph.NODES + graph.OPTIONAL_NODES + ("analysis_server", "lifecyc
 HELPERS = {"lockstep": graph.PARTICIPANTS}  # helper module -> the nodes whose endpoints its calls create
 PUBLISH = {"create_publisher": 2, "publisher": 2}  # method -> position of the QoS argument
 SUBSCRIBE = {"create_subscription": 3, "subscribe": 3}
+# functions that create an endpoint on the node given first: name -> (kind, the QoS argument's position)
+FUNCTIONS = {"subscribe_decoded": ("sub", 4)}
 SERVE = {"create_service": None}
 BLOCKS = ("topics", "messages")
 
@@ -104,19 +106,25 @@ def endpoints(module_name):
     loops = _loops(tree, vars(module))
     found = []
     for call in ast.walk(tree):
-        if not (isinstance(call, ast.Call) and isinstance(call.func, ast.Attribute)):
+        if not isinstance(call, ast.Call):
             continue
-        method = call.func.attr
-        kinds = (("pub", PUBLISH), ("sub", SUBSCRIBE), ("srv", SERVE))
-        kind, table = next(((k, t) for k, t in kinds if method in t), (None, None))
-        if kind is None or len(call.args) < 2:
+        if isinstance(call.func, ast.Name) and call.func.id in FUNCTIONS:  # f(node, type, topic, ...)
+            kind, position = FUNCTIONS[call.func.id]
+            args = call.args[1:]
+        elif isinstance(call.func, ast.Attribute):  # node.method(type, topic, ...)
+            kinds = (("pub", PUBLISH), ("sub", SUBSCRIBE), ("srv", SERVE))
+            kind, table = next(((k, t) for k, t in kinds if call.func.attr in t), (None, None))
+            position, args = (table or {}).get(call.func.attr), call.args
+        else:
+            continue
+        if kind is None or len(args) < 2:
             continue
         for binding in loops.get(id(call), [{}]):
-            topic = _value(call.args[1], vars(module), binding)
-            msg_type = _value(call.args[0], vars(module), binding)
+            topic = _value(args[1], vars(module), binding)
+            msg_type = _value(args[0], vars(module), binding)
             if not isinstance(topic, str) or msg_type is None:
                 continue
-            qos_expr = _argument(call, table[method], "qos_profile") if table[method] is not None else None
+            qos_expr = _argument(call, position, "qos_profile") if position is not None else None
             qos = _value(qos_expr, vars(module), binding) if qos_expr is not None else None
             found.append((kind, topic, msg_type, qos))
     return found

@@ -8,6 +8,13 @@ names from here without importing any node.
 
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+RECORDED_DEPTH = 5000
+"""Depth of the streams a run publishes every step (truth, measurements, status, ``/diagnostics``, ``/clock``, the
+lockstep step messages) and of the recorder's readers: a reliable KEEP_LAST writer drops its oldest message once a
+reader in another process (the recorder, the ground_bridge: the listeners of the default layout, which the lockstep
+clock does not wait for) lags by more than its depth, and the bag would miss it. 5,000 messages is about 500 steps,
+3 s of a default run's stepping, where a depth of 100 (10 steps) lost messages to a 0.5 s stall of the listeners."""
+
 LATCHED = QoSProfile(
     history=HistoryPolicy.KEEP_LAST,
     depth=1,
@@ -17,16 +24,18 @@ LATCHED = QoSProfile(
 """Plans, events and other latched outputs: a late joiner (or a restarted node) receives the last message."""
 
 DIAGNOSTICS = QoSProfile(
-    history=HistoryPolicy.KEEP_LAST, depth=10, reliability=ReliabilityPolicy.RELIABLE,
+    history=HistoryPolicy.KEEP_LAST, depth=RECORDED_DEPTH, reliability=ReliabilityPolicy.RELIABLE,
     durability=DurabilityPolicy.VOLATILE,
 )
-"""``/diagnostics``, as diagnostic_updater publishes it."""
+"""``/diagnostics``: reliable and volatile as diagnostic_updater publishes it, deeper (:data:`RECORDED_DEPTH`: the
+run report reads the statuses from the bag)."""
 
 STREAM = QoSProfile(
-    history=HistoryPolicy.KEEP_LAST, depth=100, reliability=ReliabilityPolicy.RELIABLE,
+    history=HistoryPolicy.KEEP_LAST, depth=RECORDED_DEPTH, reliability=ReliabilityPolicy.RELIABLE,
     durability=DurabilityPolicy.VOLATILE,
 )
-"""Periodic streams (truth, measurements, safety status): reliable, deep enough for a fast sim clock."""
+"""Periodic streams (truth, measurements, safety status): reliable, deep enough for a fast sim clock and a recorder
+that lags (:data:`RECORDED_DEPTH`)."""
 
 BULK = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE,
                   durability=DurabilityPolicy.VOLATILE)

@@ -279,7 +279,7 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
         reached, reason = wait_for_completion(sim_duration, deployment, timeout, progress)
     except KeyboardInterrupt as exc:  # Ctrl-C, or children.Interrupted: SIGTERM/SIGHUP under children.guarded()
         signum = getattr(exc, "signum", signal.SIGINT)
-        reached, reason = False, "interrupted (Ctrl-C)" if signum == signal.SIGINT else f"interrupted ({exc})"
+        reached, reason = False, interrupted(signum)
     except Exception as exc:  # noqa: BLE001 -- the runner outlives what goes wrong and says what it was
         reached, reason = False, f"runner error: {type(exc).__name__}: {exc}"
     finally:
@@ -298,6 +298,12 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
         report = report_from_bag(bag_dir, out, sim_duration, codes.get("recorder", codes.get("listeners")))
     return _finish(out, report, reached, reason, codes,
                    "process_per_node" if process_per_node else f"suites ({executor} executor)", params_file)
+
+
+def interrupted(signum) -> str:
+    """A run's ``reason`` when a stop signal ended it, in every layout: ``interrupted (Ctrl-C)`` for SIGINT, else
+    the signal's name (``interrupted (SIGTERM)``)."""
+    return "interrupted (Ctrl-C)" if signum == signal.SIGINT else f"interrupted ({signal.Signals(signum).name})"
 
 
 def _finish(out, report, reached, reason, codes, layout, params_file):
@@ -371,7 +377,7 @@ def _run_in_process(nodes, params_file, log_dir, duration, timeout, progress, ex
             state["timeout"] = True
         return state["end"] is not None or state["timeout"]
 
-    errors = []
+    errors, stopped = [], []
     log_dir.mkdir(parents=True, exist_ok=True)
     saved = [os.dup(1), os.dup(2)]
     with open(log_dir / "run.log", "w", encoding="utf-8") as log:
@@ -382,7 +388,8 @@ def _run_in_process(nodes, params_file, log_dir, duration, timeout, progress, ex
         try:
             code = serve([(name, lambda name=name: node_class(name)()) for name in nodes] + [(None, observer)],
                          ["roe_sep_run", "--ros-args", "--params-file", str(params_file)],
-                         make_executor=lambda: make_executor(executor), until=until, errors=errors)
+                         make_executor=lambda: make_executor(executor), until=until, errors=errors,
+                         stopped=stopped)
         finally:
             sys.stdout.flush()
             sys.stderr.flush()
@@ -400,6 +407,8 @@ def _run_in_process(nodes, params_file, log_dir, duration, timeout, progress, ex
     if code:
         why = errors[-1] if errors else "see logs/run.log"
         return False, f"in_process exited early (exit status {code}); last log line: {why}", code
+    if stopped:
+        return False, interrupted(stopped[0]), code
     return False, "interrupted (signal)", code
 
 

@@ -35,7 +35,7 @@ import time
 
 from ..children import die_with, spawn
 
-POLL = 0.05  # s between checks of the request pipe and of exited children
+POLL = 0.05  # s between checks of the request pipe and of exited children (a child's SIGCHLD wakes it sooner)
 
 
 # ----------------------------------------------------------------------------------------------------- server side
@@ -62,13 +62,18 @@ def _warm_node_startup():
     same): the package of rclpy's message type supports (imported at the first publisher), the map of module files
     of :mod:`inspect` (rclpy's logging scans every loaded module at its first log call, to name the caller) and the
     simulator's compiled truth integrator (:func:`~roe_sep.core.truth.nonlinear.pair_integrator`, memoised: a run
-    deep-copies the template). About 0.1 CPU-s per run."""
+    deep-copies the template) and the compiled CDR decoders of the inputs read raw
+    (:func:`~roe_sep.nodes.serialized.decoder_for`). About 0.1 CPU-s per run."""
     import inspect
 
     import rosidl_generator_py  # noqa: F401
+    from roe_sep_msgs.msg import LockstepAck, LockstepStep, RelativeOrbitalElements
 
     from ..core.truth.nonlinear import DEFAULT_TOL, Atmosphere, NonlinearTruth, pair_integrator
+    from ..nodes.serialized import decoder_for
 
+    for msg_type in (LockstepStep, LockstepAck, RelativeOrbitalElements):  # the raw inputs' compiled decoders
+        decoder_for(msg_type)
     inspect.getframeinfo(inspect.currentframe())
     zonals = inspect.signature(NonlinearTruth).parameters["zonals"].default
     pair_integrator(zonals, None, DEFAULT_TOL, Atmosphere.kind)
@@ -109,8 +114,10 @@ def _child(argv, log, parent):
         os._exit(int(code) & 0xFF if isinstance(code, int) else 1)
 
 
-def serve():
-    """The server loop (``python -m roe_sep.campaign.forkserver``): read requests from stdin, answer on stdout."""
+def preload():
+    """What the server does once for all its runs: the heap setting, the imports of a run and its caches
+    (:func:`_warm_node_startup`). A process that does this and then runs a scenario in process is a forked run's
+    twin (``bench/profile_run.py --campaign-layout`` profiles one)."""
     # freed NumPy temporaries stay in the heap, inherited by every fork (allocation only, the numbers unchanged;
     # first, so that the warm sweep's streaming does not set the Monte Carlo's threshold)
     from ..core.montecarlo.allocator import CLOSED_LOOP_TRIM_THRESHOLD, keep_freed_memory
@@ -134,14 +141,34 @@ def serve():
     from . import child  # noqa: F401
 
     _warm_node_startup()
+
+
+def serve():
+    """The server loop (``python -m roe_sep.campaign.forkserver``): read requests from stdin, answer on stdout."""
+    preload()
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the worker decides; a terminal's Ctrl-C goes to the worker
+    # a child's exit wakes the loop at once (Python's wakeup fd), not at the next poll: the worker starts its next
+    # run sooner
+    wake_r, wake_w = os.pipe()
+    os.set_blocking(wake_r, False)
+    os.set_blocking(wake_w, False)
+    signal.set_wakeup_fd(wake_w, warn_on_full_buffer=False)
+    signal.signal(signal.SIGCHLD, lambda signum, frame: None)
     out = sys.stdout
     server_pid = os.getpid()
     children = set()
     buf = b""
     print(json.dumps({"ready": os.getpid()}), file=out, flush=True)
     while True:
-        ready, _, _ = select.select([0], [], [], POLL)
+        ready, _, _ = select.select([0, wake_r], [], [], POLL)
+        if wake_r in ready:
+            ready.remove(wake_r)
+            while True:
+                try:
+                    if not os.read(wake_r, 512):
+                        break
+                except BlockingIOError:
+                    break
         while children:
             pid, status = os.waitpid(-1, os.WNOHANG)
             if pid == 0:
@@ -165,6 +192,10 @@ def serve():
             out.flush()
             pid = os.fork()
             if pid == 0:
+                signal.set_wakeup_fd(-1)
+                signal.signal(signal.SIGCHLD, signal.SIG_DFL)
+                os.close(wake_r)
+                os.close(wake_w)
                 _child(req["argv"], req["log"], server_pid)
             children.add(pid)
             print(json.dumps({"pid": pid}), file=out, flush=True)

@@ -171,7 +171,7 @@ class RadarODNode(ManagedNode):
         ls.subscribe(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, self.on_maneuver, interfaces.EXECUTED,
                      stamp=lambda m: time_to_sec(m.epoch), what="executed maneuver")
         ls.subscribe(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, self.on_truth, interfaces.STREAM,
-                     what="truth message")
+                     what="truth message", raw=True)  # every sample: decoded from its bytes (Lockstep.subscribe)
         self.create_subscription(Clock, interfaces.CLOCK_TOPIC, self.on_clock, interfaces.CLOCK_SUB)
         self.create_subscription(RadarMeasurement, interfaces.EXTERNAL_RADAR_TOPIC, self.on_external,
                                  interfaces.BULK)

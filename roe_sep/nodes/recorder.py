@@ -35,10 +35,11 @@ from ..bag import qos as bag_qos
 from ..bag.writer import BagWriter
 from .diagnostics import ERROR, OK, WARN, publish_status
 from .params import ParameterError, declare
+from .serialized import subscribe_decoded
 
 DISCOVERY_PERIOD = 0.5  # s, wall time
 DIAGNOSTICS_PERIOD = 1.0  # s, wall time
-SUBSCRIPTION_DEPTH = 1000
+SUBSCRIPTION_DEPTH = interfaces.RECORDED_DEPTH  # as deep as the writers of the streams: a lag loses nothing
 PENDING_LIMIT = 10000  # messages held while waiting for the first /clock
 STEP_READER = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=SUBSCRIPTION_DEPTH,
                          reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
@@ -90,7 +91,8 @@ class RecorderNode(Node):
         self.held = collections.defaultdict(collections.deque)  # topic -> (n, data, source) not attributed yet
         self.last_log = {}  # topic -> last log time [ns] (monotone per channel)
         self.step_time = None  # ns, sim time of the latest step
-        self.create_subscription(LockstepStep, interfaces.LOCKSTEP_STEP_TOPIC, self.on_step, STEP_READER)
+        subscribe_decoded(self, LockstepStep, interfaces.LOCKSTEP_STEP_TOPIC, self.on_step, STEP_READER,
+                          lambda exc: self._error(f"step message dropped: cannot be decoded: {exc}"))
         wall = Clock(clock_type=ClockType.STEADY_TIME)
         self.create_timer(DISCOVERY_PERIOD, self.discover, clock=wall)
         self.create_timer(float(self.flush_period), self.flush, clock=wall)
@@ -106,6 +108,12 @@ class RecorderNode(Node):
         if name in self.exclude:
             return False
         return name in self.topics if self.topics else not hidden(name)
+
+    def peers_constructed(self):
+        """Every node of this process is constructed (:func:`roe_sep.nodes.spin.serve`): record their topics now.
+        A managed node that starts itself (``autostart``) has its publishers by then, so a run in one process starts
+        stepping without waiting for the first discovery tick (up to :data:`DISCOVERY_PERIOD` s)."""
+        self.discover()
 
     def discover(self):
         try:

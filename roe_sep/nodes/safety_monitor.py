@@ -118,7 +118,7 @@ class SafetyMonitorNode(ManagedNode):
         ls.subscribe(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, self.on_executed, interfaces.EXECUTED,
                      stamp=lambda m: time_to_sec(m.epoch), what="executed maneuver")
         ls.subscribe(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, self.on_truth, interfaces.STREAM,
-                     what="truth state")
+                     what="truth state", raw=True)  # every sample: decoded from its bytes (Lockstep.subscribe)
         ls.subscribe(OrbitDetermination, interfaces.OD_TOPIC, self.on_estimate, interfaces.LATCHED, what="OD estimate")
         ls.subscribe(EjectionEvent, interfaces.EJECTION_TOPIC, self.on_ejection, interfaces.LATCHED,
                      what="ejection event")

@@ -149,7 +149,7 @@ class SimNode(Node):
         """Publishers, subscriptions and the clock; the simulator reads its inputs through the lockstep buffer too
         (it coordinates, so it does not acknowledge)."""
         self.lockstep = ls = Lockstep(self, acknowledge=False)
-        self.clock_pub = self.create_publisher(Clock, interfaces.CLOCK_TOPIC, 10)
+        self.clock_pub = self.create_publisher(Clock, interfaces.CLOCK_TOPIC, interfaces.RECORDED_DEPTH)
         self.roe_pub = ls.publisher(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, interfaces.STREAM)
         self.rtn_pub = ls.publisher(RelativeState, interfaces.TRUTH_RTN_TOPIC, interfaces.STREAM)
         self._truth_messages = TruthMessages()  # the truth's two messages of each sample, serialized

@@ -4,8 +4,10 @@ One life cycle (:func:`serve`) for a node alone (:func:`run`, the ``main()`` of 
 too) and for several nodes on one executor (:mod:`roe_sep.nodes.suite`); nothing waits outside the spin:
 
 * rclpy's own signal handler is off. SIGINT/SIGTERM only set a flag that the loop checks between short slices of
-  spinning (:data:`SLICE`, ``spin_until_future_complete`` on a future that never completes: the executor runs the
-  callbacks of a slice without returning to this loop for each one): a signal never interrupts a callback halfway,
+  spinning (:data:`SLICE`, ``spin_until_future_complete`` on a future that a wall-clock timer completes once the
+  flag is set or ``until()`` is true: the executor runs the callbacks of a slice without returning to this loop
+  for each one, and the EventsExecutor's slice outlasts its timeout while its queue never empties, as in a
+  lockstep run in one process): a signal never interrupts a callback halfway,
   and the context is never shut down under an executor that is building its wait set (rclpy's handler does that,
   and the executor then raises ``RCLError: the given context is not valid`` instead of exiting cleanly). The
   EventsExecutor's C++ ``spin()`` would not let Python's handlers run at all.
@@ -13,7 +15,12 @@ too) and for several nodes on one executor (:mod:`roe_sep.nodes.suite`); nothing
   recorder logs the last status a simulator published just before it was stopped, and the ground_bridge's final
   CCSDS set includes it. A node that counts what it receives (an int attribute ``messages_received``) keeps the
   drain going while the count rises, until :data:`DRAIN_IDLE` s pass without a message (at most
-  :data:`DRAIN_MAX` s; a second signal ends it at once).
+  :data:`DRAIN_MAX` s; a second signal ends it at once). When ``until`` ends the spin, every node that publishes is
+  in this process, and Fast DDS hands a message to a reader of its own participant within the publisher's
+  ``publish()`` call: nothing is then on its way from another process, and :data:`DRAIN_IDLE_LOCAL` s of quiet
+  suffice (a run in one process: 0.3 s less idle time per campaign run), over at least :data:`DRAIN_QUIET_SPINS`
+  spins (the EventsExecutor runs its queued callbacks in the order of arrival, one per spin, so a quiet measured
+  in spins as well as in wall time is not ended by the process being descheduled).
 """
 
 import os
@@ -25,6 +32,7 @@ import time
 import traceback
 
 import rclpy
+from rclpy.clock import Clock, ClockType
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.signals import SignalHandlerOptions
 from rclpy.task import Future
@@ -33,6 +41,8 @@ from ..errors import RosArgumentsError
 from .params import ParameterError, help_requested, node_table, print_usage
 
 DRAIN_IDLE = 0.3  # s (wall) without a new message that ends the drain
+DRAIN_IDLE_LOCAL = 0.05  # s (wall), the same when every publisher is in this process (``until`` ended the spin)
+DRAIN_QUIET_SPINS = 10  # and, then, at least this many spins in a row without a message
 DRAIN_MAX = 10.0  # s (wall), at most
 SLICE = 0.1  # s (wall) of spinning between two checks of the stop request, the context and ``until``
 
@@ -75,34 +85,50 @@ def received(nodes) -> int:
     return sum(int(getattr(n, "messages_received", 0)) for n in nodes)
 
 
-def spin(executor, nodes=(), until=None, errors=None) -> int:
+def spin(executor, nodes=(), until=None, errors=None, stopped=None) -> int:
     """Spin ``executor`` until SIGINT/SIGTERM, a context shutdown or ``until()`` (optional, checked every
     :data:`SLICE` s of wall time) is true, then drain (module docstring; with ``until``, only when it ended the
     spin: the nodes that publish are then in this process and would keep the drain going). Returns 1 if a callback
-    raised (traceback printed, and its last line appended to ``errors`` if given), else 0."""
+    raised (traceback printed, and its last line appended to ``errors`` if given), else 0. The stop signals
+    received are appended to ``stopped`` if given."""
     stop = []
+    wake = Future()  # completed by a wall-clock timer once the spin is to end (see below)
 
     def on_signal(signum, frame):  # noqa: ARG001
         stop.append(signum)
 
+    def check():
+        if (stop or (until is not None and until())) and not wake.done():
+            wake.set_result(True)
+
+    # The EventsExecutor's slice does not end at its timeout while its queue never empties (a lockstep run in one
+    # process: each callback publishes what the next one takes), so a signal or ``until`` would wait for the end
+    # of the run. A timer is an event in that queue: it completes ``wake`` and the slice ends after the callback
+    # in progress. (Not from the signal handler itself: it may run while the main thread holds the future's lock.)
+    timer = nodes[0].create_timer(SLICE, check, clock=Clock(clock_type=ClockType.STEADY_TIME)) if nodes else None
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, on_signal)
     try:
         while not stop and rclpy.ok() and not (until is not None and until()):
-            executor.spin_until_future_complete(Future(), timeout_sec=SLICE)
+            executor.spin_until_future_complete(wake, timeout_sec=SLICE)
         counted = [n for n in nodes if hasattr(n, "messages_received")]
         # with ``until`` the closed loop runs in this process and keeps stepping: a signal ends the run at once
         if counted and rclpy.ok() and not (stop and until is not None):
+            # local: also DRAIN_QUIET_SPINS spins in a row without a message, so that a process descheduled on a
+            # loaded machine cannot end the drain while callbacks are still queued (a spin runs one when one is)
+            idle, spins, wait = (DRAIN_IDLE, 0, 0.05) if until is None else (DRAIN_IDLE_LOCAL, DRAIN_QUIET_SPINS,
+                                                                              DRAIN_IDLE_LOCAL / DRAIN_QUIET_SPINS)
             start = last_change = time.monotonic()
-            last = received(counted)
+            last, quiet = received(counted), 0
             while len(stop) < 2 and rclpy.ok():
                 now = time.monotonic()
-                if now - last_change >= DRAIN_IDLE or now - start >= DRAIN_MAX:
+                if (now - last_change >= idle and quiet >= spins) or now - start >= DRAIN_MAX:
                     break
-                executor.spin_once(timeout_sec=0.05)
+                executor.spin_once(timeout_sec=wait)
                 count = received(counted)
+                quiet += 1
                 if count != last:
-                    last, last_change = count, time.monotonic()
+                    last, last_change, quiet = count, time.monotonic(), 0
     except ExternalShutdownException:
         pass
     except Exception:  # noqa: BLE001 -- a callback raised: the traceback, and the process stops with code 1
@@ -110,10 +136,15 @@ def spin(executor, nodes=(), until=None, errors=None) -> int:
         if errors is not None:
             errors.append(traceback.format_exc().strip().splitlines()[-1])
         return 1
+    finally:
+        if timer is not None:
+            nodes[0].destroy_timer(timer)
+        if stopped is not None:
+            stopped.extend(stop)
     return 0
 
 
-def serve(factories, args=None, make_executor=SingleThreadedExecutor, until=None, errors=None) -> int:
+def serve(factories, args=None, make_executor=SingleThreadedExecutor, until=None, errors=None, stopped=None) -> int:
     """The whole life of a process: :func:`init`; construct the nodes of ``factories`` (``[(label, factory)]``, in
     order); the nodes on one executor from ``make_executor()``; :func:`spin` with the drain (until a signal, or
     ``until()`` is true: :func:`roe_sep.run.run` in one process, a lifecycle manager whose start-up failed); then the
@@ -124,7 +155,8 @@ def serve(factories, args=None, make_executor=SingleThreadedExecutor, until=None
 
     Exit code 2 when rcl refuses the ROS arguments (a missing or malformed ``--params-file``) or a node refuses its
     parameters (``[ERROR] label: ...``, or without the label when it is None),
-    1 when a callback raised, else 0; the reason of a non-zero code is appended to ``errors`` (a list) if given.
+    1 when a callback raised, else 0; the reason of a non-zero code is appended to ``errors`` (a list) if given,
+    the stop signals received during the spin to ``stopped``.
     The signal handlers in place before are restored on return."""
     handlers = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
@@ -146,9 +178,11 @@ def serve(factories, args=None, make_executor=SingleThreadedExecutor, until=None
                 if errors is not None:
                     errors.append(f"{label}: {exc}" if label else str(exc))
                 return 2
+        for node in nodes:  # work that needs every node of the process: the recorder's first look at the topics
+            getattr(node, "peers_constructed", lambda: None)()
         for node in nodes:
             executor.add_node(node)
-        code = spin(executor, nodes, until, errors)
+        code = spin(executor, nodes, until, errors, stopped)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:

@@ -23,6 +23,9 @@ def _domains():
     return os.environ.get("ROE_SEP_TEST_CAMPAIGN_DOMAINS", f"{own}-{own}")
 
 
+LONG = str(30 * 86400)  # s of sim time: a run still under way when the signal comes (seconds of wall time, not one)
+
+
 def command(name, tmp_path):
     """(argv, what must be running below the parent before the signal: {command-line part: count}, the port)."""
     if name == "replay":
@@ -30,8 +33,9 @@ def command(name, tmp_path):
         return (["replay", str(BAG), "--rate", "2000", "--clock", "--foxglove", str(port)],
                 {"roe_sep.nodes.foxglove_view": 1}, port)
     if name == "run":
-        return (["run", "--out", str(tmp_path / "run"), "--timeout", "600"], {"roe_sep.nodes.suite": 2}, None)
-    return (["campaign", "--runs", "1", "--workers", "1", "--duration", "20000", "--out", str(tmp_path / "c"),
+        return (["run", "--out", str(tmp_path / "run"), "--timeout", "600", "--duration", LONG],
+                {"roe_sep.nodes.suite": 2}, None)
+    return (["campaign", "--runs", "1", "--workers", "1", "--duration", LONG, "--out", str(tmp_path / "c"),
              "--domains", _domains(), "--open-loop-samples", "100", "--no-figures", "--json"],
             {"roe_sep.campaign.forkserver": 2}, None)
 

@@ -50,6 +50,9 @@ def ground():
 def test_plan_bad_event_and_restart(ground):
     planner = start_node("planner", "-p", "p_mode:=fixed", "-p", "p_reduction:=0.06")
     try:
+        # the ERROR status is published once and /diagnostics is volatile: the ground must see the planner's status
+        # writer before the bad event goes out (else a slow discovery loses the status, and the test with it)
+        assert spin_until(ground, lambda: ground.count_publishers(interfaces.DIAGNOSTICS_TOPIC) >= 1, timeout=60)
         # a NaN ejection is rejected with an ERROR diagnostic; the node keeps running
         ground.ejection_pub.publish(ejection_event(dv=[math.nan, 0.0, 0.0]))
         assert spin_until(ground, lambda: any(s.level == DiagnosticStatus.ERROR and "rejected" in s.message

@@ -13,6 +13,8 @@ problems). Where that binding is not there (another scipy), it falls back to ``l
 
 import numpy as np
 
+#: HiGHS's presolve, on as in linprog (``bench/whatif_lp_presolve.py`` measures a campaign with it off)
+PRESOLVE = "on"
 #: linprog's scipy status codes and messages for HiGHS model statuses (scipy.optimize._linprog_highs)
 _OPTIMAL, _INFEASIBLE = 0, 2
 _MESSAGES = {_OPTIMAL: "Optimization terminated successfully. (HiGHS Status 7: Optimal)",
@@ -67,7 +69,7 @@ def solve_lp(cost, a_ub, b_ub, a_eq, b_eq, lo, hi, use_linprog=False):
     for v in (col_lo, col_hi, row_lo, row_hi):  # linprog's _replace_inf
         v[np.isinf(v)] = np.sign(v[np.isinf(v)]) * inf
     highs = core._Highs()
-    for name, value in (("output_flag", False), ("log_to_console", False), ("presolve", "on"),
+    for name, value in (("output_flag", False), ("log_to_console", False), ("presolve", PRESOLVE),
                         ("highs_debug_level", int(core.HighsDebugLevel.kHighsDebugLevelNone)),
                         ("simplex_strategy", int(core.simplex_constants.SimplexStrategy.kSimplexStrategyDual))):
         highs.setOptionValue(name, value)
