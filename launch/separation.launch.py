@@ -53,7 +53,7 @@ def _arg(context, name, cast=str):
 def _graph(context):
     """The run's actions: the parameter file, the nodes in order, the end of run and the report."""
     from roe_sep import interfaces
-    from roe_sep.graph import graph_nodes, parameters, run_overrides
+    from roe_sep.graph import dds_environment, graph_nodes, parameters, run_overrides
     from roe_sep.nodes.sim import DEFAULT_DURATION
 
     out = Path(_arg(context, "output")).resolve()
@@ -73,8 +73,10 @@ def _graph(context):
     state = {"end": None, "codes": {}, "start": time.monotonic()}
     # up to 20 s from SIGINT to SIGTERM, as roe-sep run waits (the recorder closes the bag, ground_bridge writes
     # its final CCSDS set; launch's default of 5 s is too short on a loaded machine)
+    dds_env = dds_environment(out)  # the nodes' DDS profile (out/fastdds.xml), as roe-sep run gives it
     nodes = {name: Node(package="roe_sep", executable=name, name=name, output="screen", sigterm_timeout="20",
-                        parameters=[str(params_file)]) for name in graph_nodes(managed=managed)}
+                        parameters=[str(params_file)], additional_env=dds_env)
+             for name in graph_nodes(managed=managed)}
 
     def shutdown(reason):
         """End the launch, once: every Shutdown event shuts launch_ros's ROS adapter down (its OnShutdown handler),

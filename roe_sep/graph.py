@@ -6,6 +6,7 @@ simulator waits for before its clock starts, and the run's ROS parameter file.
 parameters.
 """
 
+import os
 from pathlib import Path
 
 import yaml
@@ -39,6 +40,45 @@ SUBSCRIBERS = {
 LISTENERS = ("recorder", "ground_bridge", "foxglove_view")
 SUITES = ("listeners", "loop")
 EXECUTORS = ("events", "single_threaded")  # rclpy's EventsExecutor (default), SingleThreadedExecutor
+
+
+DDS_HEARTBEAT_PERIOD = 0.1
+"""s (wall): how often a reliable writer of a run's processes announces what it has sent when a reader has not yet
+acknowledged all of it (Fast DDS's default: 3 s). A reader that missed messages (a listeners' process descheduled
+on a loaded machine overflows its shared-memory port) asks for them again only when such an announcement comes; a
+writer whose history is not full sends it no sooner, and a run of a few seconds of wall time then ends with the
+gap unrepaired and the messages behind it never delivered (the bag lost every /clock after a 0.5 s stall)."""
+DDS_PROFILE_ENV = ("FASTRTPS_DEFAULT_PROFILES_FILE", "FASTDDS_DEFAULT_PROFILES_FILE")  # a user's own profile wins
+
+
+def dds_profile() -> str:
+    """The Fast DDS XML profile of a run's node processes: the default writer profile with
+    :data:`DDS_HEARTBEAT_PERIOD`; every QoS policy a ROS publisher sets stays the ROS one (rmw_fastrtps sets them
+    over the default profile)."""
+    sec = int(DDS_HEARTBEAT_PERIOD)
+    nanosec = int(round((DDS_HEARTBEAT_PERIOD - sec) * 1e9))
+    return ('<?xml version="1.0" encoding="UTF-8"?>\n'
+            '<!-- written by roe_sep (roe_sep.graph.dds_profile): the run\'s processes load it as their default -->\n'
+            '<dds xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles">\n'
+            '  <profiles>\n'
+            '    <data_writer profile_name="roe_sep_writer" is_default_profile="true">\n'
+            f'      <times><heartbeatPeriod><sec>{sec}</sec><nanosec>{nanosec}</nanosec></heartbeatPeriod></times>\n'
+            '    </data_writer>\n'
+            '  </profiles>\n'
+            '</dds>\n')
+
+
+def dds_environment(out, env=None) -> dict:
+    """The environment entries that give a run's node processes :func:`dds_profile` (written to
+    ``out/fastdds.xml``), or none when ``env`` (default: this process's) names a Fast DDS profile of its own or
+    another RMW implementation."""
+    env = os.environ if env is None else env
+    if any(env.get(k) for k in DDS_PROFILE_ENV) or env.get("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp") not in (
+            "rmw_fastrtps_cpp", "rmw_fastrtps_dynamic_cpp"):
+        return {}
+    path = Path(out) / "fastdds.xml"
+    path.write_text(dds_profile(), encoding="utf-8")
+    return {DDS_PROFILE_ENV[0]: str(path.resolve())}
 
 
 def suites(nodes):

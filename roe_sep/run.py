@@ -28,6 +28,7 @@ from .graph import (  # noqa: F401 (re-exported)
     RADAR_STREAM,
     SUBSCRIBERS,
     SUITES,
+    dds_environment,
     graph_nodes,
     load_overrides,
     parameters,
@@ -265,7 +266,9 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
         report = report_from_bag(bag_dir, out, sim_duration, 0)
         return _finish(out, report, reached, reason, {"in_process": code}, f"one process ({executor} executor)",
                        params_file)
-    deployment = Deployment(out, params_file, ros_environment(domain_id))
+    env = ros_environment(domain_id)
+    env.update(dds_environment(out, env))  # the processes' DDS profile (out/fastdds.xml): prompt repairs
+    deployment = Deployment(out, params_file, env)
     reached, reason = False, "not started"
     report = None
     try:

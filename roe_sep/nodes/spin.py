@@ -45,6 +45,7 @@ DRAIN_IDLE_LOCAL = 0.05  # s (wall), the same when every publisher is in this pr
 DRAIN_QUIET_SPINS = 10  # and, then, at least this many spins in a row without a message
 DRAIN_MAX = 10.0  # s (wall), at most
 SLICE = 0.1  # s (wall) of spinning between two checks of the stop request, the context and ``until``
+ACK_WAIT = 2.0  # s (wall), at most, for the readers of a process's reliable publishers to acknowledge everything
 
 
 def ros_arguments_error(exc, args=None) -> str:
@@ -144,6 +145,30 @@ def spin(executor, nodes=(), until=None, errors=None, stopped=None) -> int:
     return 0
 
 
+def wait_for_acknowledgments(nodes, budget=ACK_WAIT) -> bool:
+    """Before a process destroys its publishers: wait (at most ``budget`` s of wall time in all) until every
+    reliable reader has acknowledged every message of the reliable publishers of ``nodes``. A reader in another
+    process that fell behind (a descheduled listeners' process) gets its missed messages repaired only while their
+    writer exists; without this wait the loop's process could end first and the bag would lose them. The readers
+    in this process acknowledge at once; a reader whose process was killed is never heard of again, and its wait
+    ends with the budget. True if every publisher was acknowledged in time."""
+    from rclpy.duration import Duration
+    from rclpy.qos import ReliabilityPolicy
+
+    deadline = time.monotonic() + budget
+    acked = True
+    for node in nodes:
+        for pub in list(node.publishers):
+            if pub.qos_profile.reliability != ReliabilityPolicy.RELIABLE:
+                continue
+            left = deadline - time.monotonic()
+            try:
+                acked = left > 0 and pub.wait_for_all_acked(Duration(nanoseconds=int(left * 1e9))) and acked
+            except Exception:  # noqa: BLE001 -- a publisher already gone, a context shutting down: nothing to wait for
+                pass
+    return acked
+
+
 def serve(factories, args=None, make_executor=SingleThreadedExecutor, until=None, errors=None, stopped=None) -> int:
     """The whole life of a process: :func:`init`; construct the nodes of ``factories`` (``[(label, factory)]``, in
     order); the nodes on one executor from ``make_executor()``; :func:`spin` with the drain (until a signal, or
@@ -187,6 +212,9 @@ def serve(factories, args=None, make_executor=SingleThreadedExecutor, until=None
         pass
     finally:
         if executor is not None:
+            if rclpy.ok() and not wait_for_acknowledgments(nodes):
+                print(f"[WARN] messages not acknowledged by every reader within {ACK_WAIT:g} s "
+                      "(a reader's process stopped or killed?)", file=sys.stderr, flush=True)
             executor.shutdown()
             for node in nodes:  # shutdown work that may start now that no callback runs (the ground_bridge's)
                 getattr(node, "executor_stopped", lambda: None)()

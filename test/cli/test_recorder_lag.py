@@ -7,10 +7,13 @@ every step (truth, status, bearings, ``/diagnostics``, ``/clock``) are as deep a
 (``interfaces.RECORDED_DEPTH``). With depths of 10 and 100 a 0.5 s stall of the listeners lost about 800 truth
 samples and 80 clock ticks, and the report read from the bag was another (a later first OD).
 
+A reader that missed messages gets them again only while their writer exists and announces what it sent: the
+run's processes get a heartbeat every 0.1 s (graph.dds_profile) and wait, before they destroy their publishers,
+until every reader acknowledged everything (spin.wait_for_acknowledgments). Without them the reader of ``/clock``
+stayed behind its gap to the end of the run (2 runs in 6 lost every tick after the stall).
+
 Not covered (docs/run.md "A recorder that lags"): a latched topic (depth 1) published twice within the lag keeps
-only its latest message for the late reader; a burst on a topic published rarely (a radar pass) that the stalled
-reader misses waits for the writer's next heartbeat to be repaired, which may come after the loop's process has
-ended; and what the recorder has not received when the loop's process ends is lost."""
+only its latest message for the late reader."""
 
 import collections
 import os

@@ -25,7 +25,7 @@ from roe_sep_msgs.msg import (  # noqa: E402
     RelativeOrbitalElements,
     SafetyStatus,
 )
-from rosutil import ROOT, rclpy, ros_env  # noqa: I001  (skips without rclpy)
+from rosutil import ROOT, descendants, rclpy, ros_env  # noqa: I001  (skips without rclpy)
 
 from roe_sep import interfaces  # noqa: E402
 from roe_sep.bag import info  # noqa: E402
@@ -62,6 +62,15 @@ def node_pid(node, out):
     return int(found[0]) if found else None
 
 
+def still_there(parent, out):
+    """What a run that does not end is doing: its processes still running, and the last lines of every log."""
+    lines = [f"  pid {pid}: {cmd[:160]}" for pid, (_, cmd) in descendants(parent).items()]
+    for log in sorted((out / "logs").glob("*.log")):
+        tail = log.read_text(errors="replace").splitlines()[-3:]
+        lines += [f"  {log.name}: {line[:200]}" for line in tail]
+    return "\n".join(lines)
+
+
 @pytest.mark.parametrize("node", NODES + SUITES)
 def test_killing_a_node_mid_run(tmp_path, node):
     """A node's process killed (``--process-per-node``), or one of the two processes of the default layout."""
@@ -76,7 +85,10 @@ def test_killing_a_node_mid_run(tmp_path, node):
         assert pid is not None, node
         os.kill(pid, signal.SIGKILL)
         COUNTS["killed"] += 1
-        stdout, stderr = proc.communicate(timeout=120)
+        try:
+            stdout, stderr = proc.communicate(timeout=120)
+        except subprocess.TimeoutExpired:
+            pytest.fail(f"the run did not end within 120 s of the kill\n{still_there(proc.pid, out)}")
     finally:
         if proc.poll() is None:
             proc.kill()

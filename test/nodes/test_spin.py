@@ -67,3 +67,58 @@ def test_a_process_records_its_peers_from_the_first_message(tmp_path):
     assert info(bag)["complete"]
     got = [deserialize_message(m.data, String).data for m in bag_reader.messages(bag, topics=[TOPIC])]
     assert got == [str(k) for k in range(N)]
+
+
+LISTENER = """
+import sys, rclpy
+from std_msgs.msg import String
+rclpy.init()
+node = rclpy.create_node("spin_test_listener")
+node.create_subscription(String, sys.argv[1], lambda m: None, 1000)
+print("up", flush=True)
+rclpy.spin(node)
+"""
+
+
+def test_a_process_waits_for_its_readers_to_acknowledge_before_it_ends():
+    """spin.wait_for_acknowledgments: a reader in another process that is not running (SIGSTOP: a descheduled
+    listeners' process) holds the publisher's wait until the budget ends (False, after the budget, not before); once it
+    runs again, everything is acknowledged (True, well inside the budget)."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from rosutil import ros_env
+
+    from roe_sep.nodes.spin import wait_for_acknowledgments
+
+    topic = "/spin_test/acked"
+    listener = subprocess.Popen([sys.executable, "-c", LISTENER, topic], env=ros_env(), stdout=subprocess.PIPE,
+                                text=True)
+    rclpy.init()
+    node = rclpy.create_node("spin_test_acked")
+    try:
+        assert listener.stdout.readline().strip() == "up"
+        pub = node.create_publisher(String, topic, 1000)
+        end = time.monotonic() + 30
+        while pub.get_subscription_count() < 1:
+            assert time.monotonic() < end, "the listener was not discovered"
+            time.sleep(0.05)
+        listener.send_signal(signal.SIGSTOP)
+        for k in range(50):
+            pub.publish(String(data=str(k)))
+        start = time.monotonic()
+        assert not wait_for_acknowledgments([node], budget=1.0)
+        assert time.monotonic() - start >= 0.95
+        listener.send_signal(signal.SIGCONT)
+        start = time.monotonic()
+        assert wait_for_acknowledgments([node], budget=20.0)
+        # Fast DDS's default heartbeat period (3 s) bounds the time; a run's processes get 0.1 s (graph.dds_profile)
+        assert time.monotonic() - start < 10.0
+    finally:
+        listener.send_signal(signal.SIGCONT)
+        listener.kill()
+        listener.wait()
+        node.destroy_node()
+        rclpy.try_shutdown()
