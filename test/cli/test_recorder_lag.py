@@ -28,7 +28,8 @@ from rosutil import ROOT, descendants, ros_env
 from roe_sep.bag.reader import messages
 
 STREAMS = {"/sim/truth/roe": 4689, "/sim/truth/rtn": 4689, "/clock": 468, "/safety/status": 811,
-           "/sim/camera/bearing": 240}  # published every step
+           "/sim/camera/bearing": 240,  # published every step
+           "/radar/measurements": 466, "/od/estimate": 5}  # a burst per radar pass; the estimates (latched)
 
 
 def listeners_pid(parent):
