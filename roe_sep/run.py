@@ -121,14 +121,17 @@ class Deployment:
         return False
 
     def stop(self, nodes, timeout=120.0):
-        """SIGINT to each of ``nodes``, then wait; SIGKILL after ``timeout`` s (the ground_bridge writes the final
-        CCSDS set of the whole run at shutdown: seconds, many more on a loaded machine)."""
+        """SIGINT to each of ``nodes``, then wait; SIGKILL to those still running ``timeout`` s after the SIGINT (one
+        deadline for all: the ground_bridge writes the final CCSDS set of the whole run at shutdown, seconds, many
+        more on a loaded machine; a process stuck in DDS, e.g. behind a shared-memory lock that a killed peer held,
+        is ended then)."""
         self.interrupt(nodes)
+        deadline = time.monotonic() + timeout
         codes = {}
         for n in nodes:
             p, log = self.procs[n]
             try:
-                codes[n] = p.wait(timeout=timeout)
+                codes[n] = p.wait(timeout=max(0.0, deadline - time.monotonic()))
             except subprocess.TimeoutExpired:
                 p.kill()
                 codes[n] = p.wait()

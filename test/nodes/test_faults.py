@@ -85,10 +85,13 @@ def test_killing_a_node_mid_run(tmp_path, node):
         assert pid is not None, node
         os.kill(pid, signal.SIGKILL)
         COUNTS["killed"] += 1
+        # normally 2-4 s. The runner SIGKILLs what has not stopped 120 s after its SIGINT (run.Deployment.stop):
+        # a process stuck in DDS after the kill (a shared-memory lock the killed process held) still ends, and so
+        # does the run, with its report; the exit codes printed below show it (-9)
         try:
-            stdout, stderr = proc.communicate(timeout=120)
+            stdout, stderr = proc.communicate(timeout=300)
         except subprocess.TimeoutExpired:
-            pytest.fail(f"the run did not end within 120 s of the kill\n{still_there(proc.pid, out)}")
+            pytest.fail(f"the run did not end within 300 s of the kill\n{still_there(proc.pid, out)}")
     finally:
         if proc.poll() is None:
             proc.kill()
@@ -108,7 +111,7 @@ def test_killing_a_node_mid_run(tmp_path, node):
         assert recovered["messages"] > 0 and recovered["seconds_lost"] is not None
     assert info(bag)["message_count"] > 0
     COUNTS["bags_readable"] += 1
-    print(f"\n[faults] kill {node}: {reason[:160]}")
+    print(f"\n[faults] kill {node}: {reason[:160]}; exit codes {rep['run']['exit_codes']}")
     print(f"[faults] {COUNTS}")
 
 
