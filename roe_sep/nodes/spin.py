@@ -162,8 +162,10 @@ def wait_for_acknowledgments(nodes, budget=ACK_WAIT) -> bool:
             if pub.qos_profile.reliability != ReliabilityPolicy.RELIABLE:
                 continue
             left = deadline - time.monotonic()
+            if left <= 0:
+                return False
             try:
-                acked = left > 0 and pub.wait_for_all_acked(Duration(nanoseconds=int(left * 1e9))) and acked
+                acked = pub.wait_for_all_acked(Duration(nanoseconds=int(left * 1e9))) and acked
             except Exception:  # noqa: BLE001 -- a publisher already gone, a context shutting down: nothing to wait for
                 pass
     return acked

@@ -21,6 +21,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
 from rosutil import ROOT, descendants, ros_env
@@ -53,6 +54,10 @@ def test_a_stalled_recorder_catches_up_without_losing_a_stream_message(tmp_path)
             time.sleep(0.02)
         pid = listeners_pid(proc.pid)
         assert pid is not None
+        # the repairs rest on the run's DDS profile (graph.dds_environment; this environment names none of its own)
+        environ = dict(e.split("=", 1) for e in Path(f"/proc/{pid}/environ").read_bytes().decode().split("\0")
+                       if "=" in e)
+        assert environ.get("FASTRTPS_DEFAULT_PROFILES_FILE") == str((out / "fastdds.xml").resolve())
         time.sleep(0.5)  # stepping
         os.kill(pid, signal.SIGSTOP)  # the listeners' process descheduled for 0.5 s while the loop steps on
         time.sleep(0.5)

@@ -11,6 +11,8 @@ from pathlib import Path
 
 import pytest
 
+from roe_sep.graph import dds_profile
+
 ROOT = Path(__file__).resolve().parents[2]
 SCRIPT = ROOT / "scripts" / "ros2_cli.sh"
 CHECKS = ROOT / "build" / "ros2cli" / "checks"
@@ -97,6 +99,8 @@ def test_launch_runs_the_scenario_to_the_report_of_roe_sep_run(checks):
     for name in ("launch", "launch_xml"):
         report = reports[name]
         assert report["run"]["completed"] is True, report["run"]
+        # the nodes' DDS profile, as roe-sep run writes it (graph.dds_environment)
+        assert (CHECKS / name / "fastdds.xml").read_text(encoding="utf-8") == dds_profile()
         assert report["run"]["reason"] == "scenario complete"
         for key in ("dv_total", "maneuvers", "criteria", "safe", "min_distance", "final_roe"):
             assert report[key] == run[key], (name, key)

@@ -1,15 +1,20 @@
 """A process's life cycle (roe_sep.nodes.spin.serve) with every node in the process, as a campaign's run has it: the
 recorder records its peers' topics from their first message, and the short local drain loses nothing."""
 
+import signal
+import subprocess
+import sys
+import time
+
 import pytest
 from rclpy.serialization import deserialize_message  # noqa: E402
-from rosutil import rclpy  # noqa: I001  (skips without rclpy)
+from rosutil import rclpy, ros_env  # noqa: I001  (skips without rclpy)
 from std_msgs.msg import String  # noqa: E402
 
 from roe_sep.bag import info  # noqa: E402
 from roe_sep.bag import reader as bag_reader  # noqa: E402
 from roe_sep.nodes.recorder import RecorderNode  # noqa: E402
-from roe_sep.nodes.spin import serve  # noqa: E402
+from roe_sep.nodes.spin import serve, wait_for_acknowledgments  # noqa: E402
 
 pytestmark = pytest.mark.dds
 
@@ -84,15 +89,6 @@ def test_a_process_waits_for_its_readers_to_acknowledge_before_it_ends():
     """spin.wait_for_acknowledgments: a reader in another process that is not running (SIGSTOP: a descheduled
     listeners' process) holds the publisher's wait until the budget ends (False, after the budget, not before); once it
     runs again, everything is acknowledged (True, well inside the budget)."""
-    import signal
-    import subprocess
-    import sys
-    import time
-
-    from rosutil import ros_env
-
-    from roe_sep.nodes.spin import wait_for_acknowledgments
-
     topic = "/spin_test/acked"
     listener = subprocess.Popen([sys.executable, "-c", LISTENER, topic], env=ros_env(), stdout=subprocess.PIPE,
                                 text=True)
