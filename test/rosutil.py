@@ -1,5 +1,6 @@
 """Helpers for integration tests that start real node processes over DDS (localhost discovery only)."""
 
+import math
 import os
 import signal
 import subprocess
@@ -60,6 +61,22 @@ def spin_until(node, predicate, timeout=20.0):
         if predicate():
             return True
     return predicate()
+
+
+def publish_until(node, send, predicate, timeout=30.0, period=0.5):
+    """Call ``send()`` (it publishes) every ``period`` s while spinning ``node`` until ``predicate()`` holds.
+
+    For an answer published once per message on a volatile topic (an ERROR status): whichever side of the
+    discovery is slower, a later copy of the message meets a matched writer of the answer. Returns the predicate."""
+    last = [-math.inf]
+
+    def tick():
+        if time.monotonic() - last[0] >= period:
+            last[0] = time.monotonic()
+            send()
+        return predicate()
+
+    return spin_until(node, tick, timeout=timeout)
 
 
 def free_port():

@@ -8,7 +8,7 @@ import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus  # noqa: E402
 from roe_sep_msgs.msg import ManeuverPlan, OrbitalElements, OrbitDetermination  # noqa: E402
 from rosgraph_msgs.msg import Clock  # noqa: E402
-from rosutil import rclpy, spin_until, start_node, stop_node, wait_exit  # noqa: I001  (skips without rclpy)
+from rosutil import publish_until, rclpy, spin_until, start_node, stop_node, wait_exit  # noqa: I001  (skips without rclpy)
 
 from roe_sep import interfaces  # noqa: E402
 from roe_sep.core.acquisition.planner import AcquisitionConfig, plan_acquisition  # noqa: E402
@@ -73,8 +73,10 @@ def test_plan_bad_estimate_and_replan_policy(ground):
                       "final_od_arc:=0.0")
     try:
         # a NaN estimate: ERROR diagnostic, no plan, the node keeps running
-        ground.od_pub.publish(od_message(np.full(6, math.nan), T_OD - 500.0))
-        assert spin_until(ground, lambda: errors(ground, "OD estimate rejected"), timeout=30)
+        # (sent again until the ERROR arrives: it is published once per estimate on a volatile topic)
+        bad = od_message(np.full(6, math.nan), T_OD - 500.0)
+        assert publish_until(ground, lambda: ground.od_pub.publish(bad),
+                             lambda: errors(ground, "OD estimate rejected"), timeout=60)
         assert proc.poll() is None and not ground.plans
 
         ground.od_pub.publish(od_message(ROE0, T_OD))

@@ -1,12 +1,11 @@
 """Nodes never die on a bad message: they log, publish an ERROR diagnostic and keep running."""
 
 import math
-import time
 
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus  # noqa: E402
 from roe_sep_msgs.msg import EjectionEvent, ManeuverPlan, RelativeOrbitalElements, SafetyStatus  # noqa: E402
-from rosutil import rclpy, spin_until, start_node, stop_node, wait_exit  # noqa: I001  (skips without rclpy)
+from rosutil import publish_until, rclpy, spin_until, start_node, stop_node, wait_exit  # noqa: I001  (skips without rclpy)
 
 from roe_sep import interfaces  # noqa: E402
 from roe_sep.nodes.convert import maneuver_msg, sec_to_time  # noqa: E402
@@ -50,22 +49,19 @@ def test_nan_inputs_are_survived(tester):
         bad_plan = ManeuverPlan(strategy="double_impulse")
         bad_plan.header.stamp = sec_to_time(5.0)
         bad_plan.maneuvers = [maneuver_msg(9000.0, 0.0, [math.inf, 0.0, 0.0], "carrier", "drift_stop")]
-        last = [0.0]
-
-        def bad_truth_seen():  # a volatile stream: publish (twice a second) until both subscribers have had one
-            if time.monotonic() - last[0] > 0.5:
-                last[0] = time.monotonic()
-                tester.pubs["truth"].publish(bad_truth)
-            return errors(tester, "ejector", "carrier state rejected") and \
-                errors(tester, "safety_monitor", "truth state rejected")
-
-        assert spin_until(tester, bad_truth_seen, timeout=30)
+        # a volatile stream: published twice a second until both subscribers have had one
+        assert publish_until(tester, lambda: tester.pubs["truth"].publish(bad_truth),
+                             lambda: errors(tester, "ejector", "carrier state rejected")
+                             and errors(tester, "safety_monitor", "truth state rejected"))
         # (after the truth: an ejection event on the topic, even a bad one, tells the ejector not to eject again)
-        tester.pubs["ejection"].publish(bad_event)
-        tester.pubs["plan"].publish(bad_plan)
         expected = [("sim", "ejection event rejected"), ("sim", f"plan on {interfaces.DRIFT_STOP_PLAN_TOPIC} rejected"),
                     ("safety_monitor", "ejection event rejected")]
-        spin_until(tester, lambda: all(errors(tester, *e) for e in expected), timeout=30)
+
+        def send_bad_event_and_plan():
+            tester.pubs["ejection"].publish(bad_event)
+            tester.pubs["plan"].publish(bad_plan)
+
+        publish_until(tester, send_bad_event_and_plan, lambda: all(errors(tester, *e) for e in expected))
         seen = [(s.name, s.message) for d in tester.diags for s in d.status if s.level == DiagnosticStatus.ERROR]
         assert all(errors(tester, *e) for e in expected), seen
         assert all(p.poll() is None for p in procs.values())
