@@ -14,6 +14,11 @@ plan, and the run's rows, change. This bench measures both sides of that trade o
 
     python bench/whatif_lp_presolve.py --runs 100 --workers 2 --pairs 1 --domains 61-69 \\
         --out bench/results/whatif_lp_presolve.json
+
+``--variant parallel-rows-off`` keeps presolve on with only its parallel-rows-and-columns rule off
+(``highs.PRESOLVE_RULES_OFF = 1 << 13``, HiGHS's ``presolve_rule_off`` bit 13): the rule's search over the dense
+rows is about a third of a solve, and on this LP it mostly merges the two halves of a ranged row that linprog's form
+splits. In the JSON, ``off`` is the variant measured (``variant`` names it).
 """
 
 import argparse
@@ -27,7 +32,10 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "bench"))
 from bench_speed import measured, rows_of  # noqa: E402
 
-SITECUSTOMIZE = 'import roe_sep.core.acquisition.highs as _highs\n_highs.PRESOLVE = "off"\n'
+VARIANTS = {  # what the patched campaign changes, as a sitecustomize module run first in every process
+    "presolve-off": 'import roe_sep.core.acquisition.highs as _highs\n_highs.PRESOLVE = "off"\n',
+    "parallel-rows-off": 'import roe_sep.core.acquisition.highs as _highs\n_highs.PRESOLVE_RULES_OFF = 1 << 13\n',
+}
 
 
 def statistics_of(report):
@@ -48,16 +56,19 @@ def main(argv=None):
     ap.add_argument("--seed", type=int, default=1000, help="first seed of the campaign")
     ap.add_argument("--pairs", type=int, default=1, help="campaigns per variant, alternating")
     ap.add_argument("--domains", default="61-69", help="DDS domains LO-HI of the campaigns' runs")
+    ap.add_argument("--variant", choices=sorted(VARIANTS), default="presolve-off",
+                    help="what the compared campaign changes (default presolve-off)")
     ap.add_argument("--out", required=True, help="JSON results")
     args = ap.parse_args(argv)
 
     results = {"on": [], "off": []}
+    label = {"on": "shipped", "off": args.variant}
     rows, reports = {}, {}
     with tempfile.TemporaryDirectory(prefix="whatif_lp_") as tmp:
         tmp = Path(tmp)
         patch = tmp / "patch"
         patch.mkdir()
-        (patch / "sitecustomize.py").write_text(SITECUSTOMIZE)
+        (patch / "sitecustomize.py").write_text(VARIANTS[args.variant])
         for k in range(args.pairs):
             for variant in ("on", "off"):
                 out = tmp / f"{variant}{k}"
@@ -74,7 +85,7 @@ def main(argv=None):
                 results[variant].append(m)
                 rows[variant] = rows_of(out / "runs.csv")
                 reports[variant] = json.loads((out / "report.json").read_text())
-                print(f"presolve {variant} #{k}: {m['runs_per_h']:.0f} runs/h, {m['cpu_s_per_run']:.2f} CPU-s per "
+                print(f"{label[variant]} #{k}: {m['runs_per_h']:.0f} runs/h, {m['cpu_s_per_run']:.2f} CPU-s per "
                       f"run, peak proportional set {m['peak_pss_mb']:.0f} MB", flush=True)
     differ = sum(a != b for a, b in zip(rows["on"], rows["off"]))
     fields = [f for f in rows["on"][0] if any(a[f] != b[f] for a, b in zip(rows["on"], rows["off"]))]
@@ -84,10 +95,11 @@ def main(argv=None):
     ratio = (sum(m["runs_per_h"] for m in results["off"]) / sum(m["runs_per_h"] for m in results["on"]))
     lines = [f"campaign {args.runs} runs from seed {args.seed}, {args.workers} workers, no bags, {args.pairs} pair(s):",
              f"  presolve on (shipped): {rates('on')} runs/h",
-             f"  presolve off: {rates('off')} runs/h (off/on {ratio:.2f})",
+             f"  {args.variant.replace('-', ' ')}: {rates('off')} runs/h (off/on {ratio:.2f})",
              f"  rows that differ: {differ} of {len(rows['on'])}"]
     print("\n".join(lines))
-    doc = {"command": " ".join(sys.argv), "runs": args.runs, "workers": args.workers, "seed": args.seed,
+    doc = {"command": " ".join(sys.argv), "variant": args.variant, "runs": args.runs, "workers": args.workers,
+           "seed": args.seed,
            "summary": lines, "measures": results, "rows_differing": differ, "fields_differing": fields,
            "statistics": {v: statistics_of(reports[v]) for v in ("on", "off")}}
     Path(args.out).write_text(json.dumps(doc, indent=2, allow_nan=False) + "\n")

@@ -15,6 +15,9 @@ import numpy as np
 
 #: HiGHS's presolve, on as in linprog (``bench/whatif_lp_presolve.py`` measures a campaign with it off)
 PRESOLVE = "on"
+#: HiGHS presolve rules switched off (its ``presolve_rule_off`` bit mask; 0: every rule on, as in linprog).
+#: ``bench/whatif_lp_presolve.py --variant parallel-rows-off`` measures bit 13 (parallel rows and columns) off.
+PRESOLVE_RULES_OFF = 0
 #: linprog's scipy status codes and messages for HiGHS model statuses (scipy.optimize._linprog_highs)
 _OPTIMAL, _INFEASIBLE = 0, 2
 _MESSAGES = {_OPTIMAL: "Optimization terminated successfully. (HiGHS Status 7: Optimal)",
@@ -70,6 +73,7 @@ def solve_lp(cost, a_ub, b_ub, a_eq, b_eq, lo, hi, use_linprog=False):
         v[np.isinf(v)] = np.sign(v[np.isinf(v)]) * inf
     highs = core._Highs()
     for name, value in (("output_flag", False), ("log_to_console", False), ("presolve", PRESOLVE),
+                        ("presolve_rule_off", PRESOLVE_RULES_OFF),
                         ("highs_debug_level", int(core.HighsDebugLevel.kHighsDebugLevelNone)),
                         ("simplex_strategy", int(core.simplex_constants.SimplexStrategy.kSimplexStrategyDual))):
         highs.setOptionValue(name, value)
