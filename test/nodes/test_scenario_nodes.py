@@ -67,16 +67,22 @@ def test_ejection_drift_stop_loop(observer, dynamics):
 def test_restarting_planner_and_monitor_loses_nothing(observer):
     sim_time = ["-p", "use_sim_time:=true"]
     planner_args = [*sim_time, "-p", "p_mode:=fixed", "-p", "p_reduction:=0.06"]
+    # the clock starts once the ejector reads the truth and the planner the ejection (the observer reads the truth
+    # too); at 2,000 s of sim time per wall second a node still starting would miss the first ejection opportunity
+    wait_for = f"wait_for:=['{interfaces.TRUTH_ROE_TOPIC}=2', '{interfaces.EJECTION_TOPIC}=2']"
     procs = {"planner": start_node("planner", *planner_args), "ejector": start_node("ejector", *sim_time),
              "sim": start_node("sim", "-p", "duration:=40000.0", "-p", "time_step:=20.0", "-p",
-                               "approval_timeout:=60.0")}
+                               "approval_timeout:=60.0", "-p", wait_for)}
     try:
         g = observer.got
-        # no monitor yet: the drift-stop waits for its approval with the clock held
-        assert spin_until(observer, lambda: g["clock"] and g["clock"][-1].clock.sec > 8000, timeout=60)
+        # no monitor yet: the drift-stop (3 half revolutions after the ejection, whichever revolution the ejector
+        # took) waits for its approval with the clock held
+        assert spin_until(observer, lambda: g["executed"], timeout=60)
+        t_stop = time_to_sec(g["executed"][0].epoch) + 3 * math.pi / D.n
+        assert spin_until(observer, lambda: g["clock"] and g["clock"][-1].clock.sec > t_stop - 1000, timeout=60)
         spin_until(observer, lambda: False, timeout=2.0)
         held = g["clock"][-1].clock.sec
-        assert held < 3 * math.pi / D.n + 700 and [m.purpose for m in g["executed"]] == ["ejection"]
+        assert held < t_stop + 700 and [m.purpose for m in g["executed"]] == ["ejection"], (held, t_stop)
         # the monitor (as if restarted) gets the latched ejection and plan again, checks it: the burn is flown
         procs["monitor"] = start_node("safety_monitor", *sim_time)
         assert spin_until(observer, lambda: [m.purpose for m in g["executed"]] == ["ejection", "drift_stop"],
@@ -92,4 +98,6 @@ def test_restarting_planner_and_monitor_loses_nothing(observer):
         assert [m.purpose for m in g["executed"]] == ["ejection", "drift_stop"]
     finally:
         codes = [stop_node(p) for p in procs.values()]
+        for name, (code, out) in zip(procs, codes):  # shown by pytest when the test fails
+            print(f"--- {name} (exit status {code}):\n{out[-4000:]}")
     assert all(code == 0 for code, _ in codes), codes
