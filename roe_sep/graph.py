@@ -98,6 +98,12 @@ def radar_seed(seed: int) -> int:
     return int(np.random.SeedSequence([int(seed), RADAR_STREAM]).generate_state(1, np.uint32)[0])
 
 
+def wait_for(nodes) -> list[str]:
+    """The simulator's ``wait_for`` for a run of ``nodes``: 'topic=count' of the subscribers among them
+    (:data:`SUBSCRIBERS`), so that its clock starts once each of them reads what it needs."""
+    return [f"{topic}={sum(n in nodes for n in subs)}" for topic, subs in SUBSCRIBERS.items()]
+
+
 def parameters(config, bag_dir, overrides, nodes=NODES):
     """The run's ROS parameter file content: shared values for every node, then per-node values. ``nodes``: the
     nodes the run starts (:func:`graph_nodes`); the simulator waits for the subscribers among them only."""
@@ -106,7 +112,7 @@ def parameters(config, bag_dir, overrides, nodes=NODES):
         # start the clock once every node is up (the planner after its start-up Monte Carlo) and subscribed to what
         # it reads, the recorder to every topic; then run in lockstep with every reacting node
         "sim": {"use_sim_time": False,
-                "wait_for": [f"{topic}={sum(n in nodes for n in subs)}" for topic, subs in SUBSCRIBERS.items()],
+                "wait_for": wait_for(nodes),
                 "lockstep_participants": list(PARTICIPANTS)},
         "recorder": {"output": str(bag_dir)},
         "ground_bridge": {"output_dir": str(Path(bag_dir).parent / "ccsds")},  # CCSDS files of the run (issue 18)

@@ -9,6 +9,7 @@ from rosutil import rclpy, spin_until, start_node, stop_node  # noqa: I001  (ski
 
 from roe_sep import interfaces  # noqa: E402
 from roe_sep.core.separation.double_impulse import design  # noqa: E402
+from roe_sep.graph import wait_for  # noqa: E402
 from roe_sep.nodes.convert import time_to_sec  # noqa: E402
 
 pytestmark = pytest.mark.dds  # every test here starts a node or an rclpy context
@@ -67,12 +68,12 @@ def test_ejection_drift_stop_loop(observer, dynamics):
 def test_restarting_planner_and_monitor_loses_nothing(observer):
     sim_time = ["-p", "use_sim_time:=true"]
     planner_args = [*sim_time, "-p", "p_mode:=fixed", "-p", "p_reduction:=0.06"]
-    # the clock starts once the ejector reads the truth and the planner the ejection (the observer reads the truth
-    # too); at 2,000 s of sim time per wall second a node still starting would miss the first ejection opportunity
-    wait_for = f"wait_for:=['{interfaces.TRUTH_ROE_TOPIC}=2', '{interfaces.EJECTION_TOPIC}=2']"
+    # the clock starts once the nodes have subscribed (in the ROS graph), as roe-sep run sets it: at 2,000 s of sim
+    # time per wall second a node still starting would miss the first ejection opportunity
+    waiting = f"wait_for:={wait_for(('planner', 'ejector', 'sim'))!r}"
     procs = {"planner": start_node("planner", *planner_args), "ejector": start_node("ejector", *sim_time),
              "sim": start_node("sim", "-p", "duration:=40000.0", "-p", "time_step:=20.0", "-p",
-                               "approval_timeout:=60.0", "-p", wait_for)}
+                               "approval_timeout:=60.0", "-p", waiting)}
     try:
         g = observer.got
         # no monitor yet: the drift-stop (3 half revolutions after the ejection, whichever revolution the ejector
