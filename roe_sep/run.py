@@ -36,6 +36,7 @@ from .graph import (  # noqa: F401 (re-exported)
     run_overrides,
     suites,
 )
+from .nodes.scenario_end import final_status_of
 from .stamps import time_to_sec
 
 
@@ -137,28 +138,6 @@ class Deployment:
                 codes[n] = p.wait()
             log.close()
         return codes
-
-
-def final_status(array):
-    """The simulator's final status in a ``DiagnosticArray`` ("scenario complete" or "scenario aborted: ..."), or
-    None."""
-    return next((s.message for s in array.status if s.name == "roe_sep/sim" and (
-        s.message == "scenario complete" or s.message.startswith("scenario aborted"))), None)
-
-
-FINAL_MARK = b"scenario "  # in the serialized bytes of every final status (CDR strings are their UTF-8 bytes)
-
-
-def final_status_of(data: bytes):
-    """:func:`final_status` of a serialized ``DiagnosticArray`` (a raw subscription's message), decoded only when its
-    bytes contain :data:`FINAL_MARK`: the observer reads every status of a run (about 950) and decodes the few that
-    may be the final one."""
-    if FINAL_MARK not in data:
-        return None
-    from diagnostic_msgs.msg import DiagnosticArray
-    from rclpy.serialization import deserialize_message
-
-    return final_status(deserialize_message(data, DiagnosticArray))
 
 
 _Stamp = collections.namedtuple("_Stamp", "sec nanosec")

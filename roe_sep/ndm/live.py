@@ -1,6 +1,11 @@
 """A run's CCSDS set written while the run goes (the ``ground_bridge`` node's output), without ROS: the messages
 received so far, and a writer thread that writes the set from a snapshot of them on request. Serializing the OEM of a
-whole run takes seconds, during which the caller (a node's executor) must keep taking messages."""
+whole run takes seconds, during which the caller (a node's executor) must keep taking messages.
+
+The final set is the complete set of every message received. A complete set written earlier from a snapshot that
+already held them all (one requested when the scenario reported its end, :meth:`LiveSet.request`) is that final
+set: :meth:`LiveSet.finish` then has nothing left to write, and a process stopping after its scenario does not
+wait for the set a second time."""
 
 import queue
 import threading
@@ -20,6 +25,8 @@ class LiveSet:
         self.lock = threading.Lock()
         self.requests = queue.Queue()
         self.written = {}  # file stem -> sim time of the last write
+        self.received = 0  # messages added so far
+        self.complete = -1  # of them, how many the last complete set written without error was made from
         self.finishing = False  # the final set is queued (:meth:`finish`)
         self.writer = threading.Thread(target=self._writer, name="ccsds_writer", daemon=True)
         self.writer.start()
@@ -27,6 +34,7 @@ class LiveSet:
     def add(self, topic, msg):
         with self.lock:
             self.run.add(topic, msg)
+            self.received += 1
 
     def request(self, periodic):
         """Queue a write: the OPMs, and with ``periodic`` the OEM, TDM and CDM too."""
@@ -34,7 +42,8 @@ class LiveSet:
 
     def finish(self):
         """Start the final, complete set (no message may be added any more): the writer thread finishes its queue,
-        then writes everything once more, while the caller goes on with its own shutdown (:meth:`close` waits)."""
+        then writes everything once more unless the last complete set written already held every message, while the
+        caller goes on with its own shutdown (:meth:`close` waits)."""
         if not self.finishing:
             self.finishing = True
             self.requests.put(None)
@@ -51,8 +60,9 @@ class LiveSet:
             batch = [self.requests.get()]
             while not self.requests.empty():  # coalesce what queued up meanwhile
                 batch.append(self.requests.get())
-            if None in batch:  # shutdown: the final, complete set
-                self.write(True)
+            if None in batch:  # shutdown: the final, complete set, unless it is on disk already
+                if self.complete != self.received:
+                    self.write(True)
                 return
             self.write(any(batch))
 
@@ -61,6 +71,7 @@ class LiveSet:
         messages received so far."""
         with self.lock:
             snapshot = RunMessages({t: list(ms) for t, ms in self.run.by_topic.items()})
+            count = self.received
         try:
             from .dataset import messages_of  # the NDM library loads in this thread, not at start-up
             from .messages import write_message
@@ -71,3 +82,6 @@ class LiveSet:
                 self.written[stem] = self.now()
         except Exception as exc:  # noqa: BLE001  (the writer thread must survive any bad input)
             self.on_error(exc)
+        else:
+            if periodic:
+                self.complete = count

@@ -4,12 +4,14 @@ from a ground segment as radar measurements.
 Out (``output_dir``, the runner sets OUT/ccsds; '' = ``ccsds_YYYY_MM_DD-HH_MM_SS`` in the working directory): the
 same set as ``roe-sep export`` (:mod:`roe_sep.ndm.dataset`), from the same topics. An OPM pair (RTN and EME2000
 maneuvers) as soon as the safety monitor approves a plan, the executed-burns OPM after each burn, and the OEM, TDM
-and CDM every ``write_period`` s of sim time (0: never), at most every ``min_write_interval`` s of wall time, and at
-shutdown (the XML OEM of a whole run takes about 2 s to serialize, so not at every message; under the
-as-fast-as-possible lockstep clock a simulated day passes in seconds, and the periodic updates were about 1.4 of a
-default run's 12 CPU-s). The final set starts as soon as the executor stops (``executor_stopped``, while the
-process's recorder closes its bag) and ``destroy_node`` waits for it. Every file is written atomically (temporary
-file + rename).
+and CDM every ``write_period`` s of sim time (0: never), at most every ``min_write_interval`` s of wall time (the
+XML OEM of a whole run takes about 0.4 s to serialize, so not at every message; under the as-fast-as-possible
+lockstep clock a simulated day passes in seconds, and the periodic updates were about 1.4 of a default run's 12
+CPU-s). The complete set is written as soon as the simulator reports the scenario's end (its final status on
+``/diagnostics``, :mod:`.scenario_end`), while the processes of the run stop, and at shutdown once more only if a
+message of the set arrived after it (:class:`~roe_sep.ndm.live.LiveSet`); that final set starts as soon as the
+executor stops (``executor_stopped``, while the process's recorder closes its bag) and ``destroy_node`` waits for
+it. Every file is written atomically (temporary file + rename).
 
 In (``input_dir``, '' = off): every ``*.xml``, ``*.kvn`` or ``*.tdm`` file that appears there is read as a TDM
 (:func:`roe_sep.ndm.messages.read_tdm`, sim time from ``epoch_utc``) and its measurements are published on
@@ -50,6 +52,7 @@ from ..ndm.options import Options
 from .convert import sec_to_time, time_to_sec
 from .diagnostics import ERROR, OK, publish_status
 from .params import ParameterError, declare
+from .scenario_end import final_status_of
 
 EXTERNAL_RADAR_TOPIC = interfaces.EXTERNAL_RADAR_TOPIC
 INPUT_SUFFIXES = (".xml", ".kvn", ".tdm", ".txt")
@@ -123,6 +126,9 @@ class GroundBridgeNode(Node):
         for cls, topic, qos, urgent in subs:
             self.create_subscription(cls, topic, lambda m, t=topic, u=urgent: self.on_message(t, m, u), qos)
         self.create_subscription(Clock, interfaces.CLOCK_TOPIC, self.on_clock, interfaces.CLOCK_SUB)
+        # the scenario's end, from the bytes (a run's ~950 statuses, of which only the final ones are decoded)
+        self.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, self.on_diagnostics,
+                                 interfaces.DIAGNOSTICS, raw=True)
         if self.input is not None:
             for sub in ("", "processed", "rejected"):
                 (self.input / sub).mkdir(parents=True, exist_ok=True)
@@ -151,6 +157,14 @@ class GroundBridgeNode(Node):
                                        wall - self.last_periodic_wall, self.min_write_interval):
             self.last_periodic = self.t
             self.last_periodic_wall = wall
+            self.dirty = False
+            self.live.request(periodic=True)
+
+    def on_diagnostics(self, data: bytes):
+        """The simulator's final status (repeated every wall second until it stops): no state comes any more, so the
+        complete set of what arrived since the last one is written now, not after the run's processes have stopped
+        (a message of the set that still arrives later is in the final set at shutdown)."""
+        if self.dirty and final_status_of(data) is not None:
             self.dirty = False
             self.live.request(periodic=True)
 
@@ -219,4 +233,6 @@ def main(args=None):
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    from ..process_exit import exit_process
+
+    exit_process(main())

@@ -455,8 +455,8 @@ GROUND_BRIDGE = (
     SCENARIO_FILE,
     Param("carrier_isp", "double", 60.0, "carrier thruster specific impulse (OPM MAN_DELTA_MASS)", "s",
           range=(1.0, 1.0e4)),
-    Param("write_period", "double", 86400.0, "sim time between OEM/TDM/CDM updates (0: only the final set at "
-          "shutdown)", "s", range=(0.0, 2.592e6)),
+    Param("write_period", "double", 86400.0, "sim time between OEM/TDM/CDM updates (0: only the complete set at "
+          "the scenario's end and at shutdown)", "s", range=(0.0, 2.592e6)),
     Param("min_write_interval", "double", 10.0, "least wall time between two OEM/TDM/CDM updates (an update due "
           "by write_period waits for it; under the as-fast-as-possible lockstep clock a simulated day passes in "
           "about 2 s, and each update rewrites the whole run's XML OEM); 0: every write_period", "s",

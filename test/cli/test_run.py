@@ -307,8 +307,8 @@ def test_the_observer_decodes_only_the_statuses_that_may_be_final():
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
     from rclpy.serialization import deserialize_message, serialize_message
 
+    from roe_sep.nodes.scenario_end import FINAL_MARK, final_status, final_status_of
     from roe_sep.report import read_topics
-    from roe_sep.run import FINAL_MARK, final_status, final_status_of
 
     arrays = [serialize_message(DiagnosticArray(status=[DiagnosticStatus(name=name, message=text)]))
               for name in ("roe_sep/sim", "roe_sep/planner")

@@ -5,6 +5,7 @@ OD, malformed TDMs, atomic files and the ``roe-sep export`` command."""
 import json
 import math
 import os
+import time
 from pathlib import Path
 
 import numpy as np
@@ -660,3 +661,71 @@ def test_live_set_final_set_started_early_is_the_export(tmp_path, run):
         n[:-4] for n in names}
     for n in names:
         assert text(tmp_path / "live" / n) == text(tmp_path / "export" / n)
+
+
+def test_live_set_complete_set_written_before_the_end_is_the_final_set(tmp_path, run):
+    """A complete set written from every message (the ground_bridge's, when the scenario reports its end) is the final
+    set: finish has nothing left to write. A message of the set that arrives after it is in the final set, written
+    once more at finish; a complete set whose write failed is written again too."""
+    from roe_sep.ndm.live import LiveSet
+
+    def live_set(name):
+        errors, writes = [], []
+        live = LiveSet(tmp_path / name, "xml", Options(), lambda: 1.0, errors.append)
+        (tmp_path / name).mkdir()
+        write = live.write
+        live.write = lambda periodic: (writes.append(periodic), write(periodic))
+        return live, errors, writes
+
+    msgs = [(t, m) for t, ms in run.by_topic.items() for m in ms]
+    last_radar = max(k for k, (t, _) in enumerate(msgs) if t == interfaces.RADAR_TOPIC)
+    early, late = msgs[:last_radar] + msgs[last_radar + 1:], [msgs[last_radar]]
+
+    def wait_idle(live):
+        deadline = time.monotonic() + 60.0
+        while (not live.requests.empty() or live.complete != live.received) and time.monotonic() < deadline:
+            time.sleep(0.01)
+
+    # every message, then the complete set, then the end: written once
+    live, errors, writes = live_set("once")
+    for t, m in msgs:
+        live.add(t, m)
+    live.request(periodic=True)
+    wait_idle(live)
+    live.close()
+    assert not errors and writes == [True] and live.complete == live.received == len(msgs)
+
+    # the last radar measurement arrives after the complete set: the final set is written again and holds it
+    live, errors, writes = live_set("late")
+    for t, m in early:
+        live.add(t, m)
+    live.request(periodic=True)
+    wait_idle(live)
+    for t, m in late:
+        live.add(t, m)
+    live.close()
+    assert not errors and writes == [True, True]
+
+    def text(p):
+        return [line for line in p.read_text().splitlines() if "CREATION_DATE" not in line]
+
+    names = sorted(p.name for p in (tmp_path / "once").iterdir())
+    assert sorted(p.name for p in (tmp_path / "late").iterdir()) == names and "radar.tdm.xml" in names
+    for n in names:
+        assert text(tmp_path / "late" / n) == text(tmp_path / "once" / n), n
+
+    # a complete set that could not be written does not count: the final set is written at finish
+    live, errors, writes = live_set("failed")
+    for t, m in msgs:
+        live.add(t, m)
+    (tmp_path / "failed").rmdir()
+    (tmp_path / "failed").write_text("not a directory")
+    live.request(periodic=True)
+    deadline = time.monotonic() + 60.0
+    while not errors and time.monotonic() < deadline:
+        time.sleep(0.01)
+    (tmp_path / "failed").unlink()
+    (tmp_path / "failed").mkdir()
+    live.close()
+    assert len(errors) == 1 and writes == [True, True] and live.complete == live.received
+    assert (tmp_path / "failed" / "ephemeris.oem.xml").is_file()

@@ -1,6 +1,7 @@
 """ground_bridge and radar_od as real processes over DDS, fed with messages of the reference bag.
 
-Out: an approved plan becomes its OPM pair in the output directory while the node runs. In: the TDM of the
+Out: an approved plan becomes its OPM pair in the output directory while the node runs, and the simulator's final
+status the complete set. In: the TDM of the
 reference run's first OD window, dropped into the input directory, reaches radar_od through
 ``/ground/radar_measurements`` and gives the run's OD solution again; a malformed file is moved aside with an ERROR
 on ``/diagnostics`` and the node keeps running.
@@ -15,7 +16,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from rclpy.serialization import deserialize_message
 from roe_sep_msgs.msg import ManeuverPlan, OrbitDetermination, RelativeOrbitalElements, SafetyStatus
 from rosgraph_msgs.msg import Clock
-from rosutil import rclpy, spin_until, start_node, stop_node, wait_exit  # noqa: I001  (skips without rclpy)
+from rosutil import publish_until, rclpy, spin_until, start_node, stop_node, wait_exit  # noqa: I001  (skips without rclpy)
 
 from roe_sep import interfaces
 from roe_sep.bag.reader import messages
@@ -128,6 +129,14 @@ def test_ground_bridge_writes_opms_and_feeds_tdm_files_to_radar_od(tmp_path, bag
         assert stamp(new.estimate.header.stamp) == stamp(od.estimate.header.stamp)
         assert np.max(np.abs(a - b)) < 1e-3  # m; the estimate's 1-sigma is meters
         assert new.a_da_dot == pytest.approx(od.a_da_dot, rel=1e-4, abs=1e-9)
+
+        # the simulator's final status: the complete set is written at once, while the node still runs (the
+        # status is volatile and sent once by a simulator that just started repeating it: sent until it is seen)
+        assert not (out / "ephemeris.oem.xml").exists()  # the clock never reached write_period
+        diag_pub = node.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
+        final = DiagnosticArray(status=[DiagnosticStatus(name="roe_sep/sim", message="scenario complete")])
+        assert publish_until(node, lambda: diag_pub.publish(final), (out / "ephemeris.oem.xml").is_file, 60.0)
+        assert bridge.poll() is None
     finally:
         node.destroy_node()
         rclpy.shutdown()
