@@ -59,7 +59,7 @@ setup(
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
-            'roe-sep = roe_sep.cli:main',
+            'roe-sep = roe_sep.cli:entry',
             'planner = roe_sep.nodes.planner:main',
             'sim = roe_sep.nodes.sim:main',
             'suite = roe_sep.nodes.suite:main',

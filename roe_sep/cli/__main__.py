@@ -1,7 +1,5 @@
 """``python -m roe_sep.cli``: the same as ``roe-sep``."""
 
-import sys
+from . import entry
 
-from . import main
-
-sys.exit(main())
+entry()

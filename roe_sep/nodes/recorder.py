@@ -316,4 +316,6 @@ def main(args=None):
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    from ..process_exit import exit_process
+
+    exit_process(main())

@@ -99,4 +99,6 @@ def main(args=None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    from ..process_exit import exit_process
+
+    exit_process(main())
