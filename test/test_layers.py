@@ -2,8 +2,8 @@
 
 Layers, lowest first (a module may import its own layer and the ones below, never one above):
 
-    errors, stamps  <-  core, checks, children, jsonutil  <-  interfaces, validate, bag, ndm, graph  <-  nodes
-        <-  run, report, plots, engine, campaign  <-  cli, docgen
+    errors, stamps  <-  core, checks, children, process_exit, jsonutil  <-  interfaces, validate, bag, ndm, graph
+        <-  nodes  <-  run, report, plots, engine, campaign  <-  cli, docgen
 
 ``roe_sep.errors`` imports nothing of roe_sep (every layer may import it); the report imports no node, not even
 through another module (it is built offline from a bag).
@@ -22,9 +22,9 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1] / "roe_sep"
 
-LAYERS = {"errors": 0, "stamps": 0, "core": 1, "checks": 1, "children": 1, "jsonutil": 1, "interfaces": 2,
-          "validate": 2, "bag": 2, "ndm": 2, "graph": 2, "nodes": 3, "run": 4, "report": 4, "plots": 4, "engine": 4,
-          "campaign": 4, "cli": 5, "docgen": 5}
+LAYERS = {"errors": 0, "stamps": 0, "core": 1, "checks": 1, "children": 1, "process_exit": 1, "jsonutil": 1,
+          "interfaces": 2, "validate": 2, "bag": 2, "ndm": 2, "graph": 2, "nodes": 3, "run": 4, "report": 4, "plots": 4,
+          "engine": 4, "campaign": 4, "cli": 5, "docgen": 5}
 ROS_MODULES = ("rclpy", "roe_sep_msgs", "rosgraph_msgs", "diagnostic_msgs", "builtin_interfaces", "geometry_msgs",
                "std_msgs", "rcl_interfaces", "ament_index_python")
 
