@@ -139,3 +139,33 @@ def wait_gone(procs, timeout=60.0):
     while still_running(procs) and time.monotonic() < deadline:
         time.sleep(0.2)
     return still_running(procs)
+
+
+def stale_dds_segments():
+    """Names of the Fast DDS shared-memory segments in /dev/shm whose owner has gone (the segment's ``_el`` file is not
+    locked): the participant of a process that ended without deleting it (killed, or ``os._exit`` with its nodes
+    still alive)."""
+    import fcntl
+    import re
+
+    shm = Path("/dev/shm")
+    found = set()
+    if not shm.is_dir():
+        return found
+    for p in shm.iterdir():
+        if not re.fullmatch(r"fastrtps_[0-9a-f]{16}", p.name):
+            continue
+        try:
+            fd = os.open(shm / f"{p.name}_el", os.O_RDONLY)
+        except OSError:
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:  # locked: its participant lives
+            continue
+        else:
+            fcntl.flock(fd, fcntl.LOCK_UN)
+            found.add(p.name)
+        finally:
+            os.close(fd)
+    return found

@@ -24,6 +24,7 @@ Protocol (JSON lines; the server is single-threaded and polls, so forking is saf
 * End of input (the worker closed the pipe): the server exits, and the kernel ends a run still in progress.
 """
 
+import gc
 import json
 import os
 import select
@@ -106,6 +107,9 @@ def _child(argv, log, parent):
     except BaseException as exc:  # noqa: BLE001  (the child's last word goes to its log, never up into the server)
         print(f"{type(exc).__name__}: {exc}", file=sys.stderr)
     finally:
+        # the run's nodes and executor are garbage in reference cycles: collected, rmw deletes the run's DDS
+        # participant, and its shared-memory segment in /dev/shm (549 KB) with it; os._exit alone left one per run
+        gc.collect()
         for stream in (sys.stdout, sys.stderr):
             try:
                 stream.flush()
@@ -190,6 +194,9 @@ def serve():
                 print(json.dumps({"warm": True}), file=out, flush=True)
                 continue
             out.flush()
+            # the server's objects out of the collector's sight in the child (gc.freeze's use): its collections, the
+            # last one above too, walk the run's objects only, and write to no inherited page
+            gc.freeze()
             pid = os.fork()
             if pid == 0:
                 signal.set_wakeup_fd(-1)
