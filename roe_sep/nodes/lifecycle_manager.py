@@ -137,7 +137,7 @@ def main(args=None):
         managers.append(LifecycleManager())
         return managers[-1]
 
-    code = serve([("lifecycle_manager", manager)], args, until=lambda: managers[0].failed)
+    code = serve([("lifecycle_manager", manager)], args, until=lambda: managers[0].failed, leaving=True)
     return leave(code or (1 if managers and managers[0].failed else 0))
 
 

@@ -171,7 +171,8 @@ def wait_for_acknowledgments(nodes, budget=ACK_WAIT) -> bool:
     return acked
 
 
-def serve(factories, args=None, make_executor=SingleThreadedExecutor, until=None, errors=None, stopped=None) -> int:
+def serve(factories, args=None, make_executor=SingleThreadedExecutor, until=None, errors=None, stopped=None,
+          leaving=False) -> int:
     """The whole life of a process: :func:`init`; construct the nodes of ``factories`` (``[(label, factory)]``, in
     order); the nodes on one executor from ``make_executor()``; :func:`spin` with the drain (until a signal, or
     ``until()`` is true: :func:`roe_sep.run.run` in one process, a lifecycle manager whose start-up failed); then the
@@ -184,7 +185,10 @@ def serve(factories, args=None, make_executor=SingleThreadedExecutor, until=None
     parameters (``[ERROR] label: ...``, or without the label when it is None),
     1 when a callback raised, else 0; the reason of a non-zero code is appended to ``errors`` (a list) if given,
     the stop signals received during the spin to ``stopped``.
-    The signal handlers in place before are restored on return."""
+    The signal handlers in place before are restored on return; with ``leaving`` (the process ends after this: a
+    node's ``main()``, :func:`leave`) SIGINT and SIGTERM are ignored instead: a late SIGINT of ``ros2 launch``
+    arriving after the spin's handler was gone raised Python's KeyboardInterrupt there (a cleanly stopped node
+    reported as 'process has died [exit code -2]', once in a Ctrl-C of the launch test)."""
     handlers = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
         init(args)
@@ -224,7 +228,7 @@ def serve(factories, args=None, make_executor=SingleThreadedExecutor, until=None
             node.destroy_node()
         rclpy.try_shutdown()
         for sig, handler in handlers.items():
-            signal.signal(sig, handler)
+            signal.signal(sig, signal.SIG_IGN if leaving else handler)
     return code
 
 
@@ -245,4 +249,4 @@ def run(node_factory, args=None) -> int:
     name = node_table(node_factory)
     if help_requested(args):
         return print_usage(name, sys.modules[node_factory.__module__].__doc__ or "")
-    return leave(serve([(name, node_factory)], args))
+    return leave(serve([(name, node_factory)], args, leaving=True))

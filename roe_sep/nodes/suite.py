@@ -95,7 +95,7 @@ def main(args=None) -> int:
         print(f"[ERROR] {exc}", file=sys.stderr)
         return 2
     return leave(serve([(name, lambda name=name: node_class(name)()) for name in names], argv,
-                       make_executor=lambda: make_executor(executor_name)))
+                       make_executor=lambda: make_executor(executor_name), leaving=True))
 
 
 if __name__ == "__main__":

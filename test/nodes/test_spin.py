@@ -118,3 +118,22 @@ def test_a_process_waits_for_its_readers_to_acknowledge_before_it_ends():
         listener.wait()
         node.destroy_node()
         rclpy.try_shutdown()
+
+
+LEAVING = """
+import signal, rclpy
+from roe_sep.nodes.spin import serve
+before = signal.getsignal(signal.SIGINT)
+for leaving in (False, True):
+    code = serve([("t", lambda: rclpy.create_node("spin_leaving_test"))], [], until=lambda: True, leaving=leaving)
+    print(code, signal.getsignal(signal.SIGINT) is (signal.SIG_IGN if leaving else before),
+          signal.getsignal(signal.SIGTERM) is (signal.SIG_IGN if leaving else signal.SIG_DFL))
+"""
+
+
+def test_a_process_that_ends_after_serve_ignores_the_stop_signals_from_its_end():
+    """``leaving`` (a node's main()): SIGINT and SIGTERM ignored as serve returns, never Python's KeyboardInterrupt
+    handler in between (ros2 launch's late SIGINT there killed a cleanly stopped node, exit -2); without it, the
+    handlers in place before are back."""
+    out = subprocess.run([sys.executable, "-c", LEAVING], env=ros_env(), capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0 and out.stdout.split() == ["0", "True", "True", "0", "True", "True"], out
