@@ -141,22 +141,28 @@ def wait_gone(procs, timeout=60.0):
     return still_running(procs)
 
 
-def stale_dds_segments():
-    """Names of the Fast DDS shared-memory segments in /dev/shm whose owner has gone (the segment's ``_el`` file is not
-    locked): the participant of a process that ended without deleting it (killed, or ``os._exit`` with its nodes
-    still alive)."""
-    import fcntl
+DDS_SHM = Path("/dev/shm")
+
+
+def dds_segments():
+    """Names of the Fast DDS shared-memory segments of participants in /dev/shm (``fastrtps_`` and 16 hex digits; not
+    the ports')."""
     import re
 
-    shm = Path("/dev/shm")
+    if not DDS_SHM.is_dir():
+        return set()
+    return {p.name for p in DDS_SHM.iterdir() if re.fullmatch(r"fastrtps_[0-9a-f]{16}", p.name)}
+
+
+def stale_dds_segments():
+    """:func:`dds_segments` whose owner has gone (the segment's ``_el`` file is not locked): the participant of a
+    process that ended without deleting it (killed, or ``os._exit`` with its nodes still alive)."""
+    import fcntl
+
     found = set()
-    if not shm.is_dir():
-        return found
-    for p in shm.iterdir():
-        if not re.fullmatch(r"fastrtps_[0-9a-f]{16}", p.name):
-            continue
+    for name in dds_segments():
         try:
-            fd = os.open(shm / f"{p.name}_el", os.O_RDONLY)
+            fd = os.open(DDS_SHM / f"{name}_el", os.O_RDONLY)
         except OSError:
             continue
         try:
@@ -165,7 +171,7 @@ def stale_dds_segments():
             continue
         else:
             fcntl.flock(fd, fcntl.LOCK_UN)
-            found.add(p.name)
+            found.add(name)
         finally:
             os.close(fd)
     return found

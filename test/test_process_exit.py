@@ -2,19 +2,13 @@
 with ``sys.exit``, the DDS participant deleted (no shared-memory segment left in /dev/shm), and ``sys.exit`` itself
 where the teardown is still needed (no ROS, a context still up, a non-daemon thread)."""
 
-import os
-import re
 import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import pytest
-from rosutil import ROOT, ros_env
-
-SHM = Path("/dev/shm")
-SEGMENT = re.compile(r"fastrtps_[0-9a-f]{16}")  # a participant's own segment (not a port's)
+from rosutil import DDS_SHM, ROOT, dds_segments, ros_env
 
 
 def python(code, env=None):
@@ -74,22 +68,18 @@ def test_with_ros_down_the_status_the_output_and_the_exit_handlers_are_those_of_
     assert out.returncode == 5 and out.stdout == "True atexit ran from C", out
 
 
-def segments():
-    return {p.name for p in SHM.iterdir() if SEGMENT.fullmatch(p.name)} if SHM.is_dir() else set()
-
-
 @pytest.mark.dds
 def test_a_node_process_stopped_by_sigint_exits_0_and_leaves_no_dds_segment():
     """The safety monitor's suite process (managed nodes: their handles are garbage in reference cycles until
     collected; without the collection its participant's segment stayed in /dev/shm)."""
-    before = segments()
+    before = dds_segments()
     proc = subprocess.Popen([sys.executable, "-m", "roe_sep.nodes.suite", "--executor", "events", "safety_monitor"],
                             cwd=ROOT, env=ros_env(), stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     try:
         deadline = time.monotonic() + 60
-        while not segments() - before and proc.poll() is None and time.monotonic() < deadline:
+        while not dds_segments() - before and proc.poll() is None and time.monotonic() < deadline:
             time.sleep(0.1)
-        if not segments() - before:
+        if not dds_segments() - before:
             pytest.skip("Fast DDS's shared-memory transport is not in use here (no segment in /dev/shm)")
         time.sleep(1.0)
         proc.send_signal(signal.SIGINT)
@@ -99,7 +89,7 @@ def test_a_node_process_stopped_by_sigint_exits_0_and_leaves_no_dds_segment():
             proc.kill()
             proc.communicate()
     assert proc.returncode == 0, out
-    assert not segments() - before, f"left in {SHM}: {sorted(segments() - before)}"
+    assert not dds_segments() - before, f"left in {DDS_SHM}: {sorted(dds_segments() - before)}"
 
 
 def test_the_node_modules_and_the_command_end_through_it():
@@ -113,4 +103,3 @@ def test_the_node_modules_and_the_command_end_through_it():
         assert p.read_text(encoding="utf-8").rstrip().endswith("exit_process(main())"), p.name
     assert "'roe-sep = roe_sep.cli:entry'" in (ROOT / "setup.py").read_text(encoding="utf-8")
     assert (ROOT / "roe_sep" / "cli" / "__main__.py").read_text(encoding="utf-8").rstrip().endswith("entry()")
-    assert os.access(sys.executable, os.X_OK)

@@ -1,6 +1,7 @@
 """A run's CCSDS set written while the run goes (the ``ground_bridge`` node's output), without ROS: the messages
-received so far, and a writer thread that writes the set from a snapshot of them on request. Serializing the OEM of a
-whole run takes seconds, during which the caller (a node's executor) must keep taking messages.
+received so far, and a writer thread that writes the set from a snapshot of them on request. Building and writing
+the set of a whole run takes tenths of a second (seed 5: 0.7 s) to seconds for a long run, during which the caller
+(a node's executor) must keep taking messages.
 
 The final set is the complete set of every message received. A complete set written earlier from a snapshot that
 already held them all (one requested when the scenario reported its end, :meth:`LiveSet.request`) is that final

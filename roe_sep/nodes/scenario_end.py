@@ -1,7 +1,7 @@
 """The end of a scenario as the simulator reports it on ``/diagnostics``: its final status, "scenario complete" or
 "scenario aborted: ...", repeated every wall second until the simulator stops. Watchers (the runner's observer, the
-ground_bridge) read it from a raw subscription's bytes; only this module's names and the message package load
-here, so that the runner's start-up stays light."""
+ground_bridge) read it from a raw subscription's bytes. Importing this module loads nothing else (the runner's
+start-up stays light); the message package loads when a status that may be final is decoded."""
 
 FINAL_MARK = b"scenario "  # in the serialized bytes of every final status (CDR strings are their UTF-8 bytes)
 
