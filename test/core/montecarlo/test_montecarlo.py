@@ -8,7 +8,7 @@ import pytest
 from roe_sep.core.montecarlo.sweep import MonteCarloConfig, draw, sweep
 from roe_sep.core.separation.double_impulse import design
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[3] / "bench"))
 from mc_loop import sweep_per_sample  # noqa: E402
 
 D = design()

@@ -244,7 +244,7 @@ def test_gaussian_program():
 def test_config_file_is_the_default():
     from pathlib import Path
 
-    cfg = load_cluster_config(Path(__file__).resolve().parents[2] / "config" / "cluster.yaml")
+    cfg = load_cluster_config(Path(__file__).resolve().parents[3] / "config" / "cluster.yaml")
     assert cfg == ClusterConfig()
 
 
