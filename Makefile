@@ -31,7 +31,7 @@ golden: setup
 	rm -rf bags/default_run && cp -r out/golden/bag bags/default_run
 	cp out/golden/report.json bags/default_run.report.json
 
-# fault injection alone: every node killed in turn, every topic fuzzed, 541 bad command-line inputs
+# fault injection alone: every node killed in turn, every topic fuzzed, 553 bad command-line inputs
 chaos: setup
 	bash scripts/test.sh -m fault -s $(ARGS)
 

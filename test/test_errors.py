@@ -4,6 +4,7 @@ import ast
 import builtins
 import collections
 import importlib
+import re
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -39,13 +40,36 @@ def exception_classes_outside_errors():
     return out
 
 
-def test_every_exception_class_is_defined_in_errors_under_the_root():
+ERROR_CLASSES = sorted((v for v in vars(errors).values() if isinstance(v, type) and issubclass(v, BaseException)),
+                       key=lambda cls: cls.__name__)
+
+
+def test_every_exception_class_is_defined_in_errors():
     assert exception_classes_outside_errors() == []
-    defined = [v for v in vars(errors).values() if isinstance(v, type) and issubclass(v, BaseException)]
-    # every error under the root; the one other class is a stop signal, a KeyboardInterrupt and no error
-    assert len(defined) == 14 and all(issubclass(cls, errors.RoeSepError) for cls in defined
-                                      if cls is not errors.Interrupted)
-    assert issubclass(errors.Interrupted, KeyboardInterrupt) and not issubclass(errors.Interrupted, Exception)
+    assert errors.RoeSepError in ERROR_CLASSES and errors.Interrupted in ERROR_CLASSES
+
+
+@pytest.mark.parametrize("cls", ERROR_CLASSES, ids=[c.__name__ for c in ERROR_CLASSES])
+def test_each_exception_class_is_under_the_root_documented_and_used(cls):
+    """Defined in errors.py, a RoeSepError (the one other class, Interrupted, is a stop signal: a KeyboardInterrupt
+    and no error), with a docstring of its own, named in docs/developers.md "Errors and stamps", and raised or caught
+    somewhere else in roe_sep."""
+    assert cls.__module__ == "roe_sep.errors"
+    if cls is errors.Interrupted:
+        assert issubclass(cls, KeyboardInterrupt) and not issubclass(cls, Exception)
+    else:
+        assert issubclass(cls, errors.RoeSepError) and issubclass(cls, ValueError)
+    assert (vars(cls).get("__doc__") or "").strip(), f"{cls.__name__} has no docstring"
+    guide = (ROOT.parent / "docs" / "developers.md").read_text(encoding="utf-8")
+    section = guide.split("## Errors and stamps", 1)[1].split("\n## ", 1)[0]
+    named = re.search(rf"`(roe_sep\.errors\.)?{cls.__name__}`", section)
+    assert named, f"docs/developers.md 'Errors and stamps' does not name {cls.__name__}"
+    users = [path for path in ROOT.rglob("*.py") if path != ROOT / "errors.py"
+             and re.search(rf"\b{cls.__name__}\b", path.read_text(encoding="utf-8"))]
+    assert users, f"{cls.__name__} is used nowhere in roe_sep"
+
+
+def test_the_root_and_its_other_kinds():
     assert issubclass(errors.RoeSepError, ValueError) and issubclass(errors.DefinitionNotFound, LookupError)
 
 
