@@ -97,8 +97,8 @@ class UnsupportedSchema(RoeSepError):
 
 
 class IrregularBag(RoeSepError):
-    """A part of an MCAP file that the fast reader (:mod:`roe_sep.bag.scan`, :mod:`roe_sep.bag.reader`) does not read
-    as mcap's own reader would; mcap's reader reads it instead (caught where raised, never shown)."""
+    """A part of an MCAP file that the fast record scan (:mod:`roe_sep.bag.scan`) does not read as mcap's own reader
+    would; mcap's StreamReader reads it instead (caught where raised, never shown)."""
 
 
 class DefinitionNotFound(RoeSepError, LookupError):

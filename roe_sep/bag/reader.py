@@ -11,9 +11,9 @@ from pathlib import Path
 from mcap.reader import make_reader
 
 from ..checks import one_line
-from ..errors import BagError, IrregularBag
+from ..errors import BagError
 from . import metadata
-from .scan import MESSAGE_HEAD, MESSAGE_HEAD_SIZE, Scan, chunk_data, chunk_records
+from .scan import Scan
 
 Message = collections.namedtuple("Message", "topic type data log_time publish_time sequence")
 
@@ -106,73 +106,44 @@ record, its decoder (``decode(data)`` is the message) and its serialized ``data`
 def decoded_messages(file, topics, raw=()) -> list:
     """``[(topic, log_time ns, message)]`` of the messages on ``topics`` in an ``.mcap`` file, in log-time order,
     decoded with the file's own schemas: what mcap_ros2's ``read_ros2_messages(file, topics)`` yields, the same
-    messages in the same order, the same objects, or the same exception. The chunks are walked without a Python
-    object per record (:func:`~roe_sep.bag.scan.chunk_records`) and only the messages on ``topics`` are decoded,
-    by code compiled from their schemas (:mod:`roe_sep.bag.cdr`); a file this does not read as mcap would (no
-    summary or chunk index, an irregular chunk, ...) is read by mcap_ros2 itself. The messages on the topics in
-    ``raw`` may come as :class:`RawMessage` (their decoding left to the caller, who must raise what decoding
-    raises: only the other messages were decoded here)."""
-    topics = list(topics)
-    try:
-        return _decoded_messages(file, topics, frozenset(raw))
-    except Exception:  # noqa: BLE001 -- mcap_ros2 reads it, or raises what it raises
-        from mcap_ros2.reader import read_ros2_messages
-
-        return [(m.channel.topic, m.log_time_ns, m.ros_msg) for m in read_ros2_messages(str(file), topics=topics)]
-
-
-def _decoded_messages(file, topics, raw=frozenset()):
-    """:func:`decoded_messages` by the chunk index; IrregularBag (or any exception) where mcap's SeekingReader could
-    read differently."""
-    from mcap.data_stream import ReadDataStream
-    from mcap.records import Chunk
-
+    messages in the same order. mcap's reader reads the file (``iter_messages(topics, log_time_order=True)``: by
+    the chunk index of the summary, or linearly without one) and each schema's compiled decoder
+    (:func:`roe_sep.bag.cdr.decoder`, mcap_ros2's for what it does not cover) decodes. The messages on the topics
+    in ``raw`` come as :class:`RawMessage` (their decoding left to the caller). BagError, naming the file and the
+    reason, when mcap cannot read the file, a wanted channel has no ROS 2 decoder, or a message does not decode."""
     from .cdr import decoder
 
-    wanted_topics = set(topics)
-    with open(file, "rb") as fh:
-        summary = make_reader(fh).get_summary()
-        if summary is None or not summary.chunk_indexes:
-            raise IrregularBag("no chunk index")  # mcap reads such a file linearly
-        channels = summary.channels
-        wanted = {cid for cid, ch in channels.items() if ch.topic in wanted_topics}
-        # the chunks mcap reads: those whose message indexes name a wanted channel, or without message indexes
-        chunks = [ci for ci in summary.chunk_indexes
-                  if not ci.message_index_offsets
-                  or any(channels[cid].topic in wanted_topics for cid in ci.message_index_offsets)]
-        if len({ci.chunk_start_offset for ci in chunks}) != len(chunks):
-            raise IrregularBag("a chunk indexed twice")
-        found = []
-        unpack = MESSAGE_HEAD.unpack_from
-        for ci in chunks:
-            fh.seek(ci.chunk_start_offset + 9)
-            data = chunk_data(Chunk.read(ReadDataStream(fh)))
-            for opcode, start, end, _ in chunk_records(data):
-                if opcode != 5:  # Opcode.MESSAGE
-                    continue
-                channel_id, _, log_time, _ = unpack(data, start)
-                if channel_id not in channels:
-                    raise IrregularBag(f"message on an unknown channel {channel_id}")
-                if log_time < ci.message_start_time:  # mcap's log-time merge assumes the chunk's start time
-                    raise IrregularBag("message logged before its chunk's start time")
-                if channel_id in wanted:
-                    found.append((log_time, ci.chunk_start_offset, start, channel_id,
-                                  data[start + MESSAGE_HEAD_SIZE:end]))
-    found.sort(key=lambda x: x[:3])  # mcap's order: log time, then the position in the file
+    topics, raw = list(topics), frozenset(raw)
     decoders = {}  # per schema id, as mcap_ros2's DecoderFactory caches them
     out = []
-    for log_time, _, _, channel_id, data in found:
-        channel = channels[channel_id]
-        decode = decoders.get(channel.schema_id)
-        if decode is None:
-            schema = summary.schemas[channel.schema_id] if channel.schema_id else None
-            decode = decoders[channel.schema_id] = decoder(schema, channel.message_encoding)
+    with open(file, "rb") as fh:
+        records = make_reader(fh).iter_messages(topics=topics, log_time_order=True)
+        while True:
+            try:
+                schema, channel, message = next(records)
+            except StopIteration:
+                break
+            except Exception as exc:  # noqa: BLE001 -- mcap raises McapError, struct.error, ...: named, never hidden
+                raise BagError(f"{file}: mcap cannot read it ({type(exc).__name__}: {one_line(exc)}); "
+                               f"`roe-sep bag info` says what is damaged") from exc
+            decode = decoders.get(channel.schema_id)
             if decode is None:
-                raise IrregularBag(f"no decoder for channel {channel_id}")
-        if channel.topic in raw:
-            out.append((channel.topic, log_time, RawMessage(summary.schemas[channel.schema_id], decode, data)))
-        else:
-            out.append((channel.topic, log_time, decode(data)))
+                try:
+                    decode = decoders[channel.schema_id] = decoder(schema, channel.message_encoding)
+                except Exception as exc:  # noqa: BLE001 -- a schema text mcap_ros2 cannot parse either
+                    raise BagError(f"{file}: the schema of {channel.topic} does not parse ({one_line(exc)})") from exc
+                if decode is None:
+                    raise BagError(f"{file}: no ROS 2 decoder for {channel.topic} (message encoding "
+                                   f"{channel.message_encoding!r}, schema "
+                                   f"{schema.encoding if schema else 'none'!r})")
+            if channel.topic in raw:
+                out.append((channel.topic, message.log_time, RawMessage(schema, decode, message.data)))
+                continue
+            try:
+                out.append((channel.topic, message.log_time, decode(message.data)))
+            except Exception as exc:  # noqa: BLE001 -- cut off, bad UTF-8, ...: the message named
+                raise BagError(f"{file}: the message on {channel.topic} logged at {message.log_time} ns does not "
+                               f"decode as {schema.name} ({type(exc).__name__}: {one_line(exc)})") from exc
     return out
 
 

@@ -1,10 +1,12 @@
 """The compiled CDR decoders (:mod:`roe_sep.bag.cdr`) decode exactly what mcap_ros2 decodes, and the bag reader
 built on them (:func:`roe_sep.bag.reader.decoded_messages`) reads exactly what mcap_ros2's reader reads: field by
 field (types, float bits, the generated classes) on the golden bag and on schemas made to exercise CDR's alignment
-rules, fuzzed bytes, and files that the fast path must hand to mcap_ros2. No DDS."""
+rules, fuzzed bytes, and damaged files (refused with a BagError that names the file and the reason, where
+mcap_ros2 raises too). No DDS."""
 
 import math
 import random
+import re
 import struct
 from pathlib import Path
 
@@ -16,7 +18,8 @@ from mcap_ros2.decoder import DecoderFactory
 from mcap_ros2.reader import read_ros2_messages
 
 from roe_sep.bag import cdr
-from roe_sep.bag.reader import _decoded_messages, decoded_messages
+from roe_sep.bag.reader import decoded_messages
+from roe_sep.errors import BagError
 
 ROOT = Path(__file__).resolve().parents[2]
 GOLDEN = ROOT / "bags" / "default_run" / "bag_0.mcap"
@@ -220,14 +223,17 @@ def _reference(file, topics):
     return [(m.channel.topic, m.log_time_ns, m.ros_msg) for m in read_ros2_messages(str(file), topics=list(topics))]
 
 
-def _same_reading(file, topics, fast=True):
-    """``decoded_messages`` (``fast``: its fast path alone, which must not give up) against mcap_ros2's reader:
-    the same messages, or the same exception."""
-    mine = outcome(lambda f: (_decoded_messages if fast else decoded_messages)(f, topics), file)
+def _same_reading(file, topics, refused=None):
+    """``decoded_messages`` against mcap_ros2's reader: the same messages; or, where mcap_ros2 raises, a BagError
+    naming the file and matching ``refused`` (the reason)."""
+    mine = outcome(lambda f: decoded_messages(f, topics), file)
     ref = outcome(lambda f: _reference(f, topics), file)
-    if isinstance(ref, tuple) or isinstance(mine, tuple):
-        assert not fast and mine == ref
+    if refused is not None or isinstance(ref, tuple):
+        assert isinstance(ref, tuple), "mcap_ros2 reads it"
+        assert isinstance(mine, tuple) and mine[0] is BagError and str(file) in mine[1], mine
+        assert refused is not None and re.search(refused, mine[1]), mine[1]
         return
+    assert not isinstance(mine, tuple), mine
     assert len(mine) == len(ref)
     for (t1, l1, m1), (t2, l2, m2) in zip(mine, ref):
         assert (t1, l1) == (t2, l2)
@@ -268,27 +274,27 @@ def _payloads(rng, n):
             yield "/b", t, b({"k": i % 100, "v": [float(i), -float(i)]})
 
 
-def test_reader_order_ties_and_files_it_hands_to_mcap_ros2(tmp_path):
-    """Log-time order with ties across chunks (mcap's order: log time, then position in the file); a file without
-    a chunk index, a cut-off file, a message on a non-CDR channel and an undecodable message: the same messages
-    or the same exception as mcap_ros2."""
+def test_reader_order_ties_and_damaged_files(tmp_path):
+    """Log-time order with ties across chunks (mcap's order: log time, then position in the file), a file without
+    chunks: the same messages as mcap_ros2; a cut-off file, a message on a non-CDR channel and an undecodable
+    message: a BagError that says so (mcap_ros2 raises too)."""
     rng = random.Random(3)
     msgs = list(_payloads(rng, 200))
     _write(tmp_path / "ties.mcap", msgs)
     for topics in (("/a",), ("/b",), ("/a", "/b")):
         _same_reading(tmp_path / "ties.mcap", topics)
     _write(tmp_path / "flat.mcap", msgs, chunking=False)
-    _same_reading(tmp_path / "flat.mcap", ("/a", "/b"), fast=False)
-    with pytest.raises(Exception):  # noqa: B017 -- the fast path refuses it; mcap_ros2 reads it
-        _decoded_messages(tmp_path / "flat.mcap", ("/a",))
+    _same_reading(tmp_path / "flat.mcap", ("/a", "/b"))
     data = (tmp_path / "ties.mcap").read_bytes()
     (tmp_path / "cut.mcap").write_bytes(data[: len(data) // 2])
-    _same_reading(tmp_path / "cut.mcap", ("/a",), fast=False)
+    _same_reading(tmp_path / "cut.mcap", ("/a",), refused=r"mcap cannot read it \(\w+: .*\); `roe-sep bag info`")
     _write(tmp_path / "json.mcap", [*msgs[:20], ("/raw", 9, b"{}")])
-    _same_reading(tmp_path / "json.mcap", ("/a", "/raw"), fast=False)
+    _same_reading(tmp_path / "json.mcap", ("/a", "/raw"), refused=r"no ROS 2 decoder for /raw \(message encoding "
+                                                                   r"'json', schema 'none'\)")
     _same_reading(tmp_path / "json.mcap", ("/a", "/b"))
     _write(tmp_path / "bad.mcap", [*msgs[:30], ("/a", 6, b"\x00\x01\x00\x00\xff\xff\xff\x7f")])
-    _same_reading(tmp_path / "bad.mcap", ("/a",), fast=False)
+    _same_reading(tmp_path / "bad.mcap", ("/a",), refused=r"the message on /a logged at 6 ns does not decode as "
+                                                          r"test_msgs/msg/A \(\w+")
 
 
 def test_scan_fast_chunks_and_indexes_equal_the_stream_reader(monkeypatch, tmp_path):

@@ -7,8 +7,8 @@ every later epoch) and is solved in a few simplex iterations, so the solve itsel
 element by element (``HighsLp.a_matrix_.index_``/``value_`` are assigned from arrays through a list conversion)
 and builds per-column marginals in a Python loop. :func:`solve_lp` passes the same model, arrays through the
 buffer protocol (``Highs.passModel``), with the same options, to the same HiGHS (the one scipy ships), and so gets
-the same solution to the bit (``test/core/acquisition/test_acquisition.py`` checks it against ``linprog`` on real acquisition
-problems). Where that binding is not there (another scipy), it falls back to ``linprog`` itself.
+the same solution to the bit (``test/core/acquisition/test_acquisition.py`` checks it against ``linprog`` on real
+acquisition problems). Where that binding is not there (another scipy), it falls back to ``linprog`` itself.
 """
 
 import numpy as np
