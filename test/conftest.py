@@ -5,6 +5,8 @@ import os
 import sys
 from pathlib import Path
 
+import pytest
+
 # DDS traffic stays on this machine in every test session (see scripts/test.sh for the domain id).
 os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
 
@@ -18,3 +20,14 @@ from dds_plugin import (  # noqa: E402,F401  (the guard's hooks, this session's)
     pytest_runtest_setup,
     pytest_unconfigure,
 )
+
+
+@pytest.fixture
+def ros_context():
+    """rclpy's default context, initialised for the test (``rosutil.init``: the session's DDS domain, localhost
+    discovery) and shut down after it; ``rosutil.init(*ros_args)`` re-initialises it with ROS arguments. The test
+    must be marked ``dds``."""
+    from rosutil import context
+
+    with context() as ctx:
+        yield ctx

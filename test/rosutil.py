@@ -1,5 +1,6 @@
 """Helpers for integration tests that start real node processes over DDS (localhost discovery only)."""
 
+import contextlib
 import math
 import os
 import signal
@@ -21,6 +22,26 @@ def ros_env():
     env.setdefault("ROS_DOMAIN_ID", str(os.getpid() % 100 + 1))
     env["PYTHONUNBUFFERED"] = "1"
     return env
+
+
+def init(*ros_args):
+    """(Re)initialise rclpy's default context in this process: the DDS domain the nodes a test starts get too
+    (:func:`ros_env`'s ``ROS_DOMAIN_ID``), localhost discovery (test/conftest.py), and ``ros_args`` (what follows
+    ``--ros-args``, e.g. ``"-p", "name:=value"``) for every node made in it. The context."""
+    rclpy.try_shutdown()
+    rclpy.init(args=["--ros-args", *ros_args] if ros_args else None, domain_id=int(ros_env()["ROS_DOMAIN_ID"]))
+    return rclpy.get_default_context()
+
+
+@contextlib.contextmanager
+def context(*ros_args):
+    """:func:`init` on entering, rclpy shut down on leaving (also when the test fails): the ``ros_context``
+    fixture (test/conftest.py), and a module's fixtures or a helper process."""
+    ctx = init(*ros_args)
+    try:
+        yield ctx
+    finally:
+        rclpy.try_shutdown()
 
 
 def start_node(module, *ros_args):

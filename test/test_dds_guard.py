@@ -68,3 +68,18 @@ def test_unmarked_dds_fails_and_names_the_process(tmp_path):
     assert proc.returncode == 1
     assert out.count("not marked dds: add @pytest.mark.dds") >= 3, out[-3000:]
     assert re.search(r"pid \d+: python\S* -c$", out, re.MULTILINE), out[-3000:]  # the child, by its command line
+
+
+@pytest.mark.dds
+def test_the_ros_context_fixture_is_initialised_in_the_sessions_domain_and_shut_down(ros_context):
+    """The ``ros_context`` fixture (test/conftest.py): rclpy's default context, initialised in the domain the nodes a
+    test starts get (``rosutil.ros_env``); ``rosutil.context`` shuts it down on leaving, also after a failure."""
+    from rosutil import context, rclpy, ros_env
+
+    assert ros_context is rclpy.get_default_context() and ros_context.ok()
+    assert ros_context.get_domain_id() == int(ros_env()["ROS_DOMAIN_ID"])
+    with pytest.raises(RuntimeError, match="inside"):
+        with context("-p", "x:=1") as ctx:
+            assert ctx.ok()
+            raise RuntimeError("inside")
+    assert not ctx.ok()

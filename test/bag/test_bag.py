@@ -17,7 +17,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue  # n
 from mcap.reader import make_reader  # noqa: E402
 from roe_sep_msgs.msg import ImpulsiveManeuver, ManeuverPlan, RelativeOrbitalElements  # noqa: E402
 from rosgraph_msgs.msg import Clock  # noqa: E402
-from rosutil import ROOT, rclpy, ros_env, spin_until, start_node, stop_node, wait_exit  # noqa: I001,E402
+from rosutil import ROOT, context, rclpy, ros_env, spin_until, start_node, stop_node, wait_exit  # noqa: I001,E402
 
 from roe_sep import interfaces  # noqa: E402
 from roe_sep.bag import BagError, definitions, info, metadata  # noqa: E402
@@ -83,13 +83,13 @@ def published_diags(msgs):
 # -- fixtures --------------------------------------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def ros():
-    rclpy.init()
-    node = rclpy.create_node("bag_test")
-    node.diags = []
-    node.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, node.diags.append, interfaces.DIAGNOSTICS)
-    yield node
-    node.destroy_node()
-    rclpy.try_shutdown()
+    with context():  # module-wide: the recording is shared by the module's tests
+        node = rclpy.create_node("bag_test")
+        node.diags = []
+        node.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, node.diags.append,
+                                 interfaces.DIAGNOSTICS)
+        yield node
+        node.destroy_node()
 
 
 @pytest.fixture(scope="module")

@@ -192,11 +192,10 @@ def test_run_bag_reads_the_same_with_two_independent_readers(scenario):
 
 
 @pytest.mark.dds
-def test_replay_of_the_run(scenario):
+def test_replay_of_the_run(scenario, ros_context):
     out, _ = scenario
     bag = out / "bag"
     recorded = [m for m, _, _ in read_mcap_ros2(mcap_file(bag))[interfaces.TRUTH_ROE_TOPIC]]
-    rclpy.init()
     node = rclpy.create_node("replay_check")
     got = []
     node.create_subscription(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, got.append, 10000)
@@ -212,7 +211,6 @@ def test_replay_of_the_run(scenario):
     finally:
         proc.wait(timeout=60)
         node.destroy_node()
-        rclpy.try_shutdown()
     assert proc.returncode == 0
 
 

@@ -12,12 +12,10 @@ pytestmark = pytest.mark.dds  # every test here starts a node or an rclpy contex
 
 
 @pytest.fixture()
-def ground():
-    rclpy.init()
+def ground(ros_context):
     node = rclpy.create_node("analysis_test")
     yield node
     node.destroy_node()
-    rclpy.try_shutdown()
 
 
 def _call(node, client, req, timeout=60.0):

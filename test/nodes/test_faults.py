@@ -25,7 +25,7 @@ from roe_sep_msgs.msg import (  # noqa: E402
     RelativeOrbitalElements,
     SafetyStatus,
 )
-from rosutil import ROOT, descendants, rclpy, ros_env  # noqa: I001  (skips without rclpy)
+from rosutil import ROOT, context, descendants, rclpy, ros_env  # noqa: I001  (skips without rclpy)
 
 from roe_sep import interfaces  # noqa: E402
 from roe_sep.bag import info  # noqa: E402
@@ -168,17 +168,16 @@ def bad_messages():
 
 def fuzz_main(seconds):
     """The fuzzer process: every bad message on every topic, 20 times a second, for ``seconds``; prints the count."""
-    rclpy.init()
-    node = rclpy.create_node("fuzzer")
-    pubs = [(node.create_publisher(cls, topic, qos), msg) for topic, (cls, qos, msg) in bad_messages().items()]
-    sent, end = 0, time.monotonic() + seconds
-    while time.monotonic() < end:
-        for pub, msg in pubs:
-            pub.publish(msg)
-            sent += 1
-        time.sleep(0.05)
-    node.destroy_node()
-    rclpy.try_shutdown()
+    with context():
+        node = rclpy.create_node("fuzzer")
+        pubs = [(node.create_publisher(cls, topic, qos), msg) for topic, (cls, qos, msg) in bad_messages().items()]
+        sent, end = 0, time.monotonic() + seconds
+        while time.monotonic() < end:
+            for pub, msg in pubs:
+                pub.publish(msg)
+                sent += 1
+            time.sleep(0.05)
+        node.destroy_node()
     print(sent)
 
 

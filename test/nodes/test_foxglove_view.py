@@ -32,10 +32,9 @@ def free_port():
 
 
 @pytest.mark.dds
-def test_websocket_client_receives_clock_plan_and_scene():
+def test_websocket_client_receives_clock_plan_and_scene(ros_context):
     port = free_port()
     view = start_node("foxglove_view", "-p", f"port:={port}")
-    rclpy.init()
     node = rclpy.create_node("foxglove_view_test")
     ws = None
     try:
@@ -105,7 +104,6 @@ def test_websocket_client_receives_clock_plan_and_scene():
         if ws is not None:
             ws.close()
         node.destroy_node()
-        rclpy.shutdown()
         code, log = stop_node(view, 20.0)
     assert code == 0, log
 

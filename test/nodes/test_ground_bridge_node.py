@@ -62,12 +62,11 @@ def od_window_tdm(path, bag):
     return od
 
 
-def test_ground_bridge_writes_opms_and_feeds_tdm_files_to_radar_od(tmp_path, bag):
+def test_ground_bridge_writes_opms_and_feeds_tdm_files_to_radar_od(tmp_path, bag, ros_context):
     out, inp = tmp_path / "ccsds", tmp_path / "in"
     bridge = start_node("ground_bridge", "-p", f"output_dir:={out}", "-p", f"input_dir:={inp}",
                         "-p", "poll_period:=0.2")
     radar = start_node("radar_od")
-    rclpy.init()
     node = rclpy.create_node("ground_bridge_test")
     try:
         got = {"od": [], "diag": []}
@@ -139,7 +138,6 @@ def test_ground_bridge_writes_opms_and_feeds_tdm_files_to_radar_od(tmp_path, bag
         assert bridge.poll() is None
     finally:
         node.destroy_node()
-        rclpy.shutdown()
         code_b, log_b = stop_node(bridge, 30.0)
         code_r, log_r = stop_node(radar, 30.0)
     assert code_b == 0, log_b

@@ -47,8 +47,7 @@ def errors(node, text, level=DiagnosticStatus.ERROR):
 
 
 @pytest.fixture()
-def ground():
-    rclpy.init()
+def ground(ros_context):
     node = rclpy.create_node("ic_ground_test")
     node.plans, node.diags = [], []
     node.create_subscription(ManeuverPlan, interfaces.ACQUISITION_PLAN_TOPIC, node.plans.append, interfaces.LATCHED)
@@ -64,7 +63,6 @@ def ground():
     node.create_timer(0.05, tick)
     yield node
     node.destroy_node()
-    rclpy.try_shutdown()
 
 
 def test_plan_bad_estimate_and_replan_policy(ground):

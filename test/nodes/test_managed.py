@@ -8,7 +8,7 @@ from lifecycle_msgs.msg import State  # noqa: E402
 from lifecycle_msgs.srv import GetState  # noqa: E402
 from rcl_interfaces.srv import ListParameters  # noqa: E402
 from rclpy.lifecycle import TransitionCallbackReturn  # noqa: E402
-from rosutil import rclpy, start_node, stop_node, wait_exit  # noqa: I001  (skips without rclpy)
+from rosutil import init, rclpy, start_node, stop_node, wait_exit  # noqa: I001  (skips without rclpy)
 
 from roe_sep import interfaces  # noqa: E402
 from roe_sep.nodes.params import ParameterError  # noqa: E402
@@ -21,13 +21,10 @@ FAST_PLANNER = ("-p", "p_mode:=fixed", "-p", "p_reduction:=0.06")
 
 
 @pytest.fixture
-def context():
-    """``context(*params)``: rclpy's default context, initialised with these ``-p`` parameters for every node."""
-    def init(*params):
-        rclpy.try_shutdown()
-        rclpy.init(args=["--ros-args", *[a for p in params for a in ("-p", p)]])
-    yield init
-    rclpy.try_shutdown()
+def context(ros_context):
+    """``context(*params)``: rclpy's default context, initialised again with these ``-p`` parameters for every
+    node."""
+    yield lambda *params: init(*[a for p in params for a in ("-p", p)])
 
 
 def label(node):
@@ -104,11 +101,10 @@ def _state(node, name):
 
 
 @pytest.mark.dds
-def test_lifecycle_manager_answers_while_it_waits_and_exits_0_on_sigint():
+def test_lifecycle_manager_answers_while_it_waits_and_exits_0_on_sigint(ros_context):
     """Waiting for a node that never comes, the manager still serves its parameter services (what ``ros2 param list
     /lifecycle_manager`` asks); SIGINT then ends it with status 0."""
     manager = start_node("lifecycle_manager", "-p", "node_names:=['nobody_here']", "-p", "timeout:=120.0")
-    rclpy.init()
     probe = rclpy.create_node("manager_probe")
     names = None
     try:
@@ -123,7 +119,6 @@ def test_lifecycle_manager_answers_while_it_waits_and_exits_0_on_sigint():
                 names = set(future.result().result.names)
     finally:
         probe.destroy_node()
-        rclpy.try_shutdown()
         code, out = stop_node(manager)
     assert names is not None and {"node_names", "timeout", "use_sim_time"} <= names, (names, out)
     assert code == 0, out
@@ -131,11 +126,10 @@ def test_lifecycle_manager_answers_while_it_waits_and_exits_0_on_sigint():
 
 
 @pytest.mark.dds
-def test_lifecycle_manager_starts_the_nodes_in_order():
+def test_lifecycle_manager_starts_the_nodes_in_order(ros_context):
     monitor = start_node("safety_monitor", "-p", "autostart:=false", "-p", "use_sim_time:=false")
     planner = start_node("planner", "-p", "autostart:=false", "-p", "use_sim_time:=false", *FAST_PLANNER)
     manager = start_node("lifecycle_manager", "-p", "node_names:=['safety_monitor', 'planner']")
-    rclpy.init()
     probe = rclpy.create_node("managed_probe")
     try:
         active = State.PRIMARY_STATE_ACTIVE
@@ -147,7 +141,6 @@ def test_lifecycle_manager_starts_the_nodes_in_order():
             time.sleep(0.5)
     finally:
         probe.destroy_node()
-        rclpy.try_shutdown()
         code_m, out_m = stop_node(manager)
         outs = [stop_node(p) for p in (monitor, planner)]
     assert states == [State.PRIMARY_STATE_ACTIVE] * 2, (states, out_m, outs)

@@ -14,8 +14,7 @@ pytestmark = pytest.mark.dds  # every test here starts a node or an rclpy contex
 
 
 @pytest.fixture()
-def tester():
-    rclpy.init()
+def tester(ros_context):
     node = rclpy.create_node("tester")
     node.diags, node.checks = [], []
     node.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, node.diags.append, 100)
@@ -27,7 +26,6 @@ def tester():
     }
     yield node
     node.destroy_node()
-    rclpy.try_shutdown()
 
 
 def errors(node, who, text):

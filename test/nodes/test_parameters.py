@@ -12,7 +12,7 @@ import pytest
 from rcl_interfaces.msg import ParameterType  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 from rclpy.parameter_client import AsyncParameterClient  # noqa: E402
-from rosutil import ROOT, rclpy, ros_env, start_node, stop_node  # noqa: I001  (skips without rclpy)
+from rosutil import ROOT, init, rclpy, ros_env, start_node, stop_node  # noqa: I001  (skips without rclpy)
 
 from roe_sep.nodes import parameters  # noqa: E402
 from roe_sep.nodes.params import ParameterError, declare, descriptor  # noqa: E402
@@ -94,13 +94,10 @@ def test_parameter_files_are_checked_against_the_tables():
 
 # ------------------------------------------------------------------------------------------------ declared = table
 @pytest.fixture
-def context(tmp_path, monkeypatch):
+def context(tmp_path, monkeypatch, ros_context):
     monkeypatch.chdir(tmp_path)
-    rclpy.try_shutdown()
-    rclpy.init(args=["--ros-args", "-p", "mc_samples:=100", "-p", "port:=0",
-                     "-p", f"output:={tmp_path / 'bag'}"])
+    init("-p", "mc_samples:=100", "-p", "port:=0", "-p", f"output:={tmp_path / 'bag'}")
     yield tmp_path
-    rclpy.try_shutdown()
 
 
 @pytest.mark.dds
@@ -149,8 +146,7 @@ def test_settable_parameter_follows_and_keeps_its_rule(context):
 
 @pytest.mark.dds
 def test_a_type_mismatch_is_refused_in_one_message(context):
-    rclpy.try_shutdown()
-    rclpy.init(args=["--ros-args", "-p", "topics:=[1,2]", "-p", "exclude:=[]"])
+    init("-p", "topics:=[1,2]", "-p", "exclude:=[]")
     from roe_sep.nodes.recorder import RecorderNode
 
     with pytest.raises(ParameterError, match=r"^parameter 'topics' must be a list of topic names, got \[1, 2\]$"):
@@ -227,7 +223,7 @@ def _wait(node, call, timeout=30.0):
 
 
 @pytest.mark.dds
-def test_running_node_refuses_a_set_outside_the_table(tmp_path):
+def test_running_node_refuses_a_set_outside_the_table(tmp_path, ros_context):
     """``ros2 param set`` is a SetParameters call: rclpy refuses a value outside the range, a read-only parameter,
     a wrong type; the table's other rules (choices) by the node's callback. ``ros2 param get /recorder topics``
     answers [] (its default is set, not only its type)."""
@@ -235,7 +231,6 @@ def test_running_node_refuses_a_set_outside_the_table(tmp_path):
              "recorder": start_node("recorder", "-p", f"output:={tmp_path / 'bag'}",
                                     "-p", "flush_period:=0.5", "-p", "exclude:=['/rosout']",
                                     "-r", "__node:=recorder_params_test")}
-    rclpy.init()
     node = rclpy.create_node("param_tester")
     try:
         server = AsyncParameterClient(node, "analysis_server")
@@ -270,6 +265,5 @@ def test_running_node_refuses_a_set_outside_the_table(tmp_path):
         assert not set_(recorder, "flush_period", 2.0).successful  # read-only: its timer is made at start-up
     finally:
         node.destroy_node()
-        rclpy.try_shutdown()
         codes = {name: stop_node(p) for name, p in procs.items()}
     assert all(code == 0 for code, _ in codes.values()), codes

@@ -35,8 +35,7 @@ def ejection_event(dv=None, stamp=1000.0):
 
 
 @pytest.fixture()
-def ground():
-    rclpy.init()
+def ground(ros_context):
     node = rclpy.create_node("ground_test")
     node.plans, node.diags = [], []
     node.create_subscription(ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, node.plans.append, interfaces.LATCHED)
@@ -44,7 +43,6 @@ def ground():
     node.ejection_pub = node.create_publisher(EjectionEvent, interfaces.EJECTION_TOPIC, interfaces.LATCHED)
     yield node
     node.destroy_node()
-    rclpy.try_shutdown()
 
 
 def test_plan_bad_event_and_restart(ground):

@@ -68,8 +68,7 @@ def truth_msg(t, roe, kep):
 
 
 @pytest.fixture()
-def sim():
-    rclpy.init()
+def sim(ros_context):
     node = rclpy.create_node("sim_test")
     node.meas, node.ods, node.diags = [], [], []
     node.create_subscription(RadarMeasurement, interfaces.RADAR_TOPIC, node.meas.append, interfaces.STREAM)
@@ -84,7 +83,6 @@ def sim():
                              lambda a: node.acks.add((a.node, a.step, a.round)), ACK_QOS)
     yield node
     node.destroy_node()
-    rclpy.try_shutdown()
 
 
 def statuses(node, level):

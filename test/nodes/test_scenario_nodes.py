@@ -19,8 +19,7 @@ SIM_ARGS = ["-p", "duration:=30000.0", "-p", "time_step:=30.0", "-p", "seed:=3",
 
 
 @pytest.fixture()
-def observer():
-    rclpy.init()
+def observer(ros_context):
     node = rclpy.create_node("observer")
     node.got = {"executed": [], "checks": [], "truth": [], "status": [], "clock": []}
     node.create_subscription(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, node.got["executed"].append,
@@ -32,7 +31,6 @@ def observer():
     node.create_subscription(Clock, interfaces.CLOCK_TOPIC, node.got["clock"].append, 10)
     yield node
     node.destroy_node()
-    rclpy.try_shutdown()
 
 
 @pytest.mark.parametrize("dynamics", ["secular", "nonlinear"])

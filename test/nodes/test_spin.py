@@ -38,21 +38,17 @@ class Talker(rclpy.node.Node):
                 self.sent += 1
 
 
-def test_in_process_delivery_is_synchronous():
+def test_in_process_delivery_is_synchronous(ros_context):
     """The premise of the local drain (spin.DRAIN_IDLE_LOCAL): a message published to a reader of the same process
     is in that reader when ``publish()`` returns."""
-    rclpy.init()
-    try:
-        a, b = rclpy.create_node("spin_test_a"), rclpy.create_node("spin_test_b")
-        pub = a.create_publisher(String, TOPIC, 10)
-        sub = b.create_subscription(String, TOPIC, lambda m: None, 10)
-        assert pub.get_subscription_count() == 1  # local matching is immediate too
-        for k in range(500):
-            pub.publish(String(data=str(k)))
-            taken = sub.handle.take_message(String, False)
-            assert taken is not None and taken[0].data == str(k), k
-    finally:
-        rclpy.try_shutdown()
+    a, b = rclpy.create_node("spin_test_a"), rclpy.create_node("spin_test_b")
+    pub = a.create_publisher(String, TOPIC, 10)
+    sub = b.create_subscription(String, TOPIC, lambda m: None, 10)
+    assert pub.get_subscription_count() == 1  # local matching is immediate too
+    for k in range(500):
+        pub.publish(String(data=str(k)))
+        taken = sub.handle.take_message(String, False)
+        assert taken is not None and taken[0].data == str(k), k
 
 
 def test_a_process_records_its_peers_from_the_first_message(tmp_path):
@@ -85,14 +81,13 @@ rclpy.spin(node)
 """
 
 
-def test_a_process_waits_for_its_readers_to_acknowledge_before_it_ends():
+def test_a_process_waits_for_its_readers_to_acknowledge_before_it_ends(ros_context):
     """spin.wait_for_acknowledgments: a reader in another process that is not running (SIGSTOP: a descheduled
     listeners' process) holds the publisher's wait until the budget ends (False, after the budget, not before); once it
     runs again, everything is acknowledged (True, well inside the budget)."""
     topic = "/spin_test/acked"
     listener = subprocess.Popen([sys.executable, "-c", LISTENER, topic], env=ros_env(), stdout=subprocess.PIPE,
                                 text=True)
-    rclpy.init()
     node = rclpy.create_node("spin_test_acked")
     try:
         assert listener.stdout.readline().strip() == "up"
@@ -117,7 +112,6 @@ def test_a_process_waits_for_its_readers_to_acknowledge_before_it_ends():
         listener.kill()
         listener.wait()
         node.destroy_node()
-        rclpy.try_shutdown()
 
 
 LEAVING = """

@@ -160,7 +160,7 @@ def test_cli_design_and_mc_multi_impulse(capsys):
 
 
 @pytest.mark.dds
-def test_planner_node_multi_impulse_strategy():
+def test_planner_node_multi_impulse_strategy(ros_context):
     """The planner process publishes every multi-impulse carrier burn as one ManeuverPlan (strategy parameter)."""
     from roe_sep_msgs.msg import EjectionEvent, ManeuverPlan
     from rosutil import rclpy, spin_until, start_node, stop_node, wait_exit
@@ -170,7 +170,6 @@ def test_planner_node_multi_impulse_strategy():
 
     code, out = wait_exit(start_node("planner", "-p", "strategy:=triple"))
     assert code == 2 and "'strategy'" in out
-    rclpy.init()
     node = rclpy.create_node("ground_multi_test")
     plans = []
     node.create_subscription(ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, plans.append, interfaces.LATCHED)
@@ -216,5 +215,4 @@ def test_planner_node_multi_impulse_strategy():
     finally:
         code, out = stop_node(planner)
         node.destroy_node()
-        rclpy.try_shutdown()
     assert code == 0, out
