@@ -2,6 +2,7 @@
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 
+from ..core.decisions.common import Log
 from .convert import sec_to_time
 
 OK, WARN, ERROR = DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR
@@ -62,3 +63,16 @@ class StatusMessages:
             pair.value = str(v)
         _stamp(self.node, self.array)
         self.publisher.publish(self.array)
+
+
+def report(node, publisher, action):
+    """Carry out a decision's :class:`~roe_sep.core.decisions.common.Log` (logged) or
+    :class:`~roe_sep.core.decisions.common.Status` (logged at its ``log`` level, if any, and published with
+    :func:`publish_status`)."""
+    if isinstance(action, Log):
+        getattr(node.get_logger(), action.level)(action.text)
+        return
+    if action.log is not None:
+        getattr(node.get_logger(), action.log)(action.message if action.log_text is None else action.log_text)
+    publish_status(node, publisher, action.level, action.message, dict(action.values), part=action.part,
+                   stamp=action.stamp)
