@@ -70,9 +70,23 @@ def report(node, publisher, action):
     :class:`~roe_sep.core.decisions.common.Status` (logged at its ``log`` level, if any, and published with
     :func:`publish_status`)."""
     if isinstance(action, Log):
-        getattr(node.get_logger(), action.level)(action.text)
+        _log(node.get_logger(), action.level, action.text)
         return
     if action.log is not None:
-        getattr(node.get_logger(), action.log)(action.message if action.log_text is None else action.log_text)
+        _log(node.get_logger(), action.log, action.message if action.log_text is None else action.log_text)
     publish_status(node, publisher, action.level, action.message, dict(action.values), part=action.part,
                    stamp=action.stamp)
+
+
+def _log(logger, level, text):
+    """``text`` at ``level``: one call site per severity (rclpy's logger keeps a call site's severity)."""
+    if level == "debug":
+        logger.debug(text)
+    elif level == "info":
+        logger.info(text)
+    elif level == "warning":
+        logger.warning(text)
+    elif level == "error":
+        logger.error(text)
+    else:
+        raise ValueError(f"unknown log level {level!r}")
