@@ -29,28 +29,22 @@ from roe_sep_msgs.msg import ImpulsiveManeuver, ManeuverPlan, OrbitDetermination
 from .. import interfaces
 from ..core.acquisition.planner import AcquisitionConfig, InvalidAcquisitionConfig, validate_config
 from ..core.decisions import ic_planner as rules
-from ..core.decisions.common import PlannedBurn
 from ..core.od.radar import DEFAULT_EPOCH_UTC, julian_date
 from ..core.relmotion.roe import wrap_angle
-from .convert import array_to_elements, elements_to_array, msg_to_roe, roe_to_msg, sec_to_time, time_to_sec
+from .convert import (
+    array_to_elements,
+    elements_to_array,
+    maneuver,
+    msg_to_roe,
+    planned_burn,
+    roe_to_msg,
+    sec_to_time,
+    time_to_sec,
+)
 from .diagnostics import OK, publish_status, report
 from .lockstep import Lockstep
 from .managed import ManagedNode
 from .params import ParameterError, declare
-
-
-def planned_burn(m: ImpulsiveManeuver) -> PlannedBurn:
-    """The maneuver message as the decisions hold it (its stamp, angle and dv unchanged)."""
-    return PlannedBurn(m.epoch.sec, m.epoch.nanosec, m.mean_arg_latitude, (m.dv_rtn.x, m.dv_rtn.y, m.dv_rtn.z),
-                       m.spacecraft, m.purpose)
-
-
-def maneuver(b: PlannedBurn) -> ImpulsiveManeuver:
-    """The message of a decision's burn (the inverse of :func:`planned_burn`)."""
-    m = ImpulsiveManeuver(mean_arg_latitude=b.u, spacecraft=b.spacecraft, purpose=b.purpose)
-    m.epoch.sec, m.epoch.nanosec = b.sec, b.nanosec
-    m.dv_rtn.x, m.dv_rtn.y, m.dv_rtn.z = b.dv_rtn
-    return m
 
 
 def od_solution(msg: OrbitDetermination) -> rules.OdSolution:
