@@ -210,8 +210,17 @@ def on_step(state: PlannerState, t: float, wall: float, lockstep: bool, config: 
                 state, more = check(state, t, config)
                 actions += more
     except ValueError as exc:
+        state = getattr(exc, "state", state)
         actions += (status(ERROR, f"drift-stop check failed: {exc}", values(state, config), "error"),)
     return state, actions
+
+
+class CheckFailed(ValueError):
+    """A check's ValueError with the ``state`` it reached (a drift-stop found missing stays found)."""
+
+    def __init__(self, exc: ValueError, state: PlannerState):
+        super().__init__(str(exc))
+        self.state = state
 
 
 def finding(name: str, t: float, text: str, extra: dict) -> Status:
@@ -271,7 +280,11 @@ def check_missing(state: PlannerState, t: float, config: PlannerConfig) -> tuple
     state = dataclasses.replace(state, retried=(*state.retried, key))
     k = config.k if f.k is None else f.k
     orbits, _ = orbits_later(f.ejection, t, f.t_stop, config)
-    plan = dataclasses.replace(separation_plan(f.ejection, config, k=k + 2 * orbits, p=f.p), stamp=sec_nanosec(t))
+    try:
+        plan = separation_plan(f.ejection, config, k=k + 2 * orbits, p=f.p)
+    except ValueError as exc:
+        raise CheckFailed(exc, state) from exc
+    plan = dataclasses.replace(plan, stamp=sec_nanosec(t))
     t_new = plan.burns[0].epoch
     state = dataclasses.replace(state, plans=state.plans + 1, in_force=InForce(f.ejection, k + 2 * orbits, f.p, t_new))
     return state, (plan, finding(

@@ -12,7 +12,7 @@ import pytest
 
 from roe_sep.core.acquisition.planner import AcquisitionConfig
 from roe_sep.core.decisions import ic_planner as rules
-from roe_sep.core.decisions.common import ERROR, OK, WARN, Log, PlannedBurn, Status
+from roe_sep.core.decisions.common import ERROR, OK, WARN, PlannedBurn, Status
 from roe_sep.core.od.radar import DEFAULT_EPOCH_UTC, julian_date
 from roe_sep.core.relmotion.dynamics import drag_da_dot
 from roe_sep.core.separation.double_impulse import design
@@ -206,6 +206,3 @@ def test_the_state_round_trips_through_strict_json_and_decides_the_same(first):
     with pytest.raises(ValueError, match="not finite"):
         dataclasses.replace(state, t_final=math.inf).to_dict()
 
-
-def test_a_log_names_its_level():
-    assert Log("info", "x") == Log("info", "x") and Log("info", "x") != Log("debug", "x")
