@@ -4,7 +4,9 @@ status, a planned burn as its message carries it, and the strict-JSON form of a 
 import dataclasses
 import math
 import traceback
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -44,7 +46,7 @@ def status(level: int, message: str, values: dict, log: str | None = "info", **k
     return Status(level, message, tuple(values.items()), log, **kwargs)
 
 
-def guarded(rejected: str, failed: str, values: dict, fn, *args, **kwargs) -> tuple:
+def guarded(rejected: str, failed: str, values: dict, fn: Callable, *args, **kwargs) -> tuple:
     """``(fn(*args, **kwargs), ())``, or ``(None, (ERROR status,))``: a ValueError is a bad input or no solution
     (``rejected``), anything else a bug (``failed``, logged with its traceback) that must not take a node down."""
     try:
@@ -86,7 +88,7 @@ class PlannedBurn:
         return Burn(self.epoch, tuple(relative_impulse(np.array(self.dv_rtn, dtype=float), self.spacecraft)))
 
 
-def plain(value):
+def plain(value: Any) -> Any:
     """``value`` as strict-JSON primitives: a dataclass as a dict of its fields, a tuple or list as a list, a numpy
     scalar as its Python value; ValueError for a float that is not finite."""
     if dataclasses.is_dataclass(value):
@@ -99,17 +101,17 @@ def plain(value):
     return value
 
 
-def scalar(value):
+def scalar(value: Any) -> Any:
     """A numpy scalar as its Python value; anything else unchanged."""
     return value.item() if isinstance(value, np.generic) else value
 
 
-def tuples(value):
+def tuples(value: Any) -> Any:
     """A JSON list (nested) back as tuples; anything else unchanged."""
     return tuple(tuples(v) for v in value) if isinstance(value, list) else value
 
 
-def optional(make, value):
+def optional(make: Callable, value: Any) -> Any:
     """``make(value)``, or None for None."""
     return None if value is None else make(value)
 

@@ -445,11 +445,11 @@ def radar_arc(od: OdSolution, t_final: float, config: IcPlannerConfig) -> tuple 
     off, or without one."""
     if not (config.trim and config.final_od_arc):
         return None
-    return _arc(tuple(od.kep), od.epoch, t_final, config.final_od_arc, config.jd0, config.cfg.j2)
+    return _arc(tuple(od.kep), od.epoch, t_final, config.final_od_arc, config.jd0, j2=config.cfg.j2)
 
 
 @functools.lru_cache(maxsize=16)
-def _arc(kep: tuple, t_od: float, t_final: float, min_arc: float, jd0: float, j2: bool):
+def _arc(kep: tuple, t_od: float, t_final: float, min_arc: float, jd0: float, *, j2: bool) -> tuple | None:
     """:func:`radar_arc`, memoised: one OD and IC epoch give one arc, asked by every rule and re-plan."""
     passes = radar_passes(np.array(kep, dtype=float), t_od, t_final - 2.0 * SECONDS_PER_DAY,
                           t_final + 3.0 * CLUSTER_GAP, jd0, j2=j2)
