@@ -105,18 +105,14 @@ class PlannerNode(ManagedNode):
         seed = declare(self, "mc_seed")
         self.j2 = declare(self, "j2")
         self.strategy = declare(self, "strategy")
-        retry = declare(self, "drift_stop_retry")
-        retry_tolerance = declare(self, "retry_tolerance")
-        retry_margin = declare(self, "retry_margin")
-        makeup = declare(self, "drift_stop_makeup")
-        makeup_z = declare(self, "makeup_z")
-        makeup_pointing = math.radians(declare(self, "makeup_pointing_deg"))
-        hold = declare(self, "weak_ejection_hold")
-        camera_sigma = math.radians(declare(self, "camera_sigma_deg"))
-        camera_floor = declare(self, "camera_model_floor")
-        hold_sigmas = declare(self, "hold_sigmas")
-        hold_alpha = declare(self, "hold_alpha")
-        hold_lead = declare(self, "hold_lead")
+        names = (("retry", "drift_stop_retry"), ("retry_tolerance", "retry_tolerance"),
+                 ("retry_margin", "retry_margin"), ("makeup", "drift_stop_makeup"), ("makeup_z", "makeup_z"),
+                 ("makeup_pointing", "makeup_pointing_deg"), ("hold", "weak_ejection_hold"),
+                 ("camera_sigma", "camera_sigma_deg"), ("camera_floor", "camera_model_floor"),
+                 ("hold_sigmas", "hold_sigmas"), ("hold_alpha", "hold_alpha"), ("hold_lead", "hold_lead"))
+        checks = {field: declare(self, name) for field, name in names}  # the contingency checks' parameters
+        for field in ("makeup_pointing", "camera_sigma"):
+            checks[field] = math.radians(checks[field])
         try:
             self.scenario = load_scenario(scenario_file or None)
         except ConfigError as exc:
@@ -130,11 +126,8 @@ class PlannerNode(ManagedNode):
         elif self.p_mode == "monte_carlo":
             p = startup_p(self.scenario, samples, seed)
             self.get_logger().info(f"p = {p:g} m/s: p_best of a {samples}-sample Monte Carlo sweep")
-        self.config = rules.PlannerConfig(
-            self.strategy, self.k, self.p_mode, p, self.j2, self.scenario, multi=multi, retry=retry,
-            retry_tolerance=retry_tolerance, retry_margin=retry_margin, makeup=makeup, makeup_z=makeup_z,
-            makeup_pointing=makeup_pointing, hold=hold, camera_sigma=camera_sigma, camera_floor=camera_floor,
-            hold_sigmas=hold_sigmas, hold_alpha=hold_alpha, hold_lead=hold_lead)
+        self.config = rules.PlannerConfig(self.strategy, self.k, self.p_mode, p, self.j2, self.scenario, multi=multi,
+                                          **checks)
 
     def activate(self):
         """Publishers, subscriptions, services (the ``activate`` transition)."""

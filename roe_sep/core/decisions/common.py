@@ -59,22 +59,36 @@ def guarded(rejected: str, failed: str, values: dict, fn: Callable, *args, **kwa
 
 
 @dataclass(frozen=True)
-class PlannedBurn:
-    """One impulsive maneuver as its message (roe_sep_msgs/ImpulsiveManeuver) carries it: epoch stamp ``sec``,
-    ``nanosec``, mean argument of latitude ``u`` [rad], ``dv_rtn`` (3,) [m/s] of ``spacecraft`` ("carrier" or
-    "picosatellite"), ``purpose``."""
+class Stamped:
+    """Something a message stamps: ``sec``, ``nanosec`` as builtin_interfaces/Time carries them."""
 
     sec: int
     nanosec: int
-    u: float
-    dv_rtn: tuple
-    spacecraft: str
-    purpose: str
 
     @property
     def epoch(self) -> float:
         """s, as :func:`roe_sep.stamps.time_to_sec` reads the stamp."""
         return time_to_sec(self)
+
+
+class State:
+    """A decision state: ``to_dict`` gives its strict-JSON primitives (:func:`plain`); each state's ``from_dict``
+    reads them back."""
+
+    def to_dict(self) -> dict:
+        return plain(self)
+
+
+@dataclass(frozen=True)
+class PlannedBurn(Stamped):
+    """One impulsive maneuver as its message (roe_sep_msgs/ImpulsiveManeuver) carries it: epoch stamp ``sec``,
+    ``nanosec``, mean argument of latitude ``u`` [rad], ``dv_rtn`` (3,) [m/s] of ``spacecraft`` ("carrier" or
+    "picosatellite"), ``purpose``."""
+
+    u: float
+    dv_rtn: tuple
+    spacecraft: str
+    purpose: str
 
     @classmethod
     def at(cls, epoch: float, u: float, dv_rtn, spacecraft: str, purpose: str) -> "PlannedBurn":

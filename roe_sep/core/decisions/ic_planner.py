@@ -37,10 +37,10 @@ from .common import (
     WARN,
     Log,
     PlannedBurn,
+    State,
     burn_from_dict,
     guarded,
     optional,
-    plain,
     planned_from_dict,
     scalar,
     status,
@@ -92,7 +92,7 @@ class OdSolution:
 
 
 @dataclass(frozen=True)
-class IcPlannerState:
+class IcPlannerState(State):
     """What the ic_planner knows between events: the separation plan's last burn ``separation_end`` [s] (None: no
     separation plan), the carrier burns ``executed`` (relative impulses), the IC epoch ``t_final`` [s], the newest OD's
     ``last_key`` (solution stamp, epoch), the plan in force (``plan_in_force`` burns, their ``burn_epochs``, the
@@ -113,10 +113,6 @@ class IcPlannerState:
     replan_pending: bool = False
     summary: tuple = ()
     plans: int = 0
-
-    def to_dict(self) -> dict:
-        """Strict-JSON primitives (:func:`~.common.plain`)."""
-        return plain(self)
 
     @classmethod
     def from_dict(cls, d: dict) -> "IcPlannerState":

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from ...stamps import sec_nanosec, time_to_sec
+from ...stamps import sec_nanosec
 from ..relmotion.dynamics import arg_latitude_rate, drag_da_dot, propagate_chief, raan_rate
 from ..relmotion.orbit import angle_between
 from ..relmotion.roe import wrap_angle
@@ -25,7 +25,7 @@ from ..safety.ejection_check import check_ejection, nominal_fraction
 from ..separation.double_impulse import plan_drift_stop, reduction_bounds
 from ..separation.multi_impulse import multi_config, plan_carrier_burns
 from ..truth.secular import error_references
-from .common import ERROR, OK, WARN, Log, PlannedBurn, Status, optional, plain, status, tuples
+from .common import ERROR, OK, WARN, Log, PlannedBurn, Stamped, State, Status, optional, status, tuples
 
 RECORD_SETTLE = 2.0  # wall s a restarted planner (no lockstep) lets the latched executed record arrive in full
 
@@ -58,21 +58,15 @@ class PlannerConfig:
 
 
 @dataclass(frozen=True)
-class Ejection:
+class Ejection(Stamped):
     """A commanded ejection (roe_sep_msgs/EjectionEvent): its stamp ``sec``, ``nanosec``, the chief's mean elements
     ``kep`` ``[a, e, i, raan, argp, M]`` and mean argument of latitude ``u`` [rad] as the message carries it, the
     picosatellite's ``dv_rtn`` (3,) [m/s] at ``u1`` [rad]."""
 
-    sec: int
-    nanosec: int
     kep: tuple
     u: float
     dv_rtn: tuple
     u1: float
-
-    @property
-    def epoch(self) -> float:
-        return time_to_sec(self)
 
 
 @dataclass(frozen=True)
@@ -115,7 +109,7 @@ class StopBearings:
 
 
 @dataclass(frozen=True)
-class PlannerState:
+class PlannerState(State):
     """What the planner knows between events: the drift-stop ``in_force``, the ``executed_stops`` on record
     ((epoch [s], carrier dv RTN (3,) [m/s])), the release epoch ``released`` [s] and the wall time ``record_since``
     [s] it arrived, the camera's ``bearings`` ((t [s], unit line of sight (3,))) until ``camera_done``, the
@@ -129,10 +123,6 @@ class PlannerState:
     camera_done: bool = False
     retried: tuple = ()
     plans: int = 0
-
-    def to_dict(self) -> dict:
-        """Strict-JSON primitives (:func:`~.common.plain`)."""
-        return plain(self)
 
     @classmethod
     def from_dict(cls, d: dict) -> "PlannerState":
