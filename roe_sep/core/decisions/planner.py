@@ -185,7 +185,8 @@ def record_recovered(state: PlannerState, wall: float, lockstep: bool) -> bool:
 def on_step(state: PlannerState, t: float, wall: float, lockstep: bool, config: PlannerConfig) -> tuple:
     """Sim-time checks at ``t`` [s] (wall time ``wall``; ``lockstep``: the record holds every message): the camera's
     decision before the drift-stop (:func:`camera_decision`), a missing drift-stop's replacement
-    (:func:`check_missing`), a departing one's completion (:func:`check_executed`). A failed check is an ERROR."""
+    (:func:`missing`, :func:`replace_missing`), a departing one's completion (:func:`check_executed`). A failed check
+    is an ERROR."""
     if state.in_force is None:
         return state, ()
     actions = ()
@@ -195,22 +196,17 @@ def on_step(state: PlannerState, t: float, wall: float, lockstep: bool, config: 
             state, actions = dataclasses.replace(state, camera_done=True), (StopBearings(),)
             state, more = camera_decision(state, t, config)
             actions += more
-        for on, check in ((config.retry, check_missing), (config.makeup, check_executed)):
-            if on and state.in_force is not None and recovered:
-                state, more = check(state, t, config)
-                actions += more
+        if config.retry and state.in_force is not None and recovered and missing(state, t, config):
+            # found missing once, even when its replacement fails
+            state = dataclasses.replace(state, retried=(*state.retried, round(state.in_force.t_stop, 3)))
+            state, more = replace_missing(state, t, config)
+            actions += more
+        if config.makeup and state.in_force is not None and recovered:
+            state, more = check_executed(state, t, config)
+            actions += more
     except ValueError as exc:
-        state = getattr(exc, "state", state)
         actions += (status(ERROR, f"drift-stop check failed: {exc}", values(state, config), "error"),)
     return state, actions
-
-
-class CheckFailed(ValueError):
-    """A check's ValueError with the ``state`` it reached (a drift-stop found missing stays found)."""
-
-    def __init__(self, exc: ValueError, state: PlannerState):
-        super().__init__(str(exc))
-        self.state = state
 
 
 def finding(name: str, t: float, text: str, extra: dict) -> Status:
@@ -258,23 +254,22 @@ def orbits_later(ejection: Ejection, t: float, t_burn: float, config: PlannerCon
     return max(1, math.ceil((t + config.retry_margin - t_burn) / period - 1e-9)), period
 
 
-def check_missing(state: PlannerState, t: float, config: PlannerConfig) -> tuple:
-    """Replace the drift-stop in force when the record shows none ``retry_tolerance`` after its epoch: the same one
-    whole orbits later (seed 002 Eqs. 9, 18), a new plan stamped with the finding."""
+def missing(state: PlannerState, t: float, config: PlannerConfig) -> bool:
+    """Whether the record shows no drift-stop ``retry_tolerance`` after the epoch of the one in force (not replaced
+    yet)."""
     f = state.in_force
-    key = round(f.t_stop, 3)
-    if t <= f.t_stop + config.retry_tolerance or key in state.retried:
-        return state, ()
-    if any(e >= f.t_stop - config.retry_tolerance for e, _ in state.executed_stops):
-        return state, ()
-    state = dataclasses.replace(state, retried=(*state.retried, key))
+    if t <= f.t_stop + config.retry_tolerance or round(f.t_stop, 3) in state.retried:
+        return False
+    return not any(e >= f.t_stop - config.retry_tolerance for e, _ in state.executed_stops)
+
+
+def replace_missing(state: PlannerState, t: float, config: PlannerConfig) -> tuple:
+    """The missing drift-stop in force replaced: the same one whole orbits later (seed 002 Eqs. 9, 18), a new plan
+    stamped with the finding at ``t`` [s]."""
+    f = state.in_force
     k = config.k if f.k is None else f.k
     orbits, _ = orbits_later(f.ejection, t, f.t_stop, config)
-    try:
-        plan = separation_plan(f.ejection, config, k=k + 2 * orbits, p=f.p)
-    except ValueError as exc:
-        raise CheckFailed(exc, state) from exc
-    plan = dataclasses.replace(plan, stamp=sec_nanosec(t))
+    plan = dataclasses.replace(separation_plan(f.ejection, config, k=k + 2 * orbits, p=f.p), stamp=sec_nanosec(t))
     t_new = plan.burns[0].epoch
     state = dataclasses.replace(state, plans=state.plans + 1, in_force=InForce(f.ejection, k + 2 * orbits, f.p, t_new))
     return state, (plan, finding(
