@@ -6,6 +6,7 @@ from geometry_msgs.msg import Vector3
 from roe_sep_msgs.msg import ImpulsiveManeuver, OrbitalElements, RelativeOrbitalElements, RelativeState
 
 from .. import interfaces
+from ..core.decisions.common import PlannedBurn
 from ..core.relmotion.roe import wrap_angle
 from ..core.truth.execution import relative_impulse
 from ..stamps import sec_nanosec, time_to_sec
@@ -121,3 +122,17 @@ def plan_burns(maneuvers):
     from ..core.relmotion.trajectory import Burn
 
     return [Burn(time_to_sec(m.epoch), tuple(relative_dv(m))) for m in maneuvers]
+
+
+def planned_burn(m: ImpulsiveManeuver) -> PlannedBurn:
+    """The maneuver message as the decisions hold it (its stamp, angle and dv unchanged)."""
+    return PlannedBurn(m.epoch.sec, m.epoch.nanosec, m.mean_arg_latitude, (m.dv_rtn.x, m.dv_rtn.y, m.dv_rtn.z),
+                       m.spacecraft, m.purpose)
+
+
+def maneuver(b: PlannedBurn) -> ImpulsiveManeuver:
+    """The message of a decision's burn (the inverse of :func:`planned_burn`)."""
+    m = ImpulsiveManeuver(mean_arg_latitude=b.u, spacecraft=b.spacecraft, purpose=b.purpose)
+    m.epoch.sec, m.epoch.nanosec = b.sec, b.nanosec
+    m.dv_rtn.x, m.dv_rtn.y, m.dv_rtn.z = b.dv_rtn
+    return m

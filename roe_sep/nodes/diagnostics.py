@@ -2,6 +2,7 @@
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 
+from ..core.decisions.common import Log
 from .convert import sec_to_time
 
 OK, WARN, ERROR = DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR
@@ -62,3 +63,30 @@ class StatusMessages:
             pair.value = str(v)
         _stamp(self.node, self.array)
         self.publisher.publish(self.array)
+
+
+def report(node, publisher, action):
+    """Carry out a decision's :class:`~roe_sep.core.decisions.common.Log` (logged) or
+    :class:`~roe_sep.core.decisions.common.Status` (logged at its ``log`` level, if any, and published with
+    :func:`publish_status`)."""
+    if isinstance(action, Log):
+        _log(node.get_logger(), action.level, action.text)
+        return
+    if action.log is not None:
+        _log(node.get_logger(), action.log, action.message if action.log_text is None else action.log_text)
+    publish_status(node, publisher, action.level, action.message, dict(action.values), part=action.part,
+                   stamp=action.stamp)
+
+
+def _log(logger, level, text):
+    """``text`` at ``level``: one call site per severity (rclpy's logger keeps a call site's severity)."""
+    if level == "debug":
+        logger.debug(text)
+    elif level == "info":
+        logger.info(text)
+    elif level == "warning":
+        logger.warning(text)
+    elif level == "error":
+        logger.error(text)
+    else:
+        raise ValueError(f"unknown log level {level!r}")

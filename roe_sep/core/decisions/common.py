@@ -1,0 +1,140 @@
+"""What every decision module shares: the status and log actions, the guard that turns a failure into an ERROR
+status, a planned burn as its message carries it, and the strict-JSON form of a state."""
+
+import dataclasses
+import math
+import traceback
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ...stamps import sec_nanosec, time_to_sec
+from ..relmotion.roe import wrap_angle
+from ..relmotion.trajectory import Burn
+from ..truth.execution import relative_impulse
+
+OK, WARN, ERROR = 0, 1, 2  # diagnostic_msgs/DiagnosticStatus levels
+
+
+@dataclass(frozen=True)
+class Status:
+    """Publish a status on /diagnostics (``part``: the name's suffix; ``stamp`` [s] or None: the node's time) and
+    log ``log_text`` (default ``message``) at logger level ``log`` ("debug", "info", "warning", "error"; None: not
+    logged). ``values``: ``(key, value)`` pairs."""
+
+    level: int
+    message: str
+    values: tuple = ()
+    log: str | None = None
+    log_text: str | None = None
+    part: str = ""
+    stamp: float | None = None
+
+
+@dataclass(frozen=True)
+class Log:
+    """Log ``text`` at logger level ``level`` ("debug", "info", "warning", "error")."""
+
+    level: str
+    text: str
+
+
+def status(level: int, message: str, values: dict, log: str | None = "info", **kwargs) -> Status:
+    """A :class:`Status` logged (at ``log``) and published with the ``values`` dict."""
+    return Status(level, message, tuple(values.items()), log, **kwargs)
+
+
+def guarded(rejected: str, failed: str, values: dict, fn: Callable, *args, **kwargs) -> tuple:
+    """``(fn(*args, **kwargs), ())``, or ``(None, (ERROR status,))``: a ValueError is a bad input or no solution
+    (``rejected``), anything else a bug (``failed``, logged with its traceback) that must not take a node down."""
+    try:
+        return fn(*args, **kwargs), ()
+    except ValueError as exc:
+        return None, (status(ERROR, f"{rejected}: {exc}", values, "error"),)
+    except Exception as exc:  # noqa: BLE001 -- reported, never fatal
+        text = f"{failed}: {exc!r}"
+        return None, (status(ERROR, text, values, "error", log_text=f"{text}\n{traceback.format_exc()}"),)
+
+
+@dataclass(frozen=True)
+class Stamped:
+    """Something a message stamps: ``sec``, ``nanosec`` as builtin_interfaces/Time carries them."""
+
+    sec: int
+    nanosec: int
+
+    @property
+    def epoch(self) -> float:
+        """s, as :func:`roe_sep.stamps.time_to_sec` reads the stamp."""
+        return time_to_sec(self)
+
+
+class State:
+    """A decision state: ``to_dict`` gives its strict-JSON primitives (:func:`plain`); each state's ``from_dict``
+    reads them back."""
+
+    def to_dict(self) -> dict:
+        return plain(self)
+
+
+@dataclass(frozen=True)
+class PlannedBurn(Stamped):
+    """One impulsive maneuver as its message (roe_sep_msgs/ImpulsiveManeuver) carries it: epoch stamp ``sec``,
+    ``nanosec``, mean argument of latitude ``u`` [rad], ``dv_rtn`` (3,) [m/s] of ``spacecraft`` ("carrier" or
+    "picosatellite"), ``purpose``."""
+
+    u: float
+    dv_rtn: tuple
+    spacecraft: str
+    purpose: str
+
+    @classmethod
+    def at(cls, epoch: float, u: float, dv_rtn, spacecraft: str, purpose: str) -> "PlannedBurn":
+        """The burn a message built at ``epoch`` [s] carries (``u`` wrapped to [-pi, pi))."""
+        sec, nanosec = sec_nanosec(epoch)
+        return cls(sec, nanosec, float(wrap_angle(u)), tuple(float(c) for c in dv_rtn), spacecraft, purpose)
+
+    def relative(self) -> Burn:
+        """Its relative impulse (:func:`~roe_sep.core.truth.execution.relative_impulse`); ValueError for an unknown
+        spacecraft."""
+        return Burn(self.epoch, tuple(relative_impulse(np.array(self.dv_rtn, dtype=float), self.spacecraft)))
+
+
+def plain(value: Any) -> Any:
+    """``value`` as strict-JSON primitives: a dataclass as a dict of its fields, a tuple or list as a list, a numpy
+    scalar as its Python value; ValueError for a float that is not finite."""
+    if dataclasses.is_dataclass(value):
+        return {f.name: plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
+    if isinstance(value, (tuple, list)):
+        return [plain(v) for v in value]
+    value = scalar(value)
+    if isinstance(value, float) and not math.isfinite(value):
+        raise ValueError(f"a state holds a value that is not finite: {value}")
+    return value
+
+
+def scalar(value: Any) -> Any:
+    """A numpy scalar as its Python value; anything else unchanged."""
+    return value.item() if isinstance(value, np.generic) else value
+
+
+def tuples(value: Any) -> Any:
+    """A JSON list (nested) back as tuples; anything else unchanged."""
+    return tuple(tuples(v) for v in value) if isinstance(value, list) else value
+
+
+def optional(make: Callable, value: Any) -> Any:
+    """``make(value)``, or None for None."""
+    return None if value is None else make(value)
+
+
+def burn_from_dict(d: dict) -> Burn:
+    """A :class:`~roe_sep.core.relmotion.trajectory.Burn` from its :func:`plain` form."""
+    return Burn(d["epoch"], tuples(d["dv_rel"]))
+
+
+def planned_from_dict(d: dict) -> PlannedBurn:
+    """A :class:`PlannedBurn` from its :func:`plain` form."""
+    return PlannedBurn(**{**d, "dv_rtn": tuples(d["dv_rtn"])})

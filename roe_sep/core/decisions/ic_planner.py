@@ -1,0 +1,452 @@
+"""The ic_planner's decisions (docs/run.md, "Decisions"): when an OD solution re-plans the acquisition, when the
+final OD trims it, when a committed burn defers a re-plan, when a departing burn re-plans or re-trims.
+
+Each ``on_<event>(state, event, config)`` returns ``(new_state, actions)``: :class:`PublishPlan` and the shared
+:class:`~.common.Status` / :class:`~.common.Log`. The physics is :mod:`roe_sep.core.acquisition` (seed 001 Sec. 4:
+the linear program and its quantized re-solve; seed 002 Eq. 2 for the trim and the departure of a burn).
+"""
+
+import dataclasses
+import functools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..acquisition.lp_transfer import grid_epochs
+from ..acquisition.planner import AcquisitionConfig, AcquisitionInfeasible, check_inputs, plan_acquisition
+from ..acquisition.trim import (
+    CLUSTER_GAP,
+    a_da_change,
+    burns_drift_sigma,
+    drift_lattice,
+    ei_margin,
+    final_od_arc,
+    plan_trim,
+    predicted_drift_sigma,
+    radar_passes,
+    trim_problems,
+)
+from ..constants import SECONDS_PER_DAY
+from ..relmotion.dynamics import propagate_chief
+from ..relmotion.roe import wrap_angle
+from ..relmotion.trajectory import Chief, state_at
+from .common import (
+    ERROR,
+    OK,
+    WARN,
+    Log,
+    PlannedBurn,
+    State,
+    burn_from_dict,
+    guarded,
+    optional,
+    planned_from_dict,
+    scalar,
+    status,
+    tuples,
+)
+
+PASS_SLACK = 900.0  # s, between a predicted pass and its OD solution (the 5 km separation, the solution's delay)
+SUMMARY_KEYS = ("total_dv", "n_burns", "time_to_ic", "a_dl_f", "a_da_f", "min_rn", "fov_ok", "solve_time")
+
+
+@dataclass(frozen=True)
+class IcPlannerConfig:
+    """The node's parameters (docs/parameters.md, ic_planner) and ``jd0``, the Julian date of sim time 0."""
+
+    cfg: AcquisitionConfig
+    trim: bool
+    burn_sigma: float
+    final_od_arc: float
+    replan_on_burn: bool
+    ei_margin_sigmas: float
+    ic_drift_tolerance: float
+    jd0: float
+
+
+@dataclass(frozen=True)
+class OdSolution:
+    """One OD solution (roe_sep_msgs/OrbitDetermination): solution ``stamp`` and estimate ``epoch`` [s], the chief's
+    mean elements ``kep`` ``[a, e, i, raan, argp, M]`` and its mean argument of latitude ``u`` [rad] as the message
+    carries it, the dimensionless ``roe``, their ``covariance`` (36, a*ROE [m^2]), ``a_da_dot`` [m/s] and its
+    1-sigma ``a_da_dot_sigma``."""
+
+    stamp: float
+    epoch: float
+    kep: tuple
+    u: float
+    roe: tuple
+    covariance: tuple
+    a_da_dot: float
+    a_da_dot_sigma: float
+
+    @property
+    def a(self) -> float:
+        return self.kep[0]
+
+    @property
+    def sigma_a_da(self) -> float:
+        """m, 1-sigma of a da from the covariance."""
+        return math.sqrt(max(self.covariance[0], 0.0))
+
+
+@dataclass(frozen=True)
+class IcPlannerState(State):
+    """What the ic_planner knows between events: the separation plan's last burn ``separation_end`` [s] (None: no
+    separation plan), the carrier burns ``executed`` (relative impulses), the IC epoch ``t_final`` [s], the newest OD's
+    ``last_key`` (solution stamp, epoch), the plan in force (``plan_in_force`` burns, their ``burn_epochs``, the
+    1-sigma ``plan_sigma`` [m] of a da at t_F from its OD at ``plan_od_epoch``), whether the final OD decided
+    (``final_decided``), the newest OD after the separation ``last_od``, a deferred re-plan ``replan_pending``, the
+    last plan's ``summary`` ((key, value) pairs as the status shows them) and the ``plans`` published."""
+
+    separation_end: float | None = None
+    executed: tuple = ()
+    t_final: float | None = None
+    last_key: tuple | None = None
+    burn_epochs: tuple | None = None
+    plan_in_force: tuple | None = None
+    final_decided: bool = False
+    plan_sigma: float | None = None
+    plan_od_epoch: float | None = None
+    last_od: OdSolution | None = None
+    replan_pending: bool = False
+    summary: tuple = ()
+    plans: int = 0
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "IcPlannerState":
+        """The state of :meth:`to_dict`."""
+        return cls(**{**d, "executed": tuple(burn_from_dict(b) for b in d["executed"]),
+                      "last_key": optional(tuples, d["last_key"]), "burn_epochs": optional(tuples, d["burn_epochs"]),
+                      "plan_in_force": optional(lambda p: tuple(planned_from_dict(b) for b in p), d["plan_in_force"]),
+                      "last_od": optional(lambda o: OdSolution(**{k: tuples(v) for k, v in o.items()}), d["last_od"]),
+                      "summary": tuples(d["summary"])})
+
+
+@dataclass(frozen=True)
+class PublishPlan:
+    """Publish the acquisition plan: header ``stamp`` [s], its ``burns`` (:class:`~.common.PlannedBurn`), ``aimed``
+    the predicted ROE (dimensionless) at the IC epoch ``t_final`` [s] with the chief's mean elements ``aimed_kep``
+    there (angles wrapped)."""
+
+    stamp: float
+    burns: tuple
+    aimed_roe: tuple
+    aimed_kep: tuple
+    t_final: float
+
+
+def values(state: IcPlannerState) -> dict:
+    """The status values: plans published and the last plan's summary."""
+    return {"plans": state.plans, **dict(state.summary)}
+
+
+def _shown(value):
+    """A summary value as the status shows it: a float to 6 significant digits, else its Python value."""
+    value = scalar(value)
+    return f"{value:.6g}" if isinstance(value, float) else value
+
+
+def on_separation_plan(state: IcPlannerState, burn_epochs, config: IcPlannerConfig) -> tuple:
+    """The separation plan's burn epochs [s]: the acquisition starts from an OD made after the last one."""
+    return dataclasses.replace(state, separation_end=max(burn_epochs, default=None)), ()
+
+
+def on_own_plan(state: IcPlannerState, burns, t_final: float, config: IcPlannerConfig) -> tuple:
+    """The latched acquisition plan (``burns``, IC epoch ``t_final`` [s]): a restarted ic_planner continues it."""
+    if state.t_final is not None or not burns:
+        return state, ()
+    return dataclasses.replace(state, t_final=t_final, burn_epochs=tuple(b.epoch for b in burns),
+                               plan_in_force=tuple(burns)), ()
+
+
+def on_od(state: IcPlannerState, od: OdSolution, now: float, config: IcPlannerConfig) -> tuple:
+    """A new OD solution at ``now`` [s]: ignored unless newer than the last one and made after the separation
+    plan; else :func:`decide`."""
+    key = (od.stamp, od.epoch)
+    if state.last_key is not None and key <= state.last_key:
+        return state, (Log("debug", f"OD solution {key} is not newer than {state.last_key}: ignored"),)
+    state = dataclasses.replace(state, last_key=key)
+    if state.separation_end is not None and state.separation_end >= od.epoch:
+        text = (f"OD at t = {od.epoch:.1f} s not used: the separation plan flies until t = {state.separation_end:.1f}"
+                " s; the acquisition starts from an OD made after it")
+        return state, (status(OK, text, values(state)),)
+    state = dataclasses.replace(state, last_od=od)
+    state, actions, _ = decide(state, od, now, config)
+    return state, actions
+
+
+def on_executed(state: IcPlannerState, burn: PlannedBurn, config: IcPlannerConfig) -> tuple:
+    """An executed maneuver on record: a carrier burn is flown (ERROR status for a malformed one); with
+    ``replan_on_burn`` an acquisition burn may re-plan (:func:`after_burn`)."""
+    if burn.spacecraft != "carrier":
+        return state, ()
+    try:
+        flown = burn.relative()
+    except ValueError as exc:
+        return state, (status(ERROR, f"executed maneuver rejected: {exc}", values(state), None),)
+    state = dataclasses.replace(state, executed=(*state.executed, flown))
+    if not (config.replan_on_burn and burn.purpose == "ic_acquisition"):
+        return state, ()
+    result, actions = guarded("re-plan after a burn rejected", "re-plan after a burn failed", values(state),
+                              after_burn, state, burn, config)
+    return (state, actions) if result is None else result
+
+
+def after_burn(state: IcPlannerState, burn: PlannedBurn, config: IcPlannerConfig) -> tuple:
+    """An executed acquisition burn departing from its plan by more than half the trim lattice in a da (seed 002
+    Eq. 2: a Delta da = 2 dvT / n), or the committed burn a departure's re-plan waited for: re-plan the rest from the
+    last OD and the record, or re-trim once the final OD decided."""
+    t, od = burn.epoch, state.last_od
+    if od is None or state.plan_in_force is None or state.t_final is None or t >= state.t_final:
+        return state, ()
+    planned = next((p for p in state.plan_in_force if p.spacecraft == "carrier" and abs(p.epoch - t) < 1e-3), None)
+    if planned is None:
+        return state, ()
+    departure = abs(float(a_da_change(burn.dv_rtn[1] - planned.dv_rtn[1], od.a)))
+    departed = departure > 0.5 * drift_lattice(od.a, config.cfg.dv_quantum)
+    if not (departed or state.replan_pending):
+        return state, ()
+    why = (f"burn at t = {t:.1f} s departed from its plan by {departure:.2f} m of a da" if departed else
+           f"burn at t = {t:.1f} s flown, the committed burn that deferred an earlier departure's re-plan")
+    text = f"{why}: {'re-trim' if state.final_decided else 're-plan'} from the OD at t = {od.epoch:.1f} s"
+    actions = (status(OK, text, values(state)),)
+    state = dataclasses.replace(state, replan_pending=False)
+    if state.final_decided:
+        state, more = final_trim(state, od, t, config, after_burn=True)
+        return state, actions + more
+    # a committed burn keeps the plan in force: its own execution record re-plans then
+    state, more, deferred = decide(state, od, t, config)
+    return dataclasses.replace(state, replan_pending=deferred), actions + more
+
+
+def decide(state: IcPlannerState, od: OdSolution, now: float, config: IcPlannerConfig) -> tuple:
+    """What the OD does at ``now`` [s]: the final trim, a re-plan, or nothing (docs/run.md, "Decisions");
+    ``(state, actions, deferred)``, ``deferred`` True when a committed burn of the plan in force kept it."""
+    cfg = config.cfg
+    arc = radar_arc(od, state.t_final, config) if state.t_final is not None else None
+    final_band = state.t_final is not None and now < state.t_final < now + 2.0 * cfg.planning_margin
+    if config.trim and (od.epoch >= arc[1] - PASS_SLACK if arc else final_band):
+        if state.final_decided:  # once (a departing burn re-trims through after_burn)
+            return state, (), False
+        return (*final_trim(state, od, now, config), False)
+    keep_arc = arc is None or max(od.epoch, now) + cfg.planning_margin <= arc[0]
+    actions = ()
+    if not keep_arc:
+        missed, actions = guarded("OD estimate rejected", "acquisition check failed", values(state), plan_problems,
+                                  state, od, now, config)
+        if missed is None:
+            return state, actions, False
+        if not missed:
+            text = (f"OD at t = {od.epoch:.1f} s not used: the plan in force meets the initial conditions by it, and "
+                    f"its burns would fall in the final OD's radar arc [{arc[0]:.0f}, {arc[2]:.0f}] s (the final "
+                    f"OD comes after the pass at t = {arc[1]:.0f} s)")
+            return state, (status(OK, text, values(state)),), False
+        actions = (Log("info", f"OD at t = {od.epoch:.1f} s: the plan in force would miss the initial conditions "
+                               f"({'; '.join(missed)}): re-planned within the final OD's radar arc"),)
+    sigma, known = drift_sigma(od, state.t_final, config), plan_knowledge(state, od, config)
+    if sigma is not None and known is not None and sigma > known:
+        text = (f"OD at t = {od.epoch:.1f} s not used: its a da at the IC epoch is known to {sigma:.2f} m (1-sigma), "
+                f"the plan in force's to {known:.2f} m")
+        return state, actions + (status(OK, text, values(state)),), False
+    blocking = committed_burn(state, od.epoch, now, cfg.planning_margin)
+    if blocking is not None:
+        text = (f"OD at t = {od.epoch:.1f} s not used: the burn at t = {blocking:.1f} s of the plan in force is "
+                f"{'executed after the OD epoch' if blocking < now else 'committed (within planning_margin)'}")
+        return state, actions + (status(WARN, text, values(state), "warning"),), True
+    made, failed = guarded("OD estimate rejected", "acquisition planning failed", values(state), make_plan, state,
+                           od, now, config, keep_arc=keep_arc)
+    if made is None:
+        return state, actions + failed, False
+    publish, plan = made
+    if not publish.burns:  # the ICs are met without a burn: nothing to fly (an empty plan is no plan)
+        text = (f"OD at t = {od.epoch:.1f} s: the initial conditions are met at t = {plan.t_final:.1f} s without a "
+                "further burn; the plan in force stays")
+        return state, actions + (status(OK, text, values(state)),), False
+    summary = plan.summary()
+    state = dataclasses.replace(
+        state, replan_pending=False, plan_in_force=publish.burns, plan_sigma=drift_sigma(od, plan.t_final, config),
+        plan_od_epoch=od.epoch, burn_epochs=tuple(float(t) for t in plan.epochs),
+        t_final=float(plan.t_final) if state.t_final is None else state.t_final, plans=state.plans + 1,
+        summary=tuple((k, _shown(summary[k])) for k in summary if k in SUMMARY_KEYS))
+    log = Log("info", f"IC acquisition planned from the OD at t = {od.epoch:.1f} s: {plan.n_burns} burns, total dv = "
+                      f"{plan.total_dv:.3f} m/s (LP {plan.lp_dv:.4f}), ICs at t = {plan.t_final:.1f} s, "
+                      f"a dl_F = {plan.final_roe[1] * plan.a:.0f} m, min R-N = {plan.min_rn:.0f} m")
+    return state, actions + (publish, log, status(OK, "acquisition plan published", values(state), None)), False
+
+
+def final_trim(state: IcPlannerState, od: OdSolution, now: float, config: IcPlannerConfig, *,
+               after_burn: bool = False) -> tuple:
+    """The final OD's drift trim from the first newer solution near t_F whose flown burns are all on record
+    (:func:`~roe_sep.core.acquisition.trim.plan_trim`); ``after_burn``: again after a departing burn, publishing only a
+    trim. ``(state, actions)``."""
+    if state.t_final is not None and now >= state.t_final:
+        text = (f"OD at t = {od.epoch:.1f} s not used: it arrives after the IC epoch t = {state.t_final:.1f} s "
+                "without a final OD trim decision before it")
+        state = dataclasses.replace(state, final_decided=True)
+        return state, (status(WARN, text, values(state), "warning"),)
+    flown = {round(b.epoch, 3) for b in state.executed}
+    if any(od.epoch <= t < now and round(t, 3) not in flown for t in state.burn_epochs or ()):
+        return state, ()  # a burn flown after the OD epoch is not on record yet: the next solution decides
+    kept = tuple(b for b in state.plan_in_force or () if b.epoch >= now and round(b.epoch, 3) not in flown)
+    decision, actions = guarded("final OD rejected", "drift trim failed", values(state), trim_decision, state, od,
+                                now, config, kept)
+    if decision is None:
+        return state, actions
+    state = dataclasses.replace(state, final_decided=True)
+    if after_burn and not decision.trim:
+        return state, ()
+    state = dataclasses.replace(state, summary=_updated(state.summary, {f"final_{k}": _shown(v) for k, v in
+                                                                         decision.summary().items()}))
+    text = (f"final OD at t = {od.epoch:.1f} s: predicted a da at the IC epoch {decision.predicted_a_da:+.2f} m "
+            f"(1-sigma {decision.sigma_a_da:.2f} m, trim threshold {decision.threshold:.2f} m): ")
+    if not decision.trim:
+        return state, (status(OK, text + "no trim", values(state)),)
+    burns = (*kept, PlannedBurn.at(decision.epoch, float(wrap_angle(decision.u)), (0.0, decision.dv_t, 0.0),
+                                   "carrier", "ic_acquisition"))
+    publish = PublishPlan(now, burns, *aimed(od, decision.final_roe, decision.t_final, config), decision.t_final)
+    state = dataclasses.replace(state, plan_in_force=burns, t_final=decision.t_final,
+                                burn_epochs=tuple(b.epoch for b in burns), plans=state.plans + 1)
+    text += f"trim of {decision.dv_t:+.3f} m/s at t = {decision.epoch:.1f} s, IC epoch t = {decision.t_final:.1f} s"
+    if decision.problems:  # missed anyway: the trim nulls the drift to hold the formation
+        text += f"; the initial conditions are missed even so ({'; '.join(decision.problems)}): drift nulled"
+        return state, (publish, status(WARN, text, values(state), "warning"))
+    return state, (publish, status(OK, text, values(state)))
+
+
+def _updated(pairs: tuple, new: dict) -> tuple:
+    """``(key, value)`` pairs updated as a dict would be (order kept, new keys last)."""
+    merged = dict(pairs)
+    merged.update(new)
+    return tuple(merged.items())
+
+
+def committed_burn(state: IcPlannerState, t_od: float, now: float, planning_margin: float) -> float | None:
+    """A burn epoch [s] of the plan in force that a re-plan must not touch: due within ``planning_margin`` from
+    ``now``, or executed after the OD epoch ``t_od`` without its record yet; t_F when the acquisition is (nearly)
+    complete; None when re-planning is free."""
+    flown = {round(b.epoch, 3) for b in state.executed}
+    for t in state.burn_epochs or ():
+        if round(t, 3) in flown:  # flown (a re-plan after a burn starts at that burn's epoch)
+            continue
+        if now <= t < now + planning_margin or t_od <= t < now:
+            return t
+    if state.t_final is not None and now + 2.0 * planning_margin > state.t_final:
+        return state.t_final  # no new acquisition from here
+    return None
+
+
+def start_state(state: IcPlannerState, od: OdSolution, now: float, config: IcPlannerConfig) -> tuple:
+    """The best knowledge at max(OD epoch, now, the latest burn on record): the estimate plus every carrier burn
+    flown since its epoch, as (ROE, Chief there, da_dot [1/s]); ValueError on a bad estimate."""
+    a, inc, j2 = od.a, od.kep[2], config.cfg.j2
+    if not (math.isfinite(a) and a > 6.4e6):
+        raise ValueError(f"chief semi-major axis {a} m is not a valid low Earth orbit")
+    od_chief = Chief(a=a, inc=inc, u0=od.u, t0=od.epoch)
+    roe_od = np.array(od.roe, dtype=float)
+    da_dot = od.a_da_dot / a
+    check_inputs(roe_od, od_chief, da_dot)
+    # every burn on record, also one flown after ``now`` (a solution stamped before a burn it arrives after)
+    t_start = max(od.epoch, now, *(b.epoch for b in state.executed))
+    flown = [b for b in state.executed if od.epoch < b.epoch <= t_start]
+    roe0 = state_at(roe_od, od.epoch, flown, t_start, od_chief, j2=j2, da_dot=da_dot)
+    return roe0, Chief(a=a, inc=inc, u0=float(od_chief.u_at(t_start, j2)), t0=t_start), da_dot
+
+
+def _to_fly(state: IcPlannerState, kept, t0: float) -> tuple:
+    """(relative impulses of the plan's ``kept`` burns, those plus the burns flown after ``t0``)."""
+    to_fly = [b.relative() for b in kept]
+    return to_fly, to_fly + [b for b in state.executed if b.epoch > t0]
+
+
+def plan_problems(state: IcPlannerState, od: OdSolution, now: float, config: IcPlannerConfig) -> list:
+    """The initial conditions that the plan in force misses at t_F by this OD (:func:`trim_problems`, and the drift
+    beyond ``ic_drift_tolerance``: a smaller one is the final trim's); [] when it meets them."""
+    roe0, chief, da_dot = start_state(state, od, now, config)
+    flown = {round(b.epoch, 3) for b in state.executed}
+    kept = [b for b in state.plan_in_force or () if b.epoch >= chief.t0 and round(b.epoch, 3) not in flown]
+    final = state_at(roe0, chief.t0, _to_fly(state, kept, chief.t0)[1], max(state.t_final, chief.t0), chief,
+                     j2=config.cfg.j2, da_dot=da_dot)
+    problems = trim_problems(final, chief.a, config.cfg, roe0[1] > 0)
+    a_da = float(final[0]) * chief.a
+    if abs(a_da) > config.ic_drift_tolerance:  # no waiting for a final OD that may not come
+        problems.append(f"|a da_F| = {abs(a_da):.1f} m beyond ic_drift_tolerance = {config.ic_drift_tolerance:g} m")
+    return problems
+
+
+def trim_decision(state: IcPlannerState, od: OdSolution, now: float, config: IcPlannerConfig, kept):
+    """:func:`plan_trim` from the OD with the ``kept`` burns of the plan in force still to fly and the burns flown
+    after the decision time."""
+    roe0, chief, da_dot = start_state(state, od, now, config)
+    to_fly, burns = _to_fly(state, kept, chief.t0)
+    return plan_trim(roe0, chief, da_dot, burns, state.t_final, t_earliest=now + config.cfg.planning_margin,
+                     sigma_a_da=od.sigma_a_da, sigma_rate=od.a_da_dot_sigma, tolerance=config.ic_drift_tolerance,
+                     cfg=config.cfg, t_od=od.epoch,
+                     sigma_burns=burns_drift_sigma([b.dv_rel[1] for b in to_fly], chief.a, config.burn_sigma))
+
+
+def make_plan(state: IcPlannerState, od: OdSolution, now: float, config: IcPlannerConfig, *,
+              keep_arc: bool = True) -> tuple:
+    """``(PublishPlan, core plan)`` for one OD solution (:func:`plan_acquisition`, the e/i planned with the OD's
+    uncertainty as margin, ``ei_margin_sigmas``); ValueError on a bad estimate or no solution."""
+    roe0, chief, da_dot = start_state(state, od, now, config)
+    t_start = chief.t0
+    # corrections of an acquisition in progress aim at its IC epoch; a first plan opens a new window
+    cfg = config.cfg if state.t_final is None else dataclasses.replace(config.cfg, window=state.t_final - t_start)
+    t_f = state.t_final
+    if t_f is None:
+        t_f = float(grid_epochs(t_start, t_start + cfg.window, chief, cfg.grid_per_orbit, cfg.j2)[-1])
+    arc = radar_arc(od, t_f, config) if keep_arc else None
+    kwargs = dict(t_earliest=t_start + config.cfg.planning_margin, no_burns=[(arc[0], arc[2])] if arc else ())
+    margin = ei_margin(np.array(od.roe, dtype=float) * chief.a, od.covariance, config.ei_margin_sigmas)
+    try:
+        plan = plan_acquisition(roe0, chief, da_dot, dataclasses.replace(cfg, min_ei=cfg.min_ei + margin), **kwargs)
+    except AcquisitionInfeasible:
+        if margin == 0.0:
+            raise
+        plan = plan_acquisition(roe0, chief, da_dot, cfg, **kwargs)
+    burns = tuple(PlannedBurn.at(float(t), float(wrap_angle(u)), dv, "carrier", "ic_acquisition")
+                  for t, u, dv in zip(plan.epochs, plan.u, plan.dv_carrier))
+    return PublishPlan(t_start, burns, *aimed(od, plan.final_roe, plan.t_final, config), plan.t_final), plan
+
+
+def aimed(od: OdSolution, final_roe, t_final: float, config: IcPlannerConfig) -> tuple:
+    """``(ROE, chief elements)`` a plan aims at: ``final_roe`` with the OD's chief propagated to ``t_final`` [s]."""
+    kep = propagate_chief(np.array(od.kep, dtype=float), t_final - od.epoch, config.cfg.j2)
+    kep[3:] = wrap_angle(kep[3:])
+    return tuple(float(x) for x in final_roe), tuple(float(x) for x in kep)
+
+
+def drift_sigma(od: OdSolution, t_final: float | None, config: IcPlannerConfig) -> float | None:
+    """1-sigma [m] of a da at ``t_final`` predicted from the OD (:func:`predicted_drift_sigma`); None without
+    ``trim`` or t_F."""
+    if not config.trim or t_final is None:
+        return None
+    return predicted_drift_sigma(od.sigma_a_da, od.a_da_dot_sigma, t_final - od.epoch)
+
+
+def plan_knowledge(state: IcPlannerState, od: OdSolution, config: IcPlannerConfig) -> float | None:
+    """1-sigma [m] of a da at t_F as the plan in force knows it: its OD's, with the execution errors of the burns
+    flown since (``burn_sigma`` of 2 |dvT| / n each, seed 002 Eq. 2); None without a plan (or ``trim``)."""
+    if state.plan_sigma is None:
+        return None
+    flown = [b.dv_rel[1] for b in state.executed if b.epoch > state.plan_od_epoch]
+    return math.hypot(state.plan_sigma, burns_drift_sigma(flown, od.a, config.burn_sigma))
+
+
+def radar_arc(od: OdSolution, t_final: float, config: IcPlannerConfig) -> tuple | None:
+    """``(start, last_rise, end)`` [s] of the final OD's burn-free radar arc for the IC epoch ``t_final``
+    (:func:`final_od_arc` of the predicted TIRA passes of the OD's chief); None with ``trim`` or ``final_od_arc``
+    off, or without one."""
+    if not (config.trim and config.final_od_arc):
+        return None
+    return _arc(tuple(od.kep), od.epoch, t_final, config.final_od_arc, config.jd0, j2=config.cfg.j2)
+
+
+@functools.lru_cache(maxsize=16)
+def _arc(kep: tuple, t_od: float, t_final: float, min_arc: float, jd0: float, *, j2: bool) -> tuple | None:
+    """:func:`radar_arc`, memoised: one OD and IC epoch give one arc, asked by every rule and re-plan."""
+    passes = radar_passes(np.array(kep, dtype=float), t_od, t_final - 2.0 * SECONDS_PER_DAY,
+                          t_final + 3.0 * CLUSTER_GAP, jd0, j2=j2)
+    return final_od_arc(passes, t_final, min_arc)

@@ -1,0 +1,350 @@
+"""The planner's decisions (docs/run.md, "Decisions"): the blind drift-stop of a commanded ejection, its hold when
+the camera sees a weak ejection, its replacement when none is on record, its completion when the one on record
+departs from its command.
+
+Each ``on_<event>(state, ..., config)`` returns ``(new_state, actions)``: :class:`PublishPlan`,
+:class:`StopBearings` and the shared :class:`~.common.Status` / :class:`~.common.Log`. Physics: seed 002 Eqs. 9,
+13, 18 (:func:`~roe_sep.core.separation.double_impulse.plan_drift_stop`), seed 001 Sec. 3
+(:func:`~roe_sep.core.separation.multi_impulse.plan_carrier_burns`), and
+:func:`~roe_sep.core.safety.ejection_check.check_ejection` for the camera.
+"""
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ...stamps import sec_nanosec
+from ..relmotion.dynamics import arg_latitude_rate, drag_da_dot, propagate_chief, raan_rate
+from ..relmotion.orbit import angle_between
+from ..relmotion.roe import wrap_angle
+from ..safety.anomaly import magnitude_z
+from ..safety.ejection_check import check_ejection, nominal_fraction
+from ..separation.double_impulse import plan_drift_stop, reduction_bounds
+from ..separation.multi_impulse import multi_config, plan_carrier_burns
+from ..truth.secular import error_references
+from .common import ERROR, OK, WARN, Log, PlannedBurn, Stamped, State, Status, optional, status, tuples
+
+RECORD_SETTLE = 2.0  # wall s a restarted planner (no lockstep) lets the latched executed record arrive in full
+
+
+@dataclass(frozen=True)
+class PlannerConfig:
+    """The node's parameters (docs/parameters.md, planner): ``p`` [m/s] the drift-stop reduction (None: from each
+    event), ``scenario`` (:class:`~roe_sep.core.config.Scenario`), ``multi`` the multi-impulse configuration (None:
+    double impulse); angles in radians."""
+
+    strategy: str
+    k: int
+    p_mode: str
+    p: float | None
+    j2: bool
+    scenario: Any
+    multi: Any = None
+    retry: bool = False
+    retry_tolerance: float = 0.0
+    retry_margin: float = 0.0
+    makeup: bool = False
+    makeup_z: float = 0.0
+    makeup_pointing: float = 0.0
+    hold: bool = False
+    camera_sigma: float = 0.0
+    camera_floor: float = 0.0
+    hold_sigmas: float = 0.0
+    hold_alpha: float = 0.0
+    hold_lead: float = 0.0
+
+
+@dataclass(frozen=True)
+class Ejection(Stamped):
+    """A commanded ejection (roe_sep_msgs/EjectionEvent): its stamp ``sec``, ``nanosec``, the chief's mean elements
+    ``kep`` ``[a, e, i, raan, argp, M]`` and mean argument of latitude ``u`` [rad] as the message carries it, the
+    picosatellite's ``dv_rtn`` (3,) [m/s] at ``u1`` [rad]."""
+
+    kep: tuple
+    u: float
+    dv_rtn: tuple
+    u1: float
+
+
+@dataclass(frozen=True)
+class InForce:
+    """The drift-stop in force: its ``ejection``, ``k`` (None: the default), ``p`` [m/s] and epoch ``t_stop`` [s]."""
+
+    ejection: Ejection
+    k: int | None
+    p: float
+    t_stop: float
+
+
+@dataclass(frozen=True)
+class Aimed:
+    """A plan's ``aimed`` field: ``roe`` (dimensionless) at ``t`` [s] with the chief's ``elements`` (a, e, i, raan,
+    argp, mean argument of latitude) there."""
+
+    roe: tuple
+    elements: tuple
+    t: float
+
+
+@dataclass(frozen=True)
+class PublishPlan:
+    """Publish a separation plan: ``strategy``, the ejection's stamp ``ejection_stamp`` and the header's ``stamp``
+    ((sec, nanosec)), ``p_reduction`` [m/s], ``burns`` (:class:`~.common.PlannedBurn`; none: the drift-stop
+    withdrawn) and ``aimed`` (None: empty)."""
+
+    strategy: str
+    ejection_stamp: tuple
+    stamp: tuple
+    p_reduction: float
+    burns: tuple = ()
+    aimed: Aimed | None = None
+
+
+@dataclass(frozen=True)
+class StopBearings:
+    """The camera's decision is made: its bearings are no longer needed."""
+
+
+@dataclass(frozen=True)
+class PlannerState(State):
+    """What the planner knows between events: the drift-stop ``in_force``, the ``executed_stops`` on record
+    ((epoch [s], carrier dv RTN (3,) [m/s])), the release epoch ``released`` [s] and the wall time ``record_since``
+    [s] it arrived, the camera's ``bearings`` ((t [s], unit line of sight (3,))) until ``camera_done``, the
+    drift-stop epochs ``retried`` (to the ms) and the ``plans`` published."""
+
+    in_force: InForce | None = None
+    executed_stops: tuple = ()
+    released: float | None = None
+    record_since: float | None = None
+    bearings: tuple = ()
+    camera_done: bool = False
+    retried: tuple = ()
+    plans: int = 0
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "PlannerState":
+        """The state of :meth:`to_dict`."""
+        def in_force(f):
+            return InForce(**{**f, "ejection": Ejection(**{k: tuples(v) for k, v in f["ejection"].items()})})
+
+        return cls(**{**d, "in_force": optional(in_force, d["in_force"]), "executed_stops": tuples(d["executed_stops"]),
+                      "bearings": tuples(d["bearings"]), "retried": tuples(d["retried"])})
+
+
+def values(state: PlannerState, config: PlannerConfig) -> dict:
+    """The status values."""
+    return {"strategy": config.strategy, "k": config.k, "p_mode": config.p_mode,
+            "p": "per event" if config.p is None else config.p, "plans": state.plans}
+
+
+def on_ejection(state: PlannerState, ejection: Ejection, config: PlannerConfig) -> tuple:
+    """A commanded ejection: its drift-stop (or multi-impulse) plan, or an ERROR status for a malformed event."""
+    try:
+        plan = separation_plan(ejection, config)
+    except ValueError as exc:
+        return state, (status(ERROR, f"ejection event rejected: {exc}", values(state, config), "error"),)
+    burn = plan.burns[0]
+    multi = config.strategy == "multi_impulse"
+    in_force = state.in_force if multi else InForce(ejection, None, plan.p_reduction, burn.epoch)
+    state = dataclasses.replace(state, plans=state.plans + 1, in_force=in_force)
+    x, y, z = burn.dv_rtn
+    log = Log("info", f"drift-stop planned at t = {burn.epoch:.1f} s, carrier dv RTN = ({x:+.6f}, {y:+.6f}, "
+                      f"{z:+.6f}) m/s, p = {plan.p_reduction:g} m/s")
+    return state, (plan, log, status(OK, "drift-stop plan published", values(state, config), None))
+
+
+def on_executed(state: PlannerState, burn: PlannedBurn, wall: float, config: PlannerConfig) -> tuple:
+    """An executed maneuver on record at wall time ``wall`` [s]: a carrier drift-stop, or the release (the
+    ejection's epoch: when, not how fast)."""
+    if burn.spacecraft == "carrier" and burn.purpose == "drift_stop":
+        return dataclasses.replace(state, executed_stops=(*state.executed_stops, (burn.epoch, burn.dv_rtn))), ()
+    if burn.purpose == "ejection" and state.released is None:
+        return dataclasses.replace(state, released=burn.epoch, record_since=wall), ()
+    return state, ()
+
+
+def on_bearing(state: PlannerState, t: float, los, config: PlannerConfig) -> tuple:
+    """The camera's measured line of sight ``los`` (3,) at ``t`` [s], kept until the decision."""
+    if not config.hold or state.camera_done:
+        return state, ()
+    return dataclasses.replace(state, bearings=(*state.bearings, (t, tuple(float(c) for c in los)))), ()
+
+
+def record_recovered(state: PlannerState, wall: float, lockstep: bool) -> bool:
+    """Whether the executed-maneuver record is complete enough to say a drift-stop is missing: the executed ejection
+    is on it and, without ``lockstep`` (where every round holds every message), ``RECORD_SETTLE`` wall seconds have
+    passed since it arrived (a restarted planner's latched history taken in full)."""
+    if state.released is None:
+        return False
+    return lockstep or wall - state.record_since >= RECORD_SETTLE
+
+
+def on_step(state: PlannerState, t: float, wall: float, lockstep: bool, config: PlannerConfig) -> tuple:
+    """Sim-time checks at ``t`` [s] (wall time ``wall``; ``lockstep``: the record holds every message): the camera's
+    decision before the drift-stop (:func:`camera_decision`), a missing drift-stop's replacement
+    (:func:`missing`, :func:`replace_missing`), a departing one's completion (:func:`check_executed`). A failed check
+    is an ERROR."""
+    if state.in_force is None:
+        return state, ()
+    actions = ()
+    recovered = record_recovered(state, wall, lockstep)
+    try:
+        if not state.camera_done and t >= state.in_force.t_stop - config.hold_lead:
+            state, actions = dataclasses.replace(state, camera_done=True), (StopBearings(),)
+            state, more = camera_decision(state, t, config)
+            actions += more
+        if config.retry and state.in_force is not None and recovered and missing(state, t, config):
+            # found missing once, even when its replacement fails
+            state = dataclasses.replace(state, retried=(*state.retried, round(state.in_force.t_stop, 3)))
+            state, more = replace_missing(state, t, config)
+            actions += more
+        if config.makeup and state.in_force is not None and recovered:
+            state, more = check_executed(state, t, config)
+            actions += more
+    except ValueError as exc:
+        actions += (status(ERROR, f"drift-stop check failed: {exc}", values(state, config), "error"),)
+    return state, actions
+
+
+def finding(name: str, t: float, text: str, extra: dict) -> Status:
+    """A contingency the planner acted on: logged and a named WARN ``contingency`` status stamped ``t`` [s]."""
+    return status(WARN, f"{name}: {text}", {"contingency": name, "epoch_s": f"{t:.1f}", **extra}, "warning",
+                  part="contingency", stamp=t)
+
+
+def camera_decision(state: PlannerState, t: float, config: PlannerConfig) -> tuple:
+    """Test the camera's bearings against the commanded ejection; withdraw the drift-stop of a weak one (an empty
+    plan)."""
+    f = state.in_force
+    if not config.hold or state.released is None or t >= f.t_stop or not state.bearings:
+        return state, ()
+    ejection = f.ejection
+    chief = propagate_chief(np.array(ejection.kep, dtype=float), state.released - ejection.epoch, config.j2)
+    mc = config.scenario.monte_carlo
+    da_dot = float(drag_da_dot(mc.delta_b, mc.density, chief[0])) if mc.drag else 0.0
+    times = np.array([b[0] for b in state.bearings])
+    los = np.array([b[1] for b in state.bearings])
+    bound = nominal_fraction(config.scenario.separation.spl_sigma, mc.ballistic_sigma, config.hold_sigmas)
+    check = check_ejection(times, los, np.array(ejection.dv_rtn, dtype=float), state.released, chief,
+                           da_dot=da_dot, sigma=config.camera_sigma, floor=config.camera_floor, bound=bound,
+                           alpha=config.hold_alpha, j2=config.j2)
+    state = dataclasses.replace(state, bearings=())
+    log = Log("info", f"camera check of the ejection: best f1/g = {check.f1:.2f} (nominal >= {bound:.3f}), chi-square "
+                      f"gain {check.gain:.1f}, {check.samples} bearings: "
+                      f"{'drift-stop held' if check.weak else 'drift-stop flies'}")
+    if not check.weak:
+        return state, (log,)
+    hold = PublishPlan("double_impulse", (ejection.sec, ejection.nanosec), sec_nanosec(t), 0.0)
+    state = dataclasses.replace(state, plans=state.plans + 1, in_force=None)
+    return state, (log, hold, finding(
+        "weak_ejection", t, f"the camera's bearings fit f1 = {check.f1:.2f} of the commanded ejection at the nominal "
+        f"drag (chi-square gain {check.gain:.1f} over the nominal set f1/g >= {bound:.3f}, {check.samples} bearings): "
+        f"drift-stop at t = {f.t_stop:.0f} s withdrawn, the acquisition starts from the first OD",
+        {"f1": f"{check.f1:.3f}", "gain": f"{check.gain:.2f}", "samples": check.samples}))
+
+
+def orbits_later(ejection: Ejection, t: float, t_burn: float, config: PlannerConfig) -> tuple:
+    """Whole orbits after ``t_burn`` [s] (at least one) to the first epoch ``retry_margin`` after the finding at
+    ``t`` [s], and the orbit's period [s]: where a replaced or completed drift-stop flies at its argument of
+    latitude."""
+    period = 2.0 * math.pi / float(arg_latitude_rate(ejection.kep[0], ejection.kep[2], config.j2))
+    return max(1, math.ceil((t + config.retry_margin - t_burn) / period - 1e-9)), period
+
+
+def missing(state: PlannerState, t: float, config: PlannerConfig) -> bool:
+    """Whether the record shows no drift-stop ``retry_tolerance`` after the epoch of the one in force (not replaced
+    yet)."""
+    f = state.in_force
+    if t <= f.t_stop + config.retry_tolerance or round(f.t_stop, 3) in state.retried:
+        return False
+    return not any(e >= f.t_stop - config.retry_tolerance for e, _ in state.executed_stops)
+
+
+def replace_missing(state: PlannerState, t: float, config: PlannerConfig) -> tuple:
+    """The missing drift-stop in force replaced: the same one whole orbits later (seed 002 Eqs. 9, 18), a new plan
+    stamped with the finding at ``t`` [s]."""
+    f = state.in_force
+    k = config.k if f.k is None else f.k
+    orbits, _ = orbits_later(f.ejection, t, f.t_stop, config)
+    plan = dataclasses.replace(separation_plan(f.ejection, config, k=k + 2 * orbits, p=f.p), stamp=sec_nanosec(t))
+    t_new = plan.burns[0].epoch
+    state = dataclasses.replace(state, plans=state.plans + 1, in_force=InForce(f.ejection, k + 2 * orbits, f.p, t_new))
+    return state, (plan, finding(
+        "drift_stop_replaced", t, f"no drift-stop on record {t - f.t_stop:.0f} s after its epoch t = {f.t_stop:.1f} "
+        f"s: the same drift-stop {orbits} orbit(s) later, at t = {t_new:.1f} s",
+        {"planned_epoch_s": f"{f.t_stop:.1f}", "replacement_epoch_s": f"{t_new:.1f}"}))
+
+
+def check_executed(state: PlannerState, t: float, config: PlannerConfig) -> tuple:
+    """Complete the drift-stop in force when the record's drift-stop departs from its command (beyond ``makeup_z``
+    sigmas or ``makeup_pointing``): the rest, commanded minus executed, whole orbits later at the same argument of
+    latitude (seed 002 Eq. 2 is linear in the burn at a given u)."""
+    f = state.in_force
+    done = [(e, dv) for e, dv in state.executed_stops if e >= f.t_stop - config.retry_tolerance]
+    if not done or config.strategy == "multi_impulse":
+        return state, ()
+    if len(done) > 1:  # a completion already flew (a restarted planner's record)
+        return dataclasses.replace(state, in_force=None), ()
+    t_exec, dv_exec = done[0][0], np.array(done[0][1], dtype=float)
+    plan = separation_plan(f.ejection, config, k=f.k, p=f.p)
+    burn = plan.burns[0]
+    dv_cmd = np.array(burn.dv_rtn, dtype=float)
+    ref = error_references(["drift_stop"], [dv_cmd], plan.p_reduction)[0]
+    z = magnitude_z(dv_exec, dv_cmd, ref, config.scenario.separation.thruster_sigma)
+    off = float(angle_between(dv_exec, dv_cmd))
+    state = dataclasses.replace(state, in_force=None)  # one drift-stop, checked once
+    if (z is None or abs(z) <= config.makeup_z) and off <= config.makeup_pointing:
+        return state, ()
+    orbits, period = orbits_later(f.ejection, t, burn.epoch, config)
+    t_new = burn.epoch + orbits * period
+    rest = dv_cmd - dv_exec
+    out = PublishPlan("double_impulse", (f.ejection.sec, f.ejection.nanosec), sec_nanosec(t), 0.0,
+                      (PlannedBurn.at(t_new, burn.u, rest, "carrier", "drift_stop"),), plan.aimed)
+    state = dataclasses.replace(state, plans=state.plans + 1)
+    norm = float(np.linalg.norm(rest))
+    return state, (out, finding(
+        "drift_stop_completed", t, f"the drift-stop at t = {t_exec:.1f} s executed {float(np.linalg.norm(dv_exec)):.4f}"
+        f" m/s of {float(np.linalg.norm(dv_cmd)):.4f} m/s ({'n/a' if z is None else f'{z:+.1f}'} sigma, "
+        f"{math.degrees(off):.2f} deg off): the rest, {norm:.4f} m/s, {orbits} orbit(s) later at t = {t_new:.1f} s",
+        {"executed_epoch_s": f"{t_exec:.1f}", "completion_epoch_s": f"{t_new:.1f}", "rest_m_s": f"{norm:.4f}"}))
+
+
+def separation_plan(ejection: Ejection, config: PlannerConfig, *, k: int | None = None,
+                    p: float | None = None) -> PublishPlan:
+    """The plan of one commanded ejection: the drift-stop k pi later with reduction ``p`` (defaults: the config's;
+    seed 002 Eqs. 9, 18, 21) or every multi-impulse carrier burn (seed 001 Sec. 3); ValueError on a malformed
+    event (NaN, impossible orbit)."""
+    a, e, inc, raan, argp = ejection.kep[:5]
+    if not (math.isfinite(a) and a > 6.4e6 and math.isfinite(inc) and math.isfinite(raan)):
+        raise ValueError(f"chief elements are not a valid low Earth orbit (a = {a} m, i = {inc} rad)")
+    dv1 = np.array(ejection.dv_rtn, dtype=float)
+    if not np.all(np.isfinite(dv1)):
+        raise ValueError(f"ejection dv is not finite: {dv1.tolist()}")
+    stamp, epoch1 = (ejection.sec, ejection.nanosec), ejection.epoch
+    if config.strategy == "multi_impulse":
+        sep = multi_config(config.scenario.separation, config.multi)
+        mc = config.scenario.monte_carlo  # the pair is planned on the nominal differential drag
+        da_dot = float(drag_da_dot(mc.delta_b, mc.density, a)) if mc.drag else 0.0
+        plan = plan_carrier_burns(dv1, ejection.u1, epoch1, a, inc, sep=sep, mcfg=config.multi, j2=config.j2,
+                                  da_dot=da_dot)
+        burns = tuple(PlannedBurn.at(b.epoch, b.u, b.dv_carrier_rtn, "carrier", b.purpose) for b in plan.burns)
+        return PublishPlan("multi_impulse", stamp, stamp, float(plan.p), burns,
+                           _aimed(ejection, plan.roe_final, plan.ic_epoch, plan.burns[-1].u, config))
+    if p is None:
+        p = reduction_bounds(dv1[1], config.scenario.separation)[0] if config.p is None else config.p
+    stop = plan_drift_stop(dv1, ejection.u1, epoch1, a, inc, k=k or config.k, p=p, j2=config.j2)
+    burn = PlannedBurn.at(stop.epoch, stop.u2, stop.dv_carrier_rtn, "carrier", "drift_stop")
+    return PublishPlan("double_impulse", stamp, stamp, float(stop.p), (burn,),
+                       _aimed(ejection, stop.aimed_roe, stop.epoch, stop.u2, config))
+
+
+def _aimed(ejection: Ejection, roe, t: float, u: float, config: PlannerConfig) -> Aimed:
+    """``roe`` at ``t`` [s] with the chief's elements there (its RAAN drifted under J2, mean argument of latitude
+    ``u``)."""
+    a, e, inc, raan, argp = ejection.kep[:5]
+    dt = t - ejection.epoch
+    raan_t = float(wrap_angle(raan + (raan_rate(a, inc) * dt if config.j2 else 0.0)))
+    return Aimed(tuple(float(x) for x in roe), (a, e, inc, raan_t, argp, float(wrap_angle(u))), float(t))
