@@ -12,6 +12,7 @@ passes (:func:`counted_passes`).
 from typing import NamedTuple
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .radar import add_noise, visible
 
@@ -35,13 +36,14 @@ class RadarRecord(NamedTuple):
     """Epoch [s] of the chief sample the chief was propagated from."""
 
 
-def trackable(elevation, separation, mask: float, min_separation: float) -> np.ndarray:
+def trackable(elevation: ArrayLike, separation: ArrayLike, mask: float, min_separation: float) -> np.ndarray:
     """The epochs a station measures: the picosatellite above the elevation ``mask`` [rad] (:func:`visible`) and
     at least ``min_separation`` [m] from the carrier (``separation`` [m]; seed 001: 5 km)."""
     return visible(elevation, mask) & (np.asarray(separation, dtype=float) >= min_separation)
 
 
-def noisy_measurement(z_true, sigma, rng: np.random.Generator, range_bias: float = 0.0) -> np.ndarray:
+def noisy_measurement(z_true: ArrayLike, sigma: ArrayLike, rng: np.random.Generator,
+                      range_bias: float = 0.0) -> np.ndarray:
     """A measurement ``[range, az, el]``: ``z_true`` + N(0, ``sigma``) (:func:`add_noise`, one draw per component
     from ``rng``) + the station's ``range_bias`` [m] on the range."""
     z = add_noise(z_true, sigma, rng)
@@ -55,7 +57,8 @@ def pass_lost(measurements: int, epochs_in_view: int, min_pass: int) -> bool:
     return measurements == 0 and epochs_in_view >= min_pass
 
 
-def counted_passes(records, last_burn: float, closed, min_pass: int):
+def counted_passes(records: list[RadarRecord], last_burn: float, closed: set,
+                   min_pass: int) -> tuple[list[RadarRecord], set]:
     """The records the OD uses: after the latest burn ``last_burn`` [s] (epoch and chief sample), in passes
     ``(station, pass_id)`` that are ``closed`` (a set; an external pass is closed) with at least ``min_pass`` such
     records. Returns (records in their order, set of passes)."""
