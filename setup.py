@@ -65,6 +65,7 @@ setup(
             'suite = roe_sep.nodes.suite:main',
             'ejector = roe_sep.nodes.ejector:main',
             'safety_monitor = roe_sep.nodes.safety_monitor:main',
+            'radar = roe_sep.nodes.radar:main',
             'radar_od = roe_sep.nodes.radar_od:main',
             'ground_bridge = roe_sep.nodes.ground_bridge:main',
             'foxglove_view = roe_sep.nodes.foxglove_view:main',

@@ -11,24 +11,27 @@ from pathlib import Path
 
 import yaml
 
-NODES = ("recorder", "ground_bridge", "safety_monitor", "planner", "radar_od", "ic_planner", "ejector", "sim")
+NODES = ("recorder", "ground_bridge", "safety_monitor", "planner", "radar", "radar_od", "ic_planner", "ejector",
+         "sim")
 OPTIONAL_NODES = ("foxglove_view",)  # started on request: roe-sep run --foxglove [PORT]
-MANAGED = ("safety_monitor", "planner", "radar_od", "ic_planner")
+MANAGED = ("safety_monitor", "planner", "radar", "radar_od", "ic_planner")
 """The managed (lifecycle) nodes, in start-up order: configured, then activated, by ``lifecycle_manager`` when the
 graph is started managed (``ros2 launch roe_sep separation.launch.py managed:=true``), else each autostarts."""
-PARTICIPANTS = ("ejector", "planner", "radar_od", "ic_planner", "safety_monitor")
+PARTICIPANTS = ("ejector", "planner", "radar", "radar_od", "ic_planner", "safety_monitor")
 """The lockstep participants: every node that reacts to the simulation (recorder and ground_bridge listen)."""
 # subscribers of each topic the simulator waits for before its clock starts (so that nobody misses a message)
 SUBSCRIBERS = {
-    "/sim/truth/roe": ("ejector", "radar_od", "safety_monitor", "recorder", "ground_bridge"),
+    "/sim/truth/roe": ("ejector", "radar", "radar_od", "safety_monitor", "recorder", "ground_bridge"),
     "/sim/truth/rtn": ("recorder",),
     "/sim/camera/bearing": ("planner", "recorder"),
-    "/sim/executed_maneuvers": ("planner", "radar_od", "ic_planner", "safety_monitor", "recorder", "ground_bridge"),
+    "/sim/executed_maneuvers": ("planner", "radar", "radar_od", "ic_planner", "safety_monitor", "recorder",
+                                "ground_bridge"),
     "/separation/ejection": ("ejector", "planner", "safety_monitor", "sim", "recorder", "ground_bridge"),
     "/separation/drift_stop_plan": ("ic_planner", "safety_monitor", "sim", "recorder", "ground_bridge"),
     "/acquisition/plan": ("ic_planner", "safety_monitor", "sim", "recorder", "ground_bridge"),
     "/od/estimate": ("ic_planner", "safety_monitor", "sim", "recorder", "ground_bridge"),
-    "/radar/measurements": ("recorder", "ground_bridge"),
+    "/radar/measurements": ("radar_od", "recorder", "ground_bridge"),
+    "/radar/passes": ("radar_od", "recorder"),
     "/safety/status": ("recorder",),
     "/safety/plan_check": ("sim", "recorder", "ground_bridge"),
 }
@@ -90,7 +93,7 @@ RADAR_STREAM = 1  # the radar noise's stream of a run seed (the simulator uses t
 
 
 def radar_seed(seed: int) -> int:
-    """The radar_od noise seed of a run seed: a 32-bit word of ``SeedSequence([seed, 1])``, a stream independent of
+    """The radar noise seed of a run seed: a 32-bit word of ``SeedSequence([seed, 1])``, a stream independent of
     the simulator's ``default_rng(seed)`` (the same integer in both would correlate the first draws). ``--seed``
     disperses the radar noise too, so a campaign's run k is reproduced by ``roe-sep run --seed S+k`` alone."""
     import numpy as np
@@ -127,7 +130,7 @@ def parameters(config, bag_dir, overrides, nodes=NODES):
     return out
 
 
-CONTINGENCY_NODES = ("sim", "radar_od")  # the nodes that inject a contingency: the truth and the radar
+CONTINGENCY_NODES = ("sim", "radar")  # the nodes that inject a contingency: the truth and the radar
 
 
 def contingency_overrides(overrides, contingency):
@@ -152,7 +155,7 @@ def run_overrides(params=None, duration=None, seed=None, real_time_factor=None, 
         sim["duration"] = float(duration)
     if seed is not None:
         sim["seed"] = int(seed)
-        overrides.setdefault("radar_od", {}).setdefault("seed", radar_seed(seed))
+        overrides.setdefault("radar", {}).setdefault("seed", radar_seed(seed))
     if real_time_factor is not None:
         sim["real_time_factor"] = float(real_time_factor)
     if foxglove is not None:

@@ -62,7 +62,8 @@ TRUTH_RTN_TOPIC = "/sim/truth/rtn"  # RelativeState, STREAM, sim
 CAMERA_TOPIC = "/sim/camera/bearing"  # geometry_msgs/Vector3Stamped, STREAM, sim: the carrier camera's measured unit
 # line of sight to the picosatellite in the carrier RTN frame, stamped with its epoch (noise included, no truth)
 EXECUTED_TOPIC = "/sim/executed_maneuvers"  # ImpulsiveManeuver, EXECUTED, sim (as executed, with errors)
-RADAR_TOPIC = "/radar/measurements"  # RadarMeasurement, STREAM, radar_od
+RADAR_TOPIC = "/radar/measurements"  # RadarMeasurement, STREAM, radar -> radar_od
+RADAR_PASS_TOPIC = "/radar/passes"  # RadarPass, STREAM, radar -> radar_od: a pass ended (after its measurements)
 EXTERNAL_RADAR_TOPIC = "/ground/radar_measurements"  # RadarMeasurement, BULK, ground_bridge (TDM in) -> radar_od
 OD_TOPIC = "/od/estimate"  # OrbitDetermination, LATCHED, radar_od
 ACQUISITION_PLAN_TOPIC = "/acquisition/plan"  # ManeuverPlan, LATCHED, ic_planner

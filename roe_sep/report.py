@@ -324,9 +324,9 @@ def dispersions_applied(text):
 
 def contingency_applied(diagnostics):
     """The run's contingency as applied: the value ``contingency_applied`` (JSON: name, parameters as
-    drawn, configured, events) of the last status of the simulator or of radar_od that carries it, the simulator's
+    drawn, configured, events) of the last status of the simulator or of the radar that carries it, the simulator's
     first (a contingency acts on one side only); None without one."""
-    for node in ("roe_sep/sim", "roe_sep/radar_od"):
+    for node in ("roe_sep/sim", "roe_sep/radar"):
         for status in reversed([s for _, d in diagnostics for s in d.status if s.name == node]):
             text = next((kv.value for kv in status.values if kv.key == "contingency_applied"), None)
             if text:
@@ -338,13 +338,13 @@ def contingency_applied(diagnostics):
 
 CONTINGENCY_STATUS = "roe_sep/safety_monitor/contingency"
 MITIGATION_STATUS = "roe_sep/planner/contingency"  # what the planner acted on (drift_stop_replaced, weak_ejection)
-RADAR_STATUS = "roe_sep/radar_od/contingency"  # what the radar station reported (radar_pass_missed)
+RADAR_STATUS = "roe_sep/radar/contingency"  # what the radar station reported (radar_pass_missed)
 
 
 def contingencies_detected(diagnostics):
     """What the safety monitor detected (its named diagnostics ``roe_sep/safety_monitor/contingency``,
     :mod:`roe_sep.core.safety.anomaly`), what the planner acted on (``roe_sep/planner/contingency``) and what the
-    radar station reported (``roe_sep/radar_od/contingency``): per name
+    radar station reported (``roe_sep/radar/contingency``): per name
     its first finding, ``{name, epoch [s], text, count}``, in the order of their first epochs; [] when nothing was
     found."""
     found = {}

@@ -1,6 +1,6 @@
 """``roe-sep run``: the default scenario end to end.
 
-Starts the recorder, ground_bridge (CCSDS files in OUT/ccsds), safety_monitor, planner, radar_od, ic_planner,
+Starts the recorder, ground_bridge (CCSDS files in OUT/ccsds), safety_monitor, planner, radar, radar_od, ic_planner,
 ejector (and foxglove_view with ``--foxglove``) and sim (last: it owns ``/clock``) with one generated parameter
 file (:mod:`roe_sep.graph`): by default in two processes, the closed loop and the listeners, each on one executor
 (:mod:`roe_sep.nodes.suite`); with ``process_per_node`` every node its own process as a deployment runs them; with

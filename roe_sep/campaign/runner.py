@@ -49,7 +49,7 @@ def run_overrides(seed: int, base: dict, ccsds: bool = False) -> dict:
     0, unless ``--params`` sets it): nobody follows a campaign run live, and the periodic updates of a whole run's
     XML OEM cost about 4 of a run's CPU seconds. The run's CCSDS set is the same."""
     out = {node: dict(values) for node, values in (base or {}).items()}
-    out.setdefault("radar_od", {})["seed"] = radar_seed(seed)
+    out.setdefault("radar", {})["seed"] = radar_seed(seed)
     if ccsds:
         out.setdefault("ground_bridge", {}).setdefault("write_period", 0.0)
     return out

@@ -145,7 +145,7 @@ def register(subparsers):
     where.add_argument("--scheduler", type=scheduler_address, help="use an existing Dask cluster (tcp://host:port)")
     p.add_argument("--config", help="scenario YAML")
     p.add_argument("--params", help="ROS parameter YAML for every run ({node: {ros__parameters: ...}}); the "
-                   "campaign sets radar_od.seed per run")
+                   "campaign sets radar.seed per run")
     add_contingency(p)
     p.add_argument("--duration", type=finite_float(0.0, 30 * DAY, lo_open=True, unit="s"),
                    help="sim seconds per run, in (0, 2592000] (default 280800 = 3.25 days)")

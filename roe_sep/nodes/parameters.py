@@ -292,8 +292,7 @@ SIM = (
           "fails", "s", range=(0.1, 86400.0)),
 )
 
-RADAR_OD = (
-    AUTOSTART,
+RADAR_STATIONS = (
     Param("stations", "string[]", ["TIRA"], "radar station names; the three lists below have one entry per station",
           rule="a non-empty list of distinct station names", check=_distinct_names, nonempty=True),
     Param("station_latitudes_deg", "double[]", [50.6166], "geodetic latitude of each station (WGS-84)", "deg",
@@ -302,20 +301,44 @@ RADAR_OD = (
           range=(-180.0, 360.0), nonempty=True),
     Param("station_altitudes_m", "double[]", [300.0], "height of each station above the WGS-84 ellipsoid", "m",
           range=(-500.0, 9000.0), nonempty=True),
-    Param("elevation_mask_deg", "double", 10.0, "elevation mask of every station", "deg", range=(0.0, 89.0)),
+    Param("epoch_utc", "string", DEFAULT_EPOCH_UTC, "UTC calendar epoch of sim time 0 (the simulator's)",
+          rule="an ISO-8601 UTC date-time, e.g. '2016-07-01T00:00:00'", check=_iso_epoch),
+)
+"""The ground stations and the epoch of sim time 0: parameters of both the radar sensor and the OD (one value for
+both, e.g. under ``/**`` in a params file)."""
+
+RADAR_SIGMAS = (
     Param("sigma_range_m", "double", 10.0, "1-sigma range noise", "m", range=(1.0e-3, 1.0e4)),
     Param("sigma_angle_deg", "double", 0.01, "1-sigma azimuth and elevation noise (TIRA's 0.45 deg L-band beam: "
           "0.01 deg needs an SNR of about 26 dB, which a 10 cm picosatellite at ~1000 km gives)", "deg",
           range=(1.0e-6, 0.9)),
+)
+
+RADAR = (
+    AUTOSTART,
+    *RADAR_STATIONS,
+    Param("elevation_mask_deg", "double", 10.0, "elevation mask of every station", "deg", range=(0.0, 89.0)),
+    *RADAR_SIGMAS,
     Param("sample_interval", "double", 10.0, "measurement interval during a pass (a pass above 10 deg lasts a few "
           "minutes)", "s", range=(0.1, 600.0)),
     Param("min_separation", "double", 5000.0, "smallest separation the radar resolves (seed 001: 5 km)", "m",
           range=(0.0, 1.0e6)),
+    Param("min_pass_measurements", "int", 5, "epochs in view of a pass that delivered no measurement for it to be "
+          "reported lost (radar_od's measurements for a pass to count)", range=(1, 100000)),
+    Param("seed", "int", 0, "seed of the measurement noise", range=(0, SEED_MAX)),
+    SCENARIO_FILE,
+    _contingency("radar (radar_pass_missed, radar_bias; the others: none here), drawn from the noise seed's own "
+                 "stream"),
+)
+
+RADAR_OD = (
+    AUTOSTART,
+    *RADAR_STATIONS,
+    *RADAR_SIGMAS,
     Param("passes_required", "int", 2, "counted passes needed for an estimate", range=(1, 1000)),
     Param("min_arc", "double", 36000.0, "smallest span of the passes of an estimate (seed 001: about 12 h)", "s",
           range=(0.0, 2.592e6)),
     Param("min_pass_measurements", "int", 5, "measurements for a pass to count", range=(1, 100000)),
-    Param("seed", "int", 0, "seed of the measurement noise", range=(0, SEED_MAX)),
     Param("drift_prior", "bool", True, "the drift rate of the last solution before a burn is a priori information "
           "for the batches after it (core.od.batch.DriftPrior; its measurements precede the burn, so nothing is "
           "counted twice)"),
@@ -329,11 +352,6 @@ RADAR_OD = (
           "1/sqrt(day)", range=(0.0, 10.0)),
     Param("od_drag_terms", "bool", True, "the OD model's drag terms: the drift rate's growth within a batch, the "
           "drag-driven dix drift and short-periodic de (core.od.batch); false: the secular drift model alone"),
-    Param("epoch_utc", "string", DEFAULT_EPOCH_UTC, "UTC calendar epoch of sim time 0 (the simulator's)",
-          rule="an ISO-8601 UTC date-time, e.g. '2016-07-01T00:00:00'", check=_iso_epoch),
-    SCENARIO_FILE,
-    _contingency("radar (radar_pass_missed, radar_bias; the others: none here), drawn from the noise seed's own "
-                 "stream"),
 )
 
 IC_PLANNER = (
@@ -491,12 +509,13 @@ LIFECYCLE_MANAGER = (
           "is made again, up to 3 times)", "s", range=(0.1, 3600.0)),
 )
 
-TABLES = {"planner": PLANNER, "sim": SIM, "radar_od": RADAR_OD, "ic_planner": IC_PLANNER,
+TABLES = {"planner": PLANNER, "sim": SIM, "radar": RADAR, "radar_od": RADAR_OD, "ic_planner": IC_PLANNER,
           "safety_monitor": SAFETY_MONITOR, "ejector": EJECTOR, "recorder": RECORDER, "ground_bridge": GROUND_BRIDGE,
           "analysis_server": ANALYSIS_SERVER, "foxglove_view": FOXGLOVE_VIEW, "lifecycle_manager": LIFECYCLE_MANAGER}
 """{executable (= node name): its parameters, in declaration order}."""
-CLASSES = {"PlannerNode": "planner", "SimNode": "sim", "RadarODNode": "radar_od", "IcPlannerNode": "ic_planner",
-           "SafetyMonitorNode": "safety_monitor", "EjectorNode": "ejector", "RecorderNode": "recorder",
+CLASSES = {"PlannerNode": "planner", "SimNode": "sim", "RadarNode": "radar", "RadarODNode": "radar_od",
+           "IcPlannerNode": "ic_planner", "SafetyMonitorNode": "safety_monitor", "EjectorNode": "ejector",
+           "RecorderNode": "recorder",
            "GroundBridgeNode": "ground_bridge", "AnalysisServer": "analysis_server",
            "FoxgloveViewNode": "foxglove_view", "LifecycleManager": "lifecycle_manager"}
 """{node class name: its table}."""

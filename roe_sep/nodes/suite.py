@@ -38,6 +38,7 @@ NODE_CLASSES = {
     "ground_bridge": "ground_bridge:GroundBridgeNode",
     "safety_monitor": "safety_monitor:SafetyMonitorNode",
     "planner": "planner:PlannerNode",
+    "radar": "radar:RadarNode",
     "radar_od": "radar_od:RadarODNode",
     "ic_planner": "ic_planner:IcPlannerNode",
     "ejector": "ejector:EjectorNode",

@@ -259,8 +259,8 @@ def test_table_round_trip_and_torn_line(tmp_path):
 def test_radar_seed_is_derived_and_independent():
     assert radar_seed(5) == radar_seed(5) != radar_seed(6)
     assert radar_seed(5) != 5 and 0 <= radar_seed(5) < 2**32
-    over = run_overrides(5, {"radar_od": {"sigma_range": 1.0}, "sim": {"disperse": True}})
-    assert over["radar_od"] == {"sigma_range": 1.0, "seed": radar_seed(5)} and over["sim"] == {"disperse": True}
+    over = run_overrides(5, {"radar": {"sigma_range": 1.0}, "sim": {"disperse": True}})
+    assert over["radar"] == {"sigma_range": 1.0, "seed": radar_seed(5)} and over["sim"] == {"disperse": True}
     assert "ground_bridge" not in over  # no ground_bridge in a run without --ccsds
     assert run_overrides(5, {}, ccsds=True)["ground_bridge"] == {"write_period": 0.0}
     assert run_overrides(5, {"ground_bridge": {"write_period": 600.0}}, ccsds=True)["ground_bridge"] == {
@@ -303,7 +303,7 @@ def test_campaign_writes_one_row_and_report_per_run(campaign):
         run_rep = _strict((out / "runs" / str(s) / "report.json").read_text())
         assert _comparable(row) == _comparable(row_from_report(s, run_rep))
         over = yaml.safe_load((out / "runs" / str(s) / "overrides.yaml").read_text())
-        assert over["radar_od"]["ros__parameters"]["seed"] == radar_seed(s)
+        assert over["radar"]["ros__parameters"]["seed"] == radar_seed(s)
         # every node in the run's process, no ground_bridge (no --ccsds); the nodes' output in logs/run.log
         assert run_rep["run"]["layout"] == "one process (events executor)"
         assert run_rep["run"]["exit_codes"] == {"in_process": 0}

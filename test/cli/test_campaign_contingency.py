@@ -15,9 +15,9 @@ from roe_sep.nodes.parameters import check_overrides
 
 def test_the_flag_sets_the_simulator_and_the_radar():
     nominal = run_overrides(seed=3)
-    assert "contingency" not in nominal["sim"] and "contingency" not in nominal["radar_od"]
+    assert "contingency" not in nominal["sim"] and "contingency" not in nominal["radar"]
     over = run_overrides(seed=3, contingency="spl_weak")
-    assert over["sim"]["contingency"] == "spl_weak" and over["radar_od"]["contingency"] == "spl_weak"
+    assert over["sim"]["contingency"] == "spl_weak" and over["radar"]["contingency"] == "spl_weak"
     check_overrides(over)
     with pytest.raises(ValueError, match=r"sim.contingency = 'meteor': must be one of '', 'none', 'spl_weak'"):
         check_overrides({"sim": {"contingency": "meteor"}})

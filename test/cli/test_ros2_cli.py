@@ -17,9 +17,9 @@ ROOT = Path(__file__).resolve().parents[2]
 SCRIPT = ROOT / "scripts" / "ros2_cli.sh"
 CHECKS = ROOT / "build" / "ros2cli" / "checks"
 DURATION = 20000.0  # s of sim time: the ejection, the drift-stop, the first radar passes
-NODES = ("planner", "radar_od", "ic_planner", "safety_monitor", "ejector", "ground_bridge", "recorder",
+NODES = ("planner", "radar", "radar_od", "ic_planner", "safety_monitor", "ejector", "ground_bridge", "recorder",
          "analysis_server", "foxglove_view", "sim")
-MANAGED = ("planner", "radar_od", "ic_planner", "safety_monitor")
+MANAGED = ("planner", "radar", "radar_od", "ic_planner", "safety_monitor")
 
 pytestmark = [pytest.mark.ros2cli, pytest.mark.dds]
 

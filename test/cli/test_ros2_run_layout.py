@@ -10,7 +10,7 @@ import pytest
 ament_index_python = pytest.importorskip("ament_index_python", reason="needs the project venv (make test)")
 
 ROOT = Path(__file__).resolve().parents[2]
-NODE_EXECUTABLES = ("planner", "sim", "ejector", "safety_monitor", "radar_od", "ic_planner", "recorder",
+NODE_EXECUTABLES = ("planner", "sim", "ejector", "safety_monitor", "radar", "radar_od", "ic_planner", "recorder",
                     "analysis_server")
 
 

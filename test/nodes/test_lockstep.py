@@ -96,7 +96,7 @@ def test_same_run_whatever_the_layout_and_the_executor(runs):
     assert runs["fast"]["run"]["layout"] == "suites (events executor)"
     assert runs["per_node"]["run"]["layout"] == "process_per_node"
     assert set(runs["per_node"]["run"]["exit_codes"]) == {"recorder", "ground_bridge", "safety_monitor", "planner",
-                                                          "radar_od", "ic_planner", "ejector", "sim"}
+                                                          "radar", "radar_od", "ic_planner", "ejector", "sim"}
     fast = essentials(runs["fast"])
     assert essentials(runs["per_node"]) == fast
     assert essentials(runs["single_threaded"]) == fast

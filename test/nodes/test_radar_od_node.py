@@ -1,13 +1,15 @@
-"""The radar_od node as a real process over DDS, fed with a truth stream of a drifting relative orbit.
+"""The radar sensor and radar_od as real processes over DDS, fed with a truth stream of a drifting relative orbit.
 
 A test node plays the simulator: 34 h of sim time in 60 s steps (a truth message each step, one NaN truth, one
-executed burn at 15 h), as the lockstep coordinator (a ``LockstepStep`` per step, the next one once radar_od has
-acknowledged: what the node computes is independent of timing and load) or as a free-running ``/clock`` (the node
-run alone) that runs LEAD ahead of the truth, as a loaded node sees it when the clock's messages overtake the
-truth's (3 h: 0.18 wall s of the free-running simulator's default 60000x). The node must measure only during TIRA
-passes and only once the spacecraft are 5 km apart, ignore the pre-burn passes, and publish OD solutions consistent
-with the truth, in both modes: alone, it measures an epoch only once a truth sample at or after it has arrived,
-from that sample.
+executed burn at 15 h), as the lockstep coordinator (a ``LockstepStep`` per step; a second round carries what the
+radar published to radar_od; the next step once both have acknowledged: what the nodes compute is independent of
+timing and load) or as a free-running ``/clock`` (the nodes run alone) that runs LEAD ahead of the truth, as a
+loaded node sees it when the clock's messages overtake the truth's (3 h: 0.18 wall s of the free-running
+simulator's default 60000x). The radar must measure only during TIRA passes and only once the spacecraft are 5 km
+apart; radar_od must ignore the pre-burn passes and publish OD solutions consistent with the truth, in both modes:
+alone, the radar measures an epoch only once a truth sample at or after it has arrived, from that sample. Without
+the radar, radar_od estimates from measurements and pass ends that the test publishes itself (as a ground segment
+would).
 """
 
 import math
@@ -22,6 +24,7 @@ from roe_sep_msgs.msg import (  # noqa: E402
     LockstepStep,
     OrbitDetermination,
     RadarMeasurement,
+    RadarPass,
     RelativeOrbitalElements,  # noqa: E402
 )
 from rosgraph_msgs.msg import Clock  # noqa: E402
@@ -29,6 +32,7 @@ from rosutil import rclpy, spin_until, start_node, stop_node, wait_exit  # noqa:
 
 from roe_sep import interfaces  # noqa: E402
 from roe_sep.core.od.radar import TIRA, gmst, julian_date, observe, raan_from_ltan, relative_distance  # noqa: E402
+from roe_sep.core.od.sensor import noisy_measurement, trackable  # noqa: E402
 from roe_sep.core.relmotion.dynamics import propagate_chief, sun_synchronous_inclination  # noqa: E402
 from roe_sep.core.relmotion.orbit import semi_major_axis  # noqa: E402
 from roe_sep.core.relmotion.roe import wrap_angle  # noqa: E402
@@ -70,32 +74,46 @@ def truth_msg(t, roe, kep):
 @pytest.fixture()
 def sim(ros_context):
     node = rclpy.create_node("sim_test")
-    node.meas, node.ods, node.diags = [], [], []
+    node.meas, node.ends, node.ods, node.diags = [], [], [], []
     node.create_subscription(RadarMeasurement, interfaces.RADAR_TOPIC, node.meas.append, interfaces.STREAM)
+    node.create_subscription(RadarPass, interfaces.RADAR_PASS_TOPIC, node.ends.append, interfaces.STREAM)
     node.create_subscription(OrbitDetermination, interfaces.OD_TOPIC, node.ods.append, interfaces.LATCHED)
     node.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, node.diags.append, interfaces.DIAGNOSTICS)
     node.truth_pub = node.create_publisher(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, interfaces.STREAM)
     node.clock_pub = node.create_publisher(Clock, interfaces.CLOCK_TOPIC, interfaces.STREAM)
     node.burn_pub = node.create_publisher(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, interfaces.EXECUTED)
     node.step_pub = node.create_publisher(LockstepStep, interfaces.LOCKSTEP_STEP_TOPIC, STEP_QOS)
-    node.acks = set()
+    node.acks = {}
     node.create_subscription(LockstepAck, interfaces.LOCKSTEP_ACK_TOPIC,
-                             lambda a: node.acks.add((a.node, a.step, a.round)), ACK_QOS)
+                             lambda a: node.acks.__setitem__((a.node, a.step, a.round), a), ACK_QOS)
     yield node
     node.destroy_node()
 
 
-def statuses(node, level):
-    return [s.message for d in node.diags for s in d.status if s.level == level and s.name == "roe_sep/radar_od"]
+def statuses(node, level, name="radar_od"):
+    return [s.message for d in node.diags for s in d.status if s.level == level and s.name == f"roe_sep/{name}"]
 
 
-def run_sim(node, proc, lockstep):
-    """Publish the truth from 0 to SIM_END, each tick closed by a lockstep step message acknowledged by radar_od
-    (``lockstep``) or by /clock LEAD ahead of the tick (spinning 2 ms between ticks so that nothing queues up)."""
-    assert spin_until(node, lambda: node.truth_pub.get_subscription_count() >= 1
-                      and node.clock_pub.get_subscription_count() >= 1
+def step_round(node, procs, counts, k, rnd, period_start, t):
+    """Publish round ``rnd`` of step ``k`` with ``counts`` and wait for every participant's acknowledgement."""
+    topics = sorted(counts)
+    step = LockstepStep(step=k, round=rnd, period_start=period_start, topics=topics,
+                        counts=[counts[tp] for tp in topics], final=False)
+    step.header.stamp = sec_to_time(t)
+    node.step_pub.publish(step)
+    for name, proc in procs.items():
+        assert spin_until(node, lambda n=name: (n, k, rnd) in node.acks, timeout=30), f"no ack of {name} {k}/{rnd}"
+        assert proc.poll() is None, f"{name} died"
+
+
+def run_sim(node, procs, lockstep):
+    """Publish the truth from 0 to SIM_END, each tick closed by the lockstep step messages acknowledged by the
+    participants ``procs`` (``lockstep``: round 0 the truth and the burn, round 1 what the radar published) or by
+    /clock LEAD ahead of the tick (spinning 2 ms between ticks so that nothing queues up)."""
+    assert spin_until(node, lambda: node.truth_pub.get_subscription_count() >= len(procs)
+                      and node.clock_pub.get_subscription_count() >= len(procs)
                       and node.count_publishers(interfaces.OD_TOPIC) >= 1,
-                      timeout=30), "radar_od did not come up"
+                      timeout=30), "the nodes did not come up"
     time.sleep(0.5)  # let the reliable endpoints finish matching
     ticks = np.arange(0.0, SIM_END + TICK / 2, TICK)
     roe, kep = truth(ticks)
@@ -111,34 +129,46 @@ def run_sim(node, proc, lockstep):
             counts[interfaces.TRUTH_ROE_TOPIC] += 1
         node.truth_pub.publish(msg)
         if lockstep:
-            topics = sorted(counts)
-            step = LockstepStep(step=k, round=0, period_start=float(ticks[k - 1] if k else 0.0), topics=topics,
-                                counts=[counts[tp] for tp in topics], final=False)
-            step.header.stamp = sec_to_time(t)
-            node.step_pub.publish(step)
-            assert spin_until(node, lambda: ("radar_od", k, 0) in node.acks, timeout=30), f"no ack of step {k}"
-            assert proc.poll() is None, "radar_od died"
+            period_start = float(ticks[k - 1] if k else 0.0)
+            step_round(node, procs, counts, k, 0, period_start, t)
+            if "radar" in procs:  # the radar's measurements and pass ends for radar_od
+                ack = node.acks[("radar", k, 0)]
+                new = dict(zip(ack.topics, ack.published))
+                if any(counts.get(tp, 0) != n for tp, n in new.items()):
+                    counts.update(new)
+                    step_round(node, procs, counts, k, 1, period_start, t)
             continue
         node.clock_pub.publish(Clock(clock=sec_to_time(min(t + LEAD, SIM_END))))
         deadline = time.monotonic() + 0.002
         while time.monotonic() < deadline:
             rclpy.spin_once(node, timeout_sec=0.001)
-        assert proc.poll() is None, "radar_od died"
+        for name, proc in procs.items():
+            assert proc.poll() is None, f"{name} died"
+
+
+def start_pair():
+    return {"radar": start_node("radar", "-p", "use_sim_time:=true", "-p", f"epoch_utc:={EPOCH}", "-p", "seed:=3"),
+            "radar_od": start_node("radar_od", "-p", "use_sim_time:=true", "-p", f"epoch_utc:={EPOCH}")}
+
+
+def stop_all(procs):
+    for name, proc in procs.items():
+        code, out = stop_node(proc)
+        assert code == 0, f"{name}: {out}"
 
 
 @pytest.mark.parametrize("lockstep", [True, False], ids=["lockstep", "alone"])
 def test_tracks_passes_after_separation_and_estimates_consistently(sim, lockstep):
-    proc = start_node("radar_od", "-p", "use_sim_time:=true", "-p", f"epoch_utc:={EPOCH}", "-p", "seed:=3")
+    procs = start_pair()
     try:
-        if lockstep:  # the step topic must be matched before the first step, or radar_od starts alone
-            assert spin_until(sim, lambda: sim.step_pub.get_subscription_count() >= 1, timeout=30)
-        run_sim(sim, proc, lockstep)
+        if lockstep:  # the step topic must be matched before the first step, or the nodes start alone
+            assert spin_until(sim, lambda: sim.step_pub.get_subscription_count() >= 2, timeout=30)
+        run_sim(sim, procs, lockstep)
         assert spin_until(sim, lambda: len(sim.ods) >= 2, timeout=20), "no second OD solution"
         spin_until(sim, lambda: False, timeout=0.5)
-        assert proc.poll() is None  # survived the NaN truth message
+        assert all(p.poll() is None for p in procs.values())  # survived the NaN truth message
     finally:
-        code, out = stop_node(proc)
-    assert code == 0, out
+        stop_all(procs)
 
     # --- measurements: exactly the visible epochs >= 5 km apart, nothing else ---------------------------------
     grid = np.arange(SAMPLE, SIM_END + SAMPLE / 2, SAMPLE)
@@ -161,12 +191,22 @@ def test_tracks_passes_after_separation_and_estimates_consistently(sim, lockstep
     assert np.all(np.abs(dev / [10.0, math.radians(0.01), math.radians(0.01)]) < 5.0)
     pass_ids = [m.pass_id for m in sim.meas]
     assert pass_ids == sorted(pass_ids) and pass_ids[0] == 1 and pass_ids[-1] == 5  # 8.0 h pass never started
+    # every pass ends after its last measurement, with their count
+    ends = {e.pass_id: e for e in sim.ends}
+    assert sorted(ends) == [1, 2, 3, 4, 5] or sorted(ends) == [1, 2, 3, 4]  # the last one may be open at the end
+    for pid, e in ends.items():
+        own = stamps[np.array(pass_ids) == pid]
+        assert e.measurements == own.size == e.epochs_in_view and time_to_sec(e.header.stamp) > own.max()
 
     # --- diagnostics ---------------------------------------------------------------------------------------
-    assert any("waiting for separation" in s for s in statuses(sim, DiagnosticStatus.WARN))
+    assert any("waiting for separation" in s for s in statuses(sim, DiagnosticStatus.WARN, "radar"))
+    assert any("rejected" in s for s in statuses(sim, DiagnosticStatus.ERROR, "radar"))
     assert any("rejected" in s for s in statuses(sim, DiagnosticStatus.ERROR))
+    check_solutions(sim, stamps)
 
-    # --- OD: only post-burn passes, consistent with the truth ----------------------------------------------
+
+def check_solutions(sim, stamps):
+    """OD: only post-burn passes, consistent with the truth."""
     first, second = sim.ods[0], sim.ods[1]
     t1 = time_to_sec(first.estimate.header.stamp)
     # without the burn the 9.6 h and 21.0 h passes would have given an estimate; after it, 21.0 h to 31.8 h
@@ -188,16 +228,70 @@ def test_tracks_passes_after_separation_and_estimates_consistently(sim, lockstep
         assert od.estimate.chief.raan == pytest.approx(wrap_angle(kep_t[0, 3]), abs=1e-9)
 
 
+def test_estimates_from_measurements_without_the_sensor(sim):
+    """No radar node: the test publishes the measurements and pass ends itself (a ground segment's, simulated
+    here from the truth with the core's model and noise), then the truth as radar_od's chief. radar_od estimates
+    from them alone, consistent with the truth, over DDS."""
+    proc = start_node("radar_od", "-p", f"epoch_utc:={EPOCH}")
+    procs = {"radar_od": proc}
+    meas_pub = sim.create_publisher(RadarMeasurement, interfaces.RADAR_TOPIC, interfaces.STREAM)
+    end_pub = sim.create_publisher(RadarPass, interfaces.RADAR_PASS_TOPIC, interfaces.STREAM)
+    grid = np.arange(SAMPLE, SIM_END + SAMPLE / 2, SAMPLE)
+    roe, kep = truth(grid)
+    z = observe(roe, kep, gmst(JD0 + grid / 86400.0), TIRA.ecef, TIRA.enu)
+    good = trackable(z[:, 2], relative_distance(roe, A, kep[:, 4] + kep[:, 5]), MASK, 5000.0)
+    rng = np.random.default_rng(11)
+    sigma = np.array([10.0, math.radians(0.01), math.radians(0.01)])
+    try:
+        assert spin_until(sim, lambda: meas_pub.get_subscription_count() >= 1 and end_pub.get_subscription_count() >= 1
+                          and sim.truth_pub.get_subscription_count() >= 1, timeout=30), "radar_od did not come up"
+        time.sleep(0.5)
+        ticks = np.arange(0.0, SIM_END + TICK / 2, TICK)
+        roe_t, kep_t = truth(ticks)
+        for k, t in enumerate(ticks):  # the carrier's orbit first: every measurement finds its chief
+            sim.truth_pub.publish(truth_msg(t, roe_t[k], kep_t[k]))
+        sim.burn_pub.publish(maneuver_msg(BURN_T, CHIEF.u_at(BURN_T), [-v for v in BURN_DV], "carrier",
+                                          "drift_reduction"))
+        spin_until(sim, lambda: False, timeout=1.0)
+        pass_id, stamps, count = 0, [], 0
+        for j, t in enumerate(grid):
+            if good[j]:
+                if count == 0:
+                    pass_id += 1
+                zj = noisy_measurement(z[j], sigma, rng)
+                m = RadarMeasurement(station="TIRA", pass_id=pass_id, range=float(zj[0]), azimuth=float(zj[1]),
+                                     elevation=float(zj[2]), sigma_range=float(sigma[0]),
+                                     sigma_angle=float(sigma[1]))
+                m.header.stamp = sec_to_time(t)
+                meas_pub.publish(m)
+                stamps.append(t)
+                count += 1
+            elif count:
+                end = RadarPass(station="TIRA", pass_id=pass_id, measurements=count, epochs_in_view=count)
+                end.header.stamp = sec_to_time(t)
+                end_pub.publish(end)
+                count = 0
+                rclpy.spin_once(sim, timeout_sec=0.01)
+        assert spin_until(sim, lambda: len(sim.ods) >= 2, timeout=30), "no second OD solution"
+        assert proc.poll() is None
+    finally:
+        stop_all(procs)
+    check_solutions(sim, np.array(stamps))
+    cov = np.array(sim.ods[-1].estimate.covariance).reshape(6, 6)
+    assert np.all(np.linalg.eigvalsh(cov) > 0.0)  # an estimate with its covariance
+
+
 @pytest.mark.parametrize(
-    "args,name",
-    [(["-p", "sigma_range_m:=-1.0"], "'sigma_range_m'"),
-     (["-p", "station_latitudes_deg:=[50.6, 48.1]"], "'station_latitudes_deg'"),
-     (["-p", "epoch_utc:=yesterday"], "'epoch_utc'"),
-     (["-p", "min_separation:=5000"], "'min_separation'"),
-     (["-p", "density_walk:=-0.1"], "'density_walk'"),
-     (["-p", "drag_ballistic_ratio:=0.5"], "'drag_ballistic_ratio'")],
+    "node,args,name",
+    [("radar_od", ["-p", "sigma_range_m:=-1.0"], "'sigma_range_m'"),
+     ("radar", ["-p", "station_latitudes_deg:=[50.6, 48.1]"], "'station_latitudes_deg'"),
+     ("radar_od", ["-p", "station_latitudes_deg:=[50.6, 48.1]"], "'station_latitudes_deg'"),
+     ("radar", ["-p", "epoch_utc:=yesterday"], "'epoch_utc'"),
+     ("radar", ["-p", "min_separation:=5000"], "'min_separation'"),
+     ("radar_od", ["-p", "density_walk:=-0.1"], "'density_walk'"),
+     ("radar_od", ["-p", "drag_ballistic_ratio:=0.5"], "'drag_ballistic_ratio'")],
 )
-def test_bad_parameter_refused_at_startup(args, name):
-    code, out = wait_exit(start_node("radar_od", *args))
+def test_bad_parameter_refused_at_startup(node, args, name):
+    code, out = wait_exit(start_node(node, *args))
     assert code == 2, out
     assert name in out
