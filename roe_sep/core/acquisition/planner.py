@@ -47,12 +47,6 @@ runs beyond the 5 m initial condition). The OD of the radar pass just before t_F
 only when the predicted |a da_F| is not 3 OD sigmas inside the tolerance. That OD needs a radar arc free of burns
 (the OD restarts after every burn and needs passes over 10 h): ``no_burns`` keeps the plan's burns out of it.
 
-Closing on the last information. The drift at t_F is what a plan made a day earlier cannot hold: the OD's drift-rate
-error carried to t_F and the 5 % execution error of the burns flown after that OD (std 2.5 and 1.9 m, 9 % of the
-runs beyond the 5 m initial condition). The OD of the radar pass cluster just before t_F therefore decides a final
-trim, :mod:`roe_sep.core.acquisition.trim`: one quantized tangential burn uplinked with the same planning margin,
-flown only when the predicted |a da_F| is not 3 OD sigmas inside the tolerance.
-
 Quantization. The continuous optimum is then re-solved as a small mixed-integer program (HiGHS) in integer
 multiples of ``dv_quantum`` on the LP's support and its neighbouring grid epochs, with the equalities relaxed to the
 tolerances a quantized plan can meet: |a da_F| <= drift_tolerance (the da_F lattice has a spacing of
@@ -310,57 +304,145 @@ def _build(roe0, chief, da_dot, cfg, t_earliest, no_burns=()):
         quanta_max=int(math.floor(cfg.max_burn_dv / q + 1e-9)), ei_floor=ei_magnitude_floor(cfg.min_ei, gamma))
 
 
-def _assemble(pb: _Problem, cols, ihat, exact, path=True, target=True, ei=True):
-    """Objective, variable bounds and rows lb <= A v <= ub over v = [p (S), m (S), L, mu, nu] (quanta, meters).
+@dataclass(frozen=True)
+class _Layout:
+    """The LP's variables, in this order: v = [p (S), m (S), L, mu, nu].
 
+    p, m >= 0 [quanta]: the positive and negative parts of the S candidate burns (a burn is p - m, its L1 cost
+    p + m); L = s a dl_F [m]; mu = -s a de_F . i^ and nu = a di_F . i^ [m], the e/i magnitudes along the fixed
+    direction i^ (module docstring, Formulation).
+    """
+
+    n_s: int  # candidate (epoch, axis) columns
+
+    @property
+    def size(self) -> int:
+        return 2 * self.n_s + 3
+
+    @property
+    def l(self) -> int:  # noqa: E743 (the paper's name of the along-track separation)
+        return 2 * self.n_s
+
+    @property
+    def mu(self) -> int:
+        return 2 * self.n_s + 1
+
+    @property
+    def nu(self) -> int:
+        return 2 * self.n_s + 2
+
+    def row(self, burn_coef, extra=None) -> np.ndarray:
+        """One dense row: ``burn_coef`` over [p, m] (a scalar or ``2 S`` values), ``extra`` {column: value}."""
+        r = np.zeros(self.size)
+        r[:2 * self.n_s] = burn_coef
+        for idx, val in (extra or {}).items():
+            r[idx] = val
+        return r
+
+
+@dataclass(frozen=True)
+class _Rows:
+    """A group of constraint rows lb <= a v <= ub (``a`` dense, over :class:`_Layout`'s variables)."""
+
+    a: np.ndarray  # (R, 2 S + 3)
+    lb: np.ndarray  # (R,)
+    ub: np.ndarray  # (R,)
+
+
+def _rows(lay: _Layout, specs) -> _Rows:
+    """:class:`_Rows` from ``(burn_coef, extra, lb, ub)`` tuples (see :meth:`_Layout.row`)."""
+    return _Rows(np.array([lay.row(coef, extra) for coef, extra, _, _ in specs]).reshape(len(specs), lay.size),
+                 np.array([lb for _, _, lb, _ in specs], dtype=float),
+                 np.array([ub for _, _, _, ub in specs], dtype=float))
+
+
+def _drift_rows(lay: _Layout, dmat, c_f, tol) -> _Rows:
+    """|a da_F| <= ``tol`` (AVANTI IC: almost no drift): one row over the burns' effect on a da_F (seed 002 Eq. 2)."""
+    return _rows(lay, [(dmat[0], None, -tol - c_f[0], tol - c_f[0])])
+
+
+def _along_track_rows(lay: _Layout, dmat, c_f, s) -> _Rows:
+    """a dl_F = s L: the final mean along-track separation defines L (its range is in L's bounds)."""
+    return _rows(lay, [(dmat[1], {lay.l: -s}, -c_f[1], -c_f[1])])
+
+
+def _ei_direction_rows(lay: _Layout, dmat, c_f, ihat, *, s, exact, tg) -> _Rows:
+    """de_F . i^ = -s mu and di_F . i^ = nu (e/i (anti-)parallel along i^, passive safety, seed 002 Eq. 25); then
+    de_F . j^ = 0 (``exact``: the continuous LP), or the quantized program's tolerance cones
+    |de_F . j^| <= tan(g/2) mu and |di_F . j^| <= tan(g/2) nu with ``tg`` = tan(g/2) (j^ = i^ turned by +90 deg)."""
+    jhat = np.array([-ihat[1], ihat[0]])
+    e_al, e_pp = ihat @ dmat[2:4], jhat @ dmat[2:4]
+    i_al, i_pp = ihat @ dmat[4:6], jhat @ dmat[4:6]
+    specs = [(e_al, {lay.mu: s}, -ihat @ c_f[2:4], -ihat @ c_f[2:4]),
+             (i_al, {lay.nu: -1.0}, -ihat @ c_f[4:6], -ihat @ c_f[4:6])]
+    if exact:
+        specs.append((e_pp, None, -jhat @ c_f[2:4], -jhat @ c_f[2:4]))
+    else:
+        specs += [(e_pp, {lay.mu: -tg}, -np.inf, -jhat @ c_f[2:4]),
+                  (-e_pp, {lay.mu: -tg}, -np.inf, jhat @ c_f[2:4]),
+                  (i_pp, {lay.nu: -tg}, -np.inf, -jhat @ c_f[4:6]),
+                  (-i_pp, {lay.nu: -tg}, -np.inf, jhat @ c_f[4:6])]
+    return _rows(lay, specs)
+
+
+def _fov_rows(lay: _Layout, cfg: AcquisitionConfig, cg) -> _Rows:
+    """The camera field of view, seed 002 Eq. (11): |de| <= mu / cos(g/2) <= tan(fov_r) L, and likewise
+    |di| <= nu / cos(g/2) <= tan(fov_n) L (``cg`` = cos(g/2))."""
+    zero = np.zeros(2 * lay.n_s)
+    return _rows(lay, [
+        (zero, {lay.mu: 1.0 / cg, lay.l: -float(fov_limit(1.0, math.radians(cfg.fov_half_r_deg)))}, -np.inf, 0.0),
+        (zero, {lay.nu: 1.0 / cg, lay.l: -float(fov_limit(1.0, math.radians(cfg.fov_half_n_deg)))}, -np.inf, 0.0)])
+
+
+def _variable_bounds(pb: _Problem, lay: _Layout, cols, *, exact, target, ei):
+    """Bounds lo <= v <= hi: 0 <= p, m <= quanta_max (0 at epochs in ``no_burns``); L in [a_dl_min, a_dl_max],
+    or on ``a_dl_target`` (within ``a_dl_target_tol`` unless ``exact``) when ``target``; mu, nu >= the e/i floor
+    (:func:`ei_magnitude_floor`), or 0 when ``ei`` is off (the diagnosis)."""
+    cfg, n_s = pb.cfg, lay.n_s
+    lo_v = np.zeros(lay.size)
+    hi_v = np.full(lay.size, float(pb.quanta_max))
+    barred = pb.barred[pb.epoch_of[cols]]
+    hi_v[:n_s][barred] = hi_v[n_s:2 * n_s][barred] = 0.0
+    if cfg.a_dl_target and target:
+        span = 0.0 if exact else cfg.a_dl_target_tol
+        lo_v[lay.l] = max(cfg.a_dl_min, cfg.a_dl_target - span)
+        hi_v[lay.l] = min(cfg.a_dl_max, cfg.a_dl_target + span)
+    else:
+        lo_v[lay.l], hi_v[lay.l] = cfg.a_dl_min, cfg.a_dl_max
+    lo_v[lay.mu] = lo_v[lay.nu] = pb.ei_floor if ei else 0.0
+    hi_v[lay.mu] = hi_v[lay.nu] = np.inf
+    if not ei:
+        lo_v[lay.mu] = lo_v[lay.nu] = hi_v[lay.mu] = hi_v[lay.nu] = 0.0
+    return lo_v, hi_v
+
+
+def _objective(lay: _Layout) -> np.ndarray:
+    """sum (p + m): the L1 delta-v in quanta (L, mu and nu cost nothing)."""
+    return np.concatenate([np.ones(2 * lay.n_s), np.zeros(3)])
+
+
+def _assemble(pb: _Problem, cols, ihat, exact, path=True, target=True, ei=True):
+    """Objective, variable bounds and rows lb <= A v <= ub over the :class:`_Layout` v = [p, m, L, mu, nu].
+
+    Rows in order: drift, along-track, e/i direction and field of view (``ei``), path (``path``), burn magnitude.
     ``exact``: the continuous LP (e/i exactly (anti-)parallel, dl on target); otherwise the quantized program with
     the tolerance cones. ``path``/``target``/``ei`` switch constraint groups off to diagnose infeasibility.
     """
-    cfg, s = pb.cfg, pb.s
-    n_s = len(cols)
-    nv = 2 * n_s + 3
-    i_l, i_mu, i_nu = 2 * n_s, 2 * n_s + 1, 2 * n_s + 2
+    from scipy import sparse  # here, not at import: the nodes import this module for its config alone
+
+    cfg = pb.cfg
+    lay = _Layout(len(cols))
     f = pb.final[:, cols]
     dmat = np.hstack([f, -f])  # (6, 2S): effect of p and of m
     c_f = pb.free_final
-    jhat = np.array([-ihat[1], ihat[0]])
-    tg = math.tan(0.5 * math.radians(cfg.ei_angle_tol_deg))
-    cg = math.cos(0.5 * math.radians(cfg.ei_angle_tol_deg))
-    rows, lbs, ubs = [], [], []
-
-    def add(burn_coef, extra, lb, ub):
-        r = np.zeros(nv)
-        r[:2 * n_s] = burn_coef
-        for idx, val in extra.items():
-            r[idx] = val
-        rows.append(r)
-        lbs.append(lb)
-        ubs.append(ub)
-
-    tol = cfg.drift_tolerance
-    add(dmat[0], {}, -tol - c_f[0], tol - c_f[0])  # |a da_F| <= tol
-    add(dmat[1], {i_l: -s}, -c_f[1], -c_f[1])  # a dl_F = s L
+    half = 0.5 * math.radians(cfg.ei_angle_tol_deg)
+    groups = [_drift_rows(lay, dmat, c_f, cfg.drift_tolerance), _along_track_rows(lay, dmat, c_f, pb.s)]
     if ei:
-        e_al, e_pp = ihat @ dmat[2:4], jhat @ dmat[2:4]
-        i_al, i_pp = ihat @ dmat[4:6], jhat @ dmat[4:6]
-        add(e_al, {i_mu: s}, -ihat @ c_f[2:4], -ihat @ c_f[2:4])  # de_F . i^ = -s mu
-        add(i_al, {i_nu: -1.0}, -ihat @ c_f[4:6], -ihat @ c_f[4:6])  # di_F . i^ = nu
-        if exact:
-            add(e_pp, {}, -jhat @ c_f[2:4], -jhat @ c_f[2:4])  # de_F (anti-)parallel to i^
-        else:  # |de_F . j^| <= tan(g/2) mu and |di_F . j^| <= tan(g/2) nu
-            add(e_pp, {i_mu: -tg}, -np.inf, -jhat @ c_f[2:4])
-            add(-e_pp, {i_mu: -tg}, -np.inf, jhat @ c_f[2:4])
-            add(i_pp, {i_nu: -tg}, -np.inf, -jhat @ c_f[4:6])
-            add(-i_pp, {i_nu: -tg}, -np.inf, jhat @ c_f[4:6])
-        # camera field of view, seed 002 Eq. (11): |de| <= mu / cos(g/2) <= tan(fov_r) L (likewise di)
-        add(np.zeros(2 * n_s), {i_mu: 1.0 / cg, i_l: -float(fov_limit(1.0, math.radians(cfg.fov_half_r_deg)))},
-            -np.inf, 0.0)
-        add(np.zeros(2 * n_s), {i_nu: 1.0 / cg, i_l: -float(fov_limit(1.0, math.radians(cfg.fov_half_n_deg)))},
-            -np.inf, 0.0)
-    from scipy import sparse  # here, not at import: the nodes import this module for its config alone
-
-    blocks = [sparse.csr_matrix(np.array(rows))]
-    lb, ub = list(lbs), list(ubs)
+        groups += [_ei_direction_rows(lay, dmat, c_f, ihat, s=pb.s, exact=exact, tg=math.tan(half)),
+                   _fov_rows(lay, cfg, math.cos(half))]
+    blocks = [sparse.csr_matrix(np.vstack([g.a for g in groups]))]
+    lb = list(np.concatenate([g.lb for g in groups]))
+    ub = list(np.concatenate([g.ub for g in groups]))
     path_blocks, path_lb, burn_block, burn_ub = _path_and_burn_rows(pb, cols)
     if path:  # s a dl >= a_dl_min at every grid epoch (plus the sagitta between epochs)
         blocks += path_blocks
@@ -370,23 +452,8 @@ def _assemble(pb: _Problem, cols, ihat, exact, path=True, target=True, ei=True):
     lb += [-np.inf] * len(burn_ub)
     ub += burn_ub
     a_mat = sparse.vstack(blocks).tocsr()
-
-    lo_v = np.zeros(nv)
-    hi_v = np.full(nv, float(pb.quanta_max))
-    barred = pb.barred[pb.epoch_of[cols]]
-    hi_v[:n_s][barred] = hi_v[n_s:2 * n_s][barred] = 0.0
-    if cfg.a_dl_target and target:
-        span = 0.0 if exact else cfg.a_dl_target_tol
-        lo_v[i_l] = max(cfg.a_dl_min, cfg.a_dl_target - span)
-        hi_v[i_l] = min(cfg.a_dl_max, cfg.a_dl_target + span)
-    else:
-        lo_v[i_l], hi_v[i_l] = cfg.a_dl_min, cfg.a_dl_max
-    lo_v[i_mu] = lo_v[i_nu] = pb.ei_floor if ei else 0.0
-    hi_v[i_mu] = hi_v[i_nu] = np.inf
-    if not ei:
-        lo_v[i_mu] = lo_v[i_nu] = hi_v[i_mu] = hi_v[i_nu] = 0.0
-    cost = np.concatenate([np.ones(2 * n_s), np.zeros(3)])
-    return cost, lo_v, hi_v, a_mat, np.array(lb, dtype=float), np.array(ub, dtype=float)
+    lo_v, hi_v = _variable_bounds(pb, lay, cols, exact=exact, target=target, ei=ei)
+    return _objective(lay), lo_v, hi_v, a_mat, np.array(lb, dtype=float), np.array(ub, dtype=float)
 
 
 def signed_rows(sub):
@@ -409,34 +476,42 @@ def signed_rows(sub):
     return sparse.csr_matrix((data, indices, 2 * a.indptr), shape=(len(sub), 2 * n + 3))
 
 
-def _path_and_burn_rows(pb: _Problem, cols):
-    """The rows of :func:`_assemble` that the e/i direction leaves alone, over v = [p, m, L, mu, nu] for the
-    candidate columns ``cols``: the path rows (s a dl >= a_dl_min at every grid epoch, post- and pre-burn) with
-    their lower bounds, and the per-burn magnitude rows with their upper bounds. Memoised in ``pb.rows`` (the LP is
-    solved again for each e/i direction, and a plan's diagnosis relaxes other groups): the same matrices each time.
-    """
-    key = np.asarray(cols).tobytes()
-    if key in pb.rows:
-        return pb.rows[key]
-    from scipy import sparse
-
-    n_s = len(cols)
-    path_blocks, path_lb = [], []
+def _path_rows(pb: _Problem, cols):
+    """s a dl >= a_dl_min at every grid epoch, raised by the sagitta between epochs (module docstring, Formulation):
+    the post-burn rows and, with radial burns, the pre-burn rows, as :func:`signed_rows` blocks with their lower
+    bounds ``path_floor - free_path``."""
+    blocks, lb = [], []
     for mat in (pb.path, pb.path_pre):
         if mat is None:
             continue
-        sub = mat[:, cols]
-        path_blocks.append(signed_rows(sub))
-        path_lb += list(pb.path_floor - pb.free_path)
-    # per-burn magnitude: |dvR| + |dvT| + |dvN| <= max_burn_dv bounds the Euclidean norm (exact for one axis)
+        blocks.append(signed_rows(mat[:, cols]))
+        lb += list(pb.path_floor - pb.free_path)
+    return blocks, lb
+
+
+def _burn_magnitude_rows(pb: _Problem, cols):
+    """|dvR| + |dvT| + |dvN| <= max_burn_dv per grid epoch (BIROS, seed 001 Sec. 2.1): sum (p + m) over the
+    epoch's candidates <= quanta_max, one row per epoch among ``cols``; it bounds the Euclidean norm (exact for one
+    axis). Returns the CSR block over [p, m, L, mu, nu] and the upper bounds."""
+    from scipy import sparse
+
+    n_s = len(cols)
     groups, member = np.unique(pb.epoch_of[cols], return_inverse=True)
     one = np.ones(n_s)
     per_epoch = sparse.csr_matrix((np.concatenate([one, one]),
                                    (np.concatenate([member, member]), np.arange(2 * n_s))),
                                   shape=(len(groups), 2 * n_s))
-    burn_block = sparse.hstack([per_epoch, sparse.csr_matrix((len(groups), 3))])
-    pb.rows[key] = out = (path_blocks, path_lb, burn_block, [pb.quanta_max] * len(groups))
-    return out
+    return sparse.hstack([per_epoch, sparse.csr_matrix((len(groups), 3))]), [pb.quanta_max] * len(groups)
+
+
+def _path_and_burn_rows(pb: _Problem, cols):
+    """:func:`_path_rows` and :func:`_burn_magnitude_rows` (the rows the e/i direction leaves alone), memoised in
+    ``pb.rows`` by ``cols`` (the LP is solved again for each e/i direction, and a plan's diagnosis relaxes other
+    groups): the same matrices each time."""
+    key = np.asarray(cols).tobytes()
+    if key not in pb.rows:
+        pb.rows[key] = (*_path_rows(pb, cols), *_burn_magnitude_rows(pb, cols))
+    return pb.rows[key]
 
 
 def _linprog(pb, cols, ihat, use_linprog=False, **flags):
