@@ -44,7 +44,7 @@ def _core():
     return core if hasattr(core, "_Highs") and hasattr(core, "kHighsInf") else None
 
 
-def _linprog(cost, a_ub, b_ub, a_eq, b_eq, lo, hi):
+def _linprog(cost, a_ub, b_ub, a_eq, b_eq, *, lo, hi):
     from scipy.optimize import linprog
 
     res = linprog(cost, A_ub=a_ub, b_ub=b_ub, A_eq=a_eq, b_eq=b_eq, bounds=np.column_stack([lo, hi]),
@@ -52,7 +52,7 @@ def _linprog(cost, a_ub, b_ub, a_eq, b_eq, lo, hi):
     return LPResult(res.status, res.message, res.x if res.status == _OPTIMAL else None, res.fun, res.nit)
 
 
-def solve_lp(cost, a_ub, b_ub, a_eq, b_eq, lo, hi, use_linprog=False):
+def solve_lp(cost, a_ub, b_ub, a_eq, b_eq, *, lo, hi, use_linprog=False):
     """min cost @ x subject to a_ub x <= b_ub, a_eq x = b_eq, lo <= x <= hi (sparse a_ub, a_eq; linprog's form).
 
     The model is linprog's: rows ``vstack(a_ub, a_eq)`` in CSC, row bounds (-inf, b_ub) then (b_eq, b_eq), HiGHS's
@@ -61,7 +61,7 @@ def solve_lp(cost, a_ub, b_ub, a_eq, b_eq, lo, hi, use_linprog=False):
     """
     core = None if use_linprog else _core()
     if core is None:
-        return _linprog(cost, a_ub, b_ub, a_eq, b_eq, lo, hi)
+        return _linprog(cost, a_ub, b_ub, a_eq, b_eq, lo=lo, hi=hi)
     from scipy import sparse
 
     a = sparse.csc_array(sparse.vstack((a_ub, a_eq)))

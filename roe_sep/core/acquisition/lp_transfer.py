@@ -80,13 +80,13 @@ def carrier_burn_effects(epochs, axes, chief, j2=True):
     return delta_roe(units[None, :, :], u[:, None], chief.a, mean_motion(chief.a))
 
 
-def response_at(effects, epochs, t, a, inc, j2=True):
+def response_at(effects, epochs, t, a, inc, *, j2=True):
     """ROE change at one time ``t >= max(epochs)`` per unit burn: Phi(t - t_k) effects[k, j], ``(K, J, 6)``."""
     phi = transition_matrices(t - np.asarray(epochs, dtype=float), a, inc, j2)  # (K, 6, 6)
     return np.einsum("kcd,kjd->kjc", phi, effects)
 
 
-def grid_response(effects, step, a, inc, j2=True, component=1):
+def grid_response(effects, step, a, inc, j2=True, *, component=1):
     """Response of one ROE ``component`` at every grid epoch to every candidate burn on a *uniform* grid.
 
     ``R[i, k, j] = (Phi((i - k) step) effects[k, j])[component]`` for i >= k (a burn acts on the state at its own
@@ -102,7 +102,7 @@ def grid_response(effects, step, a, inc, j2=True, component=1):
     return out
 
 
-def sagitta(step, a, inc, j2=True, da_dot=0.0, component=1):
+def sagitta(step, a, inc, j2=True, da_dot=0.0, *, component=1):
     """Largest dip of a ROE ``component`` between two grid epochs below the chord through its end values.
 
     Between burns the secular model is at most quadratic in time (differential drag makes da linear, dl

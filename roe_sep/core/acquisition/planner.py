@@ -260,7 +260,7 @@ def _unit(v, what):
     return np.array([v[0], v[1]]) / norm
 
 
-def _build(roe0, chief, da_dot, cfg, t_earliest, no_burns=()):
+def _build(roe0, chief, da_dot, cfg, t_earliest, *, no_burns=()):
     a = chief.a
     x0 = np.asarray(roe0, dtype=float)
     s = 1.0 if x0[1] > 0 else -1.0
@@ -284,7 +284,7 @@ def _build(roe0, chief, da_dot, cfg, t_earliest, no_burns=()):
     q = cfg.dv_quantum
     effects = carrier_burn_effects(epochs, axes, chief, cfg.j2) * q  # (K, J, 6) per quantum
     t_f = float(epochs[-1])
-    final = a * response_at(effects, epochs, t_f, a, chief.inc, cfg.j2).reshape(k_count * j_count, 6).T
+    final = a * response_at(effects, epochs, t_f, a, chief.inc, j2=cfg.j2).reshape(k_count * j_count, 6).T
     free = a * propagate(x0, np.concatenate([epochs, [t_f]]) - chief.t0, a, chief.inc, cfg.j2, da_dot)
     step = float(epochs[1] - epochs[0])
     path = s * a * grid_response(effects, step, a, chief.inc, cfg.j2, component=1).reshape(k_count, -1)
@@ -421,7 +421,7 @@ def _objective(lay: _Layout) -> np.ndarray:
     return np.concatenate([np.ones(2 * lay.n_s), np.zeros(3)])
 
 
-def _assemble(pb: _Problem, cols, ihat, exact, path=True, target=True, ei=True):
+def _assemble(pb: _Problem, cols, ihat, exact, path=True, *, target=True, ei=True):
     """Objective, variable bounds and rows lb <= A v <= ub over the :class:`_Layout` v = [p, m, L, mu, nu].
 
     Rows in order: drift, along-track, e/i direction and field of view (``ei``), path (``path``), burn magnitude.
@@ -524,7 +524,7 @@ def _linprog(pb, cols, ihat, use_linprog=False, **flags):
     low = ~eq & np.isfinite(lb)
     a_ub = sparse.vstack([a_mat[np.flatnonzero(up)], -a_mat[np.flatnonzero(low)]]).tocsr()
     b_ub = np.concatenate([ub[up], -lb[low]])
-    return solve_lp(cost, a_ub, b_ub, a_mat[np.flatnonzero(eq)], ub[eq], lo_v, hi_v, use_linprog=use_linprog)
+    return solve_lp(cost, a_ub, b_ub, a_mat[np.flatnonzero(eq)], ub[eq], lo=lo_v, hi=hi_v, use_linprog=use_linprog)
 
 
 def _milp(pb, cols, ihat):
@@ -536,7 +536,7 @@ def _milp(pb, cols, ihat):
                 options={"time_limit": pb.cfg.milp_time_limit, "mip_rel_gap": 1e-6})
 
 
-def _diagnose(pb, cols, ihat, a_da0, a_da_dot, duration, n):
+def _diagnose(pb, cols, ihat, a_da0, a_da_dot, *, duration, n):
     """A reason for an infeasible LP, from the drift budget and from relaxing one group of constraints at a time."""
     cfg = pb.cfg
     need = drift_nulling_dv_bound(a_da0, a_da_dot, duration, n, cfg.drift_tolerance)
@@ -605,7 +605,7 @@ def check_inputs(roe0, chief: Chief, da_dot):
 
 
 def plan_acquisition(roe0, chief: Chief, da_dot=0.0, cfg: AcquisitionConfig = AcquisitionConfig(),
-                     t_earliest=None, no_burns=()) -> AcquisitionPlan:
+                     t_earliest=None, *, no_burns=()) -> AcquisitionPlan:
     """Minimum-delta-v carrier plan from the estimate ``roe0`` (dimensionless, at ``chief.t0``) to the ICs.
 
     ``da_dot`` [1/s]: estimated drift of da from differential drag (the OD's a_da_dot / a). ``t_earliest`` [s]:
@@ -626,7 +626,7 @@ def plan_acquisition(roe0, chief: Chief, da_dot=0.0, cfg: AcquisitionConfig = Ac
     if not math.isfinite(t_earliest) or t_earliest < chief.t0:
         raise AcquisitionInfeasible(f"t_earliest = {t_earliest} s precedes the OD epoch {chief.t0} s")
     start = time.perf_counter()
-    pb = _build(x0, chief, da_dot, cfg, t_earliest, tuple(no_burns))
+    pb = _build(x0, chief, da_dot, cfg, t_earliest, no_burns=tuple(no_burns))
     _check_drift_lattice(pb)
     all_cols = np.arange(pb.final.shape[1])
     ihat = _unit(pb.free_final[4:6], "the predicted relative inclination vector")
@@ -642,7 +642,7 @@ def plan_acquisition(roe0, chief: Chief, da_dot=0.0, cfg: AcquisitionConfig = Ac
             if res.status == 2:
                 raise AcquisitionInfeasible(
                     "no acquisition plan: " + _diagnose(pb, all_cols, ihat, a * x0[0], a * da_dot,
-                                                           float(pb.epochs[-1]) - chief.t0, n))
+                                                           duration=float(pb.epochs[-1]) - chief.t0, n=n))
             raise AcquisitionInfeasible(f"the linear program failed: {res.message}")
         d_lp = res.x[:len(all_cols)] - res.x[len(all_cols):2 * len(all_cols)]
         lp_final = pb.free_final + pb.final @ d_lp
@@ -673,11 +673,11 @@ def plan_acquisition(roe0, chief: Chief, da_dot=0.0, cfg: AcquisitionConfig = Ac
             f"a da takes values {lattice:.2f} m apart: drift_tolerance = {cfg.drift_tolerance:g} m may be too "
             f"small; ei_angle_tol_deg = {cfg.ei_angle_tol_deg:g}, a_dl_target_tol = {cfg.a_dl_target_tol:g} m)")
     solve_time = time.perf_counter() - start
-    return _finish(pb, x0, chief, da_dot, cfg, t_earliest, quantized, lp_final, lp_dv, (solve_time, lp_time), solves,
-                   n)
+    return _finish(pb, x0, chief, da_dot, cfg, t_earliest=t_earliest, quantized=quantized, lp_final=lp_final,
+                   lp_dv=lp_dv, times=(solve_time, lp_time), solves=solves, n=n)
 
 
-def _finish(pb, x0, chief, da_dot, cfg, t_earliest, quantized, lp_final, lp_dv, times, solves, n):
+def _finish(pb, x0, chief, da_dot, cfg, *, t_earliest, quantized, lp_final, lp_dv, times, solves, n):
     """Combine the quantized candidates into burns, predict with :func:`trajectory` and verify every IC."""
     a = float(chief.a)
     k_count, j_count = len(pb.epochs), len(pb.axes)
@@ -689,7 +689,7 @@ def _finish(pb, x0, chief, da_dot, cfg, t_earliest, quantized, lp_final, lp_dv, 
     t_f = float(pb.epochs[-1])
     period = 2.0 * math.pi / float(arg_latitude_rate(a, chief.inc, cfg.j2))
     dense = np.unique(np.concatenate([np.arange(chief.t0, t_f, period / 64.0), pb.epochs, [t_f]]))
-    traj = trajectory(x0, chief.t0, burns, dense, chief, cfg.j2, da_dot)
+    traj = trajectory(x0, chief.t0, burns, dense, chief, j2=cfg.j2, da_dot=da_dot)
     final = traj[-1]
     f = final * a
     leading = pb.s > 0
@@ -752,10 +752,10 @@ def verify(plan: AcquisitionPlan, cfg: AcquisitionConfig, eps=1e-6):
     return out
 
 
-def acquisition_trajectory(plan: AcquisitionPlan, roe0, chief: Chief, times, da_dot=0.0, j2=True):
+def acquisition_trajectory(plan: AcquisitionPlan, roe0, chief: Chief, times, da_dot=0.0, *, j2=True):
     """Dimensionless ROE along the plan at ``times`` (>= plan.t0) from ``roe0`` at ``chief.t0``, via
     :func:`trajectory` (relative impulses -dv_carrier)."""
-    return trajectory(roe0, chief.t0, plan.burns(), times, chief, j2, da_dot)
+    return trajectory(roe0, chief.t0, plan.burns(), times, chief, j2=j2, da_dot=da_dot)
 
 
 __all__ = ["AcquisitionConfig", "AcquisitionInfeasible", "AcquisitionPlan", "InvalidAcquisitionConfig",

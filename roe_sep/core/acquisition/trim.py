@@ -98,7 +98,7 @@ def trim_threshold(tolerance, sigma, lattice, z=TRIM_SIGMAS):
     return min(tolerance, max(0.5 * lattice, tolerance - z * sigma))
 
 
-def radar_passes(kep, t0, t_start, t_end, jd0, station=TIRA, mask_deg=10.0, min_duration=60.0, j2=True):
+def radar_passes(kep, t0, t_start, t_end, jd0, *, station=TIRA, mask_deg=10.0, min_duration=60.0, j2=True):
     """Rise/set times [s] ``(k, 2)`` of the carrier's passes above ``mask_deg`` at ``station`` in [t_start, t_end]:
     the chief's mean elements ``kep`` ``[a, e, i, raan, argp, M]`` at ``t0`` propagated secularly, the Earth turned
     by the sidereal angle of Julian date ``jd0`` at sim time 0 (the picosatellite is kilometers from the carrier:
@@ -206,7 +206,7 @@ def plan_trim(roe0, chief: Chief, da_dot, burns, t_final, t_earliest, sigma_a_da
     leading = x0[1] > 0
     step = 2.0 * math.pi / cfg.grid_per_orbit / float(arg_latitude_rate(a, chief.inc, cfg.j2))
     pending = [b for b in burns if b.epoch >= chief.t0]
-    kept = trajectory(x0, chief.t0, pending, [t_final], chief, cfg.j2, da_dot)[0]
+    kept = trajectory(x0, chief.t0, pending, [t_final], chief, j2=cfg.j2, da_dot=da_dot)[0]
     predicted = float(kept[0] * a)
     od_sigma = predicted_drift_sigma(sigma_a_da, sigma_rate, t_final - (chief.t0 if t_od is None else t_od))
     sigma = math.hypot(od_sigma, sigma_burns)  # with the execution errors of the burns still to fly
@@ -216,12 +216,12 @@ def plan_trim(roe0, chief: Chief, da_dot, burns, t_final, t_earliest, sigma_a_da
         return TrimDecision(float(t_final), predicted, sigma, threshold, None, None, 0.0, kept)
     epoch = float(grid_epochs(t_earliest, t_earliest + step, chief, cfg.grid_per_orbit, cfg.j2)[0])
     t_f = max(float(t_final), epoch + step)
-    free = trajectory(x0, chief.t0, pending, [t_f], chief, cfg.j2, da_dot)[0]
+    free = trajectory(x0, chief.t0, pending, [t_f], chief, j2=cfg.j2, da_dot=da_dot)[0]
     # a carrier burn +dvT is the relative impulse -dvT: a da changes by -2 dvT / n (Eq. 2)
     quanta = round(float(free[0] * a) / lattice)
     dv_t = float(np.clip(quanta * cfg.dv_quantum, -cfg.max_burn_dv, cfg.max_burn_dv))
     trim = Burn(epoch, (0.0, -dv_t, 0.0))
-    final = trajectory(x0, chief.t0, [*pending, trim], [t_f], chief, cfg.j2, da_dot)[0]
+    final = trajectory(x0, chief.t0, [*pending, trim], [t_f], chief, j2=cfg.j2, da_dot=da_dot)[0]
     problems = ic_problems(final, a, cfg, leading, ei_tolerance_deg)
     # an initial condition the plan misses anyway (a late burn's execution error drifted dl out of its band) does not
     # stop the trim: nulling the drift holds the formation; a check that only the trim would break does

@@ -287,7 +287,7 @@ def velocity_covariance(vi: ArrayLike, dti: ArrayLike, vj: ArrayLike, dtj: Array
 
 
 def position_moments(t: ArrayLike, v: ArrayLike, dt: ArrayLike, p_x: ArrayLike, sigma: float,
-                     n: float) -> tuple[np.ndarray, np.ndarray]:
+                     *, n: float) -> tuple[np.ndarray, np.ndarray]:
     """E and Var ``(..., 3)`` of one NS's position w.r.t. the OS at time ``t`` [s] from the program start (Eqs. 1-2).
 
     The NS separates at ``dt`` with speed ``v`` and differential drag acceleration ``p_x``:
@@ -323,7 +323,7 @@ def position_moments(t: ArrayLike, v: ArrayLike, dt: ArrayLike, p_x: ArrayLike, 
     return mean, np.stack([m00**2 * vx + m01**2 * vy, m10**2 * vx + m11**2 * vy, m22**2 * vz], axis=-1)
 
 
-def pair_moments(t: ArrayLike, vi: ArrayLike, dti: ArrayLike, pi: ArrayLike, vj: ArrayLike, dtj: ArrayLike,
+def pair_moments(t: ArrayLike, vi: ArrayLike, dti: ArrayLike, pi: ArrayLike, vj: ArrayLike, *, dtj: ArrayLike,
                  pj: ArrayLike, sigma: float, n: float) -> tuple[np.ndarray, np.ndarray]:
     """E and Var ``(..., 3)`` of r_i - r_j at times ``t`` (exact second moments, shared tumbling).
 
@@ -446,7 +446,7 @@ def deterministic_bound(tau: ArrayLike, v: ArrayLike, p_x: ArrayLike, n: float) 
 
 
 def deterministic_pair_bound(t: ArrayLike, vi: ArrayLike, dti: ArrayLike, pi: ArrayLike, vj: ArrayLike,
-                             dtj: ArrayLike, pj: ArrayLike, n: float) -> np.ndarray:
+                             *, dtj: ArrayLike, pj: ArrayLike, n: float) -> np.ndarray:
     """|r_i - r_j| >= s_min(M_a) V_a - s_max(M_b) V_b - |D_i - D_j| for all directions, a = earlier separation.
 
     |M_a V_a e_a - M_b V_b e_b| >= s_min(M_a) V_a - s_max(M_b) V_b for unit e_a, e_b; in the straight-line phase
@@ -505,15 +505,16 @@ def platform_safe(cfg: ClusterConfig, sat: Nanosatellite, delays: ArrayLike | No
     tau = _time_grid(cfg, cfg.departure_time, cfg.horizon - cfg.departure_time)
     if cfg.method == "envelope":
         zero = np.zeros_like(delays)
-        return conditions(sat.velocity, delays, p_x, zero, delays, zero, delays[:, None] + tau, n, cfg.omega_star,
-                          cfg.r_safe)[0]
-    mean, var = position_moments(delays[:, None] + tau, sat.velocity, delays, p_x, cfg.sigma, n)
+        return conditions(sat.velocity, delays, p_x, zero, delays, pj=zero, t=delays[:, None] + tau, n=n,
+                          omega_star=cfg.omega_star,
+                          r_min=cfg.r_safe)[0]
+    mean, var = position_moments(delays[:, None] + tau, sat.velocity, delays, p_x, cfg.sigma, n=n)
     lower, _ = box_bounds(mean, var, quantile_factor(cfg.p_required))
     det = deterministic_bound(tau, sat.velocity, p_x, n)
     return np.all((lower >= cfg.r_safe) | (det >= cfg.r_safe), axis=-1)
 
 
-def _pair_conditions(cfg, si, di, sj, dj, within=True):
+def _pair_conditions(cfg, si, di, sj, dj, *, within=True):
     """(safe, within r**, largest distance bound) of NS ``si`` at delays ``di`` against ``sj`` at ``dj`` (arrays of
     one shape), every t from the later separation to the later separation + horizon, with P* (Eqs. 4-5)."""
     n = cfg.n
@@ -523,16 +524,16 @@ def _pair_conditions(cfg, si, di, sj, dj, within=True):
     distinct = di != dj
     if cfg.method == "envelope":
         shape = di.shape
-        clear, inside, upper = conditions(si.velocity, di.ravel(), pi, sj.velocity, dj.ravel(), pj,
-                                          t.reshape(di.size, -1), n, cfg.omega_star, cfg.r_safe,
-                                          cfg.r_max if within else None)
+        clear, inside, upper = conditions(si.velocity, di.ravel(), pi, sj.velocity, dj.ravel(), pj=pj,
+                                          t=t.reshape(di.size, -1), n=n, omega_star=cfg.omega_star, r_min=cfg.r_safe,
+                                          r_max=cfg.r_max if within else None)
         if not within:
             return clear.reshape(shape) & distinct, None, None
         return clear.reshape(shape) & distinct, inside.reshape(shape) & distinct, upper.reshape(shape)
-    mean, var = pair_moments(t, si.velocity, di, pi, sj.velocity, dj, pj, cfg.sigma, n)
+    mean, var = pair_moments(t, si.velocity, di, pi, sj.velocity, dtj=dj, pj=pj, sigma=cfg.sigma, n=n)
     _, upper = box_bounds(mean, var, quantile_factor(cfg.p_required))
     near = near_probability(mean, var, cfg.r_safe)
-    det = deterministic_pair_bound(t, si.velocity, di, pi, sj.velocity, dj, pj, n)
+    det = deterministic_pair_bound(t, si.velocity, di, pi, sj.velocity, dtj=dj, pj=pj, n=n)
     safe = np.all((near <= 1.0 - cfg.p_required) | (det >= cfg.r_safe), axis=-1) & distinct
     return safe, np.all(upper <= cfg.r_max, axis=-1) & distinct, np.max(upper, axis=-1)
 
@@ -561,7 +562,7 @@ def pair_tables(cfg: ClusterConfig, si: Nanosatellite, sj: Nanosatellite,
 
 
 def pair_distance_bound(cfg: ClusterConfig, si: Nanosatellite, dt_i: float, sj: Nanosatellite, dt_j: float,
-                        t: ArrayLike) -> np.ndarray:
+                        *, t: ArrayLike) -> np.ndarray:
     """P* upper bound [m] of |r_i - r_j| at each time of ``t`` ``(T,)`` by ``cfg.method`` (the minimax quantity).
 
     Parameters
@@ -584,10 +585,11 @@ def pair_distance_bound(cfg: ClusterConfig, si: Nanosatellite, dt_i: float, sj: 
     pi = drag_acceleration(-si.delta_q, cfg.density, cfg.a)
     pj = drag_acceleration(-sj.delta_q, cfg.density, cfg.a)
     if cfg.method == "envelope":
-        return conditions(si.velocity, dt_i, pi, sj.velocity, dt_j, pj, t[:, None], cfg.n, cfg.omega_star,
-                          cfg.r_safe, cfg.r_max)[2]
+        return conditions(si.velocity, dt_i, pi, sj.velocity, dt_j, pj=pj, t=t[:, None], n=cfg.n,
+                          omega_star=cfg.omega_star,
+                          r_min=cfg.r_safe, r_max=cfg.r_max)[2]
     mean, var = pair_moments(t, si.velocity, np.asarray(dt_i, dtype=float), pi, sj.velocity,
-                             np.asarray(dt_j, dtype=float), pj, cfg.sigma, cfg.n)
+                             dtj=np.asarray(dt_j, dtype=float), pj=pj, sigma=cfg.sigma, n=cfg.n)
     return box_bounds(mean, var, quantile_factor(cfg.p_required))[1]
 
 
@@ -881,7 +883,7 @@ def simulate_program(cfg: ClusterConfig, delays: ArrayLike, draws: Draws) -> dic
 
 
 def statistical_min_delay_difference(cfg: ClusterConfig, draws: Draws, si: Nanosatellite, sj: Nanosatellite,
-                                     dt_i: float, differences: ArrayLike) -> float | None:
+                                     dt_i: float, *, differences: ArrayLike) -> float | None:
     """Smallest delay difference dt_j - dt_i (from ``differences``) with P(r_ij >= r* throughout) >= P*.
 
     Parameters

@@ -103,7 +103,7 @@ class _Cases:
     n_times: int
 
 
-def _cases(vi, dti, pi, vj, dtj, pj, t, n):
+def _cases(vi, dti, pi, vj, dtj, *, pj, t, n):
     vi, dti, pi, vj, dtj, pj = (np.asarray(x, dtype=float)[:, None] for x in (vi, dti, pi, vj, dtj, pj))
     t = np.asarray(t, dtype=float)
     ti, tj = t - dti, t - dtj
@@ -155,7 +155,7 @@ def _split(k, omega, delta):
     return np.repeat(k, 2), np.stack([omega - half, omega + half], axis=-1).ravel(), half
 
 
-def conditions(vi: ArrayLike, dti: ArrayLike, pi: ArrayLike, vj: ArrayLike, dtj: ArrayLike, pj: ArrayLike,
+def conditions(vi: ArrayLike, dti: ArrayLike, pi: ArrayLike, vj: ArrayLike, dtj: ArrayLike, *, pj: ArrayLike,
                t: ArrayLike, n: float, omega_star: float, r_min: float,
                r_max: float | None = None) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
     """Conditions (3)-(5) on S* for NS i against NS j: arrays over cases ``(C,)`` (speeds [m/s], delays [s], drag
@@ -195,7 +195,8 @@ def conditions(vi: ArrayLike, dti: ArrayLike, pi: ArrayLike, vj: ArrayLike, dtj:
     out = []
     for start in range(0, t.shape[0], CHUNK_CASES):
         part = slice(start, start + CHUNK_CASES)
-        out.append(_decide(_cases(*(np.broadcast_to(x, t.shape[:1])[part] for x in args), t[part], n),
+        parts = [np.broadcast_to(x, t.shape[:1])[part] for x in args]
+        out.append(_decide(_cases(*parts[:5], pj=parts[5], t=t[part], n=n),
                            omega_star, r_min, r_max))
     clear = np.concatenate([o[0] for o in out])
     if r_max is None:
@@ -211,10 +212,11 @@ def _decide(c: _Cases, omega_star, r_min, r_max):
     k = np.repeat(np.arange(c.l0.size), LEVEL0_CELLS)
     omega = np.tile(omega, c.l0.size)
     margin = _margin(c, k, omega, delta, l_centre)
-    clear = _clear(c, n_cases, k, omega, delta, np.sqrt(lo2), margin, r_min)
+    clear = _clear(c, n_cases, k, omega, delta, value=np.sqrt(lo2), margin=margin, r_min=r_min)
     if r_max is None:
         return clear, None, None
-    return (clear, *_within(c, n_cases, k, omega, delta, np.sqrt(hi2), margin, r_max, 1e-3 * r_max))
+    return (clear, *_within(c, n_cases, k, omega, delta, value=np.sqrt(hi2), margin=margin, r_max=r_max,
+                            tol=1e-3 * r_max))
 
 
 def _margin(c, k, omega, delta, l_centre):
@@ -222,7 +224,7 @@ def _margin(c, k, omega, delta, l_centre):
     return np.minimum(c.l0[k] + c.l1[k] * (omega + delta), l_centre + c.l2[k] * delta) * delta
 
 
-def _clear(c, n_cases, k, omega, delta, value, margin, r_min):
+def _clear(c, n_cases, k, omega, delta, *, value, margin, r_min):
     failed = np.zeros(n_cases, dtype=bool)
     for level in range(MAX_DEPTH + 1):
         case = k // c.n_times
@@ -237,7 +239,7 @@ def _clear(c, n_cases, k, omega, delta, value, margin, r_min):
         value, margin = np.sqrt(lo2), _margin(c, k, omega, delta, l_centre)
 
 
-def _within(c, n_cases, k, omega, delta, value, margin, r_max, tol):
+def _within(c, n_cases, k, omega, delta, *, value, margin, r_max, tol):
     failed = np.zeros(n_cases, dtype=bool)
     lower, upper = np.zeros(n_cases), np.zeros(n_cases)
     for level in range(MAX_DEPTH + 1):

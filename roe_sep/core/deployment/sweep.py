@@ -166,7 +166,7 @@ def deployment_roe(dv_rtn: ArrayLike, u0: ArrayLike, a: float) -> np.ndarray:
 
 
 def relative_motion(roe0: ArrayLike, t: ArrayLike, a: float, inc: ArrayLike, da_dot: ArrayLike = 0.0,
-                    j2: bool = True) -> np.ndarray:
+                    *, j2: bool = True) -> np.ndarray:
     """Linear model: ROE ``(..., len(t), 6)`` at times ``t`` [s] after the deployment.
 
     The core's secular ROE model (:func:`~roe_sep.core.relmotion.dynamics.propagate`: Keplerian, J2, constant
@@ -223,7 +223,7 @@ def _linear_distances(cfg, dv_rtn, inc, times):
     a = cfg.a
     u0 = np.radians(cfg.u0_deg)
     da_dot = drag_da_dot(cfg.delta_b, cfg.density, a) if cfg.drag else 0.0
-    roe = relative_motion(deployment_roe(dv_rtn, u0, a), times, a, inc, np.broadcast_to(da_dot, inc.shape), cfg.j2)
+    roe = relative_motion(deployment_roe(dv_rtn, u0, a), times, a, inc, np.broadcast_to(da_dot, inc.shape), j2=cfg.j2)
     return relative_distance(roe, u0 + arg_latitude_rate(a, inc[..., None], cfg.j2) * times, a)
 
 
@@ -236,7 +236,8 @@ def _nonlinear_distances(cfg, dv_rtn, inc, times):
     mother = np.stack([np.full_like(inc, cfg.a), zero, inc, zero, zero, zero + np.radians(cfg.u0_deg)], axis=-1)
     s0 = apply_impulse(pair_state(mother, mother), dv_rtn.reshape(-1, 3), np.ones(inc.shape, dtype=bool))
     b_mother, b_cubesat = (cfg.mother_ballistic, cfg.cubesat.ballistic) if cfg.drag else (0.0, 0.0)
-    states = propagate_pairs_grid(s0, 0.0, times, b_mother, b_cubesat, Atmosphere.scaled(cfg.density, cfg.altitude))
+    states = propagate_pairs_grid(s0, 0.0, times, b_mother, b_cubesat,
+                                  atmosphere=Atmosphere.scaled(cfg.density, cfg.altitude))
     return np.linalg.norm(states[..., 6:9] - states[..., 0:3], axis=-1).reshape(shape + (len(times),))
 
 

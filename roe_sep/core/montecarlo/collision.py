@@ -157,7 +157,7 @@ class Arcs:
     accel: np.ndarray  # (2, N) m/s^2, bound of |a| on each arc
 
 
-def _bounds(roe, da_dot, a, inc, j2, duration):
+def _bounds(roe, da_dot, a, inc, j2, *, duration):
     """(V, A): bounds of the relative speed [m/s] and acceleration [m/s^2] of the model over an arc of
     ``duration`` around ``roe`` (from the derivative of r/a = M(u) roe(t), roe_to_rtn, with the rates of
     :func:`~roe_sep.core.relmotion.dynamics.propagate`), 5 % margin."""
@@ -205,11 +205,11 @@ def arcs(design: DoubleImpulseDesign, mc: MonteCarloConfig, d: Draws, p: float) 
     out = after_stop(design, mc, d, pre, p)
     a, inc = design.a, design.inc
     roe = np.stack([pre.roe_before_stop, out.roe_after_stop])
-    va, aa = _bounds(pre.roe_before_stop, pre.da_dot, a, inc, mc.j2, pre.dt_stop)
+    va, aa = _bounds(pre.roe_before_stop, pre.da_dot, a, inc, mc.j2, duration=pre.dt_stop)
     # arc A is evaluated backwards from t_stop: bound with the state at its start as well (the larger of the two)
     roe1 = propagate(pre.roe_before_stop, -pre.dt_stop, a, inc, mc.j2, pre.da_dot)
-    va1, aa1 = _bounds(roe1, pre.da_dot, a, inc, mc.j2, pre.dt_stop)
-    vb, ab = _bounds(out.roe_after_stop, pre.da_dot, a, inc, mc.j2, mc.horizon)
+    va1, aa1 = _bounds(roe1, pre.da_dot, a, inc, mc.j2, duration=pre.dt_stop)
+    vb, ab = _bounds(out.roe_after_stop, pre.da_dot, a, inc, mc.j2, duration=mc.horizon)
     return Arcs(a, inc, mc.j2, design.u1, arg_latitude_rate(a, inc, mc.j2), pre.dt_stop, pre.dt_stop + mc.horizon,
                 roe, pre.da_dot, np.stack([np.maximum(va, va1), vb]), np.stack([np.maximum(aa, aa1), ab]))
 
@@ -231,7 +231,7 @@ def time_grid(arc: Arcs, steps_per_orbit: int) -> np.ndarray:
     return np.concatenate([ta, tb[1:]])
 
 
-def _lower_bound(arc, idx, t0, t1, f0, f1):
+def _lower_bound(arc, idx, t0, t1, f0, *, f1):
     """Lower bound of |r|^2 on [t0, t1] (one arc): min(f0, f1) - M h^2 / 8, M = 2 (V^2 + r_max A)."""
     which = (t0 >= arc.t_stop).astype(np.intp)
     v, acc = arc.speed[which, idx], arc.accel[which, idx]
@@ -240,13 +240,13 @@ def _lower_bound(arc, idx, t0, t1, f0, f1):
     return np.minimum(f0, f1) - (v * v + r_max * acc) * h * h / 4.0
 
 
-def _branch_and_bound(arc, idx, t0, t1, f0, f1, best, tol_abs, tol_rel, max_levels=80):
+def _branch_and_bound(arc, idx, t0, t1, f0, *, f1, best, tol_abs, tol_rel, max_levels=80):
     """Refine intervals (sample ``idx``, [t0, t1], end values f0, f1) until none can hold a value below
     ``best[idx] - tol`` (squared distances); ``best`` (per sample, m^2) is lowered in place."""
     for _ in range(max_levels):
         d = np.sqrt(best[idx])
         thr = np.maximum(d - (tol_abs + tol_rel * d), 0.0) ** 2
-        keep = _lower_bound(arc, idx, t0, t1, f0, f1) < thr
+        keep = _lower_bound(arc, idx, t0, t1, f0, f1=f1) < thr
         if not np.any(keep):
             return
         idx, t0, t1, f0, f1 = idx[keep], t0[keep], t1[keep], f0[keep], f1[keep]
@@ -312,9 +312,11 @@ def _min_distance(design, mc, d, cfg):
     # the closest approach); the interval of the departure itself starts at departure_distance
     ii, kk = np.nonzero((k[:, :-1] >= k_dep[:, None] - 1) & (k[:, :-1] < k_s[:, None]) & departed[:, None])
     rise = np.full(n, r2)
-    _branch_and_bound(arc, ii, t[kk], t[kk + 1], np.maximum(f[ii, kk], dep2), f[ii, kk + 1], rise, 0.0, 0.0)
+    _branch_and_bound(arc, ii, t[kk], t[kk + 1], np.maximum(f[ii, kk], dep2), f1=f[ii, kk + 1], best=rise, tol_abs=0.0,
+                      tol_rel=0.0)
     ii, kk = np.nonzero((k[:, :-1] >= k_s[:, None]) & returned[:, None])
-    _branch_and_bound(arc, ii, t[kk], t[kk + 1], f[ii, kk], f[ii, kk + 1], best, cfg.tol_abs, cfg.tol_rel)
+    _branch_and_bound(arc, ii, t[kk], t[kk + 1], f[ii, kk], f1=f[ii, kk + 1], best=best, tol_abs=cfg.tol_abs,
+                      tol_rel=cfg.tol_rel)
     best = np.where(rise < r2, np.minimum(rise, best), best)
     return np.where(returned | (rise < r2), np.sqrt(best), np.inf)
 
@@ -392,7 +394,7 @@ def _chunk_draws(chunk, design, mc, proposal, block):
 
 
 def evaluate_chunk(chunk: tuple[int, int], design: DoubleImpulseDesign, mc: MonteCarloConfig, cfg: CollisionConfig,
-                   proposal: Proposal | None = None, block: int = BLOCK_SIZE) -> CollisionStats:
+                   proposal: Proposal | None = None, *, block: int = BLOCK_SIZE) -> CollisionStats:
     """Collision statistics of one chunk ``(first block, number of blocks)``; ``proposal`` None: brute force.
 
     Parameters
@@ -439,7 +441,7 @@ def _fit(z, w, min_std):
 
 
 def cross_entropy(design: DoubleImpulseDesign, mc: MonteCarloConfig, cfg: CollisionConfig,
-                  samples_per_level: int = 2000, rho: float = 0.1, max_levels: int = 25,
+                  samples_per_level: int = 2000, rho: float = 0.1, *, max_levels: int = 25,
                   progress: Callable[[int, float], object] | None = None, min_std: float = 1.0,
                   patience: int = 4) -> tuple[Proposal, list, bool]:
     """Multilevel cross-entropy tuning of the Gaussian proposal (module docstring).

@@ -263,7 +263,7 @@ def chief_eccentricity(batch: RadarBatch, t_ref):
     return at_ref, slope
 
 
-def drag_de_drift(x, de, dt, a, scale_height, ecc, ecc_rate=(0.0, 0.0), a_chief_dot=0.0, growth=0.0):
+def drag_de_drift(x, de, dt, a, scale_height, *, ecc, ecc_rate=(0.0, 0.0), a_chief_dot=0.0, growth=0.0):
     """Secular change ``(..., 2)`` of the relative eccentricity vector by drag over ``dt`` [s] of states ``x``
     ``(..., 7)`` whose relative e vector is ``de`` ``(..., 2)``, chief semi-major axis ``a`` [m], density scale height
     ``scale_height`` H [m], carrier mean e vector ``ecc`` at dt = 0 and its rate ``ecc_rate`` [1/s]
@@ -309,7 +309,7 @@ def drift_growth(x, batch: RadarBatch, model, decay=None):
     return model.growth(chief_decay(batch) if decay is None else decay, a * x[..., 6])
 
 
-def propagate_state(x, dt, a, inc, j2=True, drag=True, growth=0.0):
+def propagate_state(x, dt, a, inc, j2=True, *, drag=True, growth=0.0):
     """ROE ``(..., 6)`` of states ``x`` ``(..., 7)`` after ``dt`` [s]: :func:`propagate` with da_dot = x[6] at
     dt = 0, and
 
@@ -332,7 +332,7 @@ def propagate_state(x, dt, a, inc, j2=True, drag=True, growth=0.0):
         # a zero state at the constant rate c dt / 3 integrates da to (c dt / 3) dt^2 / 2 = c dt^3 / 6: the
         # growth's integral, so its dl and diy are the growth's
 
-        grow = propagate_elements((0.0,) * 6, dt, a, inc, j2, curve * dt / 3.0)
+        grow = propagate_elements((0.0,) * 6, dt, a, inc, j2, da_dot=curve * dt / 3.0)
         roe[..., 0] += 0.5 * curve * dt * dt
         roe[..., 1] += grow[1]
         roe[..., 5] += grow[5]
@@ -354,7 +354,7 @@ def mean_roe_map(a, u):
     return jac
 
 
-def model_roe(x, batch: RadarBatch, t_est, j2=True, drag=True, model=None, decay=None, ecc=None):
+def model_roe(x, batch: RadarBatch, t_est, j2=True, drag=True, *, model=None, decay=None, ecc=None):
     """Mean ROE ``(..., m, 6)`` at the measurement epochs of states ``x`` ``(..., 7)`` at ``t_est``:
     :func:`propagate_state` (a, i of the chief at the batch's latest epoch; J2; the drift rate's growth of the drag
     ``model``, :func:`drift_growth`, none without one) plus drag's short-periodic de at each epoch's mean argument
@@ -364,22 +364,23 @@ def model_roe(x, batch: RadarBatch, t_est, j2=True, drag=True, model=None, decay
     x = np.asarray(x, dtype=float)
     a, inc = _chief_a_inc(batch)
     growth = drift_growth(x, batch, model if drag else None, decay)[..., None]
-    roe = propagate_state(x[..., None, :], batch.t - t_est, a, inc, j2, drag, growth)
+    roe = propagate_state(x[..., None, :], batch.t - t_est, a, inc, j2, drag=drag, growth=growth)
     if not drag:
         return roe
     if model is not None:
         ecc, ecc_rate = chief_eccentricity(batch, t_est) if ecc is None else ecc
-        roe[..., 2:4] += drag_de_drift(x[..., None, :], roe[..., 2:4], batch.t - t_est, a, model.scale_height, ecc,
-                                       ecc_rate, chief_decay(batch) if decay is None else decay, growth)
+        roe[..., 2:4] += drag_de_drift(x[..., None, :], roe[..., 2:4], batch.t - t_est, a, model.scale_height, ecc=ecc,
+                                       ecc_rate=ecc_rate, a_chief_dot=chief_decay(batch) if decay is None else decay,
+                                       growth=growth)
     u = batch.chief[:, 4] + batch.chief[:, 5]
     roe[..., 2:4] += drag_short_period_de(x[..., None, 6], a, u)
     return roe
 
 
-def predict(x, batch: RadarBatch, t_est, j2=True, drag=True, model=None, decay=None, ecc=None):
+def predict(x, batch: RadarBatch, t_est, j2=True, drag=True, *, model=None, decay=None, ecc=None):
     """h(x): modeled [range, az, el] ``(..., m, 3)`` for states ``x`` ``(..., 7)`` at epoch ``t_est``: the mean ROE
     of :func:`model_roe` observed with :func:`observe`."""
-    roe = model_roe(x, batch, t_est, j2, drag, model, decay, ecc)
+    roe = model_roe(x, batch, t_est, j2, drag, model=model, decay=decay, ecc=ecc)
     return observe(roe, batch.chief, batch.theta, batch.site_ef, batch.site_enu)
 
 
@@ -389,11 +390,11 @@ def state_steps(a):
     return np.array([1.0] * 6 + [1e-6]) / a
 
 
-def jacobian(x, batch: RadarBatch, t_est, j2=True, drag=True, model=None, decay=None, ecc=None):
+def jacobian(x, batch: RadarBatch, t_est, j2=True, drag=True, *, model=None, decay=None, ecc=None):
     """H = dh/dx ``(m, 3, 7)`` by central differences (h(x + s e_j) - h(x - s e_j)) / 2 s, azimuth wrapped."""
     s = state_steps(_chief_a_inc(batch)[0])
     pert = np.concatenate([np.diag(s), -np.diag(s)]) + np.asarray(x, dtype=float)
-    z = predict(pert, batch, t_est, j2, drag, model, decay, ecc)  # (14, m, 3)
+    z = predict(pert, batch, t_est, j2, drag, model=model, decay=decay, ecc=ecc)  # (14, m, 3)
     diff = measurement_residual(z[:STATE_SIZE], z[STATE_SIZE:])  # (7, m, 3)
     return np.moveaxis(diff / (2.0 * s[:, None, None]), 0, -1)
 
@@ -436,7 +437,7 @@ def _check(batch: RadarBatch):
         raise ValueError("measurement sigmas must be positive")
 
 
-def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_iterations=20, tol=1e-6, prior=None,
+def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_iterations=20, *, tol=1e-6, prior=None,
                         drag=True, model=None):
     """Gauss-Newton weighted least squares of x = [ROE at t_est (6), da_dot] (module docstring).
 
@@ -457,7 +458,8 @@ def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_ite
     ecc = chief_eccentricity(batch, t_est) if drag and model is not None else None  # constants of the batch
 
     def whitened(x):
-        r = measurement_residual(batch.z, predict(x, batch, t_est, j2, drag, model, decay, ecc)).reshape(-1) * w
+        r = measurement_residual(batch.z, predict(x, batch, t_est, j2, drag, model=model, decay=decay,
+                                                  ecc=ecc)).reshape(-1) * w
         if prior is None:
             return r, None
         r_p, h_p = prior.residual_row(x, a_chief)
@@ -465,7 +467,7 @@ def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_ite
 
     for iteration in range(1, max_iterations + 1):
         r, h_p = whitened(x)
-        h = jacobian(x, batch, t_est, j2, drag, model, decay, ecc).reshape(-1, STATE_SIZE) * w[:, None]
+        h = jacobian(x, batch, t_est, j2, drag, model=model, decay=decay, ecc=ecc).reshape(-1, STATE_SIZE) * w[:, None]
         if h_p is not None:
             h = np.vstack([h, h_p])
         scale = np.linalg.norm(h, axis=0)
@@ -483,7 +485,8 @@ def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_ite
             break
     else:
         raise ValueError(f"Gauss-Newton did not converge in {max_iterations} iterations")
-    r = measurement_residual(batch.z, predict(x, batch, t_est, j2, drag, model, decay, ecc)).reshape(-1) * w
+    r = measurement_residual(batch.z, predict(x, batch, t_est, j2, drag, model=model, decay=decay,
+                                              ecc=ecc)).reshape(-1) * w
     cov = (vt.T / sv**2) @ vt / np.outer(scale, scale)  # at the last step's Jacobian (a priori row included)
     k = np.argmax(batch.t)
     chief_est = propagate_chief(batch.chief[k], t_est - batch.t[k])

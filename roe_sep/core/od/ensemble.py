@@ -87,7 +87,7 @@ def secular_drift(t, a_da, t_ref, period, u=None):
     return float(c[0]), float(c[1])
 
 
-def secular_state(mean_a_roe, t, a_da, t_ref, period, u=None):
+def secular_state(mean_a_roe, t, a_da, t_ref, period, *, u=None):
     """The truth's secular state (a*ROE [m], a*da_dot [m/s]) ``(7,)`` at ``t_ref``: its mean a*ROE ``mean_a_roe``
     there with a da and the rate of :func:`secular_drift` (``t``, ``a_da``, ``period``, ``u`` as there); None where
     that is None."""
@@ -163,7 +163,7 @@ def scenario_pairs(members, seed):
             Atmosphere.normalised(mc.density, chief0), model)
 
 
-def truth_samples(states0, b_c, b_d, dv, atmosphere, times):
+def truth_samples(states0, b_c, b_d, dv, atmosphere, *, times):
     """Pair states ``(members, len(times), 12)`` at the sorted ``times`` (which hold every burn epoch), the
     picosatellite's along-track burns ``dv`` ``(members, burns)`` applied at the :data:`BURNS` epochs (a sample at a
     burn epoch is pre-burn)."""
@@ -174,7 +174,7 @@ def truth_samples(states0, b_c, b_d, dv, atmosphere, times):
     for k, edge in enumerate([b[0] for b in BURNS] + [math.inf]):
         hi = int(np.searchsorted(times, edge, side="right"))
         if hi > lo:
-            out[:, lo:hi] = propagate_pairs_grid(state, t0, times[lo:hi], b_c, b_d, atmosphere)
+            out[:, lo:hi] = propagate_pairs_grid(state, t0, times[lo:hi], b_c, b_d, atmosphere=atmosphere)
         if k < len(BURNS):
             pre = out[:, hi - 1]  # the burn epoch itself
             rtn = np.zeros((dv.shape[0], 3))
@@ -183,7 +183,7 @@ def truth_samples(states0, b_c, b_d, dv, atmosphere, times):
     return out
 
 
-def run_ensemble(members=8, draws=4, seed=0, prior=True, sample_interval=10.0, mask_deg=10.0,
+def run_ensemble(members=8, draws=4, seed=0, prior=True, sample_interval=10.0, *, mask_deg=10.0,
                  min_separation=5000.0, min_pass=5, min_arc=36000.0, sigma_range=10.0, sigma_angle_deg=0.01,
                  density_walk=0.0, noise_scale=1.0):
     """The ensemble (module docstring): a list of :class:`Solution`, chain by chain in time order. Deterministic in
@@ -202,7 +202,7 @@ def run_ensemble(members=8, draws=4, seed=0, prior=True, sample_interval=10.0, m
     burn_t = np.array([b[0] for b in BURNS])
     coarse = np.arange(T0, DURATION, 300.0)
     times = np.unique(np.concatenate([grid[near], burn_t, coarse]))
-    st = truth_samples(states0, b_c, b_d, dv, atmosphere, times)
+    st = truth_samples(states0, b_c, b_d, dv, atmosphere, times=times)
     kep = mean_elements(st)  # (members, times, 2, 6)
     chief, roe = kep[..., 0, :], mean_roe(st)
     theta = gmst(jd0 + times / SECONDS_PER_DAY)
@@ -251,7 +251,7 @@ def run_ensemble(members=8, draws=4, seed=0, prior=True, sample_interval=10.0, m
                 # the uniform grid (the passes see the same orbital phases), after the burn (its sample is pre-burn)
                 span = uniform & (times > start) & (times <= t_est)
                 truth7 = secular_state(roe[m, rows[-1]] * a, times[span], a_da[span], t_est, period,
-                                       chief[m, span, 4] + chief[m, span, 5]) / a
+                                       u=chief[m, span, 4] + chief[m, span, 5]) / a
                 mean, mean_cov = res.mean_state()
                 out.append(Solution(m, d, k, int(seg), t_est, res.x[6] * a * SECONDS_PER_DAY,
                                     truth7[6] * a * SECONDS_PER_DAY, math.sqrt(res.cov[6, 6]) * a * SECONDS_PER_DAY,

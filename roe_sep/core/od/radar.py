@@ -269,7 +269,7 @@ def visible(elevation, mask):
     return np.asarray(elevation, dtype=float) > mask
 
 
-def pass_windows(elevation, t_start, t_end, mask, step=30.0, tol=0.01):
+def pass_windows(elevation, t_start, t_end, mask, step=30.0, *, tol=0.01):
     """Rise/set times [s] of the passes above ``mask`` [rad] in ``[t_start, t_end]``: ``(k, 2)`` array.
 
     ``elevation(t)`` is vectorized over an array of times. Scan on a ``step`` grid, then refine every sign change of

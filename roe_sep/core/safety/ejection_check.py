@@ -134,7 +134,7 @@ def nominal_fraction(spl_sigma: float, drag_sigma: float, sigmas: float = 3.0) -
 
 
 def predicted_los(fractions: ArrayLike, dv_commanded: ArrayLike, t_ejection: float, chief_mean: ArrayLike,
-                  da_dot: float, times: ArrayLike, j2: bool = True) -> np.ndarray:
+                  da_dot: float, *, times: ArrayLike, j2: bool = True) -> np.ndarray:
     """The unit lines of sight ``(F, m, 3)`` (carrier osculating RTN) at ``times`` [s] after ejections of each of
     ``fractions`` ``(F,)`` times the commanded impulse at ``t_ejection`` [s]: the impulse on the carrier's osculating
     state, mean ROE of the pair (first-order Brouwer-Lyddane, Eq. 1), their secular propagation with J2 and the
@@ -162,12 +162,12 @@ def predicted_los(fractions: ArrayLike, dv_commanded: ArrayLike, t_ejection: flo
     numpy.ndarray, shape (F, m, 3)
         The unit lines of sight (NaN rows where the position is zero).
     """
-    pos = _positions(fractions, dv_commanded, t_ejection, chief_mean, da_dot, times, j2)
+    pos = _positions(fractions, dv_commanded, t_ejection, chief_mean, da_dot, times=times, j2=j2)
     with np.errstate(invalid="ignore", divide="ignore"):
         return pos / np.linalg.norm(pos, axis=-1, keepdims=True)
 
 
-def _positions(fractions, dv_commanded, t_ejection, chief_mean, da_dot, times, j2):
+def _positions(fractions, dv_commanded, t_ejection, chief_mean, da_dot, *, times, j2):
     """The relative positions ``(F, m, 3)`` [m] of :func:`predicted_los`."""
     f = np.atleast_1d(np.asarray(fractions, dtype=float))
     t = np.atleast_1d(np.asarray(times, dtype=float))
@@ -176,7 +176,7 @@ def _positions(fractions, dv_commanded, t_ejection, chief_mean, da_dot, times, j
     start = np.broadcast_to(pair_state(kep, kep), f.shape + (12,))
     roe0 = mean_roe(apply_impulse(start, f[:, None] * dv, np.ones(f.shape, dtype=bool)))  # (F, 6)
     chief = Chief(float(kep[0]), float(kep[2]), float(kep[4] + kep[5]), float(t_ejection))
-    roe = np.stack([trajectory(r, float(t_ejection), [], t, chief, j2, da_dot) for r in roe0])  # (F, m, 6)
+    roe = np.stack([trajectory(r, float(t_ejection), [], t, chief, j2=j2, da_dot=da_dot) for r in roe0])  # (F, m, 6)
     kc = propagate_chief(kep, t - float(t_ejection), j2)
     kc[..., 3:] = np.mod(kc[..., 3:], 2.0 * math.pi)  # the conversions want angles in one turn
     kc = np.broadcast_to(kc, roe.shape)
@@ -254,8 +254,8 @@ def check_ejection(times: ArrayLike, measured: ArrayLike, dv_commanded: ArrayLik
     t, meas = t[keep], meas[keep]
     if len(t) == 0:
         return EjectionCheck(math.nan, 0.0, 0, False, float(bound))
-    los = predicted_los(FRACTIONS, dv_commanded, t_ejection, chief_mean, da_dot, t, j2)
-    rho = np.linalg.norm(_positions(1.0, dv_commanded, t_ejection, chief_mean, da_dot, t, j2)[0], axis=-1)
+    los = predicted_los(FRACTIONS, dv_commanded, t_ejection, chief_mean, da_dot, times=t, j2=j2)
+    rho = np.linalg.norm(_positions(1.0, dv_commanded, t_ejection, chief_mean, da_dot, times=t, j2=j2)[0], axis=-1)
     sig = np.sqrt(sigma * sigma + (floor / np.maximum(rho, 1e-3)) ** 2)
     cost = bearing_cost(meas, los, sig)
     cost = np.where(np.isfinite(cost), cost, np.inf)

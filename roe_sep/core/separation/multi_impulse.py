@@ -399,14 +399,14 @@ def plan_carrier_burns(dv1_rtn: ArrayLike, u1: float, epoch1: float, a: float, i
         plan.append(CarrierBurn("drift_reduction", u, epoch_of(u), -rel, rel))
         burns.append(Burn(epoch_of(u), tuple(rel)))
     t_red = plan[-1].epoch if plan else epoch1
-    roe_red = trajectory(np.zeros(6), epoch1, burns, [t_red], chief, j2, da_dot)[0]
+    roe_red = trajectory(np.zeros(6), epoch1, burns, [t_red], chief, j2=j2, da_dot=da_dot)[0]
 
     # tangential pair on the predicted state at the earliest pair epoch
     t_p = epoch1 + mcfg.pair_delay
     if plan and t_p <= t_red:
         raise ValueError(f"pair_delay ({mcfg.pair_delay} s) must exceed the drift reduction "
                          f"({t_red - epoch1:.0f} s after the ejection)")
-    roe_p = trajectory(np.zeros(6), epoch1, burns, [t_p], chief, j2, da_dot)[0]
+    roe_p = trajectory(np.zeros(6), epoch1, burns, [t_p], chief, j2=j2, da_dot=da_dot)[0]
     dde = anti_parallel_target(roe_p[2:4], roe_p[4:6], de_min, not sep.leading) - roe_p[2:4]
     # the state at the pair's first burn (up to one revolution later) differs by the J2 rotation of de and the
     # drag drift: refine once at that epoch
@@ -415,7 +415,7 @@ def plan_carrier_burns(dv1_rtn: ArrayLike, u1: float, epoch1: float, a: float, i
     for _ in range(2):
         u_a, x1, x2 = pair(roe_p[0], dde, n, a)
         u_first = first_u_after(u_a, float(u_p))
-        roe_a = trajectory(np.zeros(6), epoch1, burns, [epoch_of(u_first)], chief, j2, da_dot)[0]
+        roe_a = trajectory(np.zeros(6), epoch1, burns, [epoch_of(u_first)], chief, j2=j2, da_dot=da_dot)[0]
         dde = anti_parallel_target(roe_a[2:4], roe_a[4:6], de_min, not sep.leading) - roe_a[2:4]
         roe_p = roe_a
     u_a, x1, x2 = pair(roe_a[0], dde, n, a)
@@ -428,12 +428,12 @@ def plan_carrier_burns(dv1_rtn: ArrayLike, u1: float, epoch1: float, a: float, i
     plan.sort(key=lambda b: b.epoch)
     all_burns = [burns[0]] + [Burn(b.epoch, tuple(b.dv_relative_rtn)) for b in plan]
     t_ic = plan[-1].epoch
-    roe_f = trajectory(np.zeros(6), epoch1, all_burns, [t_ic], chief, j2, da_dot)[0]
+    roe_f = trajectory(np.zeros(6), epoch1, all_burns, [t_ic], chief, j2=j2, da_dot=da_dot)[0]
     p_eff = abs(dv1[1]) - abs(sum(float(b.dv_carrier_rtn[1]) for b in plan if b.purpose == "drift_reduction"))
     return CarrierPlan(tuple(plan), float(p_eff), roe_red, roe_f, t_ic)
 
 
-def drift_free_state(dv1: ArrayLike, u1: float, a: float, inc: float, plan: CarrierPlan, sep: SeparationConfig,
+def drift_free_state(dv1: ArrayLike, u1: float, a: float, inc: float, plan: CarrierPlan, *, sep: SeparationConfig,
                      j2: bool = True, da_dot: float = 0.0) -> np.ndarray:
     """ROE right after the nominal drift reduction for the SPL under-performance that leaves no drift.
 
@@ -472,7 +472,7 @@ def drift_free_state(dv1: ArrayLike, u1: float, a: float, inc: float, plan: Carr
     burns = [Burn(0.0, tuple(f1 * dv1))] + [Burn(b.epoch, tuple(b.dv_relative_rtn)) for b in plan.burns
                                             if b.purpose == "drift_reduction"]
     t_red = max(b.epoch for b in burns)
-    return trajectory(np.zeros(6), 0.0, burns, [t_red], chief, j2, da_dot)[0]
+    return trajectory(np.zeros(6), 0.0, burns, [t_red], chief, j2=j2, da_dot=da_dot)[0]
 
 
 @dataclass(frozen=True)
@@ -576,7 +576,7 @@ def design(sep: SeparationConfig = SeparationConfig(), mcfg: MultiImpulseConfig 
     def margin(t_abs):  # AC3 of the drift-free sample after the drift reduction, minus the requirement [m]
         dv1 = ejection(t_abs)
         plan = plan_carrier_burns(dv1, u1, 0.0, a, inc, cfg, mcfg, j2, da_dot)
-        return a * float(min_rn_distance(drift_free_state(dv1, u1, a, inc, plan, cfg, j2, da_dot))) \
+        return a * float(min_rn_distance(drift_free_state(dv1, u1, a, inc, plan, sep=cfg, j2=j2, da_dot=da_dot))) \
             - cfg.min_rn_distance
 
     t_lo = abs(spl_tangential(e_tilde, cfg.leading))  # Eq. (10): outward drift under the SPL error

@@ -54,7 +54,7 @@ class Dispersed:
 
 
 def dispersed_truth(scenario: "Scenario", carrier: "DoubleImpulseDesign | MultiImpulseDesign", raan: float, u0: float,
-                    seed: int, disperse: bool, dynamics: str, j2: bool, ejection_delay_max: float,
+                    seed: int, *, disperse: bool, dynamics: str, j2: bool, ejection_delay_max: float,
                     contingency: ContingencyConfig | None = None) -> Dispersed:
     """The run of ``seed``. The draws are those of ``numpy.random.default_rng(seed)`` in a fixed order (ballistic
     factor, then the execution errors), the ejection delay and the contingency each from its own stream of the
@@ -208,7 +208,7 @@ class SimulatedTruth:
     drops those after it. Every sample is the value of its own epoch, whatever the pass it was evaluated in (the
     evaluation is element-wise), so the samples are those of a pass per step to the bit."""
 
-    def __init__(self, model, truth_period, distance_step, departure, on_samples, on_hour):
+    def __init__(self, model, truth_period, distance_step, departure, on_samples, *, on_hour):
         self.model = model
         self.truth_period, self.distance_step = truth_period, distance_step
         self.closest = ClosestApproach(departure)
