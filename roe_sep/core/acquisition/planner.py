@@ -1,58 +1,30 @@
 """Initial-condition acquisition: the carrier's burns from the radar OD estimate to the experiment's initial
 conditions (ICs) with minimum delta-v, as a linear program (seed 001 Secs. 2.2-2.3 and 5; seed 002 Eqs. 2, 11, 25).
 
-After the separation and the blind drift-stop the picosatellite leads by some 20-35 km and drifts slowly away. The
-ICs (seed 001 Sec. 2.2, AVANTI requirement 1, and AC3) at the final epoch t_F:
+The ICs at the final epoch t_F (seed 001 Sec. 2.2, AVANTI requirement 1, and AC3), s the sign of the estimated dl
+(leading stays leading): s a dl_F in [a_dl_min, a_dl_max] (optionally on a target), and s a dl >= a_dl_min
+throughout; |a da_F| <= drift_tolerance; e/i vectors anti-parallel when leading (parallel when following), each and
+the minimum R-N distance (seed 002 Eq. 25) at least ``min_ei``; both inside the camera field of view (seed 002
+Eq. 11); carrier burns of at most ``max_burn_dv``, quantized to ``dv_quantum`` (BIROS, seed 001 Sec. 2.1).
 
-* mean along-track separation s a dl_F in [a_dl_min, a_dl_max] (radar separability, camera detection), s = sign of
-  the estimated dl (the configuration is kept: leading stays leading), optionally a target inside that range;
-* almost no drift: |a da_F| <= drift_tolerance;
-* e/i vectors anti-parallel when leading (parallel when following) -- passive safety -- each at least ``min_ei``,
-  minimum R-N distance (seed 002 Eq. 25) at least ``min_ei``;
-* both inside the camera field of view (seed 002 Eq. 11): a|de| <= tan(6.8 deg) |a dl_F|,
-  a|di| <= tan(9.15 deg) |a dl_F|;
-* never s a dl < a_dl_min during the acquisition;
-* carrier burns of at most ``max_burn_dv`` each, quantized to ``dv_quantum`` (the BIROS cold-gas system: 0.3 m/s
-  and 1 mm/s, seed 001 Sec. 2.1).
+Formulation. Candidate burns on a grid of epochs (``grid_per_orbit`` per orbit) along ``axes`` from t_earliest to
+the end of the window, t_F the last one. The final ROE and s a dl at every grid epoch are affine in the burns
+(:mod:`roe_sep.core.acquisition.lp_transfer`: Eq. 2, the secular model, drag the affine part). With the direction
+i^ of the final di fixed every IC is linear:
 
-Formulation. Candidate carrier burns on a grid of epochs (``grid_per_orbit`` per orbit, aligned with round values
-of the mean argument of latitude) from t_earliest to the end of the window along ``axes``; t_F is the last grid
-epoch. The final ROE and the mean along-track separation at every grid epoch are affine in the burns
-(:mod:`roe_sep.core.acquisition.lp_transfer`: Eq. 2 plus the secular model, differential drag as the affine part).
-With the direction i^ of the final relative inclination vector fixed, every IC is linear:
+    de_F = -s mu i^,  di_F . i^ = nu,  dl_F = s L,  mu, nu >= m_min,
+    mu / cos(g/2) <= tan(fov_r) L,  nu / cos(g/2) <= tan(fov_n) L,
 
-    de_F = -s mu i^ (+ a perpendicular part, zero in the LP),  di_F . i^ = nu,  dl_F = s L,
-    mu, nu >= m_min,  mu / cos(g/2) <= tan(fov_r) L,  nu / cos(g/2) <= tan(fov_n) L,
+so minimising sum |dv| (L1, split variables p - m) is a linear program (HiGHS), laid out by :func:`_assemble`'s
+named blocks. i^ is iterated from the burn-free final di to the planned one (J2 couples da into di_y). m_min =
+:func:`ei_magnitude_floor` keeps Eq. (25) >= min_ei under the angle tolerance. The window is used whole and the
+dl target is mid-range (measured in docs/campaigns.md); re-planning on each newer OD and a final trim
+(:mod:`roe_sep.core.acquisition.trim`, its OD's radar arc kept free of burns by ``no_burns``) absorb OD errors.
 
-so minimising sum |dv| (L1 with split variables p - m, exact per axis for single-axis burns, an upper bound of the
-Euclidean total otherwise) is a linear program (HiGHS). i^ starts as the direction of the burn-free final di and is
-iterated to the direction of the planned one (J2 couples da into di_y; two or three solves converge). Further rows:
-s a dl >= a_dl_min at every grid epoch, raised by the sagitta of the drag parabola between epochs (and before each
-burn as well when radial burns are allowed); |dvR| + |dvT| + |dvN| <= max_burn_dv per epoch (so the Euclidean
-magnitude is within the limit); m_min = :func:`ei_magnitude_floor` keeps Eq. (25) >= min_ei under the angle
-tolerance below.
-
-Choices. The ICs are reached at t_F, the end of the window: the minimum-delta-v plan uses the whole window (a
-shorter window costs more: about 0.28 instead of 0.19 m/s for one day instead of two in the typical case), and it may
-let the estimated differential drag finish the drift stop, so its last burn can come before t_F. The along-track
-target defaults to mid-range (7500 m): left free (``a_dl_target`` = 0) the program ends wherever is cheapest, often
-near a bound, with no room left for the km-level dl errors of a two-day open-loop drift under a 20 % drag
-uncertainty. A plan's sensitivity to OD errors does not depend on its burns (the model is linear), so the remedy is
-re-planning on each newer OD, not a more conservative program.
-
-Closing on the last information. The drift at t_F is what a plan made a day earlier cannot hold: the OD's drift-rate
-error carried to t_F and the 5 % execution error of the burns flown after that OD (std 2.5 and 1.9 m, 9 % of the
-runs beyond the 5 m initial condition). The OD of the radar pass just before t_F therefore decides a final trim,
-:mod:`roe_sep.core.acquisition.trim`: one quantized tangential burn uplinked with the same planning margin, flown
-only when the predicted |a da_F| is not 3 OD sigmas inside the tolerance. That OD needs a radar arc free of burns
-(the OD restarts after every burn and needs passes over 10 h): ``no_burns`` keeps the plan's burns out of it.
-
-Quantization. The continuous optimum is then re-solved as a small mixed-integer program (HiGHS) in integer
-multiples of ``dv_quantum`` on the LP's support and its neighbouring grid epochs, with the equalities relaxed to the
-tolerances a quantized plan can meet: |a da_F| <= drift_tolerance (the da_F lattice has a spacing of
-2 dv_quantum / n = 1.8 m at 515 km, so a tolerance below half of that can be infeasible), e/i anti-parallel within
-``ei_angle_tol_deg``, the along-track target within ``a_dl_target_tol``. The plan is finally verified end to end
-with :func:`~roe_sep.core.relmotion.trajectory.trajectory` (an independent path through the same physics).
+Quantization. The LP optimum is re-solved as a mixed-integer program (HiGHS) in multiples of ``dv_quantum`` on the
+LP's support and its neighbouring epochs, the equalities relaxed to tolerances a quantized plan can meet:
+|a da_F| <= drift_tolerance (the da_F lattice spacing is 2 dv_quantum / n), e/i within ``ei_angle_tol_deg``, dl
+within ``a_dl_target_tol``. The plan is verified end to end with :func:`~roe_sep.core.relmotion.trajectory.trajectory`.
 """
 
 import math

@@ -2,25 +2,17 @@
 quantized tangential carrier burn when that prediction is not safely inside the drift tolerance.
 
 Why. The acquisition plan of :mod:`.planner` nulls the drift at the IC epoch t_F from an OD made about a day
-earlier: the OD's drift-rate error carried that far (std 2.5 m over 0.93 days in the 100-run campaign of seeds
-1000-1099) and the 5 % execution error of the burns flown after that OD (std 1.9 m) leave |a da_F| above the 5 m
-initial condition in 9 % of the runs. A flight-dynamics team closes the loop on the last information instead: a
-final radar OD shortly before t_F, then a trim uplinked with the planning margin (the ground contact after the
-solution), flown before t_F.
+earlier; the OD's drift-rate error carried that far and the execution errors of the burns flown after it leave
+|a da_F| outside the tolerance in some runs (docs/campaigns.md, "Why 9 runs missed the initial conditions"). A
+flight-dynamics team closes the loop on the last information: a final radar OD shortly before t_F, then a trim
+uplinked with the planning margin, flown before t_F.
 
-Timeline (the ic_planner, with the TIRA passes the ops geometry offers: clusters of two passes one orbit apart,
-about every 12 h). :func:`radar_passes` predicts the station's passes of the carrier (the chief's secular elements,
-the sidereal angle of the scenario's epoch). The final OD is the solution after the last pass before t_F (the
-default scenario: 246610 s, 0.5 h before t_F); :func:`final_od_arc` gives its radar arc, from the latest pass that
-spans radar_od's ``min_arc`` (10 h) with it and leaves three passes in the arc. radar_od restarts its batch after
-every burn, so the acquisition plans keep their burns out of that arc (``no_burns`` of
-:func:`.planner.plan_acquisition`; a late correction burn there left about one run in ten without a final OD). The
-trim is the first grid epoch (the planner's grid, round values of u) at or after the solution + planning_margin,
-the uplink delay every plan respects; when it falls after t_F, the IC epoch moves one grid step past it (the
-default scenario: 71.7 instead of 68.8 h after the ejection), otherwise t_F stays. Three passes know a da to about
-1.3 m (1-sigma), two to tens of meters. Four (waiting for the second pass of the last cluster, 0.46 m for seed 5)
-would move t_F past that pass and keep the arc free from the previous cluster on, leaving the acquisition no
-correction between the first day's plan and the arc (seed 1006: a 23 m drift into the keep-out zone).
+Timeline. :func:`radar_passes` predicts the station's passes of the carrier (the chief's secular elements, the
+sidereal angle of the scenario's epoch). The final OD is the solution after the last pass before t_F;
+:func:`final_od_arc` gives its radar arc, from the latest pass that spans radar_od's ``min_arc`` with it and leaves
+three passes in the arc (radar_od restarts its batch after every burn, so the plans keep their burns out of that
+arc: ``no_burns`` of :func:`.planner.plan_acquisition`). The trim is the first grid epoch at or after the solution
++ planning_margin; when that falls after t_F, the IC epoch moves one grid step past it.
 
 Decision (seed 002 Eq. 2: only a tangential impulse changes da, a Delta da = 2 dvT / n). The OD predicts a da at
 t_F with the burns still to fly, and its 1-sigma from the OD covariance, sigma^2 = sigma_a_da^2 + (sigma_rate dt)^2

@@ -2,23 +2,20 @@
 carrier (beyond ``departure_distance``, as the simulator's closest-approach tracking), comes back within a hard-body
 radius ``R`` of it before the horizon. Pure numpy.
 
-Trajectory model: the one of the Monte Carlo (:mod:`.sweep`): the dispersed ejection (Eq. 22), the secular ROE
-propagation with drag (Eqs. 23-24, J2 optional) to the drift-stop, the dispersed drift-stop with reduction p, and
-``horizon`` of drift after it; the relative position is the linear ROE -> RTN map
-(:func:`~roe_sep.core.relmotion.roe.roe_to_rtn`) at every instant. Arc A (ejection to drift-stop) is evaluated from
+Trajectory model: the Monte Carlo's (:mod:`.sweep`: dispersed ejection, Eq. 22; secular ROE with drag, Eqs. 23-24;
+dispersed drift-stop with reduction p; ``horizon`` of drift after it), the relative position the linear ROE -> RTN
+map (:func:`~roe_sep.core.relmotion.roe.roe_to_rtn`). Arc A (ejection to drift-stop) is evaluated from
 :func:`~.sweep.pre_stop`'s state at the drift-stop (the secular model is a flow, exact backwards), arc B from
-:func:`~.sweep.after_stop`'s, so the physics (and any change of the dispersed-burn convention) is the sweep's.
+:func:`~.sweep.after_stop`'s: the physics is the sweep's.
 
-Minimum distance (:func:`min_distance`): f(t) = |r(t)|^2 is sampled on a grid of ``steps_per_orbit`` points per
-orbit (the drift-stop epoch is a grid point: |r| is continuous there, its derivative is not). The window starts
-where the sampled distance first decreases after exceeding ``departure_distance`` and ends at the horizon (the end
-point counts). Every grid interval is then refined by a branch and bound with a second-order bound: on an interval
-of length h, f(t) >= min(f0, f1) - M h^2/8 with M >= max f'' = 2 max(|v|^2 + r . a), from per-sample bounds of the
-relative speed V and acceleration A over the arc derived from the model's rates (:func:`_bounds`). An interval
-whose bound is above the best sampled value (minus the tolerance) cannot hold the minimum and is dropped; the
-others are halved until none is left. The result is an evaluated trajectory point, at most ``tol = tol_abs +
-tol_rel * d`` above the true minimum of the model over the window: a certified bound, not a sampling estimate.
-The rising part between the departure and the window start is certified to stay above ``R`` the same way.
+Minimum distance (:func:`min_distance`): f(t) = |r(t)|^2 sampled ``steps_per_orbit`` times per orbit (the drift-stop
+epoch a grid point), from where it first decreases after exceeding ``departure_distance`` to the horizon. Every grid
+interval is then refined by a branch and bound with a second-order bound: on an interval of length h, f(t) >= min(f0,
+f1) - M h^2/8 with M >= max f'' = 2 max(|v|^2 + r . a), from per-sample bounds of the relative speed V and acceleration
+A over the arc derived from the model's rates (:func:`_bounds`). An interval whose bound is above the best sampled value
+(minus the tolerance) is dropped, the others halved until none is left: an evaluated point at most ``tol = tol_abs +
+tol_rel * d`` above the model's true minimum (a certified bound). The rising part between the departure and the window
+start is certified to stay above ``R`` the same way.
 
 Estimators of P(d_min <= R):
 
@@ -26,14 +23,11 @@ Estimators of P(d_min <= R):
   k hits of n, Wilson 95 % interval.
 * ``is``: importance sampling in the standard-normal dispersion space z (9 dimensions: f1, f2, the two attitude
   error triples, the dB factor). A Gaussian proposal N(mu, C) is tuned by the multilevel cross-entropy method
-  (Rubinstein & Kroese 2004): at each level the rho-quantile gamma of d_min over the samples (not below R) defines
-  the elite set, whose mean and covariance (principal standard deviations kept >= 1) give the next proposal; it
-  stops when gamma reaches R. Where one Gaussian cannot follow the failure set down to R (gamma stalls), the
-  estimate is made at the smallest gamma reached, an upper bound of P(d <= R). The final estimate uses fresh
-  samples from the proposal: p = mean(1{d <= R} w), w = phi(z) / q(z), with the 95 % normal interval from its
-  standard error and the effective sample size ESS = (sum h)^2 / sum h^2 of the terms h = 1{d <= R} w. One
-  Gaussian follows one failure region; a second, separate region with a comparable share would be under-sampled
-  (the ``mc`` agreement test checks this where brute force is affordable).
+  (Rubinstein & Kroese 2004, :func:`cross_entropy`) until gamma reaches R. Where one Gaussian cannot follow the failure
+  set down to R (gamma stalls), the estimate is made at the smallest gamma reached, an upper bound of P(d <= R). The
+  final estimate uses fresh samples from the proposal: p = mean(1{d <= R} w), w = phi(z) / q(z), with the 95 % normal
+  interval from its standard error and ESS = (sum h)^2 / sum h^2, h = 1{d <= R} w. One Gaussian follows one failure
+  region.
 """
 
 import dataclasses
@@ -446,21 +440,16 @@ def cross_entropy(design: DoubleImpulseDesign, mc: MonteCarloConfig, cfg: Collis
                   patience: int = 4) -> tuple[Proposal, list, bool]:
     """Multilevel cross-entropy tuning of the Gaussian proposal (module docstring).
 
-    Level t samples ``samples_per_level`` points of the current proposal; gamma_t = max(R, rho-quantile of d_min);
-    the next proposal is the mean and covariance of the elite set {d_min <= gamma_t} (unweighted: the levels only
-    steer the proposal, the final estimate carries the likelihood ratios), with every principal standard deviation
-    kept >= ``min_std``: a proposal never narrower than the nominal density keeps the weights phi/q bounded.
-    Returns ``(proposal, levels, reached)``: ``levels`` the list of {gamma [m], elites}; ``reached`` False when
-    gamma stopped decreasing for ``patience`` levels or ``max_levels`` ran out before R (a failure set too thin for
-    one Gaussian; the caller then bounds P(d <= R) by P(d <= the smallest gamma)). ValueError when fewer than
-    max(10, rho n) samples of a level come back after the departure: nothing to steer by.
+    Level t samples ``samples_per_level`` points of the current proposal; gamma_t = max(R, rho-quantile of d_min); the
+    next proposal is the (unweighted) mean and covariance of the elite set {d_min <= gamma_t}, every principal standard
+    deviation kept >= ``min_std`` (the weights phi/q stay bounded). ``reached`` is False when gamma stopped decreasing
+    for ``patience`` levels or ``max_levels`` ran out before R: the caller then bounds P(d <= R) by P(d <= the smallest
+    gamma). ValueError when fewer than max(10, rho n) samples of a level come back after the departure.
 
     Parameters
     ----------
-    design, mc
-        As for :func:`draws_from_normal`.
-    cfg : CollisionConfig
-        The hard-body radius R [m] the levels aim at.
+    design, mc, cfg
+        As for :func:`draws_from_normal`; ``cfg`` gives the hard-body radius R [m] the levels aim at.
     samples_per_level : int
         Points per level.
     rho : float
@@ -477,7 +466,7 @@ def cross_entropy(design: DoubleImpulseDesign, mc: MonteCarloConfig, cfg: Collis
     Returns
     -------
     (Proposal, list of dict, bool)
-        The proposal, the levels and whether gamma reached R.
+        The proposal, the levels ({gamma [m], elites}) and whether gamma reached R.
     """
     dim = N_DIM
     prop = Proposal(np.zeros(dim), np.eye(dim))

@@ -5,99 +5,26 @@ differential-drag drift of da [1/s] (:func:`~roe_sep.core.relmotion.dynamics.dra
 known (it carries GPS): its mean elements at each measurement epoch are inputs.
 
 Model (Tapley, Schutz, Born, *Statistical Orbit Determination*, 2004, Ch. 4): z_k = h_k(x) + v_k, v_k ~ N(0, R_k),
-R_k = diag(sigma_range^2, sigma_angle^2, sigma_angle^2), with
+R_k = diag(sigma_range^2, sigma_angle^2, sigma_angle^2), h_k(x) = observe(model_roe(x, t_k), chief_k, theta_k,
+station_k). The mean ROE at t_k (:func:`propagate_state`, :func:`model_roe`): the secular propagation (J2 and the
+drift x[6] of da) plus differential drag's drift of dix through the co-rotating atmosphere
+(:func:`~roe_sep.core.relmotion.dynamics.drag_dix_dot`, King-Hele 1964) and its short-periodic relative e vector
+(x[6] / n)(sin u_k, -cos u_k) (:func:`~roe_sep.core.relmotion.dynamics.drag_short_period_de`). With a
+:class:`DragModel` (density scale height H) also the e vector's secular drag drift d de/dt = k (a da_dot e_c +
+a_d_dot de), k = 1 / (2 H) + 1 / (2 a) (:func:`drag_de_drift`, King-Hele 1964), and the drift rate's growth over
+the batch, da_dot(t) = x[6] (1 + gamma (t - t_est)) (:meth:`DragModel.growth`, :func:`drift_growth`).
 
-    h_k(x) = observe(model_roe(x, t_k), chief_k, theta_k, station_k)      (:func:`model_roe`, :func:`observe`)
+Gauss-Newton: dx = (H^T W H)^-1 H^T W (z - h(x)), W = R^-1, H = dh/dx by central differences, solved by SVD of the
+column-scaled, whitened H (ill-conditioning detected, not rounded away); azimuth residuals wrapped to [-pi, pi);
+P = (H^T W H)^-1 at the solution. The model is almost linear in x over its uncertainty, so the NEES (:func:`nees`)
+is chi-square with 7 degrees of freedom. The state is secular; :meth:`ODResult.mean_state` adds the short-periodic de.
 
-and the mean ROE at t_k: the secular propagation (:func:`~roe_sep.core.relmotion.dynamics.propagate`: J2 and the
-constant drift rate x[6] of da) plus two terms of the same differential drag that the nonlinear truth shows and the
-secular model lacked (:func:`propagate_state`, :func:`model_roe`):
-
-* the drift of dix through the co-rotating atmosphere, d dix/dt = (omega_E a sin i / (4 v)) x[6]
-  (:func:`~roe_sep.core.relmotion.dynamics.drag_dix_dot`, King-Hele 1964): 0.0164 x[6], -1.3 m/day of a dix at a
-  drift rate of -81 m/day, with its J2 couplings into dl and diy;
-* the short-periodic relative e vector (x[6] / n)(sin u_k, -cos u_k)
-  (:func:`~roe_sep.core.relmotion.dynamics.drag_short_period_de`): the project's mean ROE are first-order J2 mean
-  elements (:mod:`roe_sep.core.truth.mean_osc`), which keep drag's orbit-periodic terms, 0.85 m of a de at
-  -81 m/day; in the relative position a constant along-track offset 2 a x[6] / n.
-
-With a drag model (:class:`DragModel`, which holds the density scale height H) a third term of the same drag:
-
-* the secular drift of the relative e vector (:func:`drag_de_drift`): drag decays each orbit's eccentricity
-  vector at d e/dt = (1 / (2 H) + 1 / (2 a)) a_dot e (King-Hele 1964; the perigee is in denser air), so for the
-  pair d de/dt = k (a da_dot e_c + a_d_dot de), e_c the carrier's mean e vector (:func:`chief_eccentricity`, its
-  own GPS orbit). The carrier's drift-stop has a radial impulse of 1.3 m/s (e_c = 1.8e-4), which J3 turns and
-  grows to 2.4-3.6e-4 in the last batch of a run: 1.2 m/day of a de at -74 m/day of a*da_dot. The along-track
-  oscillation 2 a de it changes projects on the smallest axis of a long batch (6.5 mm, a da about 15 h before the
-  epoch): noise-free measurements from four closed-loop truths, 43 h since the last burn, missed the secular
-  truth by 7-state NEES 4.26, 2.31, 2.30, 4.82 without the term (-1.30, -0.11, -0.92, -1.40 cm along that
-  axis, a dex 0.7-1.1 m off), 0.24, 4.80, 0.50, 0.50 with it (-0.20, +0.89, -0.22, -0.41 cm, de within 0.15 m;
-  the second truth's remaining error is not the e vector's); the OD ensemble with the closed loop's carrier
-  eccentricity (16 members, no burn for 43 h, noise-free) by 2.06 on average without, 0.23 with it.
-
-The state x is secular; :meth:`ODResult.mean_state` gives the mean ROE at t_est with the short-periodic de (what the
-truth and the reports call the ROE). Without the two terms, noise-free solutions on the nonlinear truth miss it by
-7-state NEES 0.4-1.6 (the mean 0.9 of an expected 7 for noise alone); with them by 0.04-0.27. Gauss-Newton iterations
-
-    dx = (H^T W H)^-1 H^T W (z - h(x)),   W = R^-1,   H = dh/dx by central finite differences,
-
-solved by SVD of the column-scaled, whitened H (no explicit normal matrix, so ill-conditioning is detected rather
-than rounded away). Azimuth residuals are wrapped to [-pi, pi). Formal covariance P = (H^T W H)^-1 at the solution.
-The secular ROE model is linear in x and the look angles are almost linear over the estimate's uncertainty
-(hundreds of meters at ~1000 km range; the e vector's drag drift is bilinear in de and x[6], a relative
-change of 1e-3 of de a day), so the estimate is unbiased and P is its actual covariance: the normalized
-estimation error squared (:func:`nees`) is chi-square with 7 degrees of freedom.
-
-Drift rate across burns (:class:`DragModel`, :class:`DriftPrior`). A burn changes the ROE by its executed (not its
-commanded) impulse, so every batch starts after the latest burn. The drift rate does not jump at a burn: it is the
-differential drag of the pair, seed 002 Eq. (24) differentiated in time,
-
-    da_dot = -(v^2 / (n a)) (B_d rho(h_d) - B_c rho(h_c)),   rho(h) = rho_0 exp(-(h - h_0) / H)  (Vallado Eq. 8-33),
-
-with constant ballistic coefficients B and the deputy's height h_d = h_c + a da. Linear in a da / H (a few hundred
-meters against H = 64 km at 515 km): da_dot = beta g, with the drag model's factor
-
-    g(a_c, da) = exp(-(a_c - a_ref) / H) (1 - R a da / H),   R = B_d / (B_d - B_c),
-
-and beta = -(v^2 / (n a)) (B_d - B_c) rho(a_ref - R_E) a constant of the pair (differential ballistic coefficient
-times the density at a reference height). g is known: the carrier's mean a_c (its own GPS orbit, an input of the
-batch) gives the density ratio as it decays (165 m/day at 515 km: +0.26 %/day of drift rate) and the estimate's
-own da the deputy's height (R = 1.52 in the default scenario: 0.43 % of drift rate per 180 m of a da, what a
-0.1 m/s acquisition burn changes). The last solution before a burn therefore gives a priori information on beta
-for every batch after it: its marginal (beta, sigma_beta^2) = (x[6] / g, P[6, 6] / g^2) is an a priori
-pseudo-measurement of x[6] / g(x) (Tapley, Schutz, Born 2004, Sec. 4.6, Eq. 4.6.1: the batch with a priori
-information, J = (z - h)^T W (z - h) + (x - x_bar)^T P_bar^-1 (x - x_bar)), one more whitened row of the design
-matrix. Its measurements precede the burn, those of the new batch follow it: the two are independent, and each
-batch carries forward only the marginal of the solution before it, so no measurement is used twice. The density
-of the truth atmospheres of this project (:mod:`roe_sep.core.truth.nonlinear`: the normalised exponential model,
-and NRLMSIS 2.0 at constant solar and geomagnetic activity) is a function of position (and, for NRLMSIS, of the
-Sun's direction, which turns 1 deg/day), so the orbit mean at the carrier's height is fixed by that height: no
-process noise is needed, and none is added by default. A real atmosphere changes with solar and geomagnetic
-activity: ``density_walk`` (relative 1-sigma of the orbit-mean density per sqrt(day), a random walk: state noise
-compensation, Tapley et al. Sec. 6.9) widens the a priori variance by (beta density_walk)^2 dt / 1 day between the
-two epochs.
-
-The same g changes within a batch: the drift rate grows as the carrier decays into denser air and the deputy's
-own drift takes it lower still, d ln g / dt = -(a_c_dot + R a_c da_dot) / H (:meth:`DragModel.growth`; 0.26 %/day
-from the carrier and 0.19 %/day from an 81 m/day drift in the default scenario, so 0.36 m/day over a 20-h batch
-at -81 m/day). With a drag model, the batch propagates da_dot(t) = x[6] (1 + gamma (t - t_est))
-(:func:`propagate_state`, :func:`drift_growth`; the carrier's rate a_c_dot from its own mean elements over the
-batch, :func:`chief_decay`), so x[6] is the rate at t_est, the one the drift prior and the guidance carry
-forward; a constant rate would be the batch's mean rate, half a batch old.
-
-Why these choices, measured (the OD ensemble of :mod:`roe_sep.core.od.ensemble` on the nonlinear truth, 256 chains,
-and the recorded runs): with the growth, the secular model recovers the truth's secular state from noise-free
-measurements to a 7-state NEES of 0.10 on average (0.36 at most; drift rate 0.14 sigma, 0.26 at most, 8
-chains), against 7 for the noise, so process noise inside a batch would model an error that is not there. The truth to
-compare with is its secular state (:func:`~roe_sep.core.od.ensemble.secular_drift`): a batch that spans a day
-determines a da about 6 h before its epoch to 2.6 cm, finer than the orbit-periodic centimeters of drag that the
-first-order mean elements keep. Against it the first solutions have mean 7-state NEES 7.08, drift-rate z^2 0.97,
-the last 7.08 and 1.06 (band of 256: [6.55, 7.47], [0.83, 1.18]; with the e vector's drag drift, the ensemble's
-carrier eccentric as its drift-stop leaves it, :func:`~roe_sep.core.od.ensemble.carrier_after_drift_stop`). The drift
-rate's optimism of an earlier 100-run campaign (mean z^2 1.42) came from comparing with the simulator's Eq. (24)
-value, which is smaller in magnitude than the nonlinear truth's own rate by 0.5-0.6 m/day. The remaining lever
-is information: the drift rate is a property of the pair, so the carried beta shrinks the last solution's
-drift-rate sigma from 2.05 to 0.79 m/day.
+Drift rate across burns (:class:`DragModel`, :class:`DriftPrior`): every batch starts after the latest burn, but the
+drift rate does not jump (seed 002 Eq. 24 in time): da_dot = beta g, g = exp(-(a_c - a_ref) / H) (1 - R a da / H),
+R = B_d / (B_d - B_c) (Vallado Eq. 8-33). The solution before a burn gives beta's marginal (x[6] / g, P[6, 6] / g^2)
+as an a priori pseudo-measurement, one more whitened row (Tapley et al. Sec. 4.6, Eq. 4.6.1); ``density_walk``
+widens its variance by (beta density_walk)^2 dt / 1 day (state noise compensation, Sec. 6.9). What each term is
+worth, measured: docs/campaigns.md, "The OD model's terms, measured".
 """
 
 from dataclasses import dataclass
