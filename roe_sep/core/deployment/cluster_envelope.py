@@ -6,8 +6,7 @@ uniform, shared by every NS of the stage (:mod:`~roe_sep.core.deployment.cluster
 
     S* = {Omega <= Omega*, any psi},   Omega* = sigma sqrt(-2 ln(1 - P*))   (Rayleigh CDF 1 - exp(-W^2/2 sigma^2))
 
-has probability exactly P* (:func:`omega_bound`): conditions that all hold on S* hold *jointly* with probability
->= P*, with no Gaussian approximation and no independence assumption.
+has probability exactly P* (:func:`omega_bound`): conditions that all hold on S* hold *jointly* with P >= P*.
 
 NS i relative to NS j at time t (to the OS: V_j = 0, no drag), tau = t - dt:
 

@@ -26,8 +26,7 @@ Estimators of P(d_min <= R):
   (Rubinstein & Kroese 2004, :func:`cross_entropy`) until gamma reaches R. Where one Gaussian cannot follow the failure
   set down to R (gamma stalls), the estimate is made at the smallest gamma reached, an upper bound of P(d <= R). The
   final estimate uses fresh samples from the proposal: p = mean(1{d <= R} w), w = phi(z) / q(z), with the 95 % normal
-  interval from its standard error and ESS = (sum h)^2 / sum h^2, h = 1{d <= R} w. One Gaussian follows one failure
-  region.
+  interval from its standard error and ESS = (sum h)^2 / sum h^2, h = 1{d <= R} w (one Gaussian: one failure region).
 """
 
 import dataclasses

@@ -88,13 +88,11 @@ def nearest_crossing(roe0: ArrayLike, u0: ArrayLike, duration: float, a: float, 
                      iterations: int = 3) -> tuple[np.ndarray, np.ndarray]:
     """Smallest along-track distance |T| at a transit through the R = 0 plane in ``(t_min, duration]`` seconds.
 
-    Seed 002 Fig. 8 / seed 001 AC2. ``roe0`` ``(..., 6)`` is the dimensionless state at t = 0, when the chief is at
-    mean argument of latitude ``u0`` [rad]. In each revolution m the transit candidates come from the Keplerian
+    Seed 002 Fig. 8 / seed 001 AC2. In each revolution m the transit candidates come from the Keplerian
     solution of R/a = da - |de| cos(u - phi) = 0 with the elements at that revolution's start,
     u = phi +- arccos(da/|de|), and are refined by Newton iterations on the full secular model (:func:`propagate`
-    then :func:`roe_to_rtn`), so J2 and differential drag are included. ``t_min`` (default: a tenth of an orbit)
-    excludes the trivial transit at t = 0 right after an ejection. An orbit without radial motion (da = de = 0)
-    lies in the R = 0 plane: its distance is |T| at ``t_min``.
+    then :func:`roe_to_rtn`: J2 and drag included). ``t_min`` excludes the trivial transit at t = 0 after an
+    ejection. An orbit without radial motion (da = de = 0) lies in the R = 0 plane: its distance is |T| at ``t_min``.
 
     Parameters
     ----------
@@ -104,18 +102,12 @@ def nearest_crossing(roe0: ArrayLike, u0: ArrayLike, duration: float, a: float, 
         The chief's mean argument of latitude at t = 0 [rad].
     duration : float
         End of the window [s].
-    a : float
-        The chief's semi-major axis [m].
-    inc : float
-        The chief's inclination [rad].
-    j2 : bool
-        With the J2 secular rates.
-    da_dot : array_like, shape (...)
-        Differential-drag rate of da [1/s].
-    t_min : float, optional
-        Start of the window [s] (exclusive); default a tenth of an orbit.
-    iterations : int
-        Newton iterations per transit candidate.
+    a, inc : float
+        The chief's semi-major axis [m] and inclination [rad].
+    j2, da_dot : bool; array_like, shape (...)
+        With the J2 secular rates; the differential-drag rate of da [1/s].
+    t_min, iterations : float, optional; int
+        Start of the window [s] (exclusive; default a tenth of an orbit); Newton iterations per candidate.
 
     Returns
     -------
@@ -155,10 +147,8 @@ class ChiefRates(NamedTuple):
 
         Parameters
         ----------
-        a : float
-            The chief's semi-major axis [m].
-        inc : float
-            The chief's inclination [rad].
+        a, inc : float
+            The chief's semi-major axis [m] and inclination [rad].
         j2 : bool
             With the J2 secular rates.
 
@@ -174,9 +164,8 @@ def nearest_crossing_one(r0: ArrayLike, u0: float, duration: float, chief: Chief
                          *, t_min: float | None = None, iterations: int = 3) -> tuple[np.floating, np.ndarray]:
     """:func:`nearest_crossing` of one state, the chief's rates given: the same operations on the same values,
     element by element, without the batch's broadcasting and gathers (a state assessment's transits are 2-3
-    revolutions, a few candidates: the wrappers were most of the cost). An element is the same whether computed in
-    a batch or alone (elementwise operations), and the nearest transit is picked by argmin, as the batch does along
-    its candidates.
+    revolutions, a few candidates). An element is the same computed in a batch or alone (elementwise operations,
+    the nearest transit picked by argmin as in the batch).
 
     Parameters
     ----------
@@ -190,16 +179,13 @@ def nearest_crossing_one(r0: ArrayLike, u0: float, duration: float, chief: Chief
         The chief's a, i, J2 flag and rates (:meth:`ChiefRates.of`).
     da_dot : float
         Differential-drag rate of da [1/s].
-    t_min : float, optional
-        Start of the window [s] (exclusive); default a tenth of an orbit.
-    iterations : int
-        Newton iterations per transit candidate.
+    t_min, iterations : float, optional; int
+        As for :func:`nearest_crossing`.
 
     Returns
     -------
     t_abs : numpy.floating
-        The dimensionless |T|/a of the nearest transit (``inf`` if none), as :func:`nearest_crossing` returns it
-        for one state.
+        The dimensionless |T|/a of the nearest transit (``inf`` if none), as :func:`nearest_crossing` returns it.
     t : numpy.ndarray, shape ()
         Its time [s] (``nan`` if none).
     """

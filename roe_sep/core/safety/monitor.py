@@ -149,10 +149,8 @@ def assess(roe0: ArrayLike, t0: float, chief: Chief, limits: MonitorLimits, burn
         Relative impulses (a plan's, or none for a state).
     t_end : float, optional
         End of the window [s]; default ``t0 + limits.window``.
-    j2 : bool
-        With the J2 secular rates.
-    da_dot : float
-        Differential-drag rate of da [1/s].
+    j2, da_dot : bool, float
+        With the J2 secular rates; the differential-drag rate of da [1/s].
 
     Returns
     -------

@@ -1,13 +1,12 @@
 """Multi-impulse separation: SPL ejection at the orbit pole, then purely tangential carrier burns (seed 001 Sec. 3).
 
-Seed 001 replaces the double impulse of seeds 000/002 (one large drift-stop with a radial component, about 1.33 m/s)
-because the carrier thrusters give at most ~0.3 m/s per burn, quantized to 1 mm/s (seed 001 Sec. 2.1, constraint 2),
-and the SPL delivers 1.53 m/s (fixed size, free direction). The plan built here:
+Seed 001 replaces the double impulse of seeds 000/002 (one large drift-stop with a radial component): the carrier
+thrusters give at most ~0.3 m/s per burn, quantized to 1 mm/s (seed 001 Sec. 2.1), the SPL a fixed 1.53 m/s:
 
-1. **Ejection** at u1 = 90 deg (orbit north pole, seed 001 Sec. 2.2 item 3), components chosen as seed 001 Sec. 3:
+1. **Ejection** at u1 = 90 deg (orbit north pole, seed 001 Sec. 2.2 item 3), components as in seed 001 Sec. 3:
 
-   * tangential: the least value that keeps the drift outward under the SPL under-performance, the preliminary
-     study's criterion (seed 002 Eq. 10): |dvT1| = e~ = spl_sigma |dv| (10 % of the SPL size), sign from safety #2;
+   * tangential: the least value keeping the drift outward under SPL under-performance (seed 002 Eq. 10):
+     |dvT1| = e~ = spl_sigma |dv|, sign from safety #2;
    * normal: the relative inclination vector of the initial conditions, n a di_F = dvN1 (Eq. 2), with di_F the
      largest size still in the camera field of view at the smallest admissible separation (Table 2 a_di_max,
      visibility #3, Eq. 11): the larger dvN1, the smaller the radial part the carrier has to undo; the margin of
@@ -26,9 +25,8 @@ and the SPL delivers 1.53 m/s (fixed size, free direction). The plan built here:
    shortest path to the ray anti-parallel to di with |de| >= the minimum R-N distance (seed 001 Sec. 3 'minimum
    delta-v fashion'; tangential burns: sum |dvT| >= n a/2 max(|Delta da|, |Delta de|)).
 
-Every carrier burn is quantized to ``dv_quantum`` and split into burns of at most ``max_burn``, repeated at the same
-argument of latitude on consecutive revolutions. Impulses are *relative* (picosatellite w.r.t. carrier, seed
-convention); the carrier burns the opposite.
+Every burn is quantized to ``dv_quantum``, split into burns of at most ``max_burn`` on consecutive revolutions, and
+*relative* (picosatellite w.r.t. carrier; the carrier burns the opposite).
 """
 
 import math
@@ -347,14 +345,10 @@ def plan_carrier_burns(dv1_rtn: ArrayLike, u1: float, epoch1: float, a: float, i
     ----------
     dv1_rtn : array_like, shape (3,)
         The commanded ejection [m/s], relative, RTN.
-    u1 : float
-        The carrier's mean argument of latitude at the ejection [rad].
-    epoch1 : float
-        The ejection epoch [s].
-    a : float
-        The carrier's semi-major axis [m].
-    inc : float
-        The carrier's inclination [rad].
+    u1, epoch1 : float
+        The carrier's mean argument of latitude [rad] and the epoch [s] at the ejection.
+    a, inc : float
+        The carrier's semi-major axis [m] and inclination [rad].
     sep : SeparationConfig
         Reduction sizing (Eq. 21), the minimum R-N distance and the side (leading/following).
     mcfg : MultiImpulseConfig
@@ -448,10 +442,8 @@ def drift_free_state(dv1: ArrayLike, u1: float, a: float, inc: float, plan: Carr
         The commanded ejection [m/s], relative, RTN.
     u1 : float
         The carrier's mean argument of latitude at the ejection [rad].
-    a : float
-        The carrier's semi-major axis [m].
-    inc : float
-        The carrier's inclination [rad].
+    a, inc : float
+        The carrier's semi-major axis [m] and inclination [rad].
     plan : CarrierPlan
         The plan of :func:`plan_carrier_burns` (its drift-reduction burns, epochs from the ejection at 0).
     sep : SeparationConfig

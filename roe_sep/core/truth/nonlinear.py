@@ -3,36 +3,30 @@
 Force model (per spacecraft, inertial equator-and-equinox-of-date frame of :mod:`roe_sep.core.od.radar`):
 
 * Zonal geopotential to degree 2, 3 or 4 (EGM96 J2..J4): U = mu/r [1 - sum_n J_n (R_E/r)^n P_n(z/r)] (Vallado,
-  *Fundamentals of Astrodynamics and Applications*, 4th ed., Eq. 8-19 restricted to m = 0); the acceleration is
-  grad U, differentiated symbolically by heyoka (no hand-expanded gradients to get wrong).
+  *Fundamentals of Astrodynamics and Applications*, 4th ed., Eq. 8-19, m = 0); grad U differentiated by heyoka.
 * Atmospheric drag a = -1/2 B rho(h) |v_r| v_r (Vallado Eq. 8-28), B = c_d A / m per spacecraft, v_r = v -
-  omega_E x r relative to an atmosphere co-rotating with the Earth, h = |r| - R_E (spherical altitude).
-  Density: an explicit choice of two models (:func:`truth_atmosphere`, ``ATMOSPHERES``):
+  omega_E x r relative to an atmosphere co-rotating with the Earth, h = |r| - R_E (spherical altitude). Density: an
+  explicit choice of two models (:func:`truth_atmosphere`, ``ATMOSPHERES``):
 
   * ``normalised`` (default, the seeds' assumption): the exponential model rho = rho_ref exp(-(h - h_ref) / H)
-    with the scale height H of Vallado's exponential atmosphere (Table 8-4) for the band containing the orbit,
-    normalised (:meth:`Atmosphere.normalised`) so that the *orbit-mean* drag of the carrier's osculating orbit,
-    <rho(h) |v_r| (v_r . v)>, equals the stated density times v^2 = mu / a: the density the linear model of seed
-    002 Eqs. (23)-(24) assumes (1 g/km^3). Referenced at the mean altitude a - R_E instead
-    (:meth:`Atmosphere.scaled`), the truth's drag is 4.8 % below Eq. (24): the spherical altitude of the
-    sun-synchronous orbit averages 4.2 km above a - R_E (the Earth's flattening and the short-period J2 terms of
-    the radius) and the co-rotating atmosphere adds 1.7 % of relative velocity.
-  * ``msis``: NRLMSIS 2.0 (Emmert et al., Earth and Space Science 2021) through the ``pymsis`` package (the
-    model's data ship with it, nothing is downloaded; F10.7, its 81-day mean and Ap are parameters, never
-    looked up). heyoka needs the density as an expression, so :class:`MsisAtmosphere` fits ln rho by least
-    squares over the band the pair flies through (the nominal orbit over the propagation span, +-20 km radially)
-    in the basis :func:`msis_basis`: polynomials of the direction in a frame turning with the Sun (the diurnal
+    with the scale height H of Vallado's Table 8-4 for the orbit's band, normalised (:meth:`Atmosphere.normalised`)
+    so that the *orbit-mean* drag <rho(h) |v_r| (v_r . v)> equals the stated density times v^2 = mu / a (seed 002
+    Eqs. 23-24). Referenced at the mean altitude a - R_E instead (:meth:`Atmosphere.scaled`), the
+    truth's drag is below Eq. (24) (the flattening and J2 raise the mean spherical altitude; docs/seeds.md).
+  * ``msis``: NRLMSIS 2.0 (Emmert et al., Earth and Space Science 2021) through ``pymsis`` (F10.7, its 81-day mean
+    and Ap are parameters, never looked up). heyoka needs the density as an expression, so :class:`MsisAtmosphere` fits
+    ln rho by least squares over the band the pair flies through (the nominal orbit over the propagation span, +-20 km
+    radially) in the basis :func:`msis_basis`: polynomials of the direction in a frame turning with the Sun (the diurnal
     bulge, latitude and season) times a quadratic in altitude. The fit's RMS error in ln rho is reported.
+
 Integrator: heyoka's adaptive Taylor method (Biscani & Izzo, MNRAS 2021), JIT-compiled with LLVM. Both spacecraft
 form one 12-dimensional system so that they share every step: integration error is then common-mode and largely
-cancels in the relative state. The compiled integrator is cached per process and configuration
-(:func:`pair_integrator`, about 2-5 s to compile on first use); batch mode (SIMD lanes, one sample pair each) and a
-thread pool over blocks of lanes run the Monte Carlo (:func:`propagate_pairs`) and the sweeps
-(:func:`propagate_pairs_grid`).
+cancels in the relative state. The compiled integrator is cached (:func:`pair_integrator`); batch mode (SIMD lanes)
+and a thread pool run the Monte Carlo (:func:`propagate_pairs`) and the sweeps (:func:`propagate_pairs_grid`).
 
-State layout: ``(..., 12)`` = chief (carrier) position [m], velocity [m/s], then deputy (picosatellite) likewise.
-Parameters: ``[B_chief, B_deputy, *atmosphere.pars()]``: exponential ``[rho_ref, h_ref, H]`` (kg/m^3, m, m),
-msis ``[alpha_0, h_0, c_1 .. c_46]`` (rad, m, fit coefficients).
+State ``(..., 12)``: chief (carrier) position [m], velocity [m/s], then deputy (picosatellite). Parameters:
+``[B_chief, B_deputy, *atmosphere.pars()]``: exponential ``[rho_ref, h_ref, H]`` (kg/m^3, m, m), msis
+``[alpha_0, h_0, c_1 .. c_46]`` (rad, m, fit coefficients).
 """
 
 import copy

@@ -66,14 +66,10 @@ def dispersed_truth(scenario: "Scenario", carrier: "DoubleImpulseDesign | MultiI
         The scenario (:func:`roe_sep.core.config.load_scenario`): its dispersions, drag and execution errors.
     carrier : DoubleImpulseDesign or MultiImpulseDesign
         The scenario's separation design: the carrier's ``a`` [m] and ``inc`` [rad].
-    raan : float
-        The carrier's right ascension of the ascending node [rad] at sim time 0.
-    u0 : float
-        The carrier's mean argument of latitude [rad] at sim time 0.
-    seed : int
-        The run seed.
-    disperse : bool
-        False: no drag uncertainty, no execution errors, no ejection delay.
+    raan, u0 : float
+        The carrier's right ascension of the ascending node and mean argument of latitude [rad] at sim time 0.
+    seed, disperse : int, bool
+        The run seed; False: no drag uncertainty, no execution errors, no ejection delay.
     dynamics : str
         'secular' (:class:`~.secular.TruthModel`) or 'nonlinear' (:class:`~.nonlinear.NonlinearTruth`).
     j2 : bool
