@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 CORE = Path(__file__).resolve().parents[2] / "roe_sep" / "core"
-PACKAGES = ["config.py", "deployment", "montecarlo", "ops", "relmotion", "safety", "separation", "truth"]
+PACKAGES = ["acquisition", "config.py", "deployment", "montecarlo", "ops", "relmotion", "safety", "separation", "truth"]
 
 
 def public_functions(path: Path):

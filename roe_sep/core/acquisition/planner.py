@@ -29,9 +29,12 @@ within ``a_dl_target_tol``. The plan is verified end to end with :func:`~roe_sep
 
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ...errors import AcquisitionInfeasible, InvalidAcquisitionConfig
 from ..relmotion.dynamics import arg_latitude_rate, propagate
@@ -40,6 +43,9 @@ from ..relmotion.trajectory import Burn, Chief, trajectory
 from ..safety.metrics import fov_limit, min_rn_distance
 from .highs import solve_lp
 from .lp_transfer import carrier_burn_effects, grid_epochs, grid_response, parse_axes, response_at, sagitta
+
+if TYPE_CHECKING:  # scipy.sparse is imported where the program is built: the nodes import this module for its config
+    from scipy import sparse
 
 R_EARTH_MIN = 6.4e6  # m, a semi-major axis below this is not a valid LEO chief
 QUANTA_SLACK = 4  # a quantized solution within this many quanta of the LP optimum ends the search
@@ -68,7 +74,7 @@ class AcquisitionConfig:
     milp_time_limit: float = 5.0  # s, HiGHS time limit of each quantized re-solve
 
 
-def validate_config(cfg: AcquisitionConfig):
+def validate_config(cfg: AcquisitionConfig) -> None:
     """Reject malformed fields with :class:`InvalidAcquisitionConfig` naming the field."""
 
     def number(name, positive=True, allow_zero=False):
@@ -115,7 +121,7 @@ def validate_config(cfg: AcquisitionConfig):
     number("milp_time_limit")
 
 
-def ei_magnitude_floor(min_rn, angle_tol):
+def ei_magnitude_floor(min_rn: float, angle_tol: float) -> float:
     """Smallest |a de|, |a di| that keeps seed 002 Eq. (25) >= ``min_rn`` when the vectors deviate from
     (anti-)parallel by up to ``angle_tol`` [rad].
 
@@ -125,16 +131,28 @@ def ei_magnitude_floor(min_rn, angle_tol):
     return min_rn * math.sqrt(1.0 + math.sin(angle_tol)) / math.cos(angle_tol)
 
 
-def drift_nulling_dv_bound(a_da0, a_da_dot, duration, n, tol):
+def drift_nulling_dv_bound(a_da0: float, a_da_dot: float, duration: float, n: float, tol: float) -> float:
     """Lower bound on the L1 delta-v [m/s] of any plan ending with |a da_F| <= ``tol`` after ``duration`` [s].
 
     Only tangential impulses change da (seed 002 Eq. 2: a Delta da = 2 dvT / n), so sum |dvT| >= n/2 |required
     change| with the required change = the drifted value a da0 + a_da_dot * duration minus the tolerance.
+
+    Parameters
+    ----------
+    a_da0, a_da_dot : float
+        a da now [m] and its drift rate [m/s].
+    duration, n, tol : float
+        Time to the final epoch [s], mean motion [rad/s], the drift tolerance [m].
+
+    Returns
+    -------
+    float
+        The bound [m/s].
     """
     return 0.5 * n * max(0.0, abs(a_da0 + a_da_dot * duration) - tol)
 
 
-def ei_deviation(roe, leading):
+def ei_deviation(roe: ArrayLike, leading: bool) -> np.ndarray:
     """Angle [rad] between de and the required direction: -di (anti-parallel) when ``leading``, +di otherwise."""
     r = np.asarray(roe, dtype=float)
     de, di = r[..., 2:4], r[..., 4:6] * (-1.0 if leading else 1.0)
@@ -171,26 +189,26 @@ class AcquisitionPlan:
     a: float  # m
 
     @property
-    def n_burns(self):
+    def n_burns(self) -> int:
         return len(self.epochs)
 
     @property
-    def t_last_burn(self):
+    def t_last_burn(self) -> float:
         return float(self.epochs[-1]) if len(self.epochs) else float("nan")
 
     @property
-    def time_to_ic(self):
+    def time_to_ic(self) -> float:
         return self.t_final - self.t0
 
     @property
-    def fov_ok(self):
+    def fov_ok(self) -> bool:
         return self.fov_r_margin >= 0.0 and self.fov_n_margin >= 0.0
 
-    def burns(self):
+    def burns(self) -> list[Burn]:
         """The plan as :class:`Burn` (relative impulses, -dv_carrier) for :func:`trajectory`."""
         return [Burn(float(t), tuple(-dv)) for t, dv in zip(self.epochs, self.dv_carrier)]
 
-    def summary(self):
+    def summary(self) -> dict:
         """Key numbers (SI, meters for a*ROE) for logs, diagnostics and the CLI."""
         f = self.final_roe * self.a
         return {
@@ -428,7 +446,7 @@ def _assemble(pb: _Problem, cols, ihat, exact, path=True, *, target=True, ei=Tru
     return _objective(lay), lo_v, hi_v, a_mat, np.array(lb, dtype=float), np.array(ub, dtype=float)
 
 
-def signed_rows(sub):
+def signed_rows(sub: np.ndarray) -> "sparse.csr_matrix":
     """The rows ``[sub, -sub, 0]`` over v = [p, m, L, mu, nu] (three zero columns for L, mu, nu) of the dense
     ``sub`` ``(R, n)`` as a CSR matrix of its nonzeros. ``sub`` is converted once and each row's nonzeros are laid
     out twice, at their columns then at ``n`` + their columns negated: the same arrays (indptr, indices, data) as
@@ -562,8 +580,19 @@ def _neighbourhood(pb, support, orbits, steps):
     return (epochs[:, None] * j_count + axes[None, :]).ravel()
 
 
-def check_inputs(roe0, chief: Chief, da_dot):
-    """Reject an unusable estimate (NaN, infinite, impossible orbit, no along-track separation)."""
+def check_inputs(roe0: ArrayLike, chief: Chief, da_dot: float) -> None:
+    """Reject an unusable estimate (NaN, infinite, impossible orbit, no along-track separation).
+
+    Parameters
+    ----------
+    roe0, chief, da_dot
+        As for :func:`plan_acquisition`.
+
+    Returns
+    -------
+    None
+        :class:`AcquisitionInfeasible` (a ValueError) with the reason when unusable.
+    """
     x = np.asarray(roe0, dtype=float)
     if x.shape != (6,) or not np.all(np.isfinite(x)):
         raise AcquisitionInfeasible(f"the ROE estimate is not six finite numbers: {np.asarray(roe0).tolist()}")
@@ -576,14 +605,31 @@ def check_inputs(roe0, chief: Chief, da_dot):
         raise AcquisitionInfeasible("the mean along-track separation is zero: leading or following is undefined")
 
 
-def plan_acquisition(roe0, chief: Chief, da_dot=0.0, cfg: AcquisitionConfig = AcquisitionConfig(),
-                     t_earliest=None, *, no_burns=()) -> AcquisitionPlan:
+def plan_acquisition(roe0: ArrayLike, chief: Chief, da_dot: float = 0.0, cfg: AcquisitionConfig = AcquisitionConfig(),
+                     t_earliest: float | None = None, *,
+                     no_burns: Sequence[tuple[float, float]] = ()) -> AcquisitionPlan:
     """Minimum-delta-v carrier plan from the estimate ``roe0`` (dimensionless, at ``chief.t0``) to the ICs.
 
-    ``da_dot`` [1/s]: estimated drift of da from differential drag (the OD's a_da_dot / a). ``t_earliest`` [s]:
-    first admissible burn epoch (default ``chief.t0 + planning_margin``; a node passes max(OD epoch, now) + margin).
-    ``no_burns``: intervals ``(start, end)`` [s] in which no burn may fly (the final OD's radar arc).
-    Raises :class:`AcquisitionInfeasible` (a ValueError) with the reason when no plan exists.
+    Parameters
+    ----------
+    roe0 : array_like, shape (6,)
+        The estimated ROE (dimensionless) at ``chief.t0``.
+    chief : Chief
+        The chief's a, i and argument of latitude at the OD epoch.
+    da_dot : float
+        Estimated drift of da from differential drag [1/s] (the OD's a_da_dot / a).
+    cfg : AcquisitionConfig
+        The requirements and planning knobs.
+    t_earliest : float, optional
+        First admissible burn epoch [s] (default ``chief.t0 + planning_margin``; a node passes max(OD epoch, now)
+        + margin).
+    no_burns : sequence of (float, float)
+        Intervals ``(start, end)`` [s] in which no burn may fly (the final OD's radar arc).
+
+    Returns
+    -------
+    AcquisitionPlan
+        The verified plan; :class:`AcquisitionInfeasible` (a ValueError) with the reason when none exists.
     """
     validate_config(cfg)
     check_inputs(roe0, chief, da_dot)
@@ -686,9 +732,23 @@ def _finish(pb, x0, chief, da_dot, cfg, *, t_earliest, quantized, lp_final, lp_d
     return plan
 
 
-def verify(plan: AcquisitionPlan, cfg: AcquisitionConfig, eps=1e-6):
-    """Every IC and execution constraint of a plan, checked on its :func:`trajectory` prediction; returns the list
-    of violations (empty when the plan is good). ``eps`` [m, m/s] absorbs floating-point round-off only."""
+def verify(plan: AcquisitionPlan, cfg: AcquisitionConfig, eps: float = 1e-6) -> list[str]:
+    """Every IC and execution constraint of a plan, checked on its :func:`trajectory` prediction.
+
+    Parameters
+    ----------
+    plan : AcquisitionPlan
+        The plan.
+    cfg : AcquisitionConfig
+        The requirements.
+    eps : float
+        Absorbs floating-point round-off only [m, m/s].
+
+    Returns
+    -------
+    list of str
+        The violations (empty when the plan is good).
+    """
     f = plan.final_roe * plan.a
     s = 1.0 if plan.leading else -1.0
     out = []
@@ -724,9 +784,28 @@ def verify(plan: AcquisitionPlan, cfg: AcquisitionConfig, eps=1e-6):
     return out
 
 
-def acquisition_trajectory(plan: AcquisitionPlan, roe0, chief: Chief, times, da_dot=0.0, *, j2=True):
-    """Dimensionless ROE along the plan at ``times`` (>= plan.t0) from ``roe0`` at ``chief.t0``, via
-    :func:`trajectory` (relative impulses -dv_carrier)."""
+def acquisition_trajectory(plan: AcquisitionPlan, roe0: ArrayLike, chief: Chief, times: ArrayLike,
+                           da_dot: float = 0.0, *, j2: bool = True) -> np.ndarray:
+    """Dimensionless ROE along the plan via :func:`trajectory` (relative impulses -dv_carrier).
+
+    Parameters
+    ----------
+    plan : AcquisitionPlan
+        The plan.
+    roe0 : array_like, shape (6,)
+        The ROE at ``chief.t0``.
+    chief : Chief
+        The chief.
+    times : array_like, shape (n,)
+        Output times [s], >= plan.t0.
+    da_dot, j2 : float, bool
+        The differential-drag rate of da [1/s]; with the J2 secular rates.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, 6)
+        The ROE.
+    """
     return trajectory(roe0, chief.t0, plan.burns(), times, chief, j2=j2, da_dot=da_dot)
 
 
