@@ -30,6 +30,7 @@ worth, measured: docs/campaigns.md, "The OD model's terms, measured".
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..constants import SECONDS_PER_DAY
 from ..relmotion.dynamics import (
@@ -84,7 +85,7 @@ class ODResult:
     u_est: float = 0.0
     drag: bool = True
 
-    def mean_state(self):
+    def mean_state(self) -> tuple[np.ndarray, np.ndarray]:
         """(state, covariance) of the mean ROE at ``t_est`` as the project defines them (first-order J2 mean
         elements, which keep drag's short-periodic de: :func:`mean_roe_map`) and da_dot: J x, J P J^T."""
         jac = mean_roe_map(self.a_est, self.u_est) if self.drag else np.eye(STATE_SIZE)
@@ -99,16 +100,28 @@ class DragModel:
     scale_height: float
     ballistic_ratio: float
 
-    def growth(self, a_chief_dot, a_da_dot):
+    def growth(self, a_chief_dot: ArrayLike, a_da_dot: ArrayLike) -> np.ndarray:
         """d ln g / dt [1/s] = -(a_c_dot + R a_c da_dot) / H: the relative growth of the drift rate as the carrier
         decays at ``a_chief_dot`` [m/s] (denser air) and the deputy's own drift ``a_da_dot`` [m/s] (a_c da_dot)
         takes it lower still (the time derivative of :meth:`factor` at first order in a da / H)."""
         return -(np.asarray(a_chief_dot, dtype=float)
                  + self.ballistic_ratio * np.asarray(a_da_dot, dtype=float)) / self.scale_height
 
-    def factor(self, a_chief, a_ref, da):
-        """g = exp(-(a_c - a_ref) / H) (1 - R a_c da / H): da_dot over beta at carrier mean semi-major axis
-        ``a_chief`` [m] and dimensionless ``da`` (broadcasts)."""
+    def factor(self, a_chief: ArrayLike, a_ref: float, da: ArrayLike) -> np.ndarray:
+        """g = exp(-(a_c - a_ref) / H) (1 - R a_c da / H): da_dot over beta (broadcasts).
+
+        Parameters
+        ----------
+        a_chief, a_ref : array_like, float
+            The carrier's mean semi-major axis and the reference one [m].
+        da : array_like
+            The dimensionless da.
+
+        Returns
+        -------
+        numpy.ndarray
+            g.
+        """
         a_chief = np.asarray(a_chief, dtype=float)
         return (np.exp(-(a_chief - a_ref) / self.scale_height)
                 * (1.0 - self.ballistic_ratio * a_chief * np.asarray(da, dtype=float) / self.scale_height))
@@ -127,18 +140,33 @@ class DriftPrior:
     model: DragModel
 
     @classmethod
-    def from_result(cls, result, a_chief, model: DragModel):
-        """The marginal of a solution's drift rate as beta (reference: its own carrier ``a_chief`` [m])."""
+    def from_result(cls, result: "ODResult", a_chief: float, model: DragModel) -> "DriftPrior":
+        """The marginal of a solution's drift rate as beta.
+
+        Parameters
+        ----------
+        result : ODResult
+            The solution.
+        a_chief : float
+            Its carrier's semi-major axis [m] (the reference of g).
+        model : DragModel
+            The drag model.
+
+        Returns
+        -------
+        DriftPrior
+            beta, its variance, the reference and the solution's epoch.
+        """
         g = float(model.factor(a_chief, a_chief, result.x[0]))
         return cls(float(result.x[6]) / g, float(result.cov[6, 6]) / g**2, float(a_chief), float(result.t_est), model)
 
-    def carried(self, t, density_walk=0.0):
+    def carried(self, t: float, density_walk: float = 0.0) -> "DriftPrior":
         """The same information at epoch ``t`` [s]: the variance grows by (beta density_walk)^2 |t - t0| / 1 day
         (``density_walk``: relative 1-sigma of the orbit-mean density per sqrt(day), a random walk)."""
         walk = (self.beta * density_walk) ** 2 * abs(float(t) - self.t) / SECONDS_PER_DAY
         return DriftPrior(self.beta, self.variance + walk, self.a_ref, float(t), self.model)
 
-    def residual_row(self, x, a_chief):
+    def residual_row(self, x: np.ndarray, a_chief: float) -> tuple[float, np.ndarray]:
         """Whitened a priori residual (beta - x[6] / g(x)) / sigma_beta and its partials d(x[6] / g) / dx over
         sigma_beta ``(7,)`` at state ``x`` and carrier ``a_chief`` [m]."""
         m = self.model
@@ -151,7 +179,7 @@ class DriftPrior:
         return (self.beta - x[6] / g) / sigma, row / sigma
 
 
-def measurement_residual(z, z_model):
+def measurement_residual(z: ArrayLike, z_model: ArrayLike) -> np.ndarray:
     """z - h with the azimuth difference wrapped to [-pi, pi) (``(..., 3)``)."""
     r = np.asarray(z, dtype=float) - np.asarray(z_model, dtype=float)
     r[..., 1] = wrap_angle(r[..., 1])
@@ -164,7 +192,7 @@ def _chief_a_inc(batch: RadarBatch):
     return batch.chief[k, 0], batch.chief[k, 2]
 
 
-def chief_decay(batch: RadarBatch):
+def chief_decay(batch: RadarBatch) -> float:
     """The carrier's mean semi-major axis rate [m/s] over the batch: the least-squares slope of its mean a (its own
     GPS orbit) against time; 0 over less than one orbital period (the slope would be the short-periodic remainder
     of the mean elements rather than the decay)."""
@@ -175,7 +203,7 @@ def chief_decay(batch: RadarBatch):
     return float(np.polyfit(t - t.mean(), a - a.mean(), 1)[0])
 
 
-def chief_eccentricity(batch: RadarBatch, t_ref):
+def chief_eccentricity(batch: RadarBatch, t_ref: float) -> tuple[np.ndarray, np.ndarray]:
     """The carrier's mean eccentricity vector e_c = e (cos argp, sin argp) at ``t_ref`` [s] and its rate [1/s],
     ``((2,), (2,))``: the least-squares line of its mean elements (its own GPS orbit) against time over the batch;
     over less than one orbital period their mean and no rate (as :func:`chief_decay`). The J2 perigee rotation and
@@ -190,30 +218,32 @@ def chief_eccentricity(batch: RadarBatch, t_ref):
     return at_ref, slope
 
 
-def drag_de_drift(x, de, dt, a, scale_height, *, ecc, ecc_rate=(0.0, 0.0), a_chief_dot=0.0, growth=0.0):
-    """Secular change ``(..., 2)`` of the relative eccentricity vector by drag over ``dt`` [s] of states ``x``
-    ``(..., 7)`` whose relative e vector is ``de`` ``(..., 2)``, chief semi-major axis ``a`` [m], density scale height
-    ``scale_height`` H [m], carrier mean e vector ``ecc`` at dt = 0 and its rate ``ecc_rate`` [1/s]
-    (:func:`chief_eccentricity`), carrier decay ``a_chief_dot`` [m/s] and drift growth ``growth`` gamma [1/s].
-
-    Drag at the density rho(r) = rho(a) exp(-(r - a) / H), r = a (1 - e cos M), decays the eccentricity of a
-    near-circular orbit with its semi-major axis (Gauss's equations averaged over an orbit, first order in e and in
-    c = a e / H; King-Hele, *Theory of Satellite Orbits in an Atmosphere*, 1964, Ch. 4:
-    de/dt = -B rho sqrt(mu/a) (I1(c) + e (I0 + I2) / 2) against da/dt = -B rho sqrt(mu a) (I0 + 2 e I1)):
-
-        d e_vec / dt = k a_dot e_vec,   k = 1 / (2 H) + 1 / (2 a),
-
-    the perigee being lower, in denser air, than the apogee (the argument of perigee has no secular drag rate).
-    For the pair, de = e_d - e_c and a_d - a_c = a da, so at first order
+def drag_de_drift(x: ArrayLike, de: ArrayLike, dt: ArrayLike, a: float, scale_height: float, *, ecc: ArrayLike,
+                  ecc_rate: ArrayLike = (0.0, 0.0), a_chief_dot: float = 0.0, growth: ArrayLike = 0.0) -> np.ndarray:
+    """Secular change of the relative eccentricity vector by drag. Drag decays a near-circular orbit's e vector with
+    its semi-major axis, d e_vec / dt = k a_dot e_vec, k = 1 / (2 H) + 1 / (2 a) (King-Hele, *Theory of Satellite
+    Orbits in an Atmosphere*, 1964, Ch. 4, first order in e and a e / H), so for the pair (de = e_d - e_c)
 
         d de / dt = k (a da_dot e_c + a_d_dot de),   a_d_dot = a_c_dot + a da_dot,
 
-    the first term the differential drag acting on the carrier's own eccentricity, the second the decay of the
-    relative e vector with the picosatellite's orbit. With da_dot(t) = x[6] (1 + gamma t) and
-    e_c(t) = e_c + e_c_dot t (:func:`chief_eccentricity`) integrated in closed form, de held at its value at dt
-    (J2 turns it by 0.1 rad over a 43-h batch). At e_c = 3e-4, H = 64 km and a*da_dot = -74 m/day the first term
-    moves a de 1.2 m/day (2.4 m/day of the along-track oscillation 2 a de), the second 0.4 m/day at
-    |a de| = 460 m and a_d_dot = -111 m/day."""
+    integrated in closed form with da_dot(t) = x[6] (1 + gamma t) and e_c(t) = e_c + e_c_dot t, de held at ``de``.
+
+    Parameters
+    ----------
+    x, de, dt : array_like, shapes (..., 7), (..., 2), (...)
+        States, their relative e vectors, the times [s].
+    a, scale_height : float
+        The chief's semi-major axis and the density scale height H [m].
+    ecc, ecc_rate : array_like, shape (2,)
+        The carrier's mean e vector at dt = 0 and its rate [1/s] (:func:`chief_eccentricity`).
+    a_chief_dot, growth : float, array_like
+        The carrier's decay [m/s] and the drift growth gamma [1/s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 2)
+        The change of de.
+    """
     x = np.asarray(x, dtype=float)
     dt = np.asarray(dt, dtype=float)[..., None]
     gamma = np.asarray(growth, dtype=float)[..., None]
@@ -226,9 +256,25 @@ def drag_de_drift(x, de, dt, a, scale_height, *, ecc, ecc_rate=(0.0, 0.0), a_chi
     return k * (a * carrier + decay * np.asarray(de, dtype=float))
 
 
-def drift_growth(x, batch: RadarBatch, model, decay=None):
-    """gamma [1/s] (:meth:`DragModel.growth`) of states ``x`` ``(..., 7)`` over ``batch``: the carrier's decay
-    ``decay`` [m/s] (default :func:`chief_decay`) and the state's own drift a_c x[6]; 0 without a drag ``model``."""
+def drift_growth(x: ArrayLike, batch: RadarBatch, model: DragModel | None,
+                 decay: float | None = None) -> np.ndarray | float:
+    """gamma [1/s] (:meth:`DragModel.growth`) of states over ``batch``: the carrier's decay and the state's own
+    drift a_c x[6]; 0 without a drag ``model``.
+
+    Parameters
+    ----------
+    x : array_like, shape (..., 7)
+        States.
+    batch : RadarBatch
+        The measurements and the carrier's mean elements.
+    model, decay : DragModel or None, float, optional
+        The drag model; the carrier's decay [m/s] (default :func:`chief_decay`).
+
+    Returns
+    -------
+    numpy.ndarray, shape (...), or float
+        gamma [1/s].
+    """
     x = np.asarray(x, dtype=float)
     if model is None:
         return np.zeros(x.shape[:-1])
@@ -236,9 +282,10 @@ def drift_growth(x, batch: RadarBatch, model, decay=None):
     return model.growth(chief_decay(batch) if decay is None else decay, a * x[..., 6])
 
 
-def propagate_state(x, dt, a, inc, j2=True, *, drag=True, growth=0.0):
-    """ROE ``(..., 6)`` of states ``x`` ``(..., 7)`` after ``dt`` [s]: :func:`propagate` with da_dot = x[6] at
-    dt = 0, and
+def propagate_state(x: ArrayLike, dt: ArrayLike, a: float, inc: float, j2: bool = True, *, drag: bool = True,
+                    growth: ArrayLike = 0.0) -> np.ndarray:
+    """ROE ``(..., 6)`` of states ``x`` ``(..., 7)`` after ``dt`` [s] (``a`` [m], ``inc`` [rad] the chief's):
+    :func:`propagate` with da_dot = x[6] at dt = 0, and
 
     * the drift rate's growth (``growth`` gamma [1/s], :meth:`DragModel.growth`): da_dot(dt) = x[6] (1 + gamma dt),
       which adds x[6] gamma dt^2 / 2 to da and its integral x[6] gamma dt^3 / 6 to dl and diy through the same
@@ -247,8 +294,18 @@ def propagate_state(x, dt, a, inc, j2=True, *, drag=True, growth=0.0):
       its J2 couplings into dl (d dl/dt = ... - 7 kappa sin 2i dix: - 7/2 kappa sin 2i dix_dot dt^2) and diy
       (d diy/dt = ... + 2 kappa sin^2 i dix: + kappa sin^2 i dix_dot dt^2);
 
-    ``drag`` False: :func:`propagate` alone (the secular model without the drag terms, e.g. to reproduce solutions
-    recorded with it)."""
+    Parameters
+    ----------
+    x, dt, a, inc, j2
+        As above; with the J2 secular rates.
+    drag, growth : bool, array_like
+        False: :func:`propagate` alone (to reproduce solutions recorded without the drag terms); gamma [1/s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 6)
+        The dimensionless ROE.
+    """
     x = np.asarray(x, dtype=float)
     dt = np.asarray(dt, dtype=float)
     roe = propagate(x[..., :6], dt, a, inc, j2, x[..., 6])
@@ -272,7 +329,7 @@ def propagate_state(x, dt, a, inc, j2=True, *, drag=True, growth=0.0):
     return roe
 
 
-def mean_roe_map(a, u):
+def mean_roe_map(a: float, u: float) -> np.ndarray:
     """J ``(7, 7)``: secular state -> mean ROE and da_dot of a carrier at semi-major axis ``a`` [m] and mean
     argument of latitude ``u`` [rad]: the identity plus the da_dot column of drag's short-periodic de
     (:func:`drag_short_period_de` is linear in da_dot: (sin u, -cos u) / n)."""
@@ -281,13 +338,30 @@ def mean_roe_map(a, u):
     return jac
 
 
-def model_roe(x, batch: RadarBatch, t_est, j2=True, drag=True, *, model=None, decay=None, ecc=None):
-    """Mean ROE ``(..., m, 6)`` at the measurement epochs of states ``x`` ``(..., 7)`` at ``t_est``:
-    :func:`propagate_state` (a, i of the chief at the batch's latest epoch; J2; the drift rate's growth of the drag
-    ``model``, :func:`drift_growth`, none without one) plus drag's short-periodic de at each epoch's mean argument
-    of latitude (:func:`drag_short_period_de`); ``drag`` False: no drag term. ``decay`` and ``ecc``: the carrier's
-    :func:`chief_decay` and :func:`chief_eccentricity` at ``t_est`` when the caller has them (constants of the
-    batch: a Gauss-Newton fit computes them once)."""
+def model_roe(x: ArrayLike, batch: RadarBatch, t_est: float, j2: bool = True, drag: bool = True, *,
+              model: DragModel | None = None, decay: float | None = None, ecc: tuple | None = None) -> np.ndarray:
+    """Mean ROE at the measurement epochs: :func:`propagate_state` (a, i of the chief at the batch's latest epoch;
+    the drift rate's growth, :func:`drift_growth`) plus drag's short-periodic de at each epoch's mean argument of
+    latitude (:func:`drag_short_period_de`). ``decay``, ``ecc``: constants of the batch, when the caller has them.
+
+    Parameters
+    ----------
+    x : array_like, shape (..., 7)
+        States at ``t_est``.
+    batch : RadarBatch
+        The measurements and the carrier's mean elements.
+    t_est : float
+        The estimate epoch [s].
+    j2, drag : bool
+        With the J2 secular rates; with the drag terms.
+    model, decay, ecc : DragModel, float, tuple, optional
+        The drag model (growth; none without it), :func:`chief_decay` and :func:`chief_eccentricity`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., m, 6)
+        The dimensionless mean ROE.
+    """
     x = np.asarray(x, dtype=float)
     a, inc = _chief_a_inc(batch)
     growth = drift_growth(x, batch, model if drag else None, decay)[..., None]
@@ -304,21 +378,60 @@ def model_roe(x, batch: RadarBatch, t_est, j2=True, drag=True, *, model=None, de
     return roe
 
 
-def predict(x, batch: RadarBatch, t_est, j2=True, drag=True, *, model=None, decay=None, ecc=None):
-    """h(x): modeled [range, az, el] ``(..., m, 3)`` for states ``x`` ``(..., 7)`` at epoch ``t_est``: the mean ROE
-    of :func:`model_roe` observed with :func:`observe`."""
+def predict(x: ArrayLike, batch: RadarBatch, t_est: float, j2: bool = True, drag: bool = True, *,
+            model: DragModel | None = None, decay: float | None = None, ecc: tuple | None = None) -> np.ndarray:
+    """h(x): the mean ROE of :func:`model_roe` observed with :func:`observe`.
+
+    Parameters
+    ----------
+    x : array_like, shape (..., 7)
+        States at ``t_est``.
+    batch : RadarBatch
+        The measurements and the carrier's mean elements.
+    t_est : float
+        The estimate epoch [s].
+    j2, drag : bool
+        With the J2 secular rates; with the drag terms.
+    model, decay, ecc : DragModel, float, tuple, optional
+        The drag model (growth; none without it), :func:`chief_decay` and :func:`chief_eccentricity`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., m, 3)
+        Modeled [range, az, el] [m, rad, rad].
+    """
     roe = model_roe(x, batch, t_est, j2, drag, model=model, decay=decay, ecc=ecc)
     return observe(roe, batch.chief, batch.theta, batch.site_ef, batch.site_enu)
 
 
-def state_steps(a):
+def state_steps(a: float) -> np.ndarray:
     """Finite-difference steps of the 7 states: 1 m of each a*ROE, and 1e-6 m/s of a*da_dot (6 m of a*dl after
     a day), small against the hundreds of meters the look angles need to become nonlinear at LEO ranges."""
     return np.array([1.0] * 6 + [1e-6]) / a
 
 
-def jacobian(x, batch: RadarBatch, t_est, j2=True, drag=True, *, model=None, decay=None, ecc=None):
-    """H = dh/dx ``(m, 3, 7)`` by central differences (h(x + s e_j) - h(x - s e_j)) / 2 s, azimuth wrapped."""
+def jacobian(x: ArrayLike, batch: RadarBatch, t_est: float, j2: bool = True, drag: bool = True, *,
+             model: DragModel | None = None, decay: float | None = None, ecc: tuple | None = None) -> np.ndarray:
+    """H = dh/dx by central differences (h(x + s e_j) - h(x - s e_j)) / 2 s, azimuth wrapped.
+
+    Parameters
+    ----------
+    x : array_like, shape (7,)
+        The state at ``t_est``.
+    batch : RadarBatch
+        The measurements and the carrier's mean elements.
+    t_est : float
+        The estimate epoch [s].
+    j2, drag : bool
+        With the J2 secular rates; with the drag terms.
+    model, decay, ecc : DragModel, float, tuple, optional
+        The drag model (growth; none without it), :func:`chief_decay` and :func:`chief_eccentricity`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (m, 3, 7)
+        H.
+    """
     s = state_steps(_chief_a_inc(batch)[0])
     pert = np.concatenate([np.diag(s), -np.diag(s)]) + np.asarray(x, dtype=float)
     z = predict(pert, batch, t_est, j2, drag, model=model, decay=decay, ecc=ecc)  # (14, m, 3)
@@ -326,11 +439,21 @@ def jacobian(x, batch: RadarBatch, t_est, j2=True, drag=True, *, model=None, dec
     return np.moveaxis(diff / (2.0 * s[:, None, None]), 0, -1)
 
 
-def initial_guess(batch: RadarBatch, t_est, j2=True, drag=True):
+def initial_guess(batch: RadarBatch, t_est: float, j2: bool = True, drag: bool = True) -> np.ndarray:
     """Linear starting point: every measurement inverted to a relative RTN position, then unweighted least squares.
 
     r_rel/a = [R T N]^T (R3(theta)^T look_position(z) - r_chief) / a is linear in x, exactly: the secular
     propagation and the ROE -> RTN map are linear, so its design matrix is the model evaluated on the 7 unit states.
+
+    Parameters
+    ----------
+    batch, t_est, j2, drag
+        As for :func:`model_roe`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (7,)
+        The state.
     """
     a, inc, raan, u = chief_from_kepler(batch.chief)
     rc, vc = chief_position_velocity(a, inc, raan, u)
@@ -364,17 +487,30 @@ def _check(batch: RadarBatch):
         raise ValueError("measurement sigmas must be positive")
 
 
-def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_iterations=20, *, tol=1e-6, prior=None,
-                        drag=True, model=None):
-    """Gauss-Newton weighted least squares of x = [ROE at t_est (6), da_dot] (module docstring).
+def batch_least_squares(batch: RadarBatch, t_est: float | None = None, x0: ArrayLike | None = None, j2: bool = True,
+                        max_iterations: int = 20, *, tol: float = 1e-6, prior: DriftPrior | None = None,
+                        drag: bool = True, model: DragModel | None = None) -> ODResult:
+    """Gauss-Newton weighted least squares of x = [ROE at t_est (6), da_dot] (module docstring); converged when the
+    step's Mahalanobis length sqrt(dx^T H^T W H dx) is below ``tol`` (a fraction of one sigma).
 
-    ``t_est`` defaults to the last measurement epoch; ``x0`` to :func:`initial_guess`; ``prior`` (a
-    :class:`DriftPrior`, already carried to ``t_est``) adds its a priori row at the carrier's semi-major axis of the
-    batch's latest epoch; ``drag`` False leaves out the model's drag terms (module docstring); ``model`` (a
-    :class:`DragModel`) adds the drift rate's growth over the batch (:func:`drift_growth`; none without it).
-    Converged when the step's Mahalanobis length sqrt(dx^T H^T W H dx) is below ``tol`` (a fraction of one
-    sigma). Raises ValueError with the reason for too few or non-finite measurements, an unobservable state
-    (singular normal matrix) or no convergence.
+    Parameters
+    ----------
+    batch : RadarBatch
+        The measurements and the carrier's mean elements.
+    t_est, x0 : float, array_like, optional
+        The estimate epoch [s] (default the last measurement's) and the start (default :func:`initial_guess`).
+    j2, drag : bool
+        With the J2 secular rates; with the model's drag terms.
+    max_iterations, tol : int, float
+        The Gauss-Newton limits.
+    prior, model : DriftPrior, DragModel, optional
+        The a priori row (already carried to ``t_est``); the drift rate's growth (:func:`drift_growth`).
+
+    Returns
+    -------
+    ODResult
+        The solution; ValueError with the reason for too few or non-finite measurements, an unobservable state
+        (singular normal matrix) or no convergence.
     """
     _check(batch)
     t_est = float(np.max(batch.t)) if t_est is None else float(t_est)
@@ -384,7 +520,7 @@ def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_ite
     decay = chief_decay(batch)
     ecc = chief_eccentricity(batch, t_est) if drag and model is not None else None  # constants of the batch
 
-    def whitened(x):
+    def whitened(x: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
         r = measurement_residual(batch.z, predict(x, batch, t_est, j2, drag, model=model, decay=decay,
                                                   ecc=ecc)).reshape(-1) * w
         if prior is None:
@@ -422,9 +558,20 @@ def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_ite
                     u_est=float(chief_est[4] + chief_est[5]), drag=drag)
 
 
-def nees(x_est, x_true, cov):
+def nees(x_est: ArrayLike, x_true: ArrayLike, cov: ArrayLike) -> float:
     """Normalized estimation error squared e^T P^-1 e, e = x_est - x_true (chi-square with dim(x) degrees of
-    freedom for a consistent estimator; Bar-Shalom, Li, Kirubarajan 2001, Sec. 5.4)."""
+    freedom for a consistent estimator; Bar-Shalom, Li, Kirubarajan 2001, Sec. 5.4).
+
+    Parameters
+    ----------
+    x_est, x_true, cov : array_like, shapes (n,), (n,), (n, n)
+        The estimate, the truth and the estimate's covariance.
+
+    Returns
+    -------
+    float
+        The NEES.
+    """
     e = np.asarray(x_est, dtype=float) - np.asarray(x_true, dtype=float)
     return float(e @ np.linalg.solve(np.asarray(cov, dtype=float), e))
 
