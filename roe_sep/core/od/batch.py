@@ -384,16 +384,8 @@ def predict(x: ArrayLike, batch: RadarBatch, t_est: float, j2: bool = True, drag
 
     Parameters
     ----------
-    x : array_like, shape (..., 7)
-        States at ``t_est``.
-    batch : RadarBatch
-        The measurements and the carrier's mean elements.
-    t_est : float
-        The estimate epoch [s].
-    j2, drag : bool
-        With the J2 secular rates; with the drag terms.
-    model, decay, ecc : DragModel, float, tuple, optional
-        The drag model (growth; none without it), :func:`chief_decay` and :func:`chief_eccentricity`.
+    x, batch, t_est, j2, drag, model, decay, ecc
+        As for :func:`model_roe`.
 
     Returns
     -------
@@ -417,15 +409,9 @@ def jacobian(x: ArrayLike, batch: RadarBatch, t_est: float, j2: bool = True, dra
     Parameters
     ----------
     x : array_like, shape (7,)
-        The state at ``t_est``.
-    batch : RadarBatch
-        The measurements and the carrier's mean elements.
-    t_est : float
-        The estimate epoch [s].
-    j2, drag : bool
-        With the J2 secular rates; with the drag terms.
-    model, decay, ecc : DragModel, float, tuple, optional
-        The drag model (growth; none without it), :func:`chief_decay` and :func:`chief_eccentricity`.
+        The state.
+    batch, t_est, j2, drag, model, decay, ecc
+        As for :func:`model_roe`.
 
     Returns
     -------
