@@ -36,9 +36,9 @@ def setup(d, mc, p):
 
 
 def run_heyoka(s1, dv2, b_c, b_d, atm, t_stop, t_end, workers):
-    s = nl.propagate_pairs(s1, 0.0, t_stop, b_c, b_d, atm, MC_ZONALS, MC_TOL, workers)
+    s = nl.propagate_pairs(s1, 0.0, t_stop, b_c, b_d, atmosphere=atm, zonals=MC_ZONALS, tol=MC_TOL, workers=workers)
     s = nl.apply_impulse(s, dv2, np.zeros(len(s), bool))
-    return nl.propagate_pairs(s, t_stop, t_end, b_c, b_d, atm, MC_ZONALS, MC_TOL, workers)
+    return nl.propagate_pairs(s, t_stop, t_end, b_c, b_d, atmosphere=atm, zonals=MC_ZONALS, tol=MC_TOL, workers=workers)
 
 
 def run_scipy(s1, dv2, b_c, b_d, atm, t_stop, t_end):

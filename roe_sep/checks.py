@@ -22,7 +22,7 @@ from .errors import show
 SEED_MAX = 2**32 - 1  # every seed of the project: numpy accepts larger, but one range keeps them reproducible
 
 
-def describe_range(lo=None, hi=None, lo_open=False, hi_open=False, integer=False, unit="") -> str:
+def describe_range(lo=None, hi=None, lo_open=False, hi_open=False, integer=False, *, unit="") -> str:
     """``'a finite number in (0, 10] m/s'``, ``'an integer in [1, 10000000]'``, ``'a finite number >= 0 s'``."""
     kind = "an integer" if integer else "a finite number"
 
@@ -58,7 +58,7 @@ def in_range(value, lo=None, hi=None, lo_open=False, hi_open=False) -> bool:
 
 def check_number(name, value, lo=None, hi=None, *, lo_open=False, hi_open=False, integer=False, unit=""):
     """``value`` if it is a finite number (an int when ``integer``) in range, else ValueError naming ``name``."""
-    allowed = describe_range(lo, hi, lo_open, hi_open, integer, unit)
+    allowed = describe_range(lo, hi, lo_open, hi_open, integer, unit=unit)
     ok = not isinstance(value, bool) and isinstance(value, int if integer else (int, float))
     if not (ok and in_range(value, lo, hi, lo_open, hi_open)):
         raise ValueError(f"{name}: expected {allowed}, got {show(value)}")
@@ -74,7 +74,7 @@ def _parse_float(text):
 
 def finite_float(lo=None, hi=None, *, lo_open=False, hi_open=False, unit=""):
     """argparse ``type=``: a finite float in range (argparse prefixes the option name)."""
-    allowed = describe_range(lo, hi, lo_open, hi_open, False, unit)
+    allowed = describe_range(lo, hi, lo_open, hi_open, False, unit=unit)
 
     def parse(text):
         value = _parse_float(text)
@@ -111,7 +111,7 @@ def seed():
 def number_list(lo=None, hi=None, *, lo_open=False, hi_open=False, unit="", length=None, integer_values=False,
                 max_items=10_000):
     """argparse ``type=``: comma-separated numbers, each in range; ``length`` fixes how many; returns a tuple."""
-    each = describe_range(lo, hi, lo_open, hi_open, integer_values, unit)
+    each = describe_range(lo, hi, lo_open, hi_open, integer_values, unit=unit)
     count = f"{length} comma-separated" if length else "comma-separated"
     allowed = f"{count} values, each {each}"
 

@@ -142,7 +142,7 @@ def contingency_overrides(overrides, contingency):
     return overrides
 
 
-def run_overrides(params=None, duration=None, seed=None, real_time_factor=None, foxglove=None, managed=False,
+def run_overrides(params=None, duration=None, seed=None, real_time_factor=None, foxglove=None, *, managed=False,
                   contingency=None):
     """The per-node parameter overrides of a run's options (``roe-sep run`` and the launch files' arguments):
     ``params`` (a params YAML, :func:`load_overrides`), the sim ``duration`` [s], the run ``seed`` (the simulator's,

@@ -58,7 +58,7 @@ class Truth:
     without one). Built from decoded messages (:meth:`of_messages`) or straight from the serialized messages of
     a fixed layout (:func:`read_truth`): the same values either way."""
 
-    def __init__(self, stamps, roe, a, inc, u, final_roe):
+    def __init__(self, stamps, roe, a, inc, u, *, final_roe):
         self.stamps, self.times = stamps, np.array(stamps, dtype=float)
         self.roe = np.asarray(roe, dtype=float).reshape(-1, 6)
         self.a, self.inc, self.u = a, inc, np.asarray(u, dtype=float)
@@ -75,7 +75,7 @@ class Truth:
         return cls([time_to_sec(m.header.stamp) for m in msgs], [[getattr(m, k) for k in ROE_KEYS] for m in msgs],
                    [m.chief.semi_major_axis for m in msgs], [m.chief.inclination for m in msgs],
                    [m.chief.mean_arg_latitude for m in msgs],
-                   [getattr(msgs[-1], k) for k in ROE_KEYS] if msgs else None)
+                   final_roe=[getattr(msgs[-1], k) for k in ROE_KEYS] if msgs else None)
 
 
 def _truth(truth):
@@ -156,7 +156,7 @@ def _truth_arrays(raws):
     return Truth([s + n * 1e-9 for s, n in zip(arr["header.stamp.sec"].tolist(),
                                                 arr["header.stamp.nanosec"].tolist())],
                  roe, arr["chief.semi_major_axis"].tolist(), arr["chief.inclination"].tolist(),
-                 arr["chief.mean_arg_latitude"], roe[-1].tolist() if len(roe) else None)
+                 arr["chief.mean_arg_latitude"], final_roe=roe[-1].tolist() if len(roe) else None)
 
 
 def truth_at(truth, t, truth_da_dot):
@@ -224,7 +224,7 @@ def planner_model_error(plans, truth, truth_da_dot):
 IC_CHECKS = ("within_run", "along_track", "drift", "ei_parallel", "min_rn_distance", "fov")  # initial_conditions
 
 
-def initial_conditions(truth, plans, ic_burns, truth_da_dot, limits, drift_tolerance=5.0, ei_tolerance_deg=10.0,
+def initial_conditions(truth, plans, ic_burns, truth_da_dot, limits, *, drift_tolerance=5.0, ei_tolerance_deg=10.0,
                        run_end=None):
     """The experiment's initial conditions checked on truth at the IC epoch of the last acquisition plan: mean
     along-track separation in [a_dl_min, a_dl_max], |a da| <= ``drift_tolerance`` m, e/i (anti-)parallel within

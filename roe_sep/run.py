@@ -209,7 +209,7 @@ def wait_for_completion(duration, deployment, timeout, progress):
         rclpy.try_shutdown()
 
 
-def run(config=None, out="out/run", params=None, duration=None, seed=None, timeout=1800.0, domain_id=None,
+def run(config=None, out="out/run", params=None, duration=None, seed=None, *, timeout=1800.0, domain_id=None,
         progress=False, real_time_factor=None, foxglove=None, process_per_node=False, executor="events",
         in_process=False, ground_bridge=True, contingency=None):
     """Run the scenario; returns the report dict (``report['safe']``) and writes it to ``out/report.json``.
@@ -241,13 +241,13 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
     if in_process:
         try:
             reached, reason, code = run_in_process(nodes, params_file, ros_environment(domain_id), out / "logs",
-                                                   sim_duration, timeout, progress, executor)
+                                                   sim_duration, timeout=timeout, progress=progress, executor=executor)
         except Exception as exc:  # noqa: BLE001 -- as below: the runner says what went wrong
             reached, reason, code = False, f"runner error: {type(exc).__name__}: {exc}", 1
         # the recorder was destroyed in order whatever ended the spin: info() tells whether the bag is complete
         report = report_from_bag(bag_dir, out, sim_duration, 0)
-        return _finish(out, report, reached, reason, {"in_process": code}, f"one process ({executor} executor)",
-                       params_file)
+        return _finish(out, report, reached, reason, {"in_process": code},
+                       layout=f"one process ({executor} executor)", params_file=params_file)
     env = ros_environment(domain_id)
     env.update(dds_environment(out, env))  # the processes' DDS profile (out/fastdds.xml): prompt repairs
     deployment = Deployment(out, params_file, env)
@@ -282,7 +282,8 @@ def run(config=None, out="out/run", params=None, duration=None, seed=None, timeo
     if report is None:
         report = report_from_bag(bag_dir, out, sim_duration, codes.get("recorder", codes.get("listeners")))
     return _finish(out, report, reached, reason, codes,
-                   "process_per_node" if process_per_node else f"suites ({executor} executor)", params_file)
+                   layout="process_per_node" if process_per_node else f"suites ({executor} executor)",
+                   params_file=params_file)
 
 
 def interrupted(signum) -> str:
@@ -291,7 +292,7 @@ def interrupted(signum) -> str:
     return "interrupted (Ctrl-C)" if signum == signal.SIGINT else f"interrupted ({signal.Signals(signum).name})"
 
 
-def _finish(out, report, reached, reason, codes, layout, params_file):
+def _finish(out, report, reached, reason, codes, *, layout, params_file):
     """The run's outcome into its report, written to ``out/report.json``; returns the report."""
     report["run"].update({"completed": reached, "reason": reason, "exit_codes": codes, "layout": layout,
                           "params_file": str(params_file)})
@@ -303,7 +304,7 @@ def _finish(out, report, reached, reason, codes, layout, params_file):
     return report
 
 
-def run_in_process(nodes, params_file, env, log_dir, duration, timeout, progress=False, executor="events"):
+def run_in_process(nodes, params_file, env, log_dir, duration, *, timeout, progress=False, executor="events"):
     """Every node of ``nodes`` in this process, on one executor (:func:`roe_sep.nodes.spin.serve`, as a suite), with
     an observer node that ends the spin once the simulator reports the scenario complete or aborted on
     ``/diagnostics`` (the drain then still hands the listeners what was delivered); the recorder is destroyed
@@ -317,7 +318,7 @@ def run_in_process(nodes, params_file, env, log_dir, duration, timeout, progress
         os.environ[key] = env[key]
     os.environ.pop("ROS_LOCALHOST_ONLY", None)
     try:
-        return _run_in_process(nodes, params_file, log_dir, duration, timeout, progress, executor)
+        return _run_in_process(nodes, params_file, log_dir, duration, timeout, progress=progress, executor=executor)
     finally:
         for key, value in before.items():
             if value is None:
@@ -326,7 +327,7 @@ def run_in_process(nodes, params_file, env, log_dir, duration, timeout, progress
                 os.environ[key] = value
 
 
-def _run_in_process(nodes, params_file, log_dir, duration, timeout, progress, executor):
+def _run_in_process(nodes, params_file, log_dir, duration, timeout, *, progress, executor):
     import rclpy.node
     from diagnostic_msgs.msg import DiagnosticArray
     from rosgraph_msgs.msg import Clock

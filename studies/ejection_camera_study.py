@@ -40,18 +40,20 @@ def run(seed, f1=None):
     d = design(scenario.separation)
     raan = float(raan_from_ltan(sim["ltan_hours"].default, julian_date(sim["epoch_utc"].default)))
     cont = None if f1 is None else contingency_from_dict({"name": "spl_weak", "spl_fraction": f1})
-    world = dispersed_truth(scenario, d, raan, math.radians(sim["u0_deg"].default), seed, True, "nonlinear", True,
-                            sim["ejection_delay_max"].default, cont)
+    world = dispersed_truth(scenario, d, raan, math.radians(sim["u0_deg"].default), seed, disperse=True,
+                            dynamics="nonlinear", j2=True,
+                            ejection_delay_max=sim["ejection_delay_max"].default, contingency=cont)
     period = sim["camera_period"].default
     samples = {}
     truth = SimulatedTruth(world.model, period, 10.0, 1000.0,
                            lambda e, s: samples.update({round(t, 3): (s[0][j], s[2][0][j]) for j, t in enumerate(e)}),
-                           lambda: None)
+                           on_hour=lambda: None)
     truth.advance(period)
     kep = samples[round(period, 3)][0]
     t_ej = period + time_to_arg_latitude(kep[4] + kep[5], d.u1, kep[0], kep[2])
     chief = propagate_chief(kep, t_ej - period)
-    ex = BurnExecution(truth, world.errors, world.ejection_delay, False, lambda level, text: None, world.contingency)
+    ex = BurnExecution(truth, world.errors, world.ejection_delay, False, lambda level, text: None,
+                       contingency=world.contingency)
     ex.eject(t_ej, d.dv1_rtn, "picosatellite", "ejection")
     burn = ex.take(ex.due(math.inf)[0])
     truth.advance(burn.epoch)

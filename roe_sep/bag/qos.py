@@ -26,7 +26,7 @@ def _ns(t) -> int:
 
 
 def profile_dict(history="unknown", depth=0, reliability="reliable", durability="volatile", deadline_ns=INFINITE_NS,
-                 lifespan_ns=INFINITE_NS, liveliness="automatic", lease_ns=INFINITE_NS, avoid_ros_ns=False) -> dict:
+                 *, lifespan_ns=INFINITE_NS, liveliness="automatic", lease_ns=INFINITE_NS, avoid_ros_ns=False) -> dict:
     return {"history": history, "depth": int(depth), "reliability": reliability, "durability": durability,
             "deadline": _time(deadline_ns), "lifespan": _time(lifespan_ns), "liveliness": liveliness,
             "liveliness_lease_duration": _time(lease_ns), "avoid_ros_namespace_conventions": bool(avoid_ros_ns)}

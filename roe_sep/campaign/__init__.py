@@ -53,7 +53,7 @@ def check_settings(out: Path, current: dict):
     path.write_text(jsonutil.dumps(current, indent=2) + "\n", encoding="utf-8")
 
 
-def run_campaign(runs, seed, out, workers=1, scheduler=None, config=None, overrides=None, duration=None,
+def run_campaign(runs, seed, out, workers=1, scheduler=None, *, config=None, overrides=None, duration=None,
                  timeout=1800.0, domains=(1, 100), retry_failed=False, progress=False, open_loop_samples=20000,
                  figures=True, client_factory=None, ccsds=False, bags=True):
     """Run the missing runs of seeds ``seed .. seed + runs - 1`` on Dask, append each row as it finishes, and return
@@ -69,8 +69,10 @@ def run_campaign(runs, seed, out, workers=1, scheduler=None, config=None, overri
     todo = [s for s in seeds if s not in done or (retry_failed and done[s]["status"] != "ok")]
     executed = 0
     if todo:
-        executed = _execute(todo, out, table, workers, scheduler, config, overrides, duration, timeout, domains,
-                            progress, runs - len(todo), runs, client_factory, ccsds, bags)
+        executed = _execute(todo, out, table, workers, scheduler, config=config, overrides=overrides,
+                            duration=duration, timeout=timeout, domains=domains,
+                            progress=progress, initial=runs - len(todo), total=runs, client_factory=client_factory,
+                            ccsds=ccsds, bags=bags)
     rows_by_seed = table.read()
     rows = [rows_by_seed[s] for s in seeds if s in rows_by_seed]
     rep = {"seeds": [seed, seed + runs - 1], "executed_now": executed, "skipped_done": runs - len(todo),
@@ -93,7 +95,7 @@ def _mean(values):
     return sum(vals) / len(vals) if vals else None
 
 
-def _execute(todo, out, table, workers, scheduler, config, overrides, duration, timeout, domains, progress,
+def _execute(todo, out, table, workers, scheduler, *, config, overrides, duration, timeout, domains, progress,
              initial, total, client_factory, ccsds=False, bags=True):
     from distributed import as_completed
 

@@ -40,7 +40,7 @@ def _atmospheres(text):
     return list(dict.fromkeys(values))
 
 
-def propagate_report(roe_m, altitude, inc_deg, u_deg, days, step, model, scenario):
+def propagate_report(roe_m, altitude, inc_deg, u_deg, days, *, step, model, scenario):
     """Propagate a*ROE [m] from a circular chief (mean elements) with one model; SI output."""
     from ..core.constants import SECONDS_PER_DAY
     from ..core.relmotion.dynamics import sun_synchronous_inclination
@@ -72,7 +72,7 @@ def propagate_report(roe_m, altitude, inc_deg, u_deg, days, step, model, scenari
         from ..core.truth.nonlinear import mean_roe, pair_state, propagate_pair
 
         s0 = pair_state(chief, roe_to_kepler(chief, roe))
-        out = mean_roe(propagate_pair(s0, 0.0, times, (), b_c, b_d, case.atmosphere)) * a
+        out = mean_roe(propagate_pair(s0, 0.0, times, (), b_c, b_deputy=b_d, atmosphere=case.atmosphere)) * a
     else:
         from ..core.relmotion.dynamics import drag_da_dot, propagate
 
@@ -85,8 +85,8 @@ def propagate_report(roe_m, altitude, inc_deg, u_deg, days, step, model, scenari
 def cmd_propagate(args):
     from ..core.config import load_scenario
 
-    rep = propagate_report(args.roe, args.alt, args.inc, args.u, args.days, args.step, args.model,
-                           load_scenario(args.config))
+    rep = propagate_report(args.roe, args.alt, args.inc, args.u, args.days, step=args.step, model=args.model,
+                           scenario=load_scenario(args.config))
     emit(rep, args.json, lambda r: print_propagate(r, args.step))
     return 0
 
@@ -104,7 +104,7 @@ def print_propagate(rep, step, out=None):
         w(f"  {t[k] / 3600:8.2f}" + "".join(f"{x:14.2f}" for x in rep["roe"][k]) + "\n")
 
 
-def validate_report(scenario, days, mc_samples=0, p_values=None, seed=None, atmospheres=("normalised", "msis"),
+def validate_report(scenario, days, mc_samples=0, p_values=None, seed=None, *, atmospheres=("normalised", "msis"),
                     f107=140.0, f107a=140.0, ap=15.0):
     """The model-error table (item 3) for the double- and multi-impulse cases under each truth atmosphere
     (``normalised``: the seeds' density as the orbit mean; ``msis``: NRLMSIS 2.0 at F10.7 ``f107``, its 81-day
@@ -195,8 +195,9 @@ def cmd_validate(args):
         if value is not None and not args.mc:
             raise ValueError(f"{name} applies to the Monte Carlo only: give --mc N (N >= 1) with it")
 
-    rep = validate_report(load_scenario(args.config), args.days, args.mc or 0, args.p, args.seed, args.atmosphere,
-                          args.f107, args.f107a, args.ap)
+    rep = validate_report(load_scenario(args.config), args.days, args.mc or 0, args.p, args.seed,
+                          atmospheres=args.atmosphere,
+                          f107=args.f107, f107a=args.f107a, ap=args.ap)
     emit(rep, args.json, print_validate)
     return 0
 

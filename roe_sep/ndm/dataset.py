@@ -134,8 +134,8 @@ def plan_opm(plan, truth: Truth, opts: Options, frame=frames.LOCAL_FRAME, label=
     comments = [f"roe_sep {label}: strategy {plan.strategy}, computed at sim time {time_to_sec(plan.header.stamp)!r} s",
                 "carrier state: mean near-circular orbit of the simulator (mean of date, precessed IAU 1976)",
                 f"MAN_DELTA_MASS from the rocket equation, m = {opts.carrier_mass!r} kg, Isp = {opts.carrier_isp!r} s"]
-    return build_opm(opts.carrier_name, opts.carrier_name, opts.epoch_utc, t0, r, v,
-                     _burns(carrier, truth, opts, frame), spacecraft(opts), comments)
+    return build_opm(opts.carrier_name, opts.carrier_name, opts.epoch_utc, t0, r, v=v,
+                     burns=_burns(carrier, truth, opts, frame), spacecraft=spacecraft(opts), comments=comments)
 
 
 def executed_opm(run: RunMessages, truth: Truth, opts: Options):
@@ -147,9 +147,10 @@ def executed_opm(run: RunMessages, truth: Truth, opts: Options):
     ms = [m for _, m in done]
     t0 = time_to_sec(ms[0].epoch)
     r, v = frames.chief_state(truth.chief_at(t0)[0], opts.epoch_utc, t0)
-    return build_opm(opts.carrier_name, opts.carrier_name, opts.epoch_utc, t0, r, v,
-                     _burns(ms, truth, opts, frames.LOCAL_FRAME), spacecraft(opts),
-                     ["roe_sep: carrier burns as executed by the simulator (execution and attitude errors included)"])
+    return build_opm(opts.carrier_name, opts.carrier_name, opts.epoch_utc, t0, r, v=v,
+                     burns=_burns(ms, truth, opts, frames.LOCAL_FRAME), spacecraft=spacecraft(opts),
+                     comments=["roe_sep: carrier burns as executed by the simulator (execution and attitude errors "
+                               "included)"])
 
 
 def _ejection_epoch(run: RunMessages, truth: Truth):

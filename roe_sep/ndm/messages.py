@@ -97,7 +97,7 @@ class SpacecraftParameters:
     solar_rad_coeff: float = 0.0
 
 
-def build_opm(object_name, object_id, epoch_utc, t, r, v, burns, spacecraft: SpacecraftParameters, comments=()):
+def build_opm(object_name, object_id, epoch_utc, t, r, *, v, burns, spacecraft: SpacecraftParameters, comments=()):
     """OPM 2.0: the spacecraft's EME2000 state [m, m/s] at sim time ``t``, its parameters and its maneuvers
     (:class:`Burn`)."""
     meta = nd.OpmMetadata(object_name=object_name, object_id=object_id, center_name=frames.CENTER,

@@ -8,7 +8,7 @@ from .convert import sec_to_time
 OK, WARN, ERROR = DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR
 
 
-def publish_status(node, publisher, level, message, values=None, hardware_id="roe_sep", part="", stamp=None):
+def publish_status(node, publisher, level, message, values=None, *, hardware_id="roe_sep", part="", stamp=None):
     """Publish one DiagnosticStatus named ``roe_sep/<node name>[/<part>]`` with ``values`` as key/value strings.
 
     Stamped with ``stamp`` [s] if given, else the sim time of the node's current lockstep step, else its clock."""

@@ -80,7 +80,7 @@ class GroundBridgeNode(Node):
         sigma_range = declare(self, "default_sigma_range_m")
         sigma_angle = declare(self, "default_sigma_angle_deg")
 
-        self.opts = self._check(out, epoch, scenario_file, isp, poll, sigma_range, sigma_angle)
+        self.opts = self._check(out, epoch, scenario_file, isp, poll, sigma_range=sigma_range, sigma_angle=sigma_angle)
         self.out = Path(out)
         self.out.mkdir(parents=True, exist_ok=True)
         self.sigma = (float(sigma_range), math.radians(sigma_angle))
@@ -96,7 +96,7 @@ class GroundBridgeNode(Node):
         self._status(OK, f"writing {self.fmt} files to {self.out}" +
                      (f", watching {self.input} for TDM files" if self.input else ""))
 
-    def _check(self, out, epoch, scenario_file, isp, poll, sigma_range, sigma_angle):
+    def _check(self, out, epoch, scenario_file, isp, poll, *, sigma_range, sigma_angle):
         """Check the parameters (ParameterError naming the first bad one); the set's options."""
         try:
             frames.parse_epoch(epoch)

@@ -94,7 +94,7 @@ class Lockstep:
         self.in_batch = False  # the callbacks of a round's messages are running
         # the step messages of every round, decoded from their bytes (subscribe_decoded: the same values, cheaper)
         subscribe_decoded(node, LockstepStep, interfaces.LOCKSTEP_STEP_TOPIC, self.on_step_msg, STEP_QOS,
-                          lambda exc: self.undecodable(interfaces.LOCKSTEP_STEP_TOPIC, exc))
+                          on_error=lambda exc: self.undecodable(interfaces.LOCKSTEP_STEP_TOPIC, exc))
         self.ack_pub = node.create_publisher(LockstepAck, interfaces.LOCKSTEP_ACK_TOPIC, ACK_QOS) \
             if acknowledge else None
         self._ack_msg = LockstepAck()  # refilled for every acknowledgement (_ack)
@@ -103,7 +103,7 @@ class Lockstep:
         self._ack_topics = []
 
     # ------------------------------------------------------------------ declaration
-    def subscribe(self, msg_type, topic, callback, qos, stamp=header_stamp, what=None, raw=False):
+    def subscribe(self, msg_type, topic, callback, qos, stamp=header_stamp, *, what=None, raw=False):
         """Subscribe ``callback`` to ``topic`` through the lockstep buffer (inputs are ranked in declaration
         order for messages with equal stamps). Every message is validated first (:mod:`.validate`); a bad one,
         or one whose callback raises, is reported on ``/diagnostics`` and the node goes on.
@@ -123,7 +123,7 @@ class Lockstep:
         take = lambda m, tp=topic: self._on_input(tp, m)  # noqa: E731
         if raw:
             self.subscriptions[topic] = subscribe_decoded(self.node, msg_type, topic, take, deep,
-                                                          lambda exc, tp=topic: self.undecodable(tp, exc))
+                                                          on_error=lambda exc, tp=topic: self.undecodable(tp, exc))
         else:
             self.subscriptions[topic] = self.node.create_subscription(msg_type, topic, take, deep)
         return self.subscriptions[topic]
@@ -282,7 +282,7 @@ class Coordinator:
         self.lockstep.on_round_done = self.round_check
         self.step_pub = sim.create_publisher(LockstepStep, interfaces.LOCKSTEP_STEP_TOPIC, STEP_QOS)
         subscribe_decoded(sim, LockstepAck, interfaces.LOCKSTEP_ACK_TOPIC, self.on_ack, ACK_QOS,
-                          lambda exc: self.lockstep.undecodable(interfaces.LOCKSTEP_ACK_TOPIC, exc))
+                          on_error=lambda exc: self.lockstep.undecodable(interfaces.LOCKSTEP_ACK_TOPIC, exc))
         self.participant_set = frozenset(participants)
         self.acks = {}  # participant -> its latest LockstepAck
         self.acked = set()  # the participants whose latest acknowledgement is of the current round (_acked)

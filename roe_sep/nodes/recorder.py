@@ -92,7 +92,7 @@ class RecorderNode(Node):
         self.last_log = {}  # topic -> last log time [ns] (monotone per channel)
         self.step_time = None  # ns, sim time of the latest step
         subscribe_decoded(self, LockstepStep, interfaces.LOCKSTEP_STEP_TOPIC, self.on_step, STEP_READER,
-                          lambda exc: self._error(f"step message dropped: cannot be decoded: {exc}"))
+                          on_error=lambda exc: self._error(f"step message dropped: cannot be decoded: {exc}"))
         wall = Clock(clock_type=ClockType.STEADY_TIME)
         self.create_timer(DISCOVERY_PERIOD, self.discover, clock=wall)
         self.create_timer(float(self.flush_period), self.flush, clock=wall)

@@ -61,11 +61,11 @@ class Knowledge:
         while no burn is added (an assessment per truth sample: one propagation each, the same values)."""
         burns = [b for b in executed if b.epoch > self.t]
         if self.arcs is None or self.arcs[0] != burns:
-            self.arcs = (burns, burn_segments(self.roe, self.t, burns, self.chief, j2, self.da_dot))
+            self.arcs = (burns, burn_segments(self.roe, self.t, burns, self.chief, j2, da_dot=self.da_dot))
         arcs = self.arcs[1]
         if not t_now >= max(self.t, arcs[-1][0]):  # before t (an error) or before a burn: as it always was
             return state_at(self.roe, self.t, burns, t_now, self.chief, j2, self.da_dot)
-        return segments_at(arcs[-1:], np.array([t_now]), self.t, self.chief, j2, self.da_dot)[0]
+        return segments_at(arcs[-1:], np.array([t_now]), self.t, self.chief, j2, da_dot=self.da_dot)[0]
 
 
 def chief_of(msg: RelativeOrbitalElements, t):
@@ -217,8 +217,9 @@ class SafetyMonitorNode(ManagedNode):
             self.estimate = Knowledge(roe, t, chief_of(est, t), da_dot)
             cov = np.asarray(est.covariance, dtype=float).reshape(6, 6)
             self.detect("OD estimate", lambda: self.watch.od(
-                time_to_sec(od.header.stamp), t, roe, cov, self.estimate.chief, da_dot, od.residual_rms,
-                od.measurements))
+                time_to_sec(od.header.stamp), t, roe, cov, self.estimate.chief, da_dot=da_dot,
+                residual_rms=od.residual_rms,
+                measurements=od.measurements))
             self.last_estimate = -math.inf
             self.assess_estimate(t)
             self.recheck_pending()
@@ -280,7 +281,7 @@ class SafetyMonitorNode(ManagedNode):
             # an empty drift-stop plan withdraws the drift-stop (the planner's hold): the drift checked as it is
             t_end = max((b.epoch for b in burns), default=max(k.t, time_to_sec(plan.header.stamp))) \
                 + self.limits.plan_horizon
-            res = assess(k.roe, k.t, k.chief, self.limits, done + future, t_end, self.j2, k.da_dot)
+            res = assess(k.roe, k.t, k.chief, self.limits, done + future, t_end=t_end, j2=self.j2, da_dot=k.da_dot)
         except ValueError as exc:
             self.reject(f"plan on {topic}", exc)
             res = None

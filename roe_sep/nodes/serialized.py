@@ -125,7 +125,7 @@ def decoder_for(msg_type):
     return dec if dec.fast is not None else None
 
 
-def subscribe_decoded(node, msg_type, topic, callback, qos, on_error):
+def subscribe_decoded(node, msg_type, topic, callback, qos, *, on_error):
     """``node.create_subscription(msg_type, topic, callback, qos)`` for a topic read at every step of a run: the
     bytes taken raw and decoded by :func:`decoder_for` (typed when the type has no compiled decoder). The compiled
     decoder reads the plain little-endian CDR (XCDR1, :data:`HEADER`) that Fast DDS writes; other bytes (another

@@ -103,15 +103,17 @@ class SimNode(Node):
         except ConfigError as exc:
             raise ParameterError(f"parameter 'contingency': {exc}") from exc
         self.world = world = dispersed_truth(scenario, carrier, raan, math.radians(u0_deg), self.seed,
-                                             self.disperse, self.dynamics, self.j2, self.ejection_delay_max,
-                                             chosen)
+                                             disperse=self.disperse, dynamics=self.dynamics, j2=self.j2,
+                                             ejection_delay_max=self.ejection_delay_max,
+                                             contingency=chosen)
         self.truth = SimulatedTruth(world.model, self.truth_period, self.distance_step, self.departure,
-                                    self._publish_truth, lambda: self.status(OK, "running"))
+                                    self._publish_truth, on_hour=lambda: self.status(OK, "running"))
         # the carrier camera: its own stream of the seed, so a run draws what it drew without it
         self.truth.camera = Camera(camera_period, camera_sigma, camera_duration, camera_rng(self.seed),
                                    self._publish_bearings)
         self.execution = BurnExecution(self.truth, world.errors, world.ejection_delay, self.require_approval,
-                                       lambda level, text: self.status(LEVELS[level], text), world.contingency)
+                                       lambda level, text: self.status(LEVELS[level], text),
+                                       contingency=world.contingency)
         self.done = False
         self.waiting_since = time.monotonic()
         self._interface(tick_period)

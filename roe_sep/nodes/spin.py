@@ -171,7 +171,7 @@ def wait_for_acknowledgments(nodes, budget=ACK_WAIT) -> bool:
     return acked
 
 
-def serve(factories, args=None, make_executor=SingleThreadedExecutor, until=None, errors=None, stopped=None,
+def serve(factories, args=None, make_executor=SingleThreadedExecutor, until=None, errors=None, *, stopped=None,
           leaving=False) -> int:
     """The whole life of a process: :func:`init`; construct the nodes of ``factories`` (``[(label, factory)]``, in
     order); the nodes on one executor from ``make_executor()``; :func:`spin` with the drain (until a signal, or

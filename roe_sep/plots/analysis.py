@@ -111,7 +111,7 @@ def cluster_figures(prog, out_dir, samples=2000, seed=0):
                 q = np.quantile(dist, [1.0 - cfg.p_required, 0.5, cfg.p_required], axis=0)
                 line, = ax.plot(t, q[1] / 1e3, label=f"{cfg.sats[i].name}-{cfg.sats[j].name} median")
                 ax.fill_between(t, q[0] / 1e3, q[2] / 1e3, color=line.get_color(), alpha=0.2)
-                bound = pair_distance_bound(cfg, cfg.sats[i], prog.delays[i], cfg.sats[j], prog.delays[j], t)
+                bound = pair_distance_bound(cfg, cfg.sats[i], prog.delays[i], cfg.sats[j], prog.delays[j], t=t)
                 ax.plot(t, bound / 1e3, ls="--", color=line.get_color(), lw=0.8)
         ax.axhline(cfg.r_max / 1e3, color="k", ls=":", lw=0.8)
         ax.set_xlabel("time from the start of the program [s]")

@@ -94,7 +94,7 @@ def test_an_incomplete_run_is_unsafe_only_on_a_violation_seen(tmp_path):
     assert "min_distance" in wide["violations_seen"] and not wide["criteria"]["min_distance"]
     early = {"safe": False, "criteria": {"keep_out": False}, "violations_seen": [], "run": {}}
     for rep, verdict in ((early, None), ({**wide, "run": {}}, False)):
-        out = _finish(tmp_path, rep, False, "interrupted (SIGTERM)", {}, "suites", "p.yaml")
+        out = _finish(tmp_path, rep, False, "interrupted (SIGTERM)", {}, layout="suites", params_file="p.yaml")
         assert out["safe"] is verdict and json.loads((tmp_path / "report.json").read_text())["safe"] is verdict
 
 

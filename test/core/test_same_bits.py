@@ -46,7 +46,7 @@ def old_rtn_position(roe, u):
 
 def old_propagate(roe, dt, a, inc, j2=True, da_dot=0.0):
     r = np.asarray(roe, dtype=float)
-    return np.stack(propagate_elements(np.moveaxis(r, -1, 0), dt, a, inc, j2, da_dot), axis=-1)
+    return np.stack(propagate_elements(np.moveaxis(r, -1, 0), dt, a, inc, j2, da_dot=da_dot), axis=-1)
 
 
 def old_assess(roe0, t0, chief, limits, burns=(), t_end=None, j2=True, da_dot=0.0):
@@ -56,16 +56,17 @@ def old_assess(roe0, t0, chief, limits, burns=(), t_end=None, j2=True, da_dot=0.
     t_end = t0 + limits.window if t_end is None else t_end
     n_samples = max(2, int(limits.samples_per_orbit * (t_end - t0) / orbital_period(a)) + 1)
     times = np.linspace(t0, t_end, n_samples)
-    roes = trajectory(roe0, t0, burns, times, chief, j2, da_dot)
+    roes = trajectory(roe0, t0, burns, times, chief, j2=j2, da_dot=da_dot)
     pos = old_rtn_position(roes, chief.u_at(times, j2))
     dist = np.linalg.norm(pos, axis=-1) * a
     outside = np.nonzero(dist >= limits.keep_out)[0]
     returning = dist[outside[0]:] if outside.size else dist
     burn_epochs = [b.epoch for b in burns if b.epoch >= t0]
     last_burn = max(burn_epochs, default=t0)
-    start = trajectory(roe0, t0, burns, np.array([last_burn]), chief, j2, da_dot)[0] if burn_epochs else roes[0]
-    crossing, _ = nearest_crossing(start[None], chief.u_at(last_burn, j2), t_end - last_burn, a, chief.inc, j2,
-                                   da_dot)  # (1, 6): the batched form
+    start = trajectory(roe0, t0, burns, np.array([last_burn]), chief, j2=j2,
+                       da_dot=da_dot)[0] if burn_epochs else roes[0]
+    crossing, _ = nearest_crossing(start[None], chief.u_at(last_burn, j2), t_end - last_burn, a, chief.inc, j2=j2,
+                                   da_dot=da_dot)  # (1, 6): the batched form
     end = roes[-1] * a
     res = Assessment(approaching=bool(approaching(end)), along_track_separation=float(roes[0][1] * a),
                      distance=float(dist[0]), min_distance=float(returning.min()),
@@ -203,8 +204,9 @@ def test_nearest_crossing_of_one_state_is_the_batched_one():
         roe, _, chief, j2, dad = random_case(rng, k)
         u0, dur = rng.uniform(-10.0, 10.0), rng.uniform(0.0, 3e4)
         t_min = None if k % 2 else rng.uniform(0.0, 100.0)
-        one = nearest_crossing(roe, u0, dur, chief.a, chief.inc, j2, dad, t_min, k % 4)
-        batch = nearest_crossing(roe[None], u0, dur, chief.a, chief.inc, j2, dad, t_min, k % 4)
+        one = nearest_crossing(roe, u0, dur, chief.a, chief.inc, j2=j2, da_dot=dad, t_min=t_min, iterations=k % 4)
+        batch = nearest_crossing(roe[None], u0, dur, chief.a, chief.inc, j2=j2, da_dot=dad, t_min=t_min,
+                                 iterations=k % 4)
         assert same(one[0], batch[0][0]) and same(one[1], batch[1][0])
 
 
@@ -216,7 +218,8 @@ def test_assess_is_the_stacked_trajectory_assessment():
         burns = [] if k % 5 else [Burn(t0 + rng.uniform(-100.0, 3000.0), tuple(rng.standard_normal(3) * 0.05))
                                   for _ in range(1 + k % 3)]
         t_end = None if k % 7 else t0 + rng.uniform(0.0, 5e4)
-        new, old = assess(roe, t0, chief, limits, burns, t_end, j2, dad), old_assess(roe, t0, chief, limits, burns,
+        new, old = assess(roe, t0, chief, limits, burns, t_end=t_end, j2=j2,
+                          da_dot=dad), old_assess(roe, t0, chief, limits, burns,
                                                                                        t_end, j2, dad)
         assert new.failed == old.failed
         for name in Assessment.__dataclass_fields__:

@@ -584,7 +584,8 @@ def test_the_set_validates_against_the_schema_of_the_ndm_models(exported, run):
 def _small_opm():
     sc = ndm.SpacecraftParameters(140.0, 0.48, 2.3)
     burn = ndm.Burn(10.0, np.array([0.0, 0.01, 0.0]), "RTN", ndm.delta_mass([0.0, 0.01, 0.0], 140.0, 60.0))
-    return ndm.build_opm("CARRIER", "CARRIER", EPOCH, 10.0, [A, 0.0, 0.0], [0.0, 7600.0, 0.0], [burn], sc)
+    return ndm.build_opm("CARRIER", "CARRIER", EPOCH, 10.0, [A, 0.0, 0.0], v=[0.0, 7600.0, 0.0], burns=[burn],
+                         spacecraft=sc)
 
 
 @pytest.mark.parametrize("what, edit, match", [

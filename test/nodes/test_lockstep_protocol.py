@@ -266,7 +266,8 @@ def test_bytes_of_another_encapsulation_go_to_rclpys_deserialization(monkeypatch
     monkeypatch.setattr(serialized, "decoder_for", lambda t: lambda d: compiled.append(d) or real(d))
     monkeypatch.setattr(rclpy.serialization, "deserialize_message", lambda d, t: by_rclpy.append(d) or t(a_da=1.0))
     node, got, errors = RawNode(), [], []
-    serialized.subscribe_decoded(node, RelativeOrbitalElements, "/truth", got.append, qos_of(10), errors.append)
+    serialized.subscribe_decoded(node, RelativeOrbitalElements, "/truth", got.append, qos_of(10),
+                                 on_error=errors.append)
     deliver = node.subs["/truth"][0]
     data = serialize_message(truth_msg(60.0))
     other = [b"\x00\x00" + data[2:], b"\x00\x07" + data[2:]]  # big-endian CDR, XCDR2 little-endian headers

@@ -62,7 +62,7 @@ MASK = math.radians(10.0)
 def truth(t):
     """Truth ROE and chief elements at times ``t`` (the test's own model of the simulator)."""
     t = np.atleast_1d(np.asarray(t, dtype=float))
-    return trajectory(ROE0, 0.0, [Burn(BURN_T, BURN_DV)], t, CHIEF, True, DA_DOT), propagate_chief(KEP0, t)
+    return trajectory(ROE0, 0.0, [Burn(BURN_T, BURN_DV)], t, CHIEF, j2=True, da_dot=DA_DOT), propagate_chief(KEP0, t)
 
 
 def truth_msg(t, roe, kep):

@@ -11,7 +11,12 @@ the same solution to the bit (``test/core/acquisition/test_acquisition.py`` chec
 acquisition problems). Where that binding is not there (another scipy), it falls back to ``linprog`` itself.
 """
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+
+if TYPE_CHECKING:  # scipy.sparse is imported at the solve, not at import (the nodes import the planner's config)
+    from scipy import sparse
 
 #: HiGHS's presolve, on as in linprog (``bench/whatif_lp_presolve.py`` measures a campaign with it off)
 PRESOLVE = "on"
@@ -44,7 +49,7 @@ def _core():
     return core if hasattr(core, "_Highs") and hasattr(core, "kHighsInf") else None
 
 
-def _linprog(cost, a_ub, b_ub, a_eq, b_eq, lo, hi):
+def _linprog(cost, a_ub, b_ub, a_eq, b_eq, *, lo, hi):
     from scipy.optimize import linprog
 
     res = linprog(cost, A_ub=a_ub, b_ub=b_ub, A_eq=a_eq, b_eq=b_eq, bounds=np.column_stack([lo, hi]),
@@ -52,16 +57,32 @@ def _linprog(cost, a_ub, b_ub, a_eq, b_eq, lo, hi):
     return LPResult(res.status, res.message, res.x if res.status == _OPTIMAL else None, res.fun, res.nit)
 
 
-def solve_lp(cost, a_ub, b_ub, a_eq, b_eq, lo, hi, use_linprog=False):
+def solve_lp(cost: np.ndarray, a_ub: "sparse.spmatrix", b_ub: np.ndarray, a_eq: "sparse.spmatrix", b_eq: np.ndarray,
+             *, lo: np.ndarray, hi: np.ndarray, use_linprog: bool = False) -> LPResult:
     """min cost @ x subject to a_ub x <= b_ub, a_eq x = b_eq, lo <= x <= hi (sparse a_ub, a_eq; linprog's form).
 
     The model is linprog's: rows ``vstack(a_ub, a_eq)`` in CSC, row bounds (-inf, b_ub) then (b_eq, b_eq), HiGHS's
     infinity for infinite bounds; the options are linprog(method="highs")'s (presolve on, dual simplex, no output).
-    ``use_linprog``: solve through ``linprog`` itself (tests compare the two).
+
+    Parameters
+    ----------
+    cost : numpy.ndarray, shape (n,)
+        The objective.
+    a_ub, b_ub, a_eq, b_eq : scipy.sparse matrix, numpy.ndarray
+        The inequality and equality rows ``(m, n)`` and their right-hand sides ``(m,)``.
+    lo, hi : numpy.ndarray, shape (n,)
+        The variable bounds (infinite allowed).
+    use_linprog : bool
+        Solve through ``linprog`` itself (tests compare the two).
+
+    Returns
+    -------
+    LPResult
+        Status, message, solution, objective and iterations.
     """
     core = None if use_linprog else _core()
     if core is None:
-        return _linprog(cost, a_ub, b_ub, a_eq, b_eq, lo, hi)
+        return _linprog(cost, a_ub, b_ub, a_eq, b_eq, lo=lo, hi=hi)
     from scipy import sparse
 
     a = sparse.csc_array(sparse.vstack((a_ub, a_eq)))

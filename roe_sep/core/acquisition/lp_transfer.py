@@ -18,10 +18,12 @@ them predict exactly what :func:`~roe_sep.core.relmotion.trajectory.trajectory` 
 import math
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..relmotion.dynamics import arg_latitude_rate, propagate
 from ..relmotion.maneuvers import delta_roe
 from ..relmotion.orbit import mean_motion
+from ..relmotion.trajectory import Chief
 
 AXES = {"R": 0, "T": 1, "N": 2}
 """RTN axis letters -> column of ``dv_rtn``."""
@@ -30,7 +32,7 @@ MAX_GRID_EPOCHS = 2500
 """Guard on the candidate grid (about 10 days at 16 per orbit): the path-constraint block is O(K^2) in memory."""
 
 
-def parse_axes(axes):
+def parse_axes(axes: str) -> tuple[int, ...]:
     """RTN axis letters, e.g. ``"TN"``, -> sorted tuple of dv columns ``(1, 2)``; raises ValueError if malformed."""
     if not isinstance(axes, str) or not axes:
         raise ValueError(f"axes must be a non-empty string of R, T, N, got {axes!r}")
@@ -40,10 +42,27 @@ def parse_axes(axes):
     return tuple(sorted(AXES[c] for c in letters))
 
 
-def grid_epochs(t_start, t_end, chief, per_orbit, j2=True):
+def grid_epochs(t_start: float, t_end: float, chief: Chief, per_orbit: int, j2: bool = True) -> np.ndarray:
     """Candidate burn epochs [s] in ``[t_start, t_end]``: where the chief's mean argument of latitude is a multiple
     of 2 pi / ``per_orbit`` (secular rate of :meth:`Chief.u_at`), i.e. a uniform grid of spacing
-    (2 pi / per_orbit) / (du/dt) aligned with round values of u (u = 0, 22.5 deg, ... for 16 per orbit)."""
+    (2 pi / per_orbit) / (du/dt) aligned with round values of u (u = 0, 22.5 deg, ... for 16 per orbit).
+
+    Parameters
+    ----------
+    t_start, t_end : float
+        The interval [s].
+    chief : Chief
+        The chief's a, i and argument of latitude.
+    per_orbit : int
+        Grid epochs per orbit.
+    j2 : bool
+        With the J2 secular rates.
+
+    Returns
+    -------
+    numpy.ndarray, shape (K,)
+        The epochs [s]; ValueError beyond :data:`MAX_GRID_EPOCHS`.
+    """
     rate = float(arg_latitude_rate(chief.a, chief.inc, j2))
     du = 2.0 * math.pi / per_orbit
     u_start = float(chief.u_at(t_start, j2))
@@ -55,43 +74,126 @@ def grid_epochs(t_start, t_end, chief, per_orbit, j2=True):
     return first + step * np.arange(max(count, 0))
 
 
-def transition_matrices(dt, a, inc, j2=True):
+def transition_matrices(dt: ArrayLike, a: float, inc: float, j2: bool = True) -> np.ndarray:
     """The state transition Phi(dt) ``(..., 6, 6)`` of the secular model without drag: column c is
-    :func:`propagate` of the unit ROE vector e_c over ``dt`` (the model is linear in the ROE for da_dot = 0)."""
+    :func:`propagate` of the unit ROE vector e_c over ``dt`` (the model is linear in the ROE for da_dot = 0).
+
+    Parameters
+    ----------
+    dt : array_like, shape (...)
+        Propagation times [s].
+    a, inc : float
+        The chief's semi-major axis [m] and inclination [rad].
+    j2 : bool
+        With the J2 secular rates.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 6, 6)
+        Phi(dt).
+    """
     dt = np.asarray(dt, dtype=float)
     columns = propagate(np.eye(6), dt[..., None], a, inc, j2)  # (..., column c, component)
     return np.swapaxes(columns, -1, -2)
 
 
-def drift_offset(dt, a, inc, j2=True, da_dot=0.0):
-    """The affine (state-independent) part of :func:`propagate` over ``dt``: differential drag, ``(..., 6)``."""
+def drift_offset(dt: ArrayLike, a: float, inc: float, j2: bool = True, da_dot: float = 0.0) -> np.ndarray:
+    """The affine (state-independent) part of :func:`propagate` over ``dt``: differential drag, ``(..., 6)``.
+
+    Parameters
+    ----------
+    dt : array_like, shape (...)
+        Propagation times [s].
+    a, inc : float
+        The chief's semi-major axis [m] and inclination [rad].
+    j2, da_dot : bool, float
+        With the J2 secular rates; the differential-drag rate of da [1/s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 6)
+        The dimensionless ROE offset.
+    """
     dt = np.asarray(dt, dtype=float)
     return propagate(np.zeros(6), dt, a, inc, j2, da_dot)
 
 
-def carrier_burn_effects(epochs, axes, chief, j2=True):
+def carrier_burn_effects(epochs: ArrayLike, axes: tuple[int, ...], chief: Chief, j2: bool = True) -> np.ndarray:
     """Dimensionless ROE change per 1 m/s carrier burn along each axis, ``(K, len(axes), 6)``.
 
     seed 002 Eq. (2) through :func:`delta_roe` with the relative impulse ``-dv`` of a carrier burn, at the chief's
     mean argument of latitude of each epoch.
+
+    Parameters
+    ----------
+    epochs : array_like, shape (K,)
+        Burn epochs [s].
+    axes : tuple of int
+        The dv columns (:func:`parse_axes`).
+    chief : Chief
+        The chief's a, i and argument of latitude.
+    j2 : bool
+        With the J2 secular rates.
+
+    Returns
+    -------
+    numpy.ndarray, shape (K, J, 6)
+        The effects.
     """
     u = np.asarray(chief.u_at(np.asarray(epochs, dtype=float), j2))
     units = -np.eye(3)[list(axes)]  # (J, 3): relative impulse of a +1 m/s carrier burn along each axis
     return delta_roe(units[None, :, :], u[:, None], chief.a, mean_motion(chief.a))
 
 
-def response_at(effects, epochs, t, a, inc, j2=True):
-    """ROE change at one time ``t >= max(epochs)`` per unit burn: Phi(t - t_k) effects[k, j], ``(K, J, 6)``."""
+def response_at(effects: np.ndarray, epochs: ArrayLike, t: float, a: float, inc: float, *,
+                j2: bool = True) -> np.ndarray:
+    """ROE change at one time ``t >= max(epochs)`` per unit burn: Phi(t - t_k) effects[k, j], ``(K, J, 6)``.
+
+    Parameters
+    ----------
+    effects : numpy.ndarray, shape (K, J, 6)
+        :func:`carrier_burn_effects`.
+    epochs : array_like, shape (K,)
+        Their epochs [s].
+    t : float
+        The time [s].
+    a, inc : float
+        The chief's semi-major axis [m] and inclination [rad].
+    j2 : bool
+        With the J2 secular rates.
+
+    Returns
+    -------
+    numpy.ndarray, shape (K, J, 6)
+        The responses.
+    """
     phi = transition_matrices(t - np.asarray(epochs, dtype=float), a, inc, j2)  # (K, 6, 6)
     return np.einsum("kcd,kjd->kjc", phi, effects)
 
 
-def grid_response(effects, step, a, inc, j2=True, component=1):
+def grid_response(effects: np.ndarray, step: float, a: float, inc: float, j2: bool = True, *,
+                  component: int = 1) -> np.ndarray:
     """Response of one ROE ``component`` at every grid epoch to every candidate burn on a *uniform* grid.
 
     ``R[i, k, j] = (Phi((i - k) step) effects[k, j])[component]`` for i >= k (a burn acts on the state at its own
     epoch, as in :func:`~roe_sep.core.relmotion.trajectory.trajectory`), 0 for i < k. Phi depends only on the lag i -
     k, so K transition matrices serve the whole lower-triangular block (vectorized, no loop over epochs).
+
+    Parameters
+    ----------
+    effects : numpy.ndarray, shape (K, J, 6)
+        :func:`carrier_burn_effects` on the grid.
+    step : float
+        The grid spacing [s].
+    a, inc : float
+        The chief's semi-major axis [m] and inclination [rad].
+    j2, component : bool, int
+        With the J2 secular rates; the ROE component.
+
+    Returns
+    -------
+    numpy.ndarray, shape (K, K, J)
+        R.
     """
     k_count = effects.shape[0]
     rows = transition_matrices(step * np.arange(k_count), a, inc, j2)[:, component, :]  # (lag, 6)
@@ -102,11 +204,28 @@ def grid_response(effects, step, a, inc, j2=True, component=1):
     return out
 
 
-def sagitta(step, a, inc, j2=True, da_dot=0.0, component=1):
+def sagitta(step: float, a: float, inc: float, j2: bool = True, da_dot: float = 0.0, *,
+            component: int = 1) -> float:
     """Largest dip of a ROE ``component`` between two grid epochs below the chord through its end values.
 
     Between burns the secular model is at most quadratic in time (differential drag makes da linear, dl
-    quadratic), so the dip is the sagitta |x(step/2) - (x(0) + x(step))/2| of the drag term; dimensionless.
+    quadratic), so the dip is the sagitta |x(step/2) - (x(0) + x(step))/2| of the drag term.
+
+    Parameters
+    ----------
+    step : float
+        The grid spacing [s].
+    a, inc : float
+        The chief's semi-major axis [m] and inclination [rad].
+    j2, da_dot : bool, float
+        With the J2 secular rates; the differential-drag rate of da [1/s].
+    component : int
+        The ROE component.
+
+    Returns
+    -------
+    float
+        The sagitta (dimensionless).
     """
     x = drift_offset(np.array([0.0, 0.5 * step, step]), a, inc, j2, da_dot)[:, component]
     return float(abs(x[1] - 0.5 * (x[0] + x[2])))

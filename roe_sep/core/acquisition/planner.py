@@ -1,71 +1,40 @@
 """Initial-condition acquisition: the carrier's burns from the radar OD estimate to the experiment's initial
 conditions (ICs) with minimum delta-v, as a linear program (seed 001 Secs. 2.2-2.3 and 5; seed 002 Eqs. 2, 11, 25).
 
-After the separation and the blind drift-stop the picosatellite leads by some 20-35 km and drifts slowly away. The
-ICs (seed 001 Sec. 2.2, AVANTI requirement 1, and AC3) at the final epoch t_F:
+The ICs at the final epoch t_F (seed 001 Sec. 2.2, AVANTI requirement 1, and AC3), s the sign of the estimated dl
+(leading stays leading): s a dl_F in [a_dl_min, a_dl_max] (optionally on a target), and s a dl >= a_dl_min
+throughout; |a da_F| <= drift_tolerance; e/i vectors anti-parallel when leading (parallel when following), each and
+the minimum R-N distance (seed 002 Eq. 25) at least ``min_ei``; both inside the camera field of view (seed 002
+Eq. 11); carrier burns of at most ``max_burn_dv``, quantized to ``dv_quantum`` (BIROS, seed 001 Sec. 2.1).
 
-* mean along-track separation s a dl_F in [a_dl_min, a_dl_max] (radar separability, camera detection), s = sign of
-  the estimated dl (the configuration is kept: leading stays leading), optionally a target inside that range;
-* almost no drift: |a da_F| <= drift_tolerance;
-* e/i vectors anti-parallel when leading (parallel when following) -- passive safety -- each at least ``min_ei``,
-  minimum R-N distance (seed 002 Eq. 25) at least ``min_ei``;
-* both inside the camera field of view (seed 002 Eq. 11): a|de| <= tan(6.8 deg) |a dl_F|,
-  a|di| <= tan(9.15 deg) |a dl_F|;
-* never s a dl < a_dl_min during the acquisition;
-* carrier burns of at most ``max_burn_dv`` each, quantized to ``dv_quantum`` (the BIROS cold-gas system: 0.3 m/s
-  and 1 mm/s, seed 001 Sec. 2.1).
+Formulation. Candidate burns on a grid of epochs (``grid_per_orbit`` per orbit) along ``axes`` from t_earliest to
+the end of the window, t_F the last one. The final ROE and s a dl at every grid epoch are affine in the burns
+(:mod:`roe_sep.core.acquisition.lp_transfer`: Eq. 2, the secular model, drag the affine part). With the direction
+i^ of the final di fixed every IC is linear:
 
-Formulation. Candidate carrier burns on a grid of epochs (``grid_per_orbit`` per orbit, aligned with round values
-of the mean argument of latitude) from t_earliest to the end of the window along ``axes``; t_F is the last grid
-epoch. The final ROE and the mean along-track separation at every grid epoch are affine in the burns
-(:mod:`roe_sep.core.acquisition.lp_transfer`: Eq. 2 plus the secular model, differential drag as the affine part).
-With the direction i^ of the final relative inclination vector fixed, every IC is linear:
+    de_F = -s mu i^,  di_F . i^ = nu,  dl_F = s L,  mu, nu >= m_min,
+    mu / cos(g/2) <= tan(fov_r) L,  nu / cos(g/2) <= tan(fov_n) L,
 
-    de_F = -s mu i^ (+ a perpendicular part, zero in the LP),  di_F . i^ = nu,  dl_F = s L,
-    mu, nu >= m_min,  mu / cos(g/2) <= tan(fov_r) L,  nu / cos(g/2) <= tan(fov_n) L,
+so minimising sum |dv| (L1, split variables p - m) is a linear program (HiGHS), laid out by :func:`_assemble`'s
+named blocks. i^ is iterated from the burn-free final di to the planned one (J2 couples da into di_y). m_min =
+:func:`ei_magnitude_floor` keeps Eq. (25) >= min_ei under the angle tolerance. The window is used whole and the
+dl target is mid-range (measured in docs/campaigns.md); re-planning on each newer OD and a final trim
+(:mod:`roe_sep.core.acquisition.trim`, its OD's radar arc kept free of burns by ``no_burns``) absorb OD errors.
 
-so minimising sum |dv| (L1 with split variables p - m, exact per axis for single-axis burns, an upper bound of the
-Euclidean total otherwise) is a linear program (HiGHS). i^ starts as the direction of the burn-free final di and is
-iterated to the direction of the planned one (J2 couples da into di_y; two or three solves converge). Further rows:
-s a dl >= a_dl_min at every grid epoch, raised by the sagitta of the drag parabola between epochs (and before each
-burn as well when radial burns are allowed); |dvR| + |dvT| + |dvN| <= max_burn_dv per epoch (so the Euclidean
-magnitude is within the limit); m_min = :func:`ei_magnitude_floor` keeps Eq. (25) >= min_ei under the angle
-tolerance below.
-
-Choices. The ICs are reached at t_F, the end of the window: the minimum-delta-v plan uses the whole window (a
-shorter window costs more: about 0.28 instead of 0.19 m/s for one day instead of two in the typical case), and it may
-let the estimated differential drag finish the drift stop, so its last burn can come before t_F. The along-track
-target defaults to mid-range (7500 m): left free (``a_dl_target`` = 0) the program ends wherever is cheapest, often
-near a bound, with no room left for the km-level dl errors of a two-day open-loop drift under a 20 % drag
-uncertainty. A plan's sensitivity to OD errors does not depend on its burns (the model is linear), so the remedy is
-re-planning on each newer OD, not a more conservative program.
-
-Closing on the last information. The drift at t_F is what a plan made a day earlier cannot hold: the OD's drift-rate
-error carried to t_F and the 5 % execution error of the burns flown after that OD (std 2.5 and 1.9 m, 9 % of the
-runs beyond the 5 m initial condition). The OD of the radar pass just before t_F therefore decides a final trim,
-:mod:`roe_sep.core.acquisition.trim`: one quantized tangential burn uplinked with the same planning margin, flown
-only when the predicted |a da_F| is not 3 OD sigmas inside the tolerance. That OD needs a radar arc free of burns
-(the OD restarts after every burn and needs passes over 10 h): ``no_burns`` keeps the plan's burns out of it.
-
-Closing on the last information. The drift at t_F is what a plan made a day earlier cannot hold: the OD's drift-rate
-error carried to t_F and the 5 % execution error of the burns flown after that OD (std 2.5 and 1.9 m, 9 % of the
-runs beyond the 5 m initial condition). The OD of the radar pass cluster just before t_F therefore decides a final
-trim, :mod:`roe_sep.core.acquisition.trim`: one quantized tangential burn uplinked with the same planning margin,
-flown only when the predicted |a da_F| is not 3 OD sigmas inside the tolerance.
-
-Quantization. The continuous optimum is then re-solved as a small mixed-integer program (HiGHS) in integer
-multiples of ``dv_quantum`` on the LP's support and its neighbouring grid epochs, with the equalities relaxed to the
-tolerances a quantized plan can meet: |a da_F| <= drift_tolerance (the da_F lattice has a spacing of
-2 dv_quantum / n = 1.8 m at 515 km, so a tolerance below half of that can be infeasible), e/i anti-parallel within
-``ei_angle_tol_deg``, the along-track target within ``a_dl_target_tol``. The plan is finally verified end to end
-with :func:`~roe_sep.core.relmotion.trajectory.trajectory` (an independent path through the same physics).
+Quantization. The LP optimum is re-solved as a mixed-integer program (HiGHS) in multiples of ``dv_quantum`` on the
+LP's support and its neighbouring epochs, the equalities relaxed to tolerances a quantized plan can meet:
+|a da_F| <= drift_tolerance (the da_F lattice spacing is 2 dv_quantum / n), e/i within ``ei_angle_tol_deg``, dl
+within ``a_dl_target_tol``. The plan is verified end to end with :func:`~roe_sep.core.relmotion.trajectory.trajectory`.
 """
 
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ...errors import AcquisitionInfeasible, InvalidAcquisitionConfig
 from ..relmotion.dynamics import arg_latitude_rate, propagate
@@ -74,6 +43,9 @@ from ..relmotion.trajectory import Burn, Chief, trajectory
 from ..safety.metrics import fov_limit, min_rn_distance
 from .highs import solve_lp
 from .lp_transfer import carrier_burn_effects, grid_epochs, grid_response, parse_axes, response_at, sagitta
+
+if TYPE_CHECKING:  # scipy.sparse is imported where the program is built: the nodes import this module for its config
+    from scipy import sparse
 
 R_EARTH_MIN = 6.4e6  # m, a semi-major axis below this is not a valid LEO chief
 QUANTA_SLACK = 4  # a quantized solution within this many quanta of the LP optimum ends the search
@@ -102,7 +74,7 @@ class AcquisitionConfig:
     milp_time_limit: float = 5.0  # s, HiGHS time limit of each quantized re-solve
 
 
-def validate_config(cfg: AcquisitionConfig):
+def validate_config(cfg: AcquisitionConfig) -> None:
     """Reject malformed fields with :class:`InvalidAcquisitionConfig` naming the field."""
 
     def number(name, positive=True, allow_zero=False):
@@ -149,7 +121,7 @@ def validate_config(cfg: AcquisitionConfig):
     number("milp_time_limit")
 
 
-def ei_magnitude_floor(min_rn, angle_tol):
+def ei_magnitude_floor(min_rn: float, angle_tol: float) -> float:
     """Smallest |a de|, |a di| that keeps seed 002 Eq. (25) >= ``min_rn`` when the vectors deviate from
     (anti-)parallel by up to ``angle_tol`` [rad].
 
@@ -159,16 +131,28 @@ def ei_magnitude_floor(min_rn, angle_tol):
     return min_rn * math.sqrt(1.0 + math.sin(angle_tol)) / math.cos(angle_tol)
 
 
-def drift_nulling_dv_bound(a_da0, a_da_dot, duration, n, tol):
+def drift_nulling_dv_bound(a_da0: float, a_da_dot: float, duration: float, n: float, tol: float) -> float:
     """Lower bound on the L1 delta-v [m/s] of any plan ending with |a da_F| <= ``tol`` after ``duration`` [s].
 
     Only tangential impulses change da (seed 002 Eq. 2: a Delta da = 2 dvT / n), so sum |dvT| >= n/2 |required
     change| with the required change = the drifted value a da0 + a_da_dot * duration minus the tolerance.
+
+    Parameters
+    ----------
+    a_da0, a_da_dot : float
+        a da now [m] and its drift rate [m/s].
+    duration, n, tol : float
+        Time to the final epoch [s], mean motion [rad/s], the drift tolerance [m].
+
+    Returns
+    -------
+    float
+        The bound [m/s].
     """
     return 0.5 * n * max(0.0, abs(a_da0 + a_da_dot * duration) - tol)
 
 
-def ei_deviation(roe, leading):
+def ei_deviation(roe: ArrayLike, leading: bool) -> np.ndarray:
     """Angle [rad] between de and the required direction: -di (anti-parallel) when ``leading``, +di otherwise."""
     r = np.asarray(roe, dtype=float)
     de, di = r[..., 2:4], r[..., 4:6] * (-1.0 if leading else 1.0)
@@ -205,26 +189,26 @@ class AcquisitionPlan:
     a: float  # m
 
     @property
-    def n_burns(self):
+    def n_burns(self) -> int:
         return len(self.epochs)
 
     @property
-    def t_last_burn(self):
+    def t_last_burn(self) -> float:
         return float(self.epochs[-1]) if len(self.epochs) else float("nan")
 
     @property
-    def time_to_ic(self):
+    def time_to_ic(self) -> float:
         return self.t_final - self.t0
 
     @property
-    def fov_ok(self):
+    def fov_ok(self) -> bool:
         return self.fov_r_margin >= 0.0 and self.fov_n_margin >= 0.0
 
-    def burns(self):
+    def burns(self) -> list[Burn]:
         """The plan as :class:`Burn` (relative impulses, -dv_carrier) for :func:`trajectory`."""
         return [Burn(float(t), tuple(-dv)) for t, dv in zip(self.epochs, self.dv_carrier)]
 
-    def summary(self):
+    def summary(self) -> dict:
         """Key numbers (SI, meters for a*ROE) for logs, diagnostics and the CLI."""
         f = self.final_roe * self.a
         return {
@@ -266,7 +250,7 @@ def _unit(v, what):
     return np.array([v[0], v[1]]) / norm
 
 
-def _build(roe0, chief, da_dot, cfg, t_earliest, no_burns=()):
+def _build(roe0, chief, da_dot, cfg, t_earliest, *, no_burns=()):
     a = chief.a
     x0 = np.asarray(roe0, dtype=float)
     s = 1.0 if x0[1] > 0 else -1.0
@@ -290,7 +274,7 @@ def _build(roe0, chief, da_dot, cfg, t_earliest, no_burns=()):
     q = cfg.dv_quantum
     effects = carrier_burn_effects(epochs, axes, chief, cfg.j2) * q  # (K, J, 6) per quantum
     t_f = float(epochs[-1])
-    final = a * response_at(effects, epochs, t_f, a, chief.inc, cfg.j2).reshape(k_count * j_count, 6).T
+    final = a * response_at(effects, epochs, t_f, a, chief.inc, j2=cfg.j2).reshape(k_count * j_count, 6).T
     free = a * propagate(x0, np.concatenate([epochs, [t_f]]) - chief.t0, a, chief.inc, cfg.j2, da_dot)
     step = float(epochs[1] - epochs[0])
     path = s * a * grid_response(effects, step, a, chief.inc, cfg.j2, component=1).reshape(k_count, -1)
@@ -310,57 +294,145 @@ def _build(roe0, chief, da_dot, cfg, t_earliest, no_burns=()):
         quanta_max=int(math.floor(cfg.max_burn_dv / q + 1e-9)), ei_floor=ei_magnitude_floor(cfg.min_ei, gamma))
 
 
-def _assemble(pb: _Problem, cols, ihat, exact, path=True, target=True, ei=True):
-    """Objective, variable bounds and rows lb <= A v <= ub over v = [p (S), m (S), L, mu, nu] (quanta, meters).
+@dataclass(frozen=True)
+class _Layout:
+    """The LP's variables, in this order: v = [p (S), m (S), L, mu, nu].
 
+    p, m >= 0 [quanta]: the positive and negative parts of the S candidate burns (a burn is p - m, its L1 cost
+    p + m); L = s a dl_F [m]; mu = -s a de_F . i^ and nu = a di_F . i^ [m], the e/i magnitudes along the fixed
+    direction i^ (module docstring, Formulation).
+    """
+
+    n_s: int  # candidate (epoch, axis) columns
+
+    @property
+    def size(self) -> int:
+        return 2 * self.n_s + 3
+
+    @property
+    def l(self) -> int:  # noqa: E743 (the paper's name of the along-track separation)
+        return 2 * self.n_s
+
+    @property
+    def mu(self) -> int:
+        return 2 * self.n_s + 1
+
+    @property
+    def nu(self) -> int:
+        return 2 * self.n_s + 2
+
+    def row(self, burn_coef, extra=None) -> np.ndarray:
+        """One dense row: ``burn_coef`` over [p, m] (a scalar or ``2 S`` values), ``extra`` {column: value}."""
+        r = np.zeros(self.size)
+        r[:2 * self.n_s] = burn_coef
+        for idx, val in (extra or {}).items():
+            r[idx] = val
+        return r
+
+
+@dataclass(frozen=True)
+class _Rows:
+    """A group of constraint rows lb <= a v <= ub (``a`` dense, over :class:`_Layout`'s variables)."""
+
+    a: np.ndarray  # (R, 2 S + 3)
+    lb: np.ndarray  # (R,)
+    ub: np.ndarray  # (R,)
+
+
+def _rows(lay: _Layout, specs) -> _Rows:
+    """:class:`_Rows` from ``(burn_coef, extra, lb, ub)`` tuples (see :meth:`_Layout.row`)."""
+    return _Rows(np.array([lay.row(coef, extra) for coef, extra, _, _ in specs]).reshape(len(specs), lay.size),
+                 np.array([lb for _, _, lb, _ in specs], dtype=float),
+                 np.array([ub for _, _, _, ub in specs], dtype=float))
+
+
+def _drift_rows(lay: _Layout, dmat, c_f, tol) -> _Rows:
+    """|a da_F| <= ``tol`` (AVANTI IC: almost no drift): one row over the burns' effect on a da_F (seed 002 Eq. 2)."""
+    return _rows(lay, [(dmat[0], None, -tol - c_f[0], tol - c_f[0])])
+
+
+def _along_track_rows(lay: _Layout, dmat, c_f, s) -> _Rows:
+    """a dl_F = s L: the final mean along-track separation defines L (its range is in L's bounds)."""
+    return _rows(lay, [(dmat[1], {lay.l: -s}, -c_f[1], -c_f[1])])
+
+
+def _ei_direction_rows(lay: _Layout, dmat, c_f, ihat, *, s, exact, tg) -> _Rows:
+    """de_F . i^ = -s mu and di_F . i^ = nu (e/i (anti-)parallel along i^, passive safety, seed 002 Eq. 25); then
+    de_F . j^ = 0 (``exact``: the continuous LP), or the quantized program's tolerance cones
+    |de_F . j^| <= tan(g/2) mu and |di_F . j^| <= tan(g/2) nu with ``tg`` = tan(g/2) (j^ = i^ turned by +90 deg)."""
+    jhat = np.array([-ihat[1], ihat[0]])
+    e_al, e_pp = ihat @ dmat[2:4], jhat @ dmat[2:4]
+    i_al, i_pp = ihat @ dmat[4:6], jhat @ dmat[4:6]
+    specs = [(e_al, {lay.mu: s}, -ihat @ c_f[2:4], -ihat @ c_f[2:4]),
+             (i_al, {lay.nu: -1.0}, -ihat @ c_f[4:6], -ihat @ c_f[4:6])]
+    if exact:
+        specs.append((e_pp, None, -jhat @ c_f[2:4], -jhat @ c_f[2:4]))
+    else:
+        specs += [(e_pp, {lay.mu: -tg}, -np.inf, -jhat @ c_f[2:4]),
+                  (-e_pp, {lay.mu: -tg}, -np.inf, jhat @ c_f[2:4]),
+                  (i_pp, {lay.nu: -tg}, -np.inf, -jhat @ c_f[4:6]),
+                  (-i_pp, {lay.nu: -tg}, -np.inf, jhat @ c_f[4:6])]
+    return _rows(lay, specs)
+
+
+def _fov_rows(lay: _Layout, cfg: AcquisitionConfig, cg) -> _Rows:
+    """The camera field of view, seed 002 Eq. (11): |de| <= mu / cos(g/2) <= tan(fov_r) L, and likewise
+    |di| <= nu / cos(g/2) <= tan(fov_n) L (``cg`` = cos(g/2))."""
+    zero = np.zeros(2 * lay.n_s)
+    return _rows(lay, [
+        (zero, {lay.mu: 1.0 / cg, lay.l: -float(fov_limit(1.0, math.radians(cfg.fov_half_r_deg)))}, -np.inf, 0.0),
+        (zero, {lay.nu: 1.0 / cg, lay.l: -float(fov_limit(1.0, math.radians(cfg.fov_half_n_deg)))}, -np.inf, 0.0)])
+
+
+def _variable_bounds(pb: _Problem, lay: _Layout, cols, *, exact, target, ei):
+    """Bounds lo <= v <= hi: 0 <= p, m <= quanta_max (0 at epochs in ``no_burns``); L in [a_dl_min, a_dl_max],
+    or on ``a_dl_target`` (within ``a_dl_target_tol`` unless ``exact``) when ``target``; mu, nu >= the e/i floor
+    (:func:`ei_magnitude_floor`), or 0 when ``ei`` is off (the diagnosis)."""
+    cfg, n_s = pb.cfg, lay.n_s
+    lo_v = np.zeros(lay.size)
+    hi_v = np.full(lay.size, float(pb.quanta_max))
+    barred = pb.barred[pb.epoch_of[cols]]
+    hi_v[:n_s][barred] = hi_v[n_s:2 * n_s][barred] = 0.0
+    if cfg.a_dl_target and target:
+        span = 0.0 if exact else cfg.a_dl_target_tol
+        lo_v[lay.l] = max(cfg.a_dl_min, cfg.a_dl_target - span)
+        hi_v[lay.l] = min(cfg.a_dl_max, cfg.a_dl_target + span)
+    else:
+        lo_v[lay.l], hi_v[lay.l] = cfg.a_dl_min, cfg.a_dl_max
+    lo_v[lay.mu] = lo_v[lay.nu] = pb.ei_floor if ei else 0.0
+    hi_v[lay.mu] = hi_v[lay.nu] = np.inf
+    if not ei:
+        lo_v[lay.mu] = lo_v[lay.nu] = hi_v[lay.mu] = hi_v[lay.nu] = 0.0
+    return lo_v, hi_v
+
+
+def _objective(lay: _Layout) -> np.ndarray:
+    """sum (p + m): the L1 delta-v in quanta (L, mu and nu cost nothing)."""
+    return np.concatenate([np.ones(2 * lay.n_s), np.zeros(3)])
+
+
+def _assemble(pb: _Problem, cols, ihat, exact, path=True, *, target=True, ei=True):
+    """Objective, variable bounds and rows lb <= A v <= ub over the :class:`_Layout` v = [p, m, L, mu, nu].
+
+    Rows in order: drift, along-track, e/i direction and field of view (``ei``), path (``path``), burn magnitude.
     ``exact``: the continuous LP (e/i exactly (anti-)parallel, dl on target); otherwise the quantized program with
     the tolerance cones. ``path``/``target``/``ei`` switch constraint groups off to diagnose infeasibility.
     """
-    cfg, s = pb.cfg, pb.s
-    n_s = len(cols)
-    nv = 2 * n_s + 3
-    i_l, i_mu, i_nu = 2 * n_s, 2 * n_s + 1, 2 * n_s + 2
+    from scipy import sparse  # here, not at import: the nodes import this module for its config alone
+
+    cfg = pb.cfg
+    lay = _Layout(len(cols))
     f = pb.final[:, cols]
     dmat = np.hstack([f, -f])  # (6, 2S): effect of p and of m
     c_f = pb.free_final
-    jhat = np.array([-ihat[1], ihat[0]])
-    tg = math.tan(0.5 * math.radians(cfg.ei_angle_tol_deg))
-    cg = math.cos(0.5 * math.radians(cfg.ei_angle_tol_deg))
-    rows, lbs, ubs = [], [], []
-
-    def add(burn_coef, extra, lb, ub):
-        r = np.zeros(nv)
-        r[:2 * n_s] = burn_coef
-        for idx, val in extra.items():
-            r[idx] = val
-        rows.append(r)
-        lbs.append(lb)
-        ubs.append(ub)
-
-    tol = cfg.drift_tolerance
-    add(dmat[0], {}, -tol - c_f[0], tol - c_f[0])  # |a da_F| <= tol
-    add(dmat[1], {i_l: -s}, -c_f[1], -c_f[1])  # a dl_F = s L
+    half = 0.5 * math.radians(cfg.ei_angle_tol_deg)
+    groups = [_drift_rows(lay, dmat, c_f, cfg.drift_tolerance), _along_track_rows(lay, dmat, c_f, pb.s)]
     if ei:
-        e_al, e_pp = ihat @ dmat[2:4], jhat @ dmat[2:4]
-        i_al, i_pp = ihat @ dmat[4:6], jhat @ dmat[4:6]
-        add(e_al, {i_mu: s}, -ihat @ c_f[2:4], -ihat @ c_f[2:4])  # de_F . i^ = -s mu
-        add(i_al, {i_nu: -1.0}, -ihat @ c_f[4:6], -ihat @ c_f[4:6])  # di_F . i^ = nu
-        if exact:
-            add(e_pp, {}, -jhat @ c_f[2:4], -jhat @ c_f[2:4])  # de_F (anti-)parallel to i^
-        else:  # |de_F . j^| <= tan(g/2) mu and |di_F . j^| <= tan(g/2) nu
-            add(e_pp, {i_mu: -tg}, -np.inf, -jhat @ c_f[2:4])
-            add(-e_pp, {i_mu: -tg}, -np.inf, jhat @ c_f[2:4])
-            add(i_pp, {i_nu: -tg}, -np.inf, -jhat @ c_f[4:6])
-            add(-i_pp, {i_nu: -tg}, -np.inf, jhat @ c_f[4:6])
-        # camera field of view, seed 002 Eq. (11): |de| <= mu / cos(g/2) <= tan(fov_r) L (likewise di)
-        add(np.zeros(2 * n_s), {i_mu: 1.0 / cg, i_l: -float(fov_limit(1.0, math.radians(cfg.fov_half_r_deg)))},
-            -np.inf, 0.0)
-        add(np.zeros(2 * n_s), {i_nu: 1.0 / cg, i_l: -float(fov_limit(1.0, math.radians(cfg.fov_half_n_deg)))},
-            -np.inf, 0.0)
-    from scipy import sparse  # here, not at import: the nodes import this module for its config alone
-
-    blocks = [sparse.csr_matrix(np.array(rows))]
-    lb, ub = list(lbs), list(ubs)
+        groups += [_ei_direction_rows(lay, dmat, c_f, ihat, s=pb.s, exact=exact, tg=math.tan(half)),
+                   _fov_rows(lay, cfg, math.cos(half))]
+    blocks = [sparse.csr_matrix(np.vstack([g.a for g in groups]))]
+    lb = list(np.concatenate([g.lb for g in groups]))
+    ub = list(np.concatenate([g.ub for g in groups]))
     path_blocks, path_lb, burn_block, burn_ub = _path_and_burn_rows(pb, cols)
     if path:  # s a dl >= a_dl_min at every grid epoch (plus the sagitta between epochs)
         blocks += path_blocks
@@ -370,26 +442,11 @@ def _assemble(pb: _Problem, cols, ihat, exact, path=True, target=True, ei=True):
     lb += [-np.inf] * len(burn_ub)
     ub += burn_ub
     a_mat = sparse.vstack(blocks).tocsr()
-
-    lo_v = np.zeros(nv)
-    hi_v = np.full(nv, float(pb.quanta_max))
-    barred = pb.barred[pb.epoch_of[cols]]
-    hi_v[:n_s][barred] = hi_v[n_s:2 * n_s][barred] = 0.0
-    if cfg.a_dl_target and target:
-        span = 0.0 if exact else cfg.a_dl_target_tol
-        lo_v[i_l] = max(cfg.a_dl_min, cfg.a_dl_target - span)
-        hi_v[i_l] = min(cfg.a_dl_max, cfg.a_dl_target + span)
-    else:
-        lo_v[i_l], hi_v[i_l] = cfg.a_dl_min, cfg.a_dl_max
-    lo_v[i_mu] = lo_v[i_nu] = pb.ei_floor if ei else 0.0
-    hi_v[i_mu] = hi_v[i_nu] = np.inf
-    if not ei:
-        lo_v[i_mu] = lo_v[i_nu] = hi_v[i_mu] = hi_v[i_nu] = 0.0
-    cost = np.concatenate([np.ones(2 * n_s), np.zeros(3)])
-    return cost, lo_v, hi_v, a_mat, np.array(lb, dtype=float), np.array(ub, dtype=float)
+    lo_v, hi_v = _variable_bounds(pb, lay, cols, exact=exact, target=target, ei=ei)
+    return _objective(lay), lo_v, hi_v, a_mat, np.array(lb, dtype=float), np.array(ub, dtype=float)
 
 
-def signed_rows(sub):
+def signed_rows(sub: np.ndarray) -> "sparse.csr_matrix":
     """The rows ``[sub, -sub, 0]`` over v = [p, m, L, mu, nu] (three zero columns for L, mu, nu) of the dense
     ``sub`` ``(R, n)`` as a CSR matrix of its nonzeros. ``sub`` is converted once and each row's nonzeros are laid
     out twice, at their columns then at ``n`` + their columns negated: the same arrays (indptr, indices, data) as
@@ -409,34 +466,42 @@ def signed_rows(sub):
     return sparse.csr_matrix((data, indices, 2 * a.indptr), shape=(len(sub), 2 * n + 3))
 
 
-def _path_and_burn_rows(pb: _Problem, cols):
-    """The rows of :func:`_assemble` that the e/i direction leaves alone, over v = [p, m, L, mu, nu] for the
-    candidate columns ``cols``: the path rows (s a dl >= a_dl_min at every grid epoch, post- and pre-burn) with
-    their lower bounds, and the per-burn magnitude rows with their upper bounds. Memoised in ``pb.rows`` (the LP is
-    solved again for each e/i direction, and a plan's diagnosis relaxes other groups): the same matrices each time.
-    """
-    key = np.asarray(cols).tobytes()
-    if key in pb.rows:
-        return pb.rows[key]
-    from scipy import sparse
-
-    n_s = len(cols)
-    path_blocks, path_lb = [], []
+def _path_rows(pb: _Problem, cols):
+    """s a dl >= a_dl_min at every grid epoch, raised by the sagitta between epochs (module docstring, Formulation):
+    the post-burn rows and, with radial burns, the pre-burn rows, as :func:`signed_rows` blocks with their lower
+    bounds ``path_floor - free_path``."""
+    blocks, lb = [], []
     for mat in (pb.path, pb.path_pre):
         if mat is None:
             continue
-        sub = mat[:, cols]
-        path_blocks.append(signed_rows(sub))
-        path_lb += list(pb.path_floor - pb.free_path)
-    # per-burn magnitude: |dvR| + |dvT| + |dvN| <= max_burn_dv bounds the Euclidean norm (exact for one axis)
+        blocks.append(signed_rows(mat[:, cols]))
+        lb += list(pb.path_floor - pb.free_path)
+    return blocks, lb
+
+
+def _burn_magnitude_rows(pb: _Problem, cols):
+    """|dvR| + |dvT| + |dvN| <= max_burn_dv per grid epoch (BIROS, seed 001 Sec. 2.1): sum (p + m) over the
+    epoch's candidates <= quanta_max, one row per epoch among ``cols``; it bounds the Euclidean norm (exact for one
+    axis). Returns the CSR block over [p, m, L, mu, nu] and the upper bounds."""
+    from scipy import sparse
+
+    n_s = len(cols)
     groups, member = np.unique(pb.epoch_of[cols], return_inverse=True)
     one = np.ones(n_s)
     per_epoch = sparse.csr_matrix((np.concatenate([one, one]),
                                    (np.concatenate([member, member]), np.arange(2 * n_s))),
                                   shape=(len(groups), 2 * n_s))
-    burn_block = sparse.hstack([per_epoch, sparse.csr_matrix((len(groups), 3))])
-    pb.rows[key] = out = (path_blocks, path_lb, burn_block, [pb.quanta_max] * len(groups))
-    return out
+    return sparse.hstack([per_epoch, sparse.csr_matrix((len(groups), 3))]), [pb.quanta_max] * len(groups)
+
+
+def _path_and_burn_rows(pb: _Problem, cols):
+    """:func:`_path_rows` and :func:`_burn_magnitude_rows` (the rows the e/i direction leaves alone), memoised in
+    ``pb.rows`` by ``cols`` (the LP is solved again for each e/i direction, and a plan's diagnosis relaxes other
+    groups): the same matrices each time."""
+    key = np.asarray(cols).tobytes()
+    if key not in pb.rows:
+        pb.rows[key] = (*_path_rows(pb, cols), *_burn_magnitude_rows(pb, cols))
+    return pb.rows[key]
 
 
 def _linprog(pb, cols, ihat, use_linprog=False, **flags):
@@ -449,7 +514,7 @@ def _linprog(pb, cols, ihat, use_linprog=False, **flags):
     low = ~eq & np.isfinite(lb)
     a_ub = sparse.vstack([a_mat[np.flatnonzero(up)], -a_mat[np.flatnonzero(low)]]).tocsr()
     b_ub = np.concatenate([ub[up], -lb[low]])
-    return solve_lp(cost, a_ub, b_ub, a_mat[np.flatnonzero(eq)], ub[eq], lo_v, hi_v, use_linprog=use_linprog)
+    return solve_lp(cost, a_ub, b_ub, a_mat[np.flatnonzero(eq)], ub[eq], lo=lo_v, hi=hi_v, use_linprog=use_linprog)
 
 
 def _milp(pb, cols, ihat):
@@ -461,7 +526,7 @@ def _milp(pb, cols, ihat):
                 options={"time_limit": pb.cfg.milp_time_limit, "mip_rel_gap": 1e-6})
 
 
-def _diagnose(pb, cols, ihat, a_da0, a_da_dot, duration, n):
+def _diagnose(pb, cols, ihat, a_da0, a_da_dot, *, duration, n):
     """A reason for an infeasible LP, from the drift budget and from relaxing one group of constraints at a time."""
     cfg = pb.cfg
     need = drift_nulling_dv_bound(a_da0, a_da_dot, duration, n, cfg.drift_tolerance)
@@ -515,8 +580,19 @@ def _neighbourhood(pb, support, orbits, steps):
     return (epochs[:, None] * j_count + axes[None, :]).ravel()
 
 
-def check_inputs(roe0, chief: Chief, da_dot):
-    """Reject an unusable estimate (NaN, infinite, impossible orbit, no along-track separation)."""
+def check_inputs(roe0: ArrayLike, chief: Chief, da_dot: float) -> None:
+    """Reject an unusable estimate (NaN, infinite, impossible orbit, no along-track separation).
+
+    Parameters
+    ----------
+    roe0, chief, da_dot
+        As for :func:`plan_acquisition`.
+
+    Returns
+    -------
+    None
+        :class:`AcquisitionInfeasible` (a ValueError) with the reason when unusable.
+    """
     x = np.asarray(roe0, dtype=float)
     if x.shape != (6,) or not np.all(np.isfinite(x)):
         raise AcquisitionInfeasible(f"the ROE estimate is not six finite numbers: {np.asarray(roe0).tolist()}")
@@ -529,14 +605,31 @@ def check_inputs(roe0, chief: Chief, da_dot):
         raise AcquisitionInfeasible("the mean along-track separation is zero: leading or following is undefined")
 
 
-def plan_acquisition(roe0, chief: Chief, da_dot=0.0, cfg: AcquisitionConfig = AcquisitionConfig(),
-                     t_earliest=None, no_burns=()) -> AcquisitionPlan:
+def plan_acquisition(roe0: ArrayLike, chief: Chief, da_dot: float = 0.0, cfg: AcquisitionConfig = AcquisitionConfig(),
+                     t_earliest: float | None = None, *,
+                     no_burns: Sequence[tuple[float, float]] = ()) -> AcquisitionPlan:
     """Minimum-delta-v carrier plan from the estimate ``roe0`` (dimensionless, at ``chief.t0``) to the ICs.
 
-    ``da_dot`` [1/s]: estimated drift of da from differential drag (the OD's a_da_dot / a). ``t_earliest`` [s]:
-    first admissible burn epoch (default ``chief.t0 + planning_margin``; a node passes max(OD epoch, now) + margin).
-    ``no_burns``: intervals ``(start, end)`` [s] in which no burn may fly (the final OD's radar arc).
-    Raises :class:`AcquisitionInfeasible` (a ValueError) with the reason when no plan exists.
+    Parameters
+    ----------
+    roe0 : array_like, shape (6,)
+        The estimated ROE (dimensionless) at ``chief.t0``.
+    chief : Chief
+        The chief's a, i and argument of latitude at the OD epoch.
+    da_dot : float
+        Estimated drift of da from differential drag [1/s] (the OD's a_da_dot / a).
+    cfg : AcquisitionConfig
+        The requirements and planning knobs.
+    t_earliest : float, optional
+        First admissible burn epoch [s] (default ``chief.t0 + planning_margin``; a node passes max(OD epoch, now)
+        + margin).
+    no_burns : sequence of (float, float)
+        Intervals ``(start, end)`` [s] in which no burn may fly (the final OD's radar arc).
+
+    Returns
+    -------
+    AcquisitionPlan
+        The verified plan; :class:`AcquisitionInfeasible` (a ValueError) with the reason when none exists.
     """
     validate_config(cfg)
     check_inputs(roe0, chief, da_dot)
@@ -551,7 +644,7 @@ def plan_acquisition(roe0, chief: Chief, da_dot=0.0, cfg: AcquisitionConfig = Ac
     if not math.isfinite(t_earliest) or t_earliest < chief.t0:
         raise AcquisitionInfeasible(f"t_earliest = {t_earliest} s precedes the OD epoch {chief.t0} s")
     start = time.perf_counter()
-    pb = _build(x0, chief, da_dot, cfg, t_earliest, tuple(no_burns))
+    pb = _build(x0, chief, da_dot, cfg, t_earliest, no_burns=tuple(no_burns))
     _check_drift_lattice(pb)
     all_cols = np.arange(pb.final.shape[1])
     ihat = _unit(pb.free_final[4:6], "the predicted relative inclination vector")
@@ -567,7 +660,7 @@ def plan_acquisition(roe0, chief: Chief, da_dot=0.0, cfg: AcquisitionConfig = Ac
             if res.status == 2:
                 raise AcquisitionInfeasible(
                     "no acquisition plan: " + _diagnose(pb, all_cols, ihat, a * x0[0], a * da_dot,
-                                                           float(pb.epochs[-1]) - chief.t0, n))
+                                                           duration=float(pb.epochs[-1]) - chief.t0, n=n))
             raise AcquisitionInfeasible(f"the linear program failed: {res.message}")
         d_lp = res.x[:len(all_cols)] - res.x[len(all_cols):2 * len(all_cols)]
         lp_final = pb.free_final + pb.final @ d_lp
@@ -598,11 +691,11 @@ def plan_acquisition(roe0, chief: Chief, da_dot=0.0, cfg: AcquisitionConfig = Ac
             f"a da takes values {lattice:.2f} m apart: drift_tolerance = {cfg.drift_tolerance:g} m may be too "
             f"small; ei_angle_tol_deg = {cfg.ei_angle_tol_deg:g}, a_dl_target_tol = {cfg.a_dl_target_tol:g} m)")
     solve_time = time.perf_counter() - start
-    return _finish(pb, x0, chief, da_dot, cfg, t_earliest, quantized, lp_final, lp_dv, (solve_time, lp_time), solves,
-                   n)
+    return _finish(pb, x0, chief, da_dot, cfg, t_earliest=t_earliest, quantized=quantized, lp_final=lp_final,
+                   lp_dv=lp_dv, times=(solve_time, lp_time), solves=solves, n=n)
 
 
-def _finish(pb, x0, chief, da_dot, cfg, t_earliest, quantized, lp_final, lp_dv, times, solves, n):
+def _finish(pb, x0, chief, da_dot, cfg, *, t_earliest, quantized, lp_final, lp_dv, times, solves, n):
     """Combine the quantized candidates into burns, predict with :func:`trajectory` and verify every IC."""
     a = float(chief.a)
     k_count, j_count = len(pb.epochs), len(pb.axes)
@@ -614,7 +707,7 @@ def _finish(pb, x0, chief, da_dot, cfg, t_earliest, quantized, lp_final, lp_dv, 
     t_f = float(pb.epochs[-1])
     period = 2.0 * math.pi / float(arg_latitude_rate(a, chief.inc, cfg.j2))
     dense = np.unique(np.concatenate([np.arange(chief.t0, t_f, period / 64.0), pb.epochs, [t_f]]))
-    traj = trajectory(x0, chief.t0, burns, dense, chief, cfg.j2, da_dot)
+    traj = trajectory(x0, chief.t0, burns, dense, chief, j2=cfg.j2, da_dot=da_dot)
     final = traj[-1]
     f = final * a
     leading = pb.s > 0
@@ -639,9 +732,23 @@ def _finish(pb, x0, chief, da_dot, cfg, t_earliest, quantized, lp_final, lp_dv, 
     return plan
 
 
-def verify(plan: AcquisitionPlan, cfg: AcquisitionConfig, eps=1e-6):
-    """Every IC and execution constraint of a plan, checked on its :func:`trajectory` prediction; returns the list
-    of violations (empty when the plan is good). ``eps`` [m, m/s] absorbs floating-point round-off only."""
+def verify(plan: AcquisitionPlan, cfg: AcquisitionConfig, eps: float = 1e-6) -> list[str]:
+    """Every IC and execution constraint of a plan, checked on its :func:`trajectory` prediction.
+
+    Parameters
+    ----------
+    plan : AcquisitionPlan
+        The plan.
+    cfg : AcquisitionConfig
+        The requirements.
+    eps : float
+        Absorbs floating-point round-off only [m, m/s].
+
+    Returns
+    -------
+    list of str
+        The violations (empty when the plan is good).
+    """
     f = plan.final_roe * plan.a
     s = 1.0 if plan.leading else -1.0
     out = []
@@ -677,10 +784,29 @@ def verify(plan: AcquisitionPlan, cfg: AcquisitionConfig, eps=1e-6):
     return out
 
 
-def acquisition_trajectory(plan: AcquisitionPlan, roe0, chief: Chief, times, da_dot=0.0, j2=True):
-    """Dimensionless ROE along the plan at ``times`` (>= plan.t0) from ``roe0`` at ``chief.t0``, via
-    :func:`trajectory` (relative impulses -dv_carrier)."""
-    return trajectory(roe0, chief.t0, plan.burns(), times, chief, j2, da_dot)
+def acquisition_trajectory(plan: AcquisitionPlan, roe0: ArrayLike, chief: Chief, times: ArrayLike,
+                           da_dot: float = 0.0, *, j2: bool = True) -> np.ndarray:
+    """Dimensionless ROE along the plan via :func:`trajectory` (relative impulses -dv_carrier).
+
+    Parameters
+    ----------
+    plan : AcquisitionPlan
+        The plan.
+    roe0 : array_like, shape (6,)
+        The ROE at ``chief.t0``.
+    chief : Chief
+        The chief.
+    times : array_like, shape (n,)
+        Output times [s], >= plan.t0.
+    da_dot, j2 : float, bool
+        The differential-drag rate of da [1/s]; with the J2 secular rates.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, 6)
+        The ROE.
+    """
+    return trajectory(roe0, chief.t0, plan.burns(), times, chief, j2=j2, da_dot=da_dot)
 
 
 __all__ = ["AcquisitionConfig", "AcquisitionInfeasible", "AcquisitionPlan", "InvalidAcquisitionConfig",

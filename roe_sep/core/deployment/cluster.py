@@ -1,57 +1,32 @@
 """Adaptive separation program for a nanosatellite cluster from a tumbling platform (seed 004).
 
 Frame and dynamics (seed 004 Sec. 2): orbital frame centred on the platform (orbital stage, OS), x along the flight
-direction, y along the radius vector (up), z completing the right-handed triad; circular orbit of mean motion
-omega = n; linear relative motion (the HCW solution of seed 003 Eq. 2 written for these axes) plus the constant
-along-track differential drag acceleration P_x = rho V_s^2 dQ of seed 004, with dQ = Q_OS - Q_NS the difference of
-the ballistic coefficients in the seed's convention Q = c_d S / (2 m) (acceleration Q rho V^2). With this
-convention P_x = (n a / 2) * :func:`~roe_sep.core.relmotion.dynamics.drag_da_dot` (dB = -2 dQ), which
-:func:`drag_acceleration` uses.
+direction, y up, z completing the triad; linear relative motion on a circular orbit (the HCW solution of seed 003
+Eq. 2 on these axes) plus the along-track differential drag acceleration P_x = rho V_s^2 dQ, dQ = Q_OS - Q_NS,
+Q = c_d S / (2 m); P_x = (n a / 2) * :func:`~roe_sep.core.relmotion.dynamics.drag_da_dot` (:func:`drag_acceleration`).
 
-Random direction (seed 004 'Nomenclature', ref. [5]): at t = 0 the deployers point along +x; the OS then rotates
-with a transverse angular velocity whose two components are independent N(0, sigma^2) (relative to the orbital
-frame; the spin about the deployer axis does not move it). After a delay dt the axis is tilted by theta = Omega dt,
-Omega ~ Rayleigh(sigma), about an axis of uniform azimuth psi, so the separation velocity of magnitude V is
-V (cos theta, sin theta sin psi, -sin theta cos psi). Every NS on the same OS shares Omega and psi.
+Random direction (seed 004 ref. [5]): the OS turns with a transverse angular velocity of independent N(0, sigma^2)
+components; after a delay dt the deployer axis is tilted by theta = Omega dt, Omega ~ Rayleigh(sigma), about an axis
+of uniform azimuth psi: the separation velocity is V (cos theta, sin theta sin psi, -sin theta cos psi). Every NS on
+the same OS shares Omega and psi.
 
-Moments (closed form of the seed's quadratures): with C(tau) = E[cos(Omega tau)] = 1 - sqrt(2) s D(s / sqrt(2)),
-s = sigma tau, D the Dawson function (:func:`mean_cos`):
-
-* E[Vx] = V C(dt), E[Vy] = E[Vz] = 0                                   (seed 004, E_Vx, E_Vy, E_Vz)
-* Var[Vx] = V^2 ((1 + C(2 dt))/2 - C(dt)^2), Var[Vy] = Var[Vz] = V^2 (1 - C(2 dt))/4   (Var_Vx, Var_Vy, Var_Vz)
-* K_VxVy = 0 exactly (uniform psi), the seed's independence assumption;
-* two NS i, j: Cov[Vx_i, Vx_j] = V_i V_j ((C(dt_i - dt_j) + C(dt_i + dt_j))/2 - C(dt_i) C(dt_j)),
-  Cov[Vy_i, Vy_j] = Cov[Vz_i, Vz_j] = V_i V_j (C(dt_i - dt_j) - C(dt_i + dt_j))/4.
-
-Expected values and variances of the coordinates (seed 004 Eqs. 1-2) follow by the linear map of the HCW solution
-(:func:`hcw_matrix`, :func:`drag_offset`); for a pair, Var[r_i - r_j] includes the covariance above.
+Moments (closed form of the seed's quadratures): with C(tau) = E[cos(Omega tau)] (:func:`mean_cos`), the mean
+and variance of the separation velocity (:func:`velocity_moments`) and the covariance of two NS
+(:func:`velocity_covariance`); the coordinates' (Eqs. 1-2) by the HCW map (:func:`hcw_matrix`, :func:`drag_offset`).
 
 'With probability P*' (Eqs. 3-5), two analytical methods (``ClusterConfig.method``):
 
 * ``envelope`` (default, :mod:`~roe_sep.core.deployment.cluster_envelope`): every condition must hold for every
-  tumbling state
-  of the set {Omega <= Omega*, any psi}, whose probability is exactly P*; the minimax cost is the largest pair
-  distance over that set. The conditions then hold jointly with P >= P* (a bound: no distribution approximation).
-* ``gaussian`` (the seed's model): each coordinate is taken as Gaussian with the moments above.
-  Safe from the OS (3): with k = Phi^-1(1 - (1 - P*)/6) all three coordinates lie within E +- k sigma with
-  probability >= P* (Bonferroni, any correlation); the NS is safe at t when that box stays clear of the r* ball
-  (:func:`box_bounds`, lower) or when |r_i(t)| >= s_min(M(t)) V - |D(t)| >= r*, which holds for every direction
-  (:func:`deterministic_bound`). Safe from each other (4, lower part): the box of r_i - r_j always contains the
-  origin, so the seed's independence assumption (K = 0) is used: P(|r_i - r_j| < r*) <= prod over the coordinates
-  of P(|x_c| < r*) <= 1 - P* (:func:`near_probability`), or the deterministic pair bound
-  (:func:`deterministic_pair_bound`). Within r** (4, upper part) and the minimax criterion (5): the farthest corner
-  of the P* box.
+  tumbling state of the set {Omega <= Omega*, any psi}, whose probability is exactly P*; the minimax cost is the
+  largest pair distance over that set. The conditions then hold jointly with P >= P* (no distribution approximation).
+* ``gaussian`` (the seed's model): each coordinate Gaussian with the moments above. Safe from the OS (3): the
+  Bonferroni box E +- k sigma, k = Phi^-1(1 - (1 - P*)/6), clear of the r* ball (:func:`box_bounds`), or
+  :func:`deterministic_bound`. Safe from each other (4, lower part): the independence assumption (K = 0),
+  :func:`near_probability`, or :func:`deterministic_pair_bound`. Within r** (4, upper part) and the minimax (5): the
+  farthest corner of the P* box.
 
-Measured against the statistical simulation (docs/seeds.md, tests): every region of the envelope lies inside the
-statistical one (seed 004 Sec. 4: the analytical algorithm is the more stringent). The gaussian regions do for the
-OS and for the pair with the lighter-drag NS first, but *not* for the pair with the heavier-drag NS first nor for
-r**: the along-track spread is V cos(Omega dt) with Omega Rayleigh-distributed, whose lower tail is exponential, and
-the Gaussian k sigma underestimates its P* quantile; the independence assumption misses the drag-driven crossings.
-
-Statistical validation (seed 004 Sec. 4): :func:`simulate_program` draws the angular velocity, builds every NS's
-velocity and propagates the same dynamics for every sample (vectorized over samples); the seed's statistical model is
-more accurate (exact equations, elliptic orbit), here only the probability model differs, so the comparison
-isolates the analytical approximations. Propagation: :mod:`~roe_sep.core.deployment.cluster_dynamics` only.
+Statistical validation (seed 004 Sec. 4): :func:`simulate_program`, the same dynamics over sampled angular
+velocities (only the probability model differs); the comparison is in docs/seeds.md.
 """
 
 import dataclasses
@@ -238,7 +213,9 @@ def mean_cos(sigma: float, tau: ArrayLike) -> np.ndarray:
 
 
 def velocity_moments(v: ArrayLike, dt: ArrayLike, sigma: float) -> tuple[np.ndarray, np.ndarray]:
-    """(E[V], Var[V]) ``(..., 3)`` of the separation velocity after delay ``dt`` [s] (seed 004 E_V*, Var_V*).
+    """(E[V], Var[V]) ``(..., 3)`` of the separation velocity after delay ``dt`` [s] (seed 004 E_V*, Var_V*):
+    E[Vx] = V C(dt), E[Vy] = E[Vz] = 0, Var[Vx] = V^2 ((1 + C(2 dt))/2 - C(dt)^2), Var[Vy] = Var[Vz] =
+    V^2 (1 - C(2 dt))/4, with C(tau) = 1 - sqrt(2) s D(s / sqrt(2)), s = sigma tau, D the Dawson function.
 
     Parameters
     ----------
@@ -262,7 +239,9 @@ def velocity_moments(v: ArrayLike, dt: ArrayLike, sigma: float) -> tuple[np.ndar
 
 
 def velocity_covariance(vi: ArrayLike, dti: ArrayLike, vj: ArrayLike, dtj: ArrayLike, sigma: float) -> np.ndarray:
-    """Cov[V_i, V_j] ``(..., 3)`` (diagonal: x, y, z) of two NS separated from the same tumbling OS.
+    """Cov[V_i, V_j] ``(..., 3)`` (diagonal: x, y, z) of two NS separated from the same tumbling OS:
+    Cov[Vx_i, Vx_j] = V_i V_j ((C(dt_i - dt_j) + C(dt_i + dt_j))/2 - C(dt_i) C(dt_j)),
+    Cov[Vy_i, Vy_j] = Cov[Vz_i, Vz_j] = V_i V_j (C(dt_i - dt_j) - C(dt_i + dt_j))/4 (C of :func:`velocity_moments`).
 
     Parameters
     ----------
@@ -287,7 +266,7 @@ def velocity_covariance(vi: ArrayLike, dti: ArrayLike, vj: ArrayLike, dtj: Array
 
 
 def position_moments(t: ArrayLike, v: ArrayLike, dt: ArrayLike, p_x: ArrayLike, sigma: float,
-                     n: float) -> tuple[np.ndarray, np.ndarray]:
+                     *, n: float) -> tuple[np.ndarray, np.ndarray]:
     """E and Var ``(..., 3)`` of one NS's position w.r.t. the OS at time ``t`` [s] from the program start (Eqs. 1-2).
 
     The NS separates at ``dt`` with speed ``v`` and differential drag acceleration ``p_x``:
@@ -323,7 +302,7 @@ def position_moments(t: ArrayLike, v: ArrayLike, dt: ArrayLike, p_x: ArrayLike, 
     return mean, np.stack([m00**2 * vx + m01**2 * vy, m10**2 * vx + m11**2 * vy, m22**2 * vz], axis=-1)
 
 
-def pair_moments(t: ArrayLike, vi: ArrayLike, dti: ArrayLike, pi: ArrayLike, vj: ArrayLike, dtj: ArrayLike,
+def pair_moments(t: ArrayLike, vi: ArrayLike, dti: ArrayLike, pi: ArrayLike, vj: ArrayLike, *, dtj: ArrayLike,
                  pj: ArrayLike, sigma: float, n: float) -> tuple[np.ndarray, np.ndarray]:
     """E and Var ``(..., 3)`` of r_i - r_j at times ``t`` (exact second moments, shared tumbling).
 
@@ -446,7 +425,7 @@ def deterministic_bound(tau: ArrayLike, v: ArrayLike, p_x: ArrayLike, n: float) 
 
 
 def deterministic_pair_bound(t: ArrayLike, vi: ArrayLike, dti: ArrayLike, pi: ArrayLike, vj: ArrayLike,
-                             dtj: ArrayLike, pj: ArrayLike, n: float) -> np.ndarray:
+                             *, dtj: ArrayLike, pj: ArrayLike, n: float) -> np.ndarray:
     """|r_i - r_j| >= s_min(M_a) V_a - s_max(M_b) V_b - |D_i - D_j| for all directions, a = earlier separation.
 
     |M_a V_a e_a - M_b V_b e_b| >= s_min(M_a) V_a - s_max(M_b) V_b for unit e_a, e_b; in the straight-line phase
@@ -505,15 +484,16 @@ def platform_safe(cfg: ClusterConfig, sat: Nanosatellite, delays: ArrayLike | No
     tau = _time_grid(cfg, cfg.departure_time, cfg.horizon - cfg.departure_time)
     if cfg.method == "envelope":
         zero = np.zeros_like(delays)
-        return conditions(sat.velocity, delays, p_x, zero, delays, zero, delays[:, None] + tau, n, cfg.omega_star,
-                          cfg.r_safe)[0]
-    mean, var = position_moments(delays[:, None] + tau, sat.velocity, delays, p_x, cfg.sigma, n)
+        return conditions(sat.velocity, delays, p_x, zero, delays, pj=zero, t=delays[:, None] + tau, n=n,
+                          omega_star=cfg.omega_star,
+                          r_min=cfg.r_safe)[0]
+    mean, var = position_moments(delays[:, None] + tau, sat.velocity, delays, p_x, cfg.sigma, n=n)
     lower, _ = box_bounds(mean, var, quantile_factor(cfg.p_required))
     det = deterministic_bound(tau, sat.velocity, p_x, n)
     return np.all((lower >= cfg.r_safe) | (det >= cfg.r_safe), axis=-1)
 
 
-def _pair_conditions(cfg, si, di, sj, dj, within=True):
+def _pair_conditions(cfg, si, di, sj, dj, *, within=True):
     """(safe, within r**, largest distance bound) of NS ``si`` at delays ``di`` against ``sj`` at ``dj`` (arrays of
     one shape), every t from the later separation to the later separation + horizon, with P* (Eqs. 4-5)."""
     n = cfg.n
@@ -523,16 +503,16 @@ def _pair_conditions(cfg, si, di, sj, dj, within=True):
     distinct = di != dj
     if cfg.method == "envelope":
         shape = di.shape
-        clear, inside, upper = conditions(si.velocity, di.ravel(), pi, sj.velocity, dj.ravel(), pj,
-                                          t.reshape(di.size, -1), n, cfg.omega_star, cfg.r_safe,
-                                          cfg.r_max if within else None)
+        clear, inside, upper = conditions(si.velocity, di.ravel(), pi, sj.velocity, dj.ravel(), pj=pj,
+                                          t=t.reshape(di.size, -1), n=n, omega_star=cfg.omega_star, r_min=cfg.r_safe,
+                                          r_max=cfg.r_max if within else None)
         if not within:
             return clear.reshape(shape) & distinct, None, None
         return clear.reshape(shape) & distinct, inside.reshape(shape) & distinct, upper.reshape(shape)
-    mean, var = pair_moments(t, si.velocity, di, pi, sj.velocity, dj, pj, cfg.sigma, n)
+    mean, var = pair_moments(t, si.velocity, di, pi, sj.velocity, dtj=dj, pj=pj, sigma=cfg.sigma, n=n)
     _, upper = box_bounds(mean, var, quantile_factor(cfg.p_required))
     near = near_probability(mean, var, cfg.r_safe)
-    det = deterministic_pair_bound(t, si.velocity, di, pi, sj.velocity, dj, pj, n)
+    det = deterministic_pair_bound(t, si.velocity, di, pi, sj.velocity, dtj=dj, pj=pj, n=n)
     safe = np.all((near <= 1.0 - cfg.p_required) | (det >= cfg.r_safe), axis=-1) & distinct
     return safe, np.all(upper <= cfg.r_max, axis=-1) & distinct, np.max(upper, axis=-1)
 
@@ -561,7 +541,7 @@ def pair_tables(cfg: ClusterConfig, si: Nanosatellite, sj: Nanosatellite,
 
 
 def pair_distance_bound(cfg: ClusterConfig, si: Nanosatellite, dt_i: float, sj: Nanosatellite, dt_j: float,
-                        t: ArrayLike) -> np.ndarray:
+                        *, t: ArrayLike) -> np.ndarray:
     """P* upper bound [m] of |r_i - r_j| at each time of ``t`` ``(T,)`` by ``cfg.method`` (the minimax quantity).
 
     Parameters
@@ -584,10 +564,11 @@ def pair_distance_bound(cfg: ClusterConfig, si: Nanosatellite, dt_i: float, sj: 
     pi = drag_acceleration(-si.delta_q, cfg.density, cfg.a)
     pj = drag_acceleration(-sj.delta_q, cfg.density, cfg.a)
     if cfg.method == "envelope":
-        return conditions(si.velocity, dt_i, pi, sj.velocity, dt_j, pj, t[:, None], cfg.n, cfg.omega_star,
-                          cfg.r_safe, cfg.r_max)[2]
+        return conditions(si.velocity, dt_i, pi, sj.velocity, dt_j, pj=pj, t=t[:, None], n=cfg.n,
+                          omega_star=cfg.omega_star,
+                          r_min=cfg.r_safe, r_max=cfg.r_max)[2]
     mean, var = pair_moments(t, si.velocity, np.asarray(dt_i, dtype=float), pi, sj.velocity,
-                             np.asarray(dt_j, dtype=float), pj, cfg.sigma, cfg.n)
+                             dtj=np.asarray(dt_j, dtype=float), pj=pj, sigma=cfg.sigma, n=cfg.n)
     return box_bounds(mean, var, quantile_factor(cfg.p_required))[1]
 
 
@@ -881,7 +862,7 @@ def simulate_program(cfg: ClusterConfig, delays: ArrayLike, draws: Draws) -> dic
 
 
 def statistical_min_delay_difference(cfg: ClusterConfig, draws: Draws, si: Nanosatellite, sj: Nanosatellite,
-                                     dt_i: float, differences: ArrayLike) -> float | None:
+                                     dt_i: float, *, differences: ArrayLike) -> float | None:
     """Smallest delay difference dt_j - dt_i (from ``differences``) with P(r_ij >= r* throughout) >= P*.
 
     Parameters

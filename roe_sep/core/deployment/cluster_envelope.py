@@ -1,40 +1,32 @@
 """The P* envelope of the tumbling: cluster conditions that hold for every tumbling state of a set of probability P*.
 
-Seed 004 asks for conditions (3)-(5) 'with probability P*' of the random attitude of the stage (OS). The attitude
-model (:mod:`~roe_sep.core.deployment.cluster`, seed 004 ref. [5]) makes every separation direction a function of the
-stage's
-transverse angular velocity: magnitude Omega ~ Rayleigh(sigma), axis azimuth psi uniform, and a NS separated at dt
-leaves along e(Omega dt, psi) = (cos theta, sin theta sin psi, -sin theta cos psi). The set
+Seed 004 asks for conditions (3)-(5) 'with probability P*' of the stage's (OS) random attitude: a NS separated at dt
+leaves along e(Omega dt, psi) = (cos theta, sin theta sin psi, -sin theta cos psi), Omega ~ Rayleigh(sigma), psi
+uniform, shared by every NS of the stage (:mod:`~roe_sep.core.deployment.cluster`, seed 004 ref. [5]). The set
 
     S* = {Omega <= Omega*, any psi},   Omega* = sigma sqrt(-2 ln(1 - P*))   (Rayleigh CDF 1 - exp(-W^2/2 sigma^2))
 
-has probability exactly P* (:func:`omega_bound`). A condition that holds for every state of S* holds with
-probability >= P*, and conditions that all hold on S* hold *jointly* with probability >= P*, without a Gaussian
-approximation of the distances (whose k-sigma quantiles miss the exponential tail of V cos(Omega dt)) and without an
-independence assumption between the coordinates or the NS. Every NS of the stage shares (Omega, psi).
+has probability exactly P* (:func:`omega_bound`): conditions that all hold on S* hold *jointly* with P >= P*.
 
-Relative position of NS i w.r.t. NS j at time t (w.r.t. the OS: V_j = 0, no drag of its own), tau = t - dt:
+NS i relative to NS j at time t (to the OS: V_j = 0, no drag), tau = t - dt:
 
     r = V_i M(tau_i) e(Omega dt_i, psi) - V_j M(tau_j) e(Omega dt_j, psi) + D_i(tau_i) - D_j(tau_j)
 
-(:mod:`~roe_sep.core.deployment.cluster_dynamics`: M the HCW matrix, D the drag offset). With s = sin psi and cos^2
-psi = 1 - s^2 the in-plane part is u + s w and the normal part is cos psi h, so over psi
+(:mod:`~roe_sep.core.deployment.cluster_dynamics`: M the HCW matrix, D the drag offset). With s = sin psi the
+in-plane part is u + s w and the normal part cos psi h, so over psi
 
     |r|^2 = alpha + 2 beta s + gamma s^2 on s in [-1, 1],  alpha = |u|^2 + h^2, beta = u.w, gamma = |w|^2 - h^2,
 
-whose minimum and maximum are closed form (:func:`psi_extrema`). Over Omega the conditions are decided by branch
-and bound on cells [Omega_c - delta, Omega_c + delta]. With e' = de/dtheta = -sin theta e_x + cos theta n_psi
-(n_psi a unit vector in the y-z plane, |e'| = |e''| = 1), |dr/dOmega| is bounded over the cell by the smaller of
+extrema in closed form (:func:`psi_extrema`). Over Omega: branch and bound on cells [Omega_c - delta, Omega_c +
+delta], |dr/dOmega| bounded over a cell (|de/dtheta| = |d2e/dtheta2| = 1) by the smaller of
 
     L1 = s_max(V_i dt_i M_i - V_j dt_j M_j)
          + min(V_j dt_j s_max(M_j), V_i dt_i s_max(M_i)) |dt_i - dt_j| (Omega_c + delta)
     L2 = |(a_i M_i - a_j M_j) e_x| + |b_i M_i - b_j M_j|_yz + delta sum_k V_k dt_k^2 (|M_k e_x| + |M_k|_yz),
 
-a_k = V_k dt_k sin(Omega_c dt_k), b_k = V_k dt_k cos(Omega_c dt_k), |X|_yz = max(|X e_y|, |X e_z|) (L2 is tight at
-small tilts, where the large along-track entry of M hardly moves r). So |r| stays within L delta of its value at the
-cell centre for every psi. A centre that violates a condition is a state of S*: the condition fails. A cell whose
-bound clears it is done. Other cells split, down to a depth limit after which the case counts as failed
-(conservative). The conditions are decided at the sampled times (the grid of the statistical check).
+a_k = V_k dt_k sin(Omega_c dt_k), b_k = V_k dt_k cos(Omega_c dt_k), |X|_yz = max(|X e_y|, |X e_z|): |r| stays within
+L delta of its value at the cell centre. A centre that violates a condition fails it; a cell whose bound clears it is
+done; others split, down to a depth limit after which the case fails (conservative). At the sampled times.
 """
 
 from dataclasses import dataclass
@@ -103,7 +95,7 @@ class _Cases:
     n_times: int
 
 
-def _cases(vi, dti, pi, vj, dtj, pj, t, n):
+def _cases(vi, dti, pi, vj, dtj, *, pj, t, n):
     vi, dti, pi, vj, dtj, pj = (np.asarray(x, dtype=float)[:, None] for x in (vi, dti, pi, vj, dtj, pj))
     t = np.asarray(t, dtype=float)
     ti, tj = t - dti, t - dtj
@@ -155,16 +147,13 @@ def _split(k, omega, delta):
     return np.repeat(k, 2), np.stack([omega - half, omega + half], axis=-1).ravel(), half
 
 
-def conditions(vi: ArrayLike, dti: ArrayLike, pi: ArrayLike, vj: ArrayLike, dtj: ArrayLike, pj: ArrayLike,
+def conditions(vi: ArrayLike, dti: ArrayLike, pi: ArrayLike, vj: ArrayLike, dtj: ArrayLike, *, pj: ArrayLike,
                t: ArrayLike, n: float, omega_star: float, r_min: float,
                r_max: float | None = None) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
-    """Conditions (3)-(5) on S* for NS i against NS j: arrays over cases ``(C,)`` (speeds [m/s], delays [s], drag
-    accelerations [m/s^2]), times ``t`` ``(C, T)`` [s from the program start]; against the OS: V_j = 0, p_j = 0.
-
-    Per case, for every state of S* at every sampled time: clear (|r| >= ``r_min``), and with ``r_max``: within
-    (|r| <= ``r_max``) and upper, an upper bound of max |r| [m] over the times and S*, tight to r_max / 1000 where
-    the case is within (the minimax cost). Returns (clear, within, upper); the last two None without ``r_max``.
-    :data:`CHUNK_CASES` cases are decided together (bench/bench_cluster.py measures the choice).
+    """Conditions (3)-(5) on S* for NS i against NS j (against the OS: V_j = 0, p_j = 0), per case, for every state
+    of S* at every sampled time: clear (|r| >= ``r_min``), and with ``r_max``: within (|r| <= ``r_max``) and upper,
+    an upper bound of max |r| [m] over the times and S*, tight to r_max / 1000 where the case is within (the minimax
+    cost). :data:`CHUNK_CASES` cases are decided together.
 
     Parameters
     ----------
@@ -195,7 +184,8 @@ def conditions(vi: ArrayLike, dti: ArrayLike, pi: ArrayLike, vj: ArrayLike, dtj:
     out = []
     for start in range(0, t.shape[0], CHUNK_CASES):
         part = slice(start, start + CHUNK_CASES)
-        out.append(_decide(_cases(*(np.broadcast_to(x, t.shape[:1])[part] for x in args), t[part], n),
+        parts = [np.broadcast_to(x, t.shape[:1])[part] for x in args]
+        out.append(_decide(_cases(*parts[:5], pj=parts[5], t=t[part], n=n),
                            omega_star, r_min, r_max))
     clear = np.concatenate([o[0] for o in out])
     if r_max is None:
@@ -211,10 +201,11 @@ def _decide(c: _Cases, omega_star, r_min, r_max):
     k = np.repeat(np.arange(c.l0.size), LEVEL0_CELLS)
     omega = np.tile(omega, c.l0.size)
     margin = _margin(c, k, omega, delta, l_centre)
-    clear = _clear(c, n_cases, k, omega, delta, np.sqrt(lo2), margin, r_min)
+    clear = _clear(c, n_cases, k, omega, delta, value=np.sqrt(lo2), margin=margin, r_min=r_min)
     if r_max is None:
         return clear, None, None
-    return (clear, *_within(c, n_cases, k, omega, delta, np.sqrt(hi2), margin, r_max, 1e-3 * r_max))
+    return (clear, *_within(c, n_cases, k, omega, delta, value=np.sqrt(hi2), margin=margin, r_max=r_max,
+                            tol=1e-3 * r_max))
 
 
 def _margin(c, k, omega, delta, l_centre):
@@ -222,7 +213,7 @@ def _margin(c, k, omega, delta, l_centre):
     return np.minimum(c.l0[k] + c.l1[k] * (omega + delta), l_centre + c.l2[k] * delta) * delta
 
 
-def _clear(c, n_cases, k, omega, delta, value, margin, r_min):
+def _clear(c, n_cases, k, omega, delta, *, value, margin, r_min):
     failed = np.zeros(n_cases, dtype=bool)
     for level in range(MAX_DEPTH + 1):
         case = k // c.n_times
@@ -237,7 +228,7 @@ def _clear(c, n_cases, k, omega, delta, value, margin, r_min):
         value, margin = np.sqrt(lo2), _margin(c, k, omega, delta, l_centre)
 
 
-def _within(c, n_cases, k, omega, delta, value, margin, r_max, tol):
+def _within(c, n_cases, k, omega, delta, *, value, margin, r_max, tol):
     failed = np.zeros(n_cases, dtype=bool)
     lower, upper = np.zeros(n_cases), np.zeros(n_cases)
     for level in range(MAX_DEPTH + 1):

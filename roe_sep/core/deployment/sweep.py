@@ -12,18 +12,14 @@ Relative motion models (``DeploymentConfig.model``), both behind :func:`distance
   atmosphere co-rotating with the Earth), all cases at once in batch mode; the distance is the true Euclidean
   distance |r_CubeSat - r_mother|. The mother craft starts on a *mean* circular orbit (mean -> osculating, first
   order J2) and the CubeSat from the same state plus the deployer impulse in the mother craft's RTN frame. The seed
-  propagates with GMAT (RK89, JGM-2 to J4, MSISE90, SRP, Sun/Moon); SRP and third bodies are left out (at 400 km
-  their differential effect on two bodies a few km apart is orders of magnitude below drag).
+  propagates with GMAT (RK89, JGM-2 to J4, MSISE90, SRP, Sun/Moon); SRP and third bodies are left out (their
+  differential effect is orders of magnitude below drag).
 * ``linear``: the impulse enters the ROE by seed 002 Eq. (2) (:func:`~roe_sep.core.relmotion.maneuvers.delta_roe`),
   the ROE are propagated by the core's secular model (:func:`relative_motion`: Keplerian drift, J2 of the
   Koenig-Guffanti-D'Amico STM, differential drag as a constant d(da)/dt from
   :func:`~roe_sep.core.relmotion.dynamics.drag_da_dot`) and mapped to RTN with
-  :func:`~roe_sep.core.relmotion.roe.roe_to_rtn`; the
-  along-track distance is then the arc a*dl (the chord is shorter by about 0.7 % at 3000 km). Fast; the model of
-  the planner, so the sweep also shows how far that model carries. Measured against the nonlinear model (default
-  sweep): within 6 % after 10 days wherever the drift is set by the deployment or by drag alone; the truth's
-  orbit-averaged along-track drag is 0.94/0.97/1.03 of the model's rho_ref V^2 at i = 97/37/5 deg (the mean
-  spherical altitude of a mean-circular 400 km orbit is 404.7/395.5/390.3 km, and the atmosphere co-rotates).
+  :func:`~roe_sep.core.relmotion.roe.roe_to_rtn`; the along-track distance is then the arc a*dl. Fast; the model of
+  the planner, so the sweep also shows how far that model carries (compared in docs/seeds.md).
 
 Drag: only the CubeSat is perturbed (seed 003 Sec. 4.1: the Space Rider is controlled, 'not perturbed, except for
 gravitational effects'), so dB = B_cubesat - B_mother with B_mother = 0 by default. Default density: the US
@@ -166,7 +162,7 @@ def deployment_roe(dv_rtn: ArrayLike, u0: ArrayLike, a: float) -> np.ndarray:
 
 
 def relative_motion(roe0: ArrayLike, t: ArrayLike, a: float, inc: ArrayLike, da_dot: ArrayLike = 0.0,
-                    j2: bool = True) -> np.ndarray:
+                    *, j2: bool = True) -> np.ndarray:
     """Linear model: ROE ``(..., len(t), 6)`` at times ``t`` [s] after the deployment.
 
     The core's secular ROE model (:func:`~roe_sep.core.relmotion.dynamics.propagate`: Keplerian, J2, constant
@@ -223,7 +219,7 @@ def _linear_distances(cfg, dv_rtn, inc, times):
     a = cfg.a
     u0 = np.radians(cfg.u0_deg)
     da_dot = drag_da_dot(cfg.delta_b, cfg.density, a) if cfg.drag else 0.0
-    roe = relative_motion(deployment_roe(dv_rtn, u0, a), times, a, inc, np.broadcast_to(da_dot, inc.shape), cfg.j2)
+    roe = relative_motion(deployment_roe(dv_rtn, u0, a), times, a, inc, np.broadcast_to(da_dot, inc.shape), j2=cfg.j2)
     return relative_distance(roe, u0 + arg_latitude_rate(a, inc[..., None], cfg.j2) * times, a)
 
 
@@ -236,7 +232,8 @@ def _nonlinear_distances(cfg, dv_rtn, inc, times):
     mother = np.stack([np.full_like(inc, cfg.a), zero, inc, zero, zero, zero + np.radians(cfg.u0_deg)], axis=-1)
     s0 = apply_impulse(pair_state(mother, mother), dv_rtn.reshape(-1, 3), np.ones(inc.shape, dtype=bool))
     b_mother, b_cubesat = (cfg.mother_ballistic, cfg.cubesat.ballistic) if cfg.drag else (0.0, 0.0)
-    states = propagate_pairs_grid(s0, 0.0, times, b_mother, b_cubesat, Atmosphere.scaled(cfg.density, cfg.altitude))
+    states = propagate_pairs_grid(s0, 0.0, times, b_mother, b_cubesat,
+                                  atmosphere=Atmosphere.scaled(cfg.density, cfg.altitude))
     return np.linalg.norm(states[..., 6:9] - states[..., 0:3], axis=-1).reshape(shape + (len(times),))
 
 

@@ -108,12 +108,12 @@ def run(design: MultiImpulseDesign, mc: MonteCarloConfig = MonteCarloConfig()) -
     state, u_state, crossings = roe1, design.u1, []
     for b, ref in zip(reductions, refs):  # a handful of burns: the loop is over burns, never samples
         dt = (b.u - u_state) / u_rate
-        crossings.append(nearest_crossing(state, u_state, dt, a, inc, mc.j2, da_dot,
+        crossings.append(nearest_crossing(state, u_state, dt, a, inc, j2=mc.j2, da_dot=da_dot,
                                           t_min=None if u_state == design.u1 else 1e-3)[0])
         state = propagate(state, dt, a, inc, mc.j2, da_dot)
         state = state + delta_roe(dispersed_dv(b.dv_relative_rtn, d.f2, d.eps2, ref), b.u, a, n)
         u_state = b.u
-    crossings.append(nearest_crossing(state, u_state, mc.horizon, a, inc, mc.j2, da_dot, t_min=1e-3)[0])
+    crossings.append(nearest_crossing(state, u_state, mc.horizon, a, inc, j2=mc.j2, da_dot=da_dot, t_min=1e-3)[0])
     crossing = np.min(np.stack(crossings), axis=0) * a
     roe_h = propagate(state, mc.horizon, a, inc, mc.j2, da_dot)
     side = 1.0 if cfg.leading else -1.0

@@ -2,23 +2,20 @@
 carrier (beyond ``departure_distance``, as the simulator's closest-approach tracking), comes back within a hard-body
 radius ``R`` of it before the horizon. Pure numpy.
 
-Trajectory model: the one of the Monte Carlo (:mod:`.sweep`): the dispersed ejection (Eq. 22), the secular ROE
-propagation with drag (Eqs. 23-24, J2 optional) to the drift-stop, the dispersed drift-stop with reduction p, and
-``horizon`` of drift after it; the relative position is the linear ROE -> RTN map
-(:func:`~roe_sep.core.relmotion.roe.roe_to_rtn`) at every instant. Arc A (ejection to drift-stop) is evaluated from
+Trajectory model: the Monte Carlo's (:mod:`.sweep`: dispersed ejection, Eq. 22; secular ROE with drag, Eqs. 23-24;
+dispersed drift-stop with reduction p; ``horizon`` of drift after it), the relative position the linear ROE -> RTN
+map (:func:`~roe_sep.core.relmotion.roe.roe_to_rtn`). Arc A (ejection to drift-stop) is evaluated from
 :func:`~.sweep.pre_stop`'s state at the drift-stop (the secular model is a flow, exact backwards), arc B from
-:func:`~.sweep.after_stop`'s, so the physics (and any change of the dispersed-burn convention) is the sweep's.
+:func:`~.sweep.after_stop`'s: the physics is the sweep's.
 
-Minimum distance (:func:`min_distance`): f(t) = |r(t)|^2 is sampled on a grid of ``steps_per_orbit`` points per
-orbit (the drift-stop epoch is a grid point: |r| is continuous there, its derivative is not). The window starts
-where the sampled distance first decreases after exceeding ``departure_distance`` and ends at the horizon (the end
-point counts). Every grid interval is then refined by a branch and bound with a second-order bound: on an interval
-of length h, f(t) >= min(f0, f1) - M h^2/8 with M >= max f'' = 2 max(|v|^2 + r . a), from per-sample bounds of the
-relative speed V and acceleration A over the arc derived from the model's rates (:func:`_bounds`). An interval
-whose bound is above the best sampled value (minus the tolerance) cannot hold the minimum and is dropped; the
-others are halved until none is left. The result is an evaluated trajectory point, at most ``tol = tol_abs +
-tol_rel * d`` above the true minimum of the model over the window: a certified bound, not a sampling estimate.
-The rising part between the departure and the window start is certified to stay above ``R`` the same way.
+Minimum distance (:func:`min_distance`): f(t) = |r(t)|^2 sampled ``steps_per_orbit`` times per orbit (the drift-stop
+epoch a grid point), from where it first decreases after exceeding ``departure_distance`` to the horizon. Every grid
+interval is then refined by a branch and bound with a second-order bound: on an interval of length h, f(t) >= min(f0,
+f1) - M h^2/8 with M >= max f'' = 2 max(|v|^2 + r . a), from per-sample bounds of the relative speed V and acceleration
+A over the arc derived from the model's rates (:func:`_bounds`). An interval whose bound is above the best sampled value
+(minus the tolerance) is dropped, the others halved until none is left: an evaluated point at most ``tol = tol_abs +
+tol_rel * d`` above the model's true minimum (a certified bound). The rising part between the departure and the window
+start is certified to stay above ``R`` the same way.
 
 Estimators of P(d_min <= R):
 
@@ -26,14 +23,10 @@ Estimators of P(d_min <= R):
   k hits of n, Wilson 95 % interval.
 * ``is``: importance sampling in the standard-normal dispersion space z (9 dimensions: f1, f2, the two attitude
   error triples, the dB factor). A Gaussian proposal N(mu, C) is tuned by the multilevel cross-entropy method
-  (Rubinstein & Kroese 2004): at each level the rho-quantile gamma of d_min over the samples (not below R) defines
-  the elite set, whose mean and covariance (principal standard deviations kept >= 1) give the next proposal; it
-  stops when gamma reaches R. Where one Gaussian cannot follow the failure set down to R (gamma stalls), the
-  estimate is made at the smallest gamma reached, an upper bound of P(d <= R). The final estimate uses fresh
-  samples from the proposal: p = mean(1{d <= R} w), w = phi(z) / q(z), with the 95 % normal interval from its
-  standard error and the effective sample size ESS = (sum h)^2 / sum h^2 of the terms h = 1{d <= R} w. One
-  Gaussian follows one failure region; a second, separate region with a comparable share would be under-sampled
-  (the ``mc`` agreement test checks this where brute force is affordable).
+  (Rubinstein & Kroese 2004, :func:`cross_entropy`) until gamma reaches R. Where one Gaussian cannot follow the failure
+  set down to R (gamma stalls), the estimate is made at the smallest gamma reached, an upper bound of P(d <= R). The
+  final estimate uses fresh samples from the proposal: p = mean(1{d <= R} w), w = phi(z) / q(z), with the 95 % normal
+  interval from its standard error and ESS = (sum h)^2 / sum h^2, h = 1{d <= R} w (one Gaussian: one failure region).
 """
 
 import dataclasses
@@ -157,7 +150,7 @@ class Arcs:
     accel: np.ndarray  # (2, N) m/s^2, bound of |a| on each arc
 
 
-def _bounds(roe, da_dot, a, inc, j2, duration):
+def _bounds(roe, da_dot, a, inc, j2, *, duration):
     """(V, A): bounds of the relative speed [m/s] and acceleration [m/s^2] of the model over an arc of
     ``duration`` around ``roe`` (from the derivative of r/a = M(u) roe(t), roe_to_rtn, with the rates of
     :func:`~roe_sep.core.relmotion.dynamics.propagate`), 5 % margin."""
@@ -205,11 +198,11 @@ def arcs(design: DoubleImpulseDesign, mc: MonteCarloConfig, d: Draws, p: float) 
     out = after_stop(design, mc, d, pre, p)
     a, inc = design.a, design.inc
     roe = np.stack([pre.roe_before_stop, out.roe_after_stop])
-    va, aa = _bounds(pre.roe_before_stop, pre.da_dot, a, inc, mc.j2, pre.dt_stop)
+    va, aa = _bounds(pre.roe_before_stop, pre.da_dot, a, inc, mc.j2, duration=pre.dt_stop)
     # arc A is evaluated backwards from t_stop: bound with the state at its start as well (the larger of the two)
     roe1 = propagate(pre.roe_before_stop, -pre.dt_stop, a, inc, mc.j2, pre.da_dot)
-    va1, aa1 = _bounds(roe1, pre.da_dot, a, inc, mc.j2, pre.dt_stop)
-    vb, ab = _bounds(out.roe_after_stop, pre.da_dot, a, inc, mc.j2, mc.horizon)
+    va1, aa1 = _bounds(roe1, pre.da_dot, a, inc, mc.j2, duration=pre.dt_stop)
+    vb, ab = _bounds(out.roe_after_stop, pre.da_dot, a, inc, mc.j2, duration=mc.horizon)
     return Arcs(a, inc, mc.j2, design.u1, arg_latitude_rate(a, inc, mc.j2), pre.dt_stop, pre.dt_stop + mc.horizon,
                 roe, pre.da_dot, np.stack([np.maximum(va, va1), vb]), np.stack([np.maximum(aa, aa1), ab]))
 
@@ -231,7 +224,7 @@ def time_grid(arc: Arcs, steps_per_orbit: int) -> np.ndarray:
     return np.concatenate([ta, tb[1:]])
 
 
-def _lower_bound(arc, idx, t0, t1, f0, f1):
+def _lower_bound(arc, idx, t0, t1, f0, *, f1):
     """Lower bound of |r|^2 on [t0, t1] (one arc): min(f0, f1) - M h^2 / 8, M = 2 (V^2 + r_max A)."""
     which = (t0 >= arc.t_stop).astype(np.intp)
     v, acc = arc.speed[which, idx], arc.accel[which, idx]
@@ -240,13 +233,13 @@ def _lower_bound(arc, idx, t0, t1, f0, f1):
     return np.minimum(f0, f1) - (v * v + r_max * acc) * h * h / 4.0
 
 
-def _branch_and_bound(arc, idx, t0, t1, f0, f1, best, tol_abs, tol_rel, max_levels=80):
+def _branch_and_bound(arc, idx, t0, t1, f0, *, f1, best, tol_abs, tol_rel, max_levels=80):
     """Refine intervals (sample ``idx``, [t0, t1], end values f0, f1) until none can hold a value below
     ``best[idx] - tol`` (squared distances); ``best`` (per sample, m^2) is lowered in place."""
     for _ in range(max_levels):
         d = np.sqrt(best[idx])
         thr = np.maximum(d - (tol_abs + tol_rel * d), 0.0) ** 2
-        keep = _lower_bound(arc, idx, t0, t1, f0, f1) < thr
+        keep = _lower_bound(arc, idx, t0, t1, f0, f1=f1) < thr
         if not np.any(keep):
             return
         idx, t0, t1, f0, f1 = idx[keep], t0[keep], t1[keep], f0[keep], f1[keep]
@@ -312,9 +305,11 @@ def _min_distance(design, mc, d, cfg):
     # the closest approach); the interval of the departure itself starts at departure_distance
     ii, kk = np.nonzero((k[:, :-1] >= k_dep[:, None] - 1) & (k[:, :-1] < k_s[:, None]) & departed[:, None])
     rise = np.full(n, r2)
-    _branch_and_bound(arc, ii, t[kk], t[kk + 1], np.maximum(f[ii, kk], dep2), f[ii, kk + 1], rise, 0.0, 0.0)
+    _branch_and_bound(arc, ii, t[kk], t[kk + 1], np.maximum(f[ii, kk], dep2), f1=f[ii, kk + 1], best=rise, tol_abs=0.0,
+                      tol_rel=0.0)
     ii, kk = np.nonzero((k[:, :-1] >= k_s[:, None]) & returned[:, None])
-    _branch_and_bound(arc, ii, t[kk], t[kk + 1], f[ii, kk], f[ii, kk + 1], best, cfg.tol_abs, cfg.tol_rel)
+    _branch_and_bound(arc, ii, t[kk], t[kk + 1], f[ii, kk], f1=f[ii, kk + 1], best=best, tol_abs=cfg.tol_abs,
+                      tol_rel=cfg.tol_rel)
     best = np.where(rise < r2, np.minimum(rise, best), best)
     return np.where(returned | (rise < r2), np.sqrt(best), np.inf)
 
@@ -392,7 +387,7 @@ def _chunk_draws(chunk, design, mc, proposal, block):
 
 
 def evaluate_chunk(chunk: tuple[int, int], design: DoubleImpulseDesign, mc: MonteCarloConfig, cfg: CollisionConfig,
-                   proposal: Proposal | None = None, block: int = BLOCK_SIZE) -> CollisionStats:
+                   proposal: Proposal | None = None, *, block: int = BLOCK_SIZE) -> CollisionStats:
     """Collision statistics of one chunk ``(first block, number of blocks)``; ``proposal`` None: brute force.
 
     Parameters
@@ -439,26 +434,21 @@ def _fit(z, w, min_std):
 
 
 def cross_entropy(design: DoubleImpulseDesign, mc: MonteCarloConfig, cfg: CollisionConfig,
-                  samples_per_level: int = 2000, rho: float = 0.1, max_levels: int = 25,
+                  samples_per_level: int = 2000, rho: float = 0.1, *, max_levels: int = 25,
                   progress: Callable[[int, float], object] | None = None, min_std: float = 1.0,
                   patience: int = 4) -> tuple[Proposal, list, bool]:
     """Multilevel cross-entropy tuning of the Gaussian proposal (module docstring).
 
-    Level t samples ``samples_per_level`` points of the current proposal; gamma_t = max(R, rho-quantile of d_min);
-    the next proposal is the mean and covariance of the elite set {d_min <= gamma_t} (unweighted: the levels only
-    steer the proposal, the final estimate carries the likelihood ratios), with every principal standard deviation
-    kept >= ``min_std``: a proposal never narrower than the nominal density keeps the weights phi/q bounded.
-    Returns ``(proposal, levels, reached)``: ``levels`` the list of {gamma [m], elites}; ``reached`` False when
-    gamma stopped decreasing for ``patience`` levels or ``max_levels`` ran out before R (a failure set too thin for
-    one Gaussian; the caller then bounds P(d <= R) by P(d <= the smallest gamma)). ValueError when fewer than
-    max(10, rho n) samples of a level come back after the departure: nothing to steer by.
+    Level t samples ``samples_per_level`` points of the current proposal; gamma_t = max(R, rho-quantile of d_min); the
+    next proposal is the (unweighted) mean and covariance of the elite set {d_min <= gamma_t}, every principal standard
+    deviation kept >= ``min_std`` (the weights phi/q stay bounded). ``reached`` is False when gamma stopped decreasing
+    for ``patience`` levels or ``max_levels`` ran out before R: the caller then bounds P(d <= R) by P(d <= the smallest
+    gamma). ValueError when fewer than max(10, rho n) samples of a level come back after the departure.
 
     Parameters
     ----------
-    design, mc
-        As for :func:`draws_from_normal`.
-    cfg : CollisionConfig
-        The hard-body radius R [m] the levels aim at.
+    design, mc, cfg
+        As for :func:`draws_from_normal`; ``cfg`` gives the hard-body radius R [m] the levels aim at.
     samples_per_level : int
         Points per level.
     rho : float
@@ -475,7 +465,7 @@ def cross_entropy(design: DoubleImpulseDesign, mc: MonteCarloConfig, cfg: Collis
     Returns
     -------
     (Proposal, list of dict, bool)
-        The proposal, the levels and whether gamma reached R.
+        The proposal, the levels ({gamma [m], elites}) and whether gamma reached R.
     """
     dim = N_DIM
     prop = Proposal(np.zeros(dim), np.eye(dim))

@@ -326,7 +326,7 @@ def serial_map(fn: Callable, items: Iterable, *args) -> Iterator:
 
 
 def stream_sweep(design: DoubleImpulseDesign, mc: MonteCarloConfig, p_values: Iterable[float],
-                 chunk_size: int = DEFAULT_CHUNK_SIZE, block: int = BLOCK_SIZE, mapper: Callable = serial_map,
+                 chunk_size: int = DEFAULT_CHUNK_SIZE, block: int = BLOCK_SIZE, *, mapper: Callable = serial_map,
                  on_chunk: Callable[[int], object] | None = None) -> SweepStats:
     """The p sweep of ``mc.samples`` samples in chunks of ``chunk_size``, reduced in chunk order.
 

@@ -204,7 +204,7 @@ def pre_stop(design: DoubleImpulseDesign, mc: MonteCarloConfig, d: Draws) -> Pre
     roe1 = ejection_roe(design, d)
     da_dot = drag_da_dot(mc.delta_b * d.db_factor, mc.density, a) if mc.drag else np.zeros_like(d.f1)
     dt_stop = time_to_stop(design, mc)
-    crossing, _ = nearest_crossing(roe1, design.u1, dt_stop, a, inc, mc.j2, da_dot)
+    crossing, _ = nearest_crossing(roe1, design.u1, dt_stop, a, inc, j2=mc.j2, da_dot=da_dot)
     return PreStop(propagate(roe1, dt_stop, a, inc, mc.j2, da_dot), da_dot, crossing * a, dt_stop)
 
 

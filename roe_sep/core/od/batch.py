@@ -5,104 +5,32 @@ differential-drag drift of da [1/s] (:func:`~roe_sep.core.relmotion.dynamics.dra
 known (it carries GPS): its mean elements at each measurement epoch are inputs.
 
 Model (Tapley, Schutz, Born, *Statistical Orbit Determination*, 2004, Ch. 4): z_k = h_k(x) + v_k, v_k ~ N(0, R_k),
-R_k = diag(sigma_range^2, sigma_angle^2, sigma_angle^2), with
+R_k = diag(sigma_range^2, sigma_angle^2, sigma_angle^2), h_k(x) = observe(model_roe(x, t_k), chief_k, theta_k,
+station_k). The mean ROE at t_k (:func:`propagate_state`, :func:`model_roe`): the secular propagation (J2 and the
+drift x[6] of da) plus differential drag's drift of dix through the co-rotating atmosphere
+(:func:`~roe_sep.core.relmotion.dynamics.drag_dix_dot`, King-Hele 1964) and its short-periodic relative e vector
+(x[6] / n)(sin u_k, -cos u_k) (:func:`~roe_sep.core.relmotion.dynamics.drag_short_period_de`). With a
+:class:`DragModel` (density scale height H) also the e vector's secular drag drift d de/dt = k (a da_dot e_c +
+a_d_dot de), k = 1 / (2 H) + 1 / (2 a) (:func:`drag_de_drift`, King-Hele 1964), and the drift rate's growth over
+the batch, da_dot(t) = x[6] (1 + gamma (t - t_est)) (:meth:`DragModel.growth`, :func:`drift_growth`).
 
-    h_k(x) = observe(model_roe(x, t_k), chief_k, theta_k, station_k)      (:func:`model_roe`, :func:`observe`)
+Gauss-Newton: dx = (H^T W H)^-1 H^T W (z - h(x)), W = R^-1, H = dh/dx by central differences, solved by SVD of the
+column-scaled, whitened H (ill-conditioning detected, not rounded away); azimuth residuals wrapped to [-pi, pi);
+P = (H^T W H)^-1 at the solution. The model is almost linear in x over its uncertainty, so the NEES (:func:`nees`)
+is chi-square with 7 degrees of freedom. The state is secular; :meth:`ODResult.mean_state` adds the short-periodic de.
 
-and the mean ROE at t_k: the secular propagation (:func:`~roe_sep.core.relmotion.dynamics.propagate`: J2 and the
-constant drift rate x[6] of da) plus two terms of the same differential drag that the nonlinear truth shows and the
-secular model lacked (:func:`propagate_state`, :func:`model_roe`):
-
-* the drift of dix through the co-rotating atmosphere, d dix/dt = (omega_E a sin i / (4 v)) x[6]
-  (:func:`~roe_sep.core.relmotion.dynamics.drag_dix_dot`, King-Hele 1964): 0.0164 x[6], -1.3 m/day of a dix at a
-  drift rate of -81 m/day, with its J2 couplings into dl and diy;
-* the short-periodic relative e vector (x[6] / n)(sin u_k, -cos u_k)
-  (:func:`~roe_sep.core.relmotion.dynamics.drag_short_period_de`): the project's mean ROE are first-order J2 mean
-  elements (:mod:`roe_sep.core.truth.mean_osc`), which keep drag's orbit-periodic terms, 0.85 m of a de at
-  -81 m/day; in the relative position a constant along-track offset 2 a x[6] / n.
-
-With a drag model (:class:`DragModel`, which holds the density scale height H) a third term of the same drag:
-
-* the secular drift of the relative e vector (:func:`drag_de_drift`): drag decays each orbit's eccentricity
-  vector at d e/dt = (1 / (2 H) + 1 / (2 a)) a_dot e (King-Hele 1964; the perigee is in denser air), so for the
-  pair d de/dt = k (a da_dot e_c + a_d_dot de), e_c the carrier's mean e vector (:func:`chief_eccentricity`, its
-  own GPS orbit). The carrier's drift-stop has a radial impulse of 1.3 m/s (e_c = 1.8e-4), which J3 turns and
-  grows to 2.4-3.6e-4 in the last batch of a run: 1.2 m/day of a de at -74 m/day of a*da_dot. The along-track
-  oscillation 2 a de it changes projects on the smallest axis of a long batch (6.5 mm, a da about 15 h before the
-  epoch): noise-free measurements from four closed-loop truths, 43 h since the last burn, missed the secular
-  truth by 7-state NEES 4.26, 2.31, 2.30, 4.82 without the term (-1.30, -0.11, -0.92, -1.40 cm along that
-  axis, a dex 0.7-1.1 m off), 0.24, 4.80, 0.50, 0.50 with it (-0.20, +0.89, -0.22, -0.41 cm, de within 0.15 m;
-  the second truth's remaining error is not the e vector's); the OD ensemble with the closed loop's carrier
-  eccentricity (16 members, no burn for 43 h, noise-free) by 2.06 on average without, 0.23 with it.
-
-The state x is secular; :meth:`ODResult.mean_state` gives the mean ROE at t_est with the short-periodic de (what the
-truth and the reports call the ROE). Without the two terms, noise-free solutions on the nonlinear truth miss it by
-7-state NEES 0.4-1.6 (the mean 0.9 of an expected 7 for noise alone); with them by 0.04-0.27. Gauss-Newton iterations
-
-    dx = (H^T W H)^-1 H^T W (z - h(x)),   W = R^-1,   H = dh/dx by central finite differences,
-
-solved by SVD of the column-scaled, whitened H (no explicit normal matrix, so ill-conditioning is detected rather
-than rounded away). Azimuth residuals are wrapped to [-pi, pi). Formal covariance P = (H^T W H)^-1 at the solution.
-The secular ROE model is linear in x and the look angles are almost linear over the estimate's uncertainty
-(hundreds of meters at ~1000 km range; the e vector's drag drift is bilinear in de and x[6], a relative
-change of 1e-3 of de a day), so the estimate is unbiased and P is its actual covariance: the normalized
-estimation error squared (:func:`nees`) is chi-square with 7 degrees of freedom.
-
-Drift rate across burns (:class:`DragModel`, :class:`DriftPrior`). A burn changes the ROE by its executed (not its
-commanded) impulse, so every batch starts after the latest burn. The drift rate does not jump at a burn: it is the
-differential drag of the pair, seed 002 Eq. (24) differentiated in time,
-
-    da_dot = -(v^2 / (n a)) (B_d rho(h_d) - B_c rho(h_c)),   rho(h) = rho_0 exp(-(h - h_0) / H)  (Vallado Eq. 8-33),
-
-with constant ballistic coefficients B and the deputy's height h_d = h_c + a da. Linear in a da / H (a few hundred
-meters against H = 64 km at 515 km): da_dot = beta g, with the drag model's factor
-
-    g(a_c, da) = exp(-(a_c - a_ref) / H) (1 - R a da / H),   R = B_d / (B_d - B_c),
-
-and beta = -(v^2 / (n a)) (B_d - B_c) rho(a_ref - R_E) a constant of the pair (differential ballistic coefficient
-times the density at a reference height). g is known: the carrier's mean a_c (its own GPS orbit, an input of the
-batch) gives the density ratio as it decays (165 m/day at 515 km: +0.26 %/day of drift rate) and the estimate's
-own da the deputy's height (R = 1.52 in the default scenario: 0.43 % of drift rate per 180 m of a da, what a
-0.1 m/s acquisition burn changes). The last solution before a burn therefore gives a priori information on beta
-for every batch after it: its marginal (beta, sigma_beta^2) = (x[6] / g, P[6, 6] / g^2) is an a priori
-pseudo-measurement of x[6] / g(x) (Tapley, Schutz, Born 2004, Sec. 4.6, Eq. 4.6.1: the batch with a priori
-information, J = (z - h)^T W (z - h) + (x - x_bar)^T P_bar^-1 (x - x_bar)), one more whitened row of the design
-matrix. Its measurements precede the burn, those of the new batch follow it: the two are independent, and each
-batch carries forward only the marginal of the solution before it, so no measurement is used twice. The density
-of the truth atmospheres of this project (:mod:`roe_sep.core.truth.nonlinear`: the normalised exponential model,
-and NRLMSIS 2.0 at constant solar and geomagnetic activity) is a function of position (and, for NRLMSIS, of the
-Sun's direction, which turns 1 deg/day), so the orbit mean at the carrier's height is fixed by that height: no
-process noise is needed, and none is added by default. A real atmosphere changes with solar and geomagnetic
-activity: ``density_walk`` (relative 1-sigma of the orbit-mean density per sqrt(day), a random walk: state noise
-compensation, Tapley et al. Sec. 6.9) widens the a priori variance by (beta density_walk)^2 dt / 1 day between the
-two epochs.
-
-The same g changes within a batch: the drift rate grows as the carrier decays into denser air and the deputy's
-own drift takes it lower still, d ln g / dt = -(a_c_dot + R a_c da_dot) / H (:meth:`DragModel.growth`; 0.26 %/day
-from the carrier and 0.19 %/day from an 81 m/day drift in the default scenario, so 0.36 m/day over a 20-h batch
-at -81 m/day). With a drag model, the batch propagates da_dot(t) = x[6] (1 + gamma (t - t_est))
-(:func:`propagate_state`, :func:`drift_growth`; the carrier's rate a_c_dot from its own mean elements over the
-batch, :func:`chief_decay`), so x[6] is the rate at t_est, the one the drift prior and the guidance carry
-forward; a constant rate would be the batch's mean rate, half a batch old.
-
-Why these choices, measured (the OD ensemble of :mod:`roe_sep.core.od.ensemble` on the nonlinear truth, 256 chains,
-and the recorded runs): with the growth, the secular model recovers the truth's secular state from noise-free
-measurements to a 7-state NEES of 0.10 on average (0.36 at most; drift rate 0.14 sigma, 0.26 at most, 8
-chains), against 7 for the noise, so process noise inside a batch would model an error that is not there. The truth to
-compare with is its secular state (:func:`~roe_sep.core.od.ensemble.secular_drift`): a batch that spans a day
-determines a da about 6 h before its epoch to 2.6 cm, finer than the orbit-periodic centimeters of drag that the
-first-order mean elements keep. Against it the first solutions have mean 7-state NEES 7.08, drift-rate z^2 0.97,
-the last 7.08 and 1.06 (band of 256: [6.55, 7.47], [0.83, 1.18]; with the e vector's drag drift, the ensemble's
-carrier eccentric as its drift-stop leaves it, :func:`~roe_sep.core.od.ensemble.carrier_after_drift_stop`). The drift
-rate's optimism of an earlier 100-run campaign (mean z^2 1.42) came from comparing with the simulator's Eq. (24)
-value, which is smaller in magnitude than the nonlinear truth's own rate by 0.5-0.6 m/day. The remaining lever
-is information: the drift rate is a property of the pair, so the carried beta shrinks the last solution's
-drift-rate sigma from 2.05 to 0.79 m/day.
+Drift rate across burns (:class:`DragModel`, :class:`DriftPrior`): every batch starts after the latest burn, but the
+drift rate does not jump (seed 002 Eq. 24 in time): da_dot = beta g, g = exp(-(a_c - a_ref) / H) (1 - R a da / H),
+R = B_d / (B_d - B_c) (Vallado Eq. 8-33). The solution before a burn gives beta's marginal (x[6] / g, P[6, 6] / g^2)
+as an a priori pseudo-measurement, one more whitened row (Tapley et al. Sec. 4.6, Eq. 4.6.1); ``density_walk``
+widens its variance by (beta density_walk)^2 dt / 1 day (state noise compensation, Sec. 6.9). What each term is
+worth, measured: docs/campaigns.md, "The OD model's terms, measured".
 """
 
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..constants import SECONDS_PER_DAY
 from ..relmotion.dynamics import (
@@ -157,7 +85,7 @@ class ODResult:
     u_est: float = 0.0
     drag: bool = True
 
-    def mean_state(self):
+    def mean_state(self) -> tuple[np.ndarray, np.ndarray]:
         """(state, covariance) of the mean ROE at ``t_est`` as the project defines them (first-order J2 mean
         elements, which keep drag's short-periodic de: :func:`mean_roe_map`) and da_dot: J x, J P J^T."""
         jac = mean_roe_map(self.a_est, self.u_est) if self.drag else np.eye(STATE_SIZE)
@@ -172,16 +100,28 @@ class DragModel:
     scale_height: float
     ballistic_ratio: float
 
-    def growth(self, a_chief_dot, a_da_dot):
+    def growth(self, a_chief_dot: ArrayLike, a_da_dot: ArrayLike) -> np.ndarray:
         """d ln g / dt [1/s] = -(a_c_dot + R a_c da_dot) / H: the relative growth of the drift rate as the carrier
         decays at ``a_chief_dot`` [m/s] (denser air) and the deputy's own drift ``a_da_dot`` [m/s] (a_c da_dot)
         takes it lower still (the time derivative of :meth:`factor` at first order in a da / H)."""
         return -(np.asarray(a_chief_dot, dtype=float)
                  + self.ballistic_ratio * np.asarray(a_da_dot, dtype=float)) / self.scale_height
 
-    def factor(self, a_chief, a_ref, da):
-        """g = exp(-(a_c - a_ref) / H) (1 - R a_c da / H): da_dot over beta at carrier mean semi-major axis
-        ``a_chief`` [m] and dimensionless ``da`` (broadcasts)."""
+    def factor(self, a_chief: ArrayLike, a_ref: float, da: ArrayLike) -> np.ndarray:
+        """g = exp(-(a_c - a_ref) / H) (1 - R a_c da / H): da_dot over beta (broadcasts).
+
+        Parameters
+        ----------
+        a_chief, a_ref : array_like, float
+            The carrier's mean semi-major axis and the reference one [m].
+        da : array_like
+            The dimensionless da.
+
+        Returns
+        -------
+        numpy.ndarray
+            g.
+        """
         a_chief = np.asarray(a_chief, dtype=float)
         return (np.exp(-(a_chief - a_ref) / self.scale_height)
                 * (1.0 - self.ballistic_ratio * a_chief * np.asarray(da, dtype=float) / self.scale_height))
@@ -200,18 +140,33 @@ class DriftPrior:
     model: DragModel
 
     @classmethod
-    def from_result(cls, result, a_chief, model: DragModel):
-        """The marginal of a solution's drift rate as beta (reference: its own carrier ``a_chief`` [m])."""
+    def from_result(cls, result: "ODResult", a_chief: float, model: DragModel) -> "DriftPrior":
+        """The marginal of a solution's drift rate as beta.
+
+        Parameters
+        ----------
+        result : ODResult
+            The solution.
+        a_chief : float
+            Its carrier's semi-major axis [m] (the reference of g).
+        model : DragModel
+            The drag model.
+
+        Returns
+        -------
+        DriftPrior
+            beta, its variance, the reference and the solution's epoch.
+        """
         g = float(model.factor(a_chief, a_chief, result.x[0]))
         return cls(float(result.x[6]) / g, float(result.cov[6, 6]) / g**2, float(a_chief), float(result.t_est), model)
 
-    def carried(self, t, density_walk=0.0):
+    def carried(self, t: float, density_walk: float = 0.0) -> "DriftPrior":
         """The same information at epoch ``t`` [s]: the variance grows by (beta density_walk)^2 |t - t0| / 1 day
         (``density_walk``: relative 1-sigma of the orbit-mean density per sqrt(day), a random walk)."""
         walk = (self.beta * density_walk) ** 2 * abs(float(t) - self.t) / SECONDS_PER_DAY
         return DriftPrior(self.beta, self.variance + walk, self.a_ref, float(t), self.model)
 
-    def residual_row(self, x, a_chief):
+    def residual_row(self, x: np.ndarray, a_chief: float) -> tuple[float, np.ndarray]:
         """Whitened a priori residual (beta - x[6] / g(x)) / sigma_beta and its partials d(x[6] / g) / dx over
         sigma_beta ``(7,)`` at state ``x`` and carrier ``a_chief`` [m]."""
         m = self.model
@@ -224,7 +179,7 @@ class DriftPrior:
         return (self.beta - x[6] / g) / sigma, row / sigma
 
 
-def measurement_residual(z, z_model):
+def measurement_residual(z: ArrayLike, z_model: ArrayLike) -> np.ndarray:
     """z - h with the azimuth difference wrapped to [-pi, pi) (``(..., 3)``)."""
     r = np.asarray(z, dtype=float) - np.asarray(z_model, dtype=float)
     r[..., 1] = wrap_angle(r[..., 1])
@@ -237,7 +192,7 @@ def _chief_a_inc(batch: RadarBatch):
     return batch.chief[k, 0], batch.chief[k, 2]
 
 
-def chief_decay(batch: RadarBatch):
+def chief_decay(batch: RadarBatch) -> float:
     """The carrier's mean semi-major axis rate [m/s] over the batch: the least-squares slope of its mean a (its own
     GPS orbit) against time; 0 over less than one orbital period (the slope would be the short-periodic remainder
     of the mean elements rather than the decay)."""
@@ -248,7 +203,7 @@ def chief_decay(batch: RadarBatch):
     return float(np.polyfit(t - t.mean(), a - a.mean(), 1)[0])
 
 
-def chief_eccentricity(batch: RadarBatch, t_ref):
+def chief_eccentricity(batch: RadarBatch, t_ref: float) -> tuple[np.ndarray, np.ndarray]:
     """The carrier's mean eccentricity vector e_c = e (cos argp, sin argp) at ``t_ref`` [s] and its rate [1/s],
     ``((2,), (2,))``: the least-squares line of its mean elements (its own GPS orbit) against time over the batch;
     over less than one orbital period their mean and no rate (as :func:`chief_decay`). The J2 perigee rotation and
@@ -263,30 +218,32 @@ def chief_eccentricity(batch: RadarBatch, t_ref):
     return at_ref, slope
 
 
-def drag_de_drift(x, de, dt, a, scale_height, ecc, ecc_rate=(0.0, 0.0), a_chief_dot=0.0, growth=0.0):
-    """Secular change ``(..., 2)`` of the relative eccentricity vector by drag over ``dt`` [s] of states ``x``
-    ``(..., 7)`` whose relative e vector is ``de`` ``(..., 2)``, chief semi-major axis ``a`` [m], density scale height
-    ``scale_height`` H [m], carrier mean e vector ``ecc`` at dt = 0 and its rate ``ecc_rate`` [1/s]
-    (:func:`chief_eccentricity`), carrier decay ``a_chief_dot`` [m/s] and drift growth ``growth`` gamma [1/s].
-
-    Drag at the density rho(r) = rho(a) exp(-(r - a) / H), r = a (1 - e cos M), decays the eccentricity of a
-    near-circular orbit with its semi-major axis (Gauss's equations averaged over an orbit, first order in e and in
-    c = a e / H; King-Hele, *Theory of Satellite Orbits in an Atmosphere*, 1964, Ch. 4:
-    de/dt = -B rho sqrt(mu/a) (I1(c) + e (I0 + I2) / 2) against da/dt = -B rho sqrt(mu a) (I0 + 2 e I1)):
-
-        d e_vec / dt = k a_dot e_vec,   k = 1 / (2 H) + 1 / (2 a),
-
-    the perigee being lower, in denser air, than the apogee (the argument of perigee has no secular drag rate).
-    For the pair, de = e_d - e_c and a_d - a_c = a da, so at first order
+def drag_de_drift(x: ArrayLike, de: ArrayLike, dt: ArrayLike, a: float, scale_height: float, *, ecc: ArrayLike,
+                  ecc_rate: ArrayLike = (0.0, 0.0), a_chief_dot: float = 0.0, growth: ArrayLike = 0.0) -> np.ndarray:
+    """Secular change of the relative eccentricity vector by drag. Drag decays a near-circular orbit's e vector with
+    its semi-major axis, d e_vec / dt = k a_dot e_vec, k = 1 / (2 H) + 1 / (2 a) (King-Hele, *Theory of Satellite
+    Orbits in an Atmosphere*, 1964, Ch. 4, first order in e and a e / H), so for the pair (de = e_d - e_c)
 
         d de / dt = k (a da_dot e_c + a_d_dot de),   a_d_dot = a_c_dot + a da_dot,
 
-    the first term the differential drag acting on the carrier's own eccentricity, the second the decay of the
-    relative e vector with the picosatellite's orbit. With da_dot(t) = x[6] (1 + gamma t) and
-    e_c(t) = e_c + e_c_dot t (:func:`chief_eccentricity`) integrated in closed form, de held at its value at dt
-    (J2 turns it by 0.1 rad over a 43-h batch). At e_c = 3e-4, H = 64 km and a*da_dot = -74 m/day the first term
-    moves a de 1.2 m/day (2.4 m/day of the along-track oscillation 2 a de), the second 0.4 m/day at
-    |a de| = 460 m and a_d_dot = -111 m/day."""
+    integrated in closed form with da_dot(t) = x[6] (1 + gamma t) and e_c(t) = e_c + e_c_dot t, de held at ``de``.
+
+    Parameters
+    ----------
+    x, de, dt : array_like, shapes (..., 7), (..., 2), (...)
+        States, their relative e vectors, the times [s].
+    a, scale_height : float
+        The chief's semi-major axis and the density scale height H [m].
+    ecc, ecc_rate : array_like, shape (2,)
+        The carrier's mean e vector at dt = 0 and its rate [1/s] (:func:`chief_eccentricity`).
+    a_chief_dot, growth : float, array_like
+        The carrier's decay [m/s] and the drift growth gamma [1/s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 2)
+        The change of de.
+    """
     x = np.asarray(x, dtype=float)
     dt = np.asarray(dt, dtype=float)[..., None]
     gamma = np.asarray(growth, dtype=float)[..., None]
@@ -299,9 +256,25 @@ def drag_de_drift(x, de, dt, a, scale_height, ecc, ecc_rate=(0.0, 0.0), a_chief_
     return k * (a * carrier + decay * np.asarray(de, dtype=float))
 
 
-def drift_growth(x, batch: RadarBatch, model, decay=None):
-    """gamma [1/s] (:meth:`DragModel.growth`) of states ``x`` ``(..., 7)`` over ``batch``: the carrier's decay
-    ``decay`` [m/s] (default :func:`chief_decay`) and the state's own drift a_c x[6]; 0 without a drag ``model``."""
+def drift_growth(x: ArrayLike, batch: RadarBatch, model: DragModel | None,
+                 decay: float | None = None) -> np.ndarray | float:
+    """gamma [1/s] (:meth:`DragModel.growth`) of states over ``batch``: the carrier's decay and the state's own
+    drift a_c x[6]; 0 without a drag ``model``.
+
+    Parameters
+    ----------
+    x : array_like, shape (..., 7)
+        States.
+    batch : RadarBatch
+        The measurements and the carrier's mean elements.
+    model, decay : DragModel or None, float, optional
+        The drag model; the carrier's decay [m/s] (default :func:`chief_decay`).
+
+    Returns
+    -------
+    numpy.ndarray, shape (...), or float
+        gamma [1/s].
+    """
     x = np.asarray(x, dtype=float)
     if model is None:
         return np.zeros(x.shape[:-1])
@@ -309,9 +282,10 @@ def drift_growth(x, batch: RadarBatch, model, decay=None):
     return model.growth(chief_decay(batch) if decay is None else decay, a * x[..., 6])
 
 
-def propagate_state(x, dt, a, inc, j2=True, drag=True, growth=0.0):
-    """ROE ``(..., 6)`` of states ``x`` ``(..., 7)`` after ``dt`` [s]: :func:`propagate` with da_dot = x[6] at
-    dt = 0, and
+def propagate_state(x: ArrayLike, dt: ArrayLike, a: float, inc: float, j2: bool = True, *, drag: bool = True,
+                    growth: ArrayLike = 0.0) -> np.ndarray:
+    """ROE ``(..., 6)`` of states ``x`` ``(..., 7)`` after ``dt`` [s] (``a`` [m], ``inc`` [rad] the chief's):
+    :func:`propagate` with da_dot = x[6] at dt = 0, and
 
     * the drift rate's growth (``growth`` gamma [1/s], :meth:`DragModel.growth`): da_dot(dt) = x[6] (1 + gamma dt),
       which adds x[6] gamma dt^2 / 2 to da and its integral x[6] gamma dt^3 / 6 to dl and diy through the same
@@ -320,8 +294,18 @@ def propagate_state(x, dt, a, inc, j2=True, drag=True, growth=0.0):
       its J2 couplings into dl (d dl/dt = ... - 7 kappa sin 2i dix: - 7/2 kappa sin 2i dix_dot dt^2) and diy
       (d diy/dt = ... + 2 kappa sin^2 i dix: + kappa sin^2 i dix_dot dt^2);
 
-    ``drag`` False: :func:`propagate` alone (the secular model without the drag terms, e.g. to reproduce solutions
-    recorded with it)."""
+    Parameters
+    ----------
+    x, dt, a, inc, j2
+        As above; with the J2 secular rates.
+    drag, growth : bool, array_like
+        False: :func:`propagate` alone (to reproduce solutions recorded without the drag terms); gamma [1/s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 6)
+        The dimensionless ROE.
+    """
     x = np.asarray(x, dtype=float)
     dt = np.asarray(dt, dtype=float)
     roe = propagate(x[..., :6], dt, a, inc, j2, x[..., 6])
@@ -332,7 +316,7 @@ def propagate_state(x, dt, a, inc, j2=True, drag=True, growth=0.0):
         # a zero state at the constant rate c dt / 3 integrates da to (c dt / 3) dt^2 / 2 = c dt^3 / 6: the
         # growth's integral, so its dl and diy are the growth's
 
-        grow = propagate_elements((0.0,) * 6, dt, a, inc, j2, curve * dt / 3.0)
+        grow = propagate_elements((0.0,) * 6, dt, a, inc, j2, da_dot=curve * dt / 3.0)
         roe[..., 0] += 0.5 * curve * dt * dt
         roe[..., 1] += grow[1]
         roe[..., 5] += grow[5]
@@ -345,7 +329,7 @@ def propagate_state(x, dt, a, inc, j2=True, drag=True, growth=0.0):
     return roe
 
 
-def mean_roe_map(a, u):
+def mean_roe_map(a: float, u: float) -> np.ndarray:
     """J ``(7, 7)``: secular state -> mean ROE and da_dot of a carrier at semi-major axis ``a`` [m] and mean
     argument of latitude ``u`` [rad]: the identity plus the da_dot column of drag's short-periodic de
     (:func:`drag_short_period_de` is linear in da_dot: (sin u, -cos u) / n)."""
@@ -354,55 +338,108 @@ def mean_roe_map(a, u):
     return jac
 
 
-def model_roe(x, batch: RadarBatch, t_est, j2=True, drag=True, model=None, decay=None, ecc=None):
-    """Mean ROE ``(..., m, 6)`` at the measurement epochs of states ``x`` ``(..., 7)`` at ``t_est``:
-    :func:`propagate_state` (a, i of the chief at the batch's latest epoch; J2; the drift rate's growth of the drag
-    ``model``, :func:`drift_growth`, none without one) plus drag's short-periodic de at each epoch's mean argument
-    of latitude (:func:`drag_short_period_de`); ``drag`` False: no drag term. ``decay`` and ``ecc``: the carrier's
-    :func:`chief_decay` and :func:`chief_eccentricity` at ``t_est`` when the caller has them (constants of the
-    batch: a Gauss-Newton fit computes them once)."""
+def model_roe(x: ArrayLike, batch: RadarBatch, t_est: float, j2: bool = True, drag: bool = True, *,
+              model: DragModel | None = None, decay: float | None = None, ecc: tuple | None = None) -> np.ndarray:
+    """Mean ROE at the measurement epochs: :func:`propagate_state` (a, i of the chief at the batch's latest epoch;
+    the drift rate's growth, :func:`drift_growth`) plus drag's short-periodic de at each epoch's mean argument of
+    latitude (:func:`drag_short_period_de`). ``decay``, ``ecc``: constants of the batch, when the caller has them.
+
+    Parameters
+    ----------
+    x : array_like, shape (..., 7)
+        States at ``t_est``.
+    batch : RadarBatch
+        The measurements and the carrier's mean elements.
+    t_est : float
+        The estimate epoch [s].
+    j2, drag : bool
+        With the J2 secular rates; with the drag terms.
+    model, decay, ecc : DragModel, float, tuple, optional
+        The drag model (growth; none without it), :func:`chief_decay` and :func:`chief_eccentricity`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., m, 6)
+        The dimensionless mean ROE.
+    """
     x = np.asarray(x, dtype=float)
     a, inc = _chief_a_inc(batch)
     growth = drift_growth(x, batch, model if drag else None, decay)[..., None]
-    roe = propagate_state(x[..., None, :], batch.t - t_est, a, inc, j2, drag, growth)
+    roe = propagate_state(x[..., None, :], batch.t - t_est, a, inc, j2, drag=drag, growth=growth)
     if not drag:
         return roe
     if model is not None:
         ecc, ecc_rate = chief_eccentricity(batch, t_est) if ecc is None else ecc
-        roe[..., 2:4] += drag_de_drift(x[..., None, :], roe[..., 2:4], batch.t - t_est, a, model.scale_height, ecc,
-                                       ecc_rate, chief_decay(batch) if decay is None else decay, growth)
+        roe[..., 2:4] += drag_de_drift(x[..., None, :], roe[..., 2:4], batch.t - t_est, a, model.scale_height, ecc=ecc,
+                                       ecc_rate=ecc_rate, a_chief_dot=chief_decay(batch) if decay is None else decay,
+                                       growth=growth)
     u = batch.chief[:, 4] + batch.chief[:, 5]
     roe[..., 2:4] += drag_short_period_de(x[..., None, 6], a, u)
     return roe
 
 
-def predict(x, batch: RadarBatch, t_est, j2=True, drag=True, model=None, decay=None, ecc=None):
-    """h(x): modeled [range, az, el] ``(..., m, 3)`` for states ``x`` ``(..., 7)`` at epoch ``t_est``: the mean ROE
-    of :func:`model_roe` observed with :func:`observe`."""
-    roe = model_roe(x, batch, t_est, j2, drag, model, decay, ecc)
+def predict(x: ArrayLike, batch: RadarBatch, t_est: float, j2: bool = True, drag: bool = True, *,
+            model: DragModel | None = None, decay: float | None = None, ecc: tuple | None = None) -> np.ndarray:
+    """h(x): the mean ROE of :func:`model_roe` observed with :func:`observe`.
+
+    Parameters
+    ----------
+    x, batch, t_est, j2, drag, model, decay, ecc
+        As for :func:`model_roe`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., m, 3)
+        Modeled [range, az, el] [m, rad, rad].
+    """
+    roe = model_roe(x, batch, t_est, j2, drag, model=model, decay=decay, ecc=ecc)
     return observe(roe, batch.chief, batch.theta, batch.site_ef, batch.site_enu)
 
 
-def state_steps(a):
+def state_steps(a: float) -> np.ndarray:
     """Finite-difference steps of the 7 states: 1 m of each a*ROE, and 1e-6 m/s of a*da_dot (6 m of a*dl after
     a day), small against the hundreds of meters the look angles need to become nonlinear at LEO ranges."""
     return np.array([1.0] * 6 + [1e-6]) / a
 
 
-def jacobian(x, batch: RadarBatch, t_est, j2=True, drag=True, model=None, decay=None, ecc=None):
-    """H = dh/dx ``(m, 3, 7)`` by central differences (h(x + s e_j) - h(x - s e_j)) / 2 s, azimuth wrapped."""
+def jacobian(x: ArrayLike, batch: RadarBatch, t_est: float, j2: bool = True, drag: bool = True, *,
+             model: DragModel | None = None, decay: float | None = None, ecc: tuple | None = None) -> np.ndarray:
+    """H = dh/dx by central differences (h(x + s e_j) - h(x - s e_j)) / 2 s, azimuth wrapped.
+
+    Parameters
+    ----------
+    x : array_like, shape (7,)
+        The state.
+    batch, t_est, j2, drag, model, decay, ecc
+        As for :func:`model_roe`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (m, 3, 7)
+        H.
+    """
     s = state_steps(_chief_a_inc(batch)[0])
     pert = np.concatenate([np.diag(s), -np.diag(s)]) + np.asarray(x, dtype=float)
-    z = predict(pert, batch, t_est, j2, drag, model, decay, ecc)  # (14, m, 3)
+    z = predict(pert, batch, t_est, j2, drag, model=model, decay=decay, ecc=ecc)  # (14, m, 3)
     diff = measurement_residual(z[:STATE_SIZE], z[STATE_SIZE:])  # (7, m, 3)
     return np.moveaxis(diff / (2.0 * s[:, None, None]), 0, -1)
 
 
-def initial_guess(batch: RadarBatch, t_est, j2=True, drag=True):
+def initial_guess(batch: RadarBatch, t_est: float, j2: bool = True, drag: bool = True) -> np.ndarray:
     """Linear starting point: every measurement inverted to a relative RTN position, then unweighted least squares.
 
     r_rel/a = [R T N]^T (R3(theta)^T look_position(z) - r_chief) / a is linear in x, exactly: the secular
     propagation and the ROE -> RTN map are linear, so its design matrix is the model evaluated on the 7 unit states.
+
+    Parameters
+    ----------
+    batch, t_est, j2, drag
+        As for :func:`model_roe`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (7,)
+        The state.
     """
     a, inc, raan, u = chief_from_kepler(batch.chief)
     rc, vc = chief_position_velocity(a, inc, raan, u)
@@ -436,17 +473,30 @@ def _check(batch: RadarBatch):
         raise ValueError("measurement sigmas must be positive")
 
 
-def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_iterations=20, tol=1e-6, prior=None,
-                        drag=True, model=None):
-    """Gauss-Newton weighted least squares of x = [ROE at t_est (6), da_dot] (module docstring).
+def batch_least_squares(batch: RadarBatch, t_est: float | None = None, x0: ArrayLike | None = None, j2: bool = True,
+                        max_iterations: int = 20, *, tol: float = 1e-6, prior: DriftPrior | None = None,
+                        drag: bool = True, model: DragModel | None = None) -> ODResult:
+    """Gauss-Newton weighted least squares of x = [ROE at t_est (6), da_dot] (module docstring); converged when the
+    step's Mahalanobis length sqrt(dx^T H^T W H dx) is below ``tol`` (a fraction of one sigma).
 
-    ``t_est`` defaults to the last measurement epoch; ``x0`` to :func:`initial_guess`; ``prior`` (a
-    :class:`DriftPrior`, already carried to ``t_est``) adds its a priori row at the carrier's semi-major axis of the
-    batch's latest epoch; ``drag`` False leaves out the model's drag terms (module docstring); ``model`` (a
-    :class:`DragModel`) adds the drift rate's growth over the batch (:func:`drift_growth`; none without it).
-    Converged when the step's Mahalanobis length sqrt(dx^T H^T W H dx) is below ``tol`` (a fraction of one
-    sigma). Raises ValueError with the reason for too few or non-finite measurements, an unobservable state
-    (singular normal matrix) or no convergence.
+    Parameters
+    ----------
+    batch : RadarBatch
+        The measurements and the carrier's mean elements.
+    t_est, x0 : float, array_like, optional
+        The estimate epoch [s] (default the last measurement's) and the start (default :func:`initial_guess`).
+    j2, drag : bool
+        With the J2 secular rates; with the model's drag terms.
+    max_iterations, tol : int, float
+        The Gauss-Newton limits.
+    prior, model : DriftPrior, DragModel, optional
+        The a priori row (already carried to ``t_est``); the drift rate's growth (:func:`drift_growth`).
+
+    Returns
+    -------
+    ODResult
+        The solution; ValueError with the reason for too few or non-finite measurements, an unobservable state
+        (singular normal matrix) or no convergence.
     """
     _check(batch)
     t_est = float(np.max(batch.t)) if t_est is None else float(t_est)
@@ -456,8 +506,9 @@ def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_ite
     decay = chief_decay(batch)
     ecc = chief_eccentricity(batch, t_est) if drag and model is not None else None  # constants of the batch
 
-    def whitened(x):
-        r = measurement_residual(batch.z, predict(x, batch, t_est, j2, drag, model, decay, ecc)).reshape(-1) * w
+    def whitened(x: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+        r = measurement_residual(batch.z, predict(x, batch, t_est, j2, drag, model=model, decay=decay,
+                                                  ecc=ecc)).reshape(-1) * w
         if prior is None:
             return r, None
         r_p, h_p = prior.residual_row(x, a_chief)
@@ -465,7 +516,7 @@ def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_ite
 
     for iteration in range(1, max_iterations + 1):
         r, h_p = whitened(x)
-        h = jacobian(x, batch, t_est, j2, drag, model, decay, ecc).reshape(-1, STATE_SIZE) * w[:, None]
+        h = jacobian(x, batch, t_est, j2, drag, model=model, decay=decay, ecc=ecc).reshape(-1, STATE_SIZE) * w[:, None]
         if h_p is not None:
             h = np.vstack([h, h_p])
         scale = np.linalg.norm(h, axis=0)
@@ -483,7 +534,8 @@ def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_ite
             break
     else:
         raise ValueError(f"Gauss-Newton did not converge in {max_iterations} iterations")
-    r = measurement_residual(batch.z, predict(x, batch, t_est, j2, drag, model, decay, ecc)).reshape(-1) * w
+    r = measurement_residual(batch.z, predict(x, batch, t_est, j2, drag, model=model, decay=decay,
+                                              ecc=ecc)).reshape(-1) * w
     cov = (vt.T / sv**2) @ vt / np.outer(scale, scale)  # at the last step's Jacobian (a priori row included)
     k = np.argmax(batch.t)
     chief_est = propagate_chief(batch.chief[k], t_est - batch.t[k])
@@ -492,9 +544,20 @@ def batch_least_squares(batch: RadarBatch, t_est=None, x0=None, j2=True, max_ite
                     u_est=float(chief_est[4] + chief_est[5]), drag=drag)
 
 
-def nees(x_est, x_true, cov):
+def nees(x_est: ArrayLike, x_true: ArrayLike, cov: ArrayLike) -> float:
     """Normalized estimation error squared e^T P^-1 e, e = x_est - x_true (chi-square with dim(x) degrees of
-    freedom for a consistent estimator; Bar-Shalom, Li, Kirubarajan 2001, Sec. 5.4)."""
+    freedom for a consistent estimator; Bar-Shalom, Li, Kirubarajan 2001, Sec. 5.4).
+
+    Parameters
+    ----------
+    x_est, x_true, cov : array_like, shapes (n,), (n,), (n, n)
+        The estimate, the truth and the estimate's covariance.
+
+    Returns
+    -------
+    float
+        The NEES.
+    """
     e = np.asarray(x_est, dtype=float) - np.asarray(x_true, dtype=float)
     return float(e @ np.linalg.solve(np.asarray(cov, dtype=float), e))
 

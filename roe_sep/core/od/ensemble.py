@@ -20,8 +20,10 @@ chi2(7N, 0.025..0.975) / N and the mean z^2 in chi2(N, ...) / N with 95 % probab
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..constants import R_EARTH, SECONDS_PER_DAY
 from ..montecarlo.stats import nees_bounds
@@ -29,6 +31,10 @@ from ..relmotion.dynamics import propagate_chief
 from ..relmotion.orbit import mean_motion
 from .batch import DragModel, DriftPrior, RadarBatch, batch_least_squares, nees
 from .radar import DEFAULT_EPOCH_UTC, TIRA, gmst, julian_date, observe, raan_from_ltan, relative_distance
+
+if TYPE_CHECKING:  # the nonlinear truth and the designs are imported where they are used (the report imports this)
+    from ..separation.double_impulse import DoubleImpulseDesign
+    from ..truth.nonlinear import Atmosphere
 
 T0 = 9200.0
 """s, start of the ensemble: just after the default scenario's drift-stop (9156 s)."""
@@ -55,22 +61,28 @@ harmonics do not take moves the quadratic's end slope by more than a line's (wit
 6 orbits, worst phase)."""
 
 
-def secular_drift(t, a_da, t_ref, period, u=None):
-    """The truth's secular a da [m] and its rate [m/s] at ``t_ref`` [s] from its mean a da ``a_da`` [m] sampled at
-    ``t`` [s] over one burn-free span ending at ``t_ref``, carrier mean argument of latitude ``u`` [rad] at ``t``:
-    least squares of a quadratic in time (the drift rate grows as the pair decays into denser air,
-    :meth:`~roe_sep.core.od.batch.DragModel.growth`) over at least :data:`QUADRATIC_ORBITS` orbital periods
-    ``period`` [s], a line over at least :data:`MIN_DRIFT_ORBITS`, else None; with ``u``, plus the first and
-    second orbital harmonics sin u, cos u, sin 2u, cos 2u.
+def secular_drift(t: ArrayLike, a_da: ArrayLike, t_ref: float, period: float,
+                  u: ArrayLike | None = None) -> tuple[float, float] | None:
+    """The truth's secular a da and its rate at ``t_ref``: least squares of a quadratic in time (the drift rate grows
+    as the pair decays, :meth:`~roe_sep.core.od.batch.DragModel.growth`) over at least :data:`QUADRATIC_ORBITS`
+    orbital periods, a line over at least :data:`MIN_DRIFT_ORBITS`; with ``u``, plus the harmonics sin u, cos u,
+    sin 2u, cos 2u. The OD's state is secular, the truth's first-order mean elements keep drag's orbit-periodic
+    centimeters of a da, which a day-long batch resolves: the fit removes them (measured in docs/campaigns.md).
 
-    The OD's state is secular (:mod:`roe_sep.core.od.batch`); the first-order mean elements of the truth keep
-    drag's orbit-periodic terms, centimeters of a da, and a batch that spans a day determines a combination of
-    a da and its rate to centimeters: the along-track drift of two passes a day apart, each a few meters, is
-    143 m per meter of a da, so the smallest axis of the 7-state covariance is 2.6 cm, along a da 6 h before
-    the epoch. Compared with the mean a da at the epoch, an honest covariance shows a 7-state NEES three times
-    too large on the OD ensemble (:func:`run_ensemble`, 256 chains: 22 against 7.5); the fit over orbits and
-    the harmonics remove those terms, as the OD's secular model does not have them (first solutions: 7.02 with
-    the harmonics, 7.44 without)."""
+    Parameters
+    ----------
+    t, a_da : array_like, shape (n,)
+        Sample times [s] over one burn-free span ending at ``t_ref``; the truth's mean a da there [m].
+    t_ref, period : float
+        The epoch [s]; the orbital period [s].
+    u : array_like, shape (n,), optional
+        The carrier's mean argument of latitude at ``t`` [rad].
+
+    Returns
+    -------
+    (float, float) or None
+        a da [m] and its rate [m/s] at ``t_ref``; None over too short a span.
+    """
     t = np.asarray(t, dtype=float)
     a_da = np.asarray(a_da, dtype=float)
     span = float(np.ptp(t)) if t.size else 0.0
@@ -87,10 +99,22 @@ def secular_drift(t, a_da, t_ref, period, u=None):
     return float(c[0]), float(c[1])
 
 
-def secular_state(mean_a_roe, t, a_da, t_ref, period, u=None):
-    """The truth's secular state (a*ROE [m], a*da_dot [m/s]) ``(7,)`` at ``t_ref``: its mean a*ROE ``mean_a_roe``
-    there with a da and the rate of :func:`secular_drift` (``t``, ``a_da``, ``period``, ``u`` as there); None where
-    that is None."""
+def secular_state(mean_a_roe: ArrayLike, t: ArrayLike, a_da: ArrayLike, t_ref: float, period: float, *,
+                  u: ArrayLike | None = None) -> np.ndarray | None:
+    """The truth's secular state at ``t_ref``: its mean a*ROE there with a da and the rate of :func:`secular_drift`.
+
+    Parameters
+    ----------
+    mean_a_roe : array_like, shape (6,)
+        The truth's mean a*ROE at ``t_ref`` [m].
+    t, a_da, t_ref, period, u
+        As for :func:`secular_drift`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (7,), or None
+        a*ROE [m] and a*da_dot [m/s]; None where :func:`secular_drift` is None.
+    """
     drift = secular_drift(t, a_da, t_ref, period, u)
     if drift is None:
         return None
@@ -117,16 +141,15 @@ class Solution:
     prior: bool
 
     @property
-    def z(self):
+    def z(self) -> float:
         return (self.a_da_dot - self.a_da_dot_truth) / self.a_da_dot_sigma
 
 
-def carrier_after_drift_stop(chief, carrier):
+def carrier_after_drift_stop(chief: ArrayLike, carrier: "DoubleImpulseDesign") -> np.ndarray:
     """The carrier's mean elements ``chief`` (circular) with the eccentricity vector its own drift-stop gave it: the
     carrier burns -dv2 (the design's drift-stop, relative effect dv2) at u2, which changes its e vector by Gauss's
-    equations (seed 002 Eq. 2, :func:`~roe_sep.core.relmotion.maneuvers.delta_roe` of its own burn): the radial
-    1.3 m/s of the default design makes e = 1.8e-4, whose drag drift the OD models
-    (:func:`~roe_sep.core.od.batch.drag_de_drift`). The argument of latitude is kept."""
+    equations (seed 002 Eq. 2, :func:`~roe_sep.core.relmotion.maneuvers.delta_roe` of its own burn), whose drag
+    drift the OD models (:func:`~roe_sep.core.od.batch.drag_de_drift`). The argument of latitude is kept."""
     from ..relmotion.maneuvers import delta_roe
 
     de = delta_roe(-np.asarray(carrier.dv2_rtn, dtype=float), carrier.u2, carrier.a, carrier.n)[2:4]
@@ -138,7 +161,7 @@ def carrier_after_drift_stop(chief, carrier):
     return out
 
 
-def scenario_pairs(members, seed):
+def scenario_pairs(members: int, seed: int) -> tuple:
     """Initial pair states ``(members, 12)`` at :data:`T0`, carrier and picosatellite ballistic coefficients
     ``(members,)``, the atmosphere, the carrier's mean elements at T0 and the drag model (default scenario)."""
     from ..config import load_scenario
@@ -163,10 +186,29 @@ def scenario_pairs(members, seed):
             Atmosphere.normalised(mc.density, chief0), model)
 
 
-def truth_samples(states0, b_c, b_d, dv, atmosphere, times):
-    """Pair states ``(members, len(times), 12)`` at the sorted ``times`` (which hold every burn epoch), the
-    picosatellite's along-track burns ``dv`` ``(members, burns)`` applied at the :data:`BURNS` epochs (a sample at a
-    burn epoch is pre-burn)."""
+def truth_samples(states0: np.ndarray, b_c: ArrayLike, b_d: ArrayLike, dv: np.ndarray, atmosphere: "Atmosphere", *,
+                  times: np.ndarray) -> np.ndarray:
+    """Pair states at the sorted ``times`` (which hold every burn epoch), the picosatellite's along-track burns
+    applied at the :data:`BURNS` epochs (a sample at a burn epoch is pre-burn).
+
+    Parameters
+    ----------
+    states0 : numpy.ndarray, shape (members, 12)
+        The pair states at :data:`T0`.
+    b_c, b_d : array_like, shape (members,)
+        Carrier and picosatellite ballistic coefficients.
+    dv : numpy.ndarray, shape (members, burns)
+        The along-track burns [m/s].
+    atmosphere : Atmosphere
+        The truth's atmosphere.
+    times : numpy.ndarray, shape (n,)
+        Sorted sample times [s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (members, n, 12)
+        The pair states.
+    """
     from ..truth.nonlinear import apply_impulse, propagate_pairs_grid
 
     out = np.empty((states0.shape[0], times.size, 12))
@@ -174,7 +216,7 @@ def truth_samples(states0, b_c, b_d, dv, atmosphere, times):
     for k, edge in enumerate([b[0] for b in BURNS] + [math.inf]):
         hi = int(np.searchsorted(times, edge, side="right"))
         if hi > lo:
-            out[:, lo:hi] = propagate_pairs_grid(state, t0, times[lo:hi], b_c, b_d, atmosphere)
+            out[:, lo:hi] = propagate_pairs_grid(state, t0, times[lo:hi], b_c, b_d, atmosphere=atmosphere)
         if k < len(BURNS):
             pre = out[:, hi - 1]  # the burn epoch itself
             rtn = np.zeros((dv.shape[0], 3))
@@ -183,11 +225,31 @@ def truth_samples(states0, b_c, b_d, dv, atmosphere, times):
     return out
 
 
-def run_ensemble(members=8, draws=4, seed=0, prior=True, sample_interval=10.0, mask_deg=10.0,
-                 min_separation=5000.0, min_pass=5, min_arc=36000.0, sigma_range=10.0, sigma_angle_deg=0.01,
-                 density_walk=0.0, noise_scale=1.0):
-    """The ensemble (module docstring): a list of :class:`Solution`, chain by chain in time order. Deterministic in
-    ``seed`` (truth dispersions from ``seed``, noise of member m, draw d from SeedSequence([seed, m, d]))."""
+def run_ensemble(members: int = 8, draws: int = 4, seed: int = 0, prior: bool = True, sample_interval: float = 10.0,
+                 *, mask_deg: float = 10.0, min_separation: float = 5000.0, min_pass: int = 5, min_arc: float = 36000.0,
+                 sigma_range: float = 10.0, sigma_angle_deg: float = 0.01, density_walk: float = 0.0,
+                 noise_scale: float = 1.0) -> list[Solution]:
+    """The ensemble (module docstring). Deterministic in ``seed`` (truth dispersions from ``seed``, noise of member
+    m, draw d from SeedSequence([seed, m, d])).
+
+    Parameters
+    ----------
+    members, draws, seed : int
+        Truth pairs, noise draws per pair, the seed.
+    prior, density_walk : bool, float
+        Carry the drift prior across burns; its density random walk (per sqrt(day)).
+    sample_interval, mask_deg, min_separation : float
+        The radar's sampling [s], elevation mask [deg] and least resolvable separation [m].
+    min_pass, min_arc : int, float
+        Measurements of a pass; the OD's minimum arc [s].
+    sigma_range, sigma_angle_deg, noise_scale : float
+        Range [m] and angle [deg] 1-sigma; the noise actually drawn, as a multiple of them.
+
+    Returns
+    -------
+    list of Solution
+        Chain by chain in time order.
+    """
     from ..truth.nonlinear import mean_elements, mean_roe
 
     states0, b_c, b_d, dv, atmosphere, model = scenario_pairs(members, seed)
@@ -202,7 +264,7 @@ def run_ensemble(members=8, draws=4, seed=0, prior=True, sample_interval=10.0, m
     burn_t = np.array([b[0] for b in BURNS])
     coarse = np.arange(T0, DURATION, 300.0)
     times = np.unique(np.concatenate([grid[near], burn_t, coarse]))
-    st = truth_samples(states0, b_c, b_d, dv, atmosphere, times)
+    st = truth_samples(states0, b_c, b_d, dv, atmosphere, times=times)
     kep = mean_elements(st)  # (members, times, 2, 6)
     chief, roe = kep[..., 0, :], mean_roe(st)
     theta = gmst(jd0 + times / SECONDS_PER_DAY)
@@ -251,7 +313,7 @@ def run_ensemble(members=8, draws=4, seed=0, prior=True, sample_interval=10.0, m
                 # the uniform grid (the passes see the same orbital phases), after the burn (its sample is pre-burn)
                 span = uniform & (times > start) & (times <= t_est)
                 truth7 = secular_state(roe[m, rows[-1]] * a, times[span], a_da[span], t_est, period,
-                                       chief[m, span, 4] + chief[m, span, 5]) / a
+                                       u=chief[m, span, 4] + chief[m, span, 5]) / a
                 mean, mean_cov = res.mean_state()
                 out.append(Solution(m, d, k, int(seg), t_est, res.x[6] * a * SECONDS_PER_DAY,
                                     truth7[6] * a * SECONDS_PER_DAY, math.sqrt(res.cov[6, 6]) * a * SECONDS_PER_DAY,
@@ -261,7 +323,7 @@ def run_ensemble(members=8, draws=4, seed=0, prior=True, sample_interval=10.0, m
     return out
 
 
-def consistency(solutions, which):
+def consistency(solutions: list[Solution], which: str) -> dict:
     """Statistics of the first or last solution of every chain (``which`` 'first' | 'last' | 'all'): count, mean
     7-state NEES with its band, mean drift-rate z^2 with its band, mean 6-state NEES, the fraction of 7-state NEES
     inside the single-run 95 % bound chi2(7, 0.95) and of |z| inside 1.96, mean drift-rate sigma [m/day]."""

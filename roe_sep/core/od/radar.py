@@ -21,10 +21,12 @@ astrometry:
 """
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import datetime, timezone
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..constants import MU_EARTH, R_EARTH, SECONDS_PER_DAY
 from ..relmotion.roe import components, rtn_position, stack_last
@@ -48,7 +50,7 @@ JD_UNIX_EPOCH = 2440587.5
 """Julian date of 1970-01-01 00:00 UTC."""
 
 
-def julian_date(epoch_utc):
+def julian_date(epoch_utc: datetime | str) -> float:
     """Julian date of a UTC calendar epoch: JD = 2440587.5 + (POSIX seconds) / 86400.
 
     ``epoch_utc`` is a :class:`datetime` or an ISO-8601 string (``2016-07-01T00:00:00``, optional ``Z`` or
@@ -65,7 +67,7 @@ def julian_date(epoch_utc):
     return JD_UNIX_EPOCH + epoch_utc.timestamp() / SECONDS_PER_DAY
 
 
-def gmst(jd_ut1):
+def gmst(jd_ut1: ArrayLike) -> np.ndarray:
     """Greenwich mean sidereal time [rad, 0..2pi) from the UT1 Julian date, IAU 1982 (Vallado Eq. 3-47).
 
     theta = 67310.54841 s + (876600 h + 8640184.812866 s) T + 0.093104 s T^2 - 6.2e-6 s T^3,
@@ -76,7 +78,7 @@ def gmst(jd_ut1):
     return np.mod(seconds, SECONDS_PER_DAY) * (2.0 * np.pi / SECONDS_PER_DAY)
 
 
-def sun_right_ascension(jd):
+def sun_right_ascension(jd: ArrayLike) -> np.ndarray:
     """Apparent right ascension of the Sun [rad, -pi..pi), low precision (Astronomical Almanac, Sec. C, 0.01 deg
     in 1950-2050).
 
@@ -91,7 +93,7 @@ def sun_right_ascension(jd):
     return np.arctan2(np.cos(eps) * np.sin(lam), np.cos(lam))
 
 
-def raan_from_sun(sun_ra, ltan_hours):
+def raan_from_sun(sun_ra: ArrayLike, ltan_hours: float) -> np.ndarray:
     """RAAN [rad, 0..2pi) of an orbit whose ascending node is at local time ``ltan_hours`` when the Sun is at right
     ascension ``sun_ra``: raan = alpha_sun + (LTAN - 12 h) * 15 deg/h (the node is LTAN - 12 h of hour angle east
     of the Sun)."""
@@ -99,18 +101,28 @@ def raan_from_sun(sun_ra, ltan_hours):
                   2.0 * np.pi)
 
 
-def raan_from_ltan(ltan_hours, jd):
+def raan_from_ltan(ltan_hours: float, jd: ArrayLike) -> np.ndarray:
     """:func:`raan_from_sun` with the low-precision *apparent* Sun of :func:`sun_right_ascension` on date ``jd``,
     i.e. LTAN in apparent solar time; for mean solar time add the equation of time (at most 16 min, 4 deg of RAAN).
     BIROS: LTAN 09:30 (seed 002)."""
     return raan_from_sun(sun_right_ascension(jd), ltan_hours)
 
 
-def geodetic_to_ecef(lat, lon, alt):
+def geodetic_to_ecef(lat: ArrayLike, lon: ArrayLike, alt: ArrayLike) -> np.ndarray:
     """Earth-fixed position [m] of geodetic latitude/longitude [rad] and ellipsoidal height [m] on WGS-84.
 
     N = a / sqrt(1 - e^2 sin^2 lat):  x = (N + h) cos lat cos lon,  y = (N + h) cos lat sin lon,
-    z = (N (1 - e^2) + h) sin lat.  Returns ``(..., 3)``.
+    z = (N (1 - e^2) + h) sin lat.
+
+    Parameters
+    ----------
+    lat, lon, alt : array_like, shape (...)
+        Geodetic latitude and longitude [rad], ellipsoidal height [m].
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+        The position [m].
     """
     lat, lon, alt = (np.asarray(v, dtype=float) for v in (lat, lon, alt))
     n = WGS84_A / np.sqrt(1.0 - WGS84_E2 * np.sin(lat) ** 2)
@@ -118,7 +130,7 @@ def geodetic_to_ecef(lat, lon, alt):
                      (n * (1.0 - WGS84_E2) + alt) * np.sin(lat)], axis=-1)
 
 
-def enu_matrix(lat, lon):
+def enu_matrix(lat: ArrayLike, lon: ArrayLike) -> np.ndarray:
     """Rotation Earth-fixed -> local East-North-Up at geodetic ``lat``/``lon`` [rad]: rows E, N, U, ``(..., 3, 3)``.
 
     E = (-sin lon, cos lon, 0), N = (-sin lat cos lon, -sin lat sin lon, cos lat), U = (cos lat cos lon,
@@ -141,12 +153,12 @@ class Station:
     alt: float
 
     @property
-    def ecef(self):
+    def ecef(self) -> np.ndarray:
         """Earth-fixed position [m], :func:`geodetic_to_ecef`."""
         return geodetic_to_ecef(self.lat, self.lon, self.alt)
 
     @property
-    def enu(self):
+    def enu(self) -> np.ndarray:
         """Earth-fixed -> ENU rotation, :func:`enu_matrix`."""
         return enu_matrix(self.lat, self.lon)
 
@@ -157,7 +169,7 @@ level (the nearby highest point of Wachtberg is 269 m) and the geoid is about 47
 300 m ellipsoidal height."""
 
 
-def earth_rotation_matrix(theta):
+def earth_rotation_matrix(theta: ArrayLike) -> np.ndarray:
     """Inertial (of date) -> Earth-fixed rotation R3(theta) about z by the sidereal angle ``theta`` [rad],
     ``(..., 3, 3)``: x_ef = cos th x + sin th y, y_ef = -sin th x + cos th y, z_ef = z."""
     th = np.asarray(theta, dtype=float)
@@ -167,12 +179,23 @@ def earth_rotation_matrix(theta):
     return m
 
 
-def chief_position_velocity(a, inc, raan, u):
+def chief_position_velocity(a: ArrayLike, inc: ArrayLike, raan: ArrayLike,
+                            u: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Inertial position [m] and velocity [m/s] of a circular orbit at argument of latitude ``u`` [rad].
 
     r = a (cos raan cos u - sin raan sin u cos i,  sin raan cos u + cos raan sin u cos i,  sin u sin i),
     v = sqrt(mu / a) (-cos raan sin u - sin raan cos u cos i,  -sin raan sin u + cos raan cos u cos i,  cos u sin i).
-    Mean elements used as osculating (see the module docstring). Returns two ``(..., 3)`` arrays.
+    Mean elements used as osculating (see the module docstring).
+
+    Parameters
+    ----------
+    a, inc, raan, u : array_like, shape (...)
+        Semi-major axis [m], inclination, RAAN and argument of latitude [rad].
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray), each shape (..., 3)
+        Position [m] and velocity [m/s].
     """
     a, inc, raan, u = (np.asarray(v, dtype=float) for v in (a, inc, raan, u))
     co, so, ci, si, cu, su = np.cos(raan), np.sin(raan), np.cos(inc), np.sin(inc), np.cos(u), np.sin(u)
@@ -181,7 +204,7 @@ def chief_position_velocity(a, inc, raan, u):
     return r, v
 
 
-def rtn_matrix(r, v):
+def rtn_matrix(r: ArrayLike, v: ArrayLike) -> np.ndarray:
     """RTN -> inertial rotation ``(..., 3, 3)`` whose columns are R = r/|r|, T = N x R, N = (r x v)/|r x v|."""
     r, v = np.asarray(r, dtype=float), np.asarray(v, dtype=float)
     er = r / np.linalg.norm(r, axis=-1, keepdims=True)
@@ -198,18 +221,29 @@ def _cross(a, b):
     return stack_last([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
 
 
-def chief_from_kepler(kep):
+def chief_from_kepler(kep: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(a, i, raan, u) of mean Keplerian elements ``[a, e, i, raan, argp, M]`` (u = argp + M)."""
     k = np.asarray(kep, dtype=float)
     return k[..., 0], k[..., 2], k[..., 3], k[..., 4] + k[..., 5]
 
 
-def deputy_position(roe, chief_kep, rel=None):
+def deputy_position(roe: ArrayLike, chief_kep: ArrayLike, rel: ArrayLike | None = None) -> np.ndarray:
     """Inertial position [m] of the picosatellite: chief + RTN relative position.
 
     r = r_chief + [R T N] (a * roe_to_rtn(roe, u)[0]), with the chief from :func:`chief_position_velocity` at its
-    mean elements ``chief_kep`` ``[a, e, i, raan, argp, M]``; ``roe`` dimensionless. Broadcasts over leading axes.
-    ``rel``: ``rtn_position(roe, u)`` when the caller has it (u = argp + M of ``chief_kep``).
+    mean elements. Broadcasts over leading axes.
+
+    Parameters
+    ----------
+    roe, chief_kep : array_like, shape (..., 6)
+        Dimensionless ROE; the chief's mean elements ``[a, e, i, raan, argp, M]``.
+    rel : array_like, shape (..., 3), optional
+        ``rtn_position(roe, u)`` when the caller has it (u = argp + M of ``chief_kep``).
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+        The position [m].
     """
     a, inc, raan, u = chief_from_kepler(chief_kep)
     rc, vc = chief_position_velocity(a, inc, raan, u)
@@ -217,17 +251,41 @@ def deputy_position(roe, chief_kep, rel=None):
     return rc + np.einsum("...ij,...j->...i", rtn_matrix(rc, vc), rel)
 
 
-def relative_distance(roe, a, u, rel=None):
-    """|relative position| [m] of the linear ROE map, a |roe_to_rtn(roe, u)[0]|: the radar separability distance
-    (``rel``: ``rtn_position(roe, u)`` when the caller has it)."""
+def relative_distance(roe: ArrayLike, a: ArrayLike, u: ArrayLike, rel: ArrayLike | None = None) -> np.ndarray:
+    """|relative position| of the linear ROE map, a |roe_to_rtn(roe, u)[0]|: the radar separability distance.
+
+    Parameters
+    ----------
+    roe, a, u : array_like
+        Dimensionless ROE ``(..., 6)``, the chief's semi-major axis [m] and argument of latitude [rad].
+    rel : array_like, shape (..., 3), optional
+        ``rtn_position(roe, u)`` when the caller has it.
+
+    Returns
+    -------
+    numpy.ndarray, shape (...)
+        The distance [m].
+    """
     return np.linalg.norm(rtn_position(roe, u) if rel is None else rel, axis=-1) * np.asarray(a, dtype=float)
 
 
-def look_angles(r_ef, site_ef, site_enu):
+def look_angles(r_ef: ArrayLike, site_ef: ArrayLike, site_enu: ArrayLike) -> np.ndarray:
     """Range [m], azimuth [rad, 0..2pi, from north towards east] and elevation [rad] of Earth-fixed ``r_ef``.
 
     rho = r - site rotated to ENU (``site_enu`` from :func:`enu_matrix`): range = |rho|,
-    az = atan2(E, N), el = atan2(U, sqrt(E^2 + N^2)). Returns ``(..., 3)`` = [range, az, el].
+    az = atan2(E, N), el = atan2(U, sqrt(E^2 + N^2)).
+
+    Parameters
+    ----------
+    r_ef : array_like, shape (..., 3)
+        The Earth-fixed position [m].
+    site_ef, site_enu : array_like, shapes (3,) and (3, 3)
+        The station's Earth-fixed position [m] and ENU rotation (:attr:`Station.ecef`, :attr:`Station.enu`).
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+        [range, az, el].
     """
     d = np.asarray(r_ef, dtype=float) - np.asarray(site_ef, dtype=float)
     e, n, up = components(np.einsum("...ij,...j->...i", site_enu, d))
@@ -235,47 +293,111 @@ def look_angles(r_ef, site_ef, site_enu):
                        np.arctan2(up, np.hypot(e, n))])
 
 
-def look_position(z, site_ef, site_enu):
-    """Inverse of :func:`look_angles`: Earth-fixed position of ``z`` = [range, az, el]:
-    ENU = range (cos el sin az, cos el cos az, sin el), r = site + ENU^T rotated back."""
+def look_position(z: np.ndarray, site_ef: ArrayLike, site_enu: ArrayLike) -> np.ndarray:
+    """Inverse of :func:`look_angles`: ENU = range (cos el sin az, cos el cos az, sin el), r = site + ENU^T rotated
+    back.
+
+    Parameters
+    ----------
+    z : numpy.ndarray, shape (..., 3)
+        [range, az, el] [m, rad, rad].
+    site_ef, site_enu : array_like, shapes (3,) and (3, 3)
+        The station's Earth-fixed position [m] and ENU rotation (:attr:`Station.ecef`, :attr:`Station.enu`).
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+        The Earth-fixed position [m].
+    """
     z = np.asarray(z, dtype=float)
     rng, az, el = z[..., 0], z[..., 1], z[..., 2]
     enu = rng[..., None] * np.stack([np.cos(el) * np.sin(az), np.cos(el) * np.cos(az), np.sin(el)], axis=-1)
     return np.asarray(site_ef, dtype=float) + np.einsum("...ji,...j->...i", site_enu, enu)
 
 
-def observe(roe, chief_kep, theta, site_ef, site_enu):
+def observe(roe: ArrayLike, chief_kep: ArrayLike, theta: ArrayLike, site_ef: ArrayLike,
+            site_enu: ArrayLike) -> np.ndarray:
     """The measurement function: [range, az, el] of the picosatellite seen from a station.
 
     :func:`deputy_position` -> Earth-fixed with :func:`earth_rotation_matrix` (sidereal angle ``theta``, e.g.
     :func:`gmst`) -> :func:`look_angles`. Broadcasts over leading axes (epochs, samples).
+
+    Parameters
+    ----------
+    roe, chief_kep, theta
+        As for :func:`deputy_earth_fixed`.
+    site_ef, site_enu : array_like, shapes (3,) and (3, 3)
+        The station's Earth-fixed position [m] and ENU rotation (:attr:`Station.ecef`, :attr:`Station.enu`).
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+        [range, az, el] [m, rad, rad].
     """
     return look_angles(deputy_earth_fixed(roe, chief_kep, theta), site_ef, site_enu)
 
 
-def deputy_earth_fixed(roe, chief_kep, theta, rel=None):
-    """The Earth-fixed position [m] of the picosatellite that :func:`observe` looks at: :func:`deputy_position`
-    rotated by :func:`earth_rotation_matrix` (the same for every station: formed once for several)."""
+def deputy_earth_fixed(roe: ArrayLike, chief_kep: ArrayLike, theta: ArrayLike,
+                       rel: ArrayLike | None = None) -> np.ndarray:
+    """The Earth-fixed position of the picosatellite that :func:`observe` looks at: :func:`deputy_position`
+    rotated by :func:`earth_rotation_matrix` (the same for every station: formed once for several).
+
+    Parameters
+    ----------
+    roe, chief_kep, rel
+        As for :func:`deputy_position`.
+    theta : array_like, shape (...)
+        The sidereal angle [rad].
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+        The position [m].
+    """
     return np.einsum("...ij,...j->...i", earth_rotation_matrix(theta), deputy_position(roe, chief_kep, rel))
 
 
-def chief_elevation(chief_kep, theta, site_ef, site_enu):
-    """Elevation [rad] of the chief itself (roe = 0) from a station: the carrier's passes."""
+def chief_elevation(chief_kep: ArrayLike, theta: ArrayLike, site_ef: ArrayLike, site_enu: ArrayLike) -> np.ndarray:
+    """Elevation of the chief itself (roe = 0) from a station: the carrier's passes.
+
+    Parameters
+    ----------
+    chief_kep, theta, site_ef, site_enu
+        As for :func:`observe`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (...)
+        The elevation [rad].
+    """
     return observe(np.zeros(6), chief_kep, theta, site_ef, site_enu)[..., 2]
 
 
-def visible(elevation, mask):
+def visible(elevation: ArrayLike, mask: float) -> np.ndarray:
     """True where the elevation is above the mask [rad]."""
     return np.asarray(elevation, dtype=float) > mask
 
 
-def pass_windows(elevation, t_start, t_end, mask, step=30.0, tol=0.01):
-    """Rise/set times [s] of the passes above ``mask`` [rad] in ``[t_start, t_end]``: ``(k, 2)`` array.
+def pass_windows(elevation: Callable[[np.ndarray], np.ndarray], t_start: float, t_end: float, mask: float,
+                 step: float = 30.0, *, tol: float = 0.01) -> np.ndarray:
+    """Rise/set times of the passes above ``mask``: scan on a ``step`` grid, then refine every sign change of
+    elevation - mask by simultaneous bisection down to ``tol``. A pass in progress at ``t_start`` (``t_end``) starts
+    (ends) there. Passes shorter than ``step`` can fall between grid points and be missed (the default 30 s is far
+    below the minutes a LEO pass above a 10 deg mask lasts).
 
-    ``elevation(t)`` is vectorized over an array of times. Scan on a ``step`` grid, then refine every sign change of
-    elevation - mask by simultaneous bisection down to ``tol`` seconds. A pass in progress at ``t_start``
-    (``t_end``) starts (ends) there. Passes shorter than ``step`` can fall between grid points and be missed: the
-    default 30 s is far below the minutes a LEO pass above a 10 deg mask lasts.
+    Parameters
+    ----------
+    elevation : callable
+        ``elevation(t)`` [rad], vectorized over an array of times [s].
+    t_start, t_end, mask : float
+        The interval [s] and the mask [rad].
+    step, tol : float
+        The scan step and the bisection tolerance [s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (k, 2)
+        Rise and set times [s].
     """
     t = np.arange(t_start, t_end, step, dtype=float)
     t = np.append(t, float(t_end))
@@ -297,7 +419,7 @@ def pass_windows(elevation, t_start, t_end, mask, step=30.0, tol=0.01):
     return np.array([rises, sets], dtype=float).T.reshape(-1, 2)
 
 
-def truth_da_rate(t0, roe0, t1, roe1):
+def truth_da_rate(t0: float, roe0: ArrayLike, t1: float, roe1: ArrayLike) -> float:
     """The drift of da [1/s] between two truth samples, (da1 - da0) / (t1 - t0): what a measurement between them
     is simulated with (:func:`~roe_sep.core.relmotion.dynamics.propagate`'s ``da_dot``) instead of the later
     sample's da. Differential drag moves a da by about -70 m/day in the default scenario, so a measurement that
@@ -321,10 +443,20 @@ def truth_da_rate(t0, roe0, t1, roe1):
     return float((roe1[0] - roe0[0]) / (t1 - t0))
 
 
-def add_noise(z, sigma, rng):
+def add_noise(z: ArrayLike, sigma: ArrayLike, rng: np.random.Generator) -> np.ndarray:
     """Noisy measurements: z + N(0, sigma) per component (range [m], az, el [rad]), azimuth wrapped to 0..2pi.
 
-    ``rng`` is a :class:`numpy.random.Generator` (seeded by the caller for reproducibility).
+    Parameters
+    ----------
+    z, sigma : array_like, shape (..., 3)
+        The measurements and their 1-sigma.
+    rng : numpy.random.Generator
+        Seeded by the caller for reproducibility.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+        The noisy measurements.
     """
     z = np.asarray(z, dtype=float)
     out = z + np.asarray(sigma, dtype=float) * rng.standard_normal(z.shape)

@@ -430,8 +430,9 @@ def plan(cfg: OpsConfig, date: _dt.date, days: float = 2.0, boresight_rtn: Array
             if not inside:
                 continue
             j = i if frac < 0.5 else i + 1
-            windows.append(_judge(tt, pole, inside, radar, bool(sunlit[j]), float(sun_angle[j]), period, rules,
-                                  cfg.camera, ts, tol))
+            windows.append(_judge(tt, pole, inside, radar, bool(sunlit[j]), sun_angle=float(sun_angle[j]),
+                                  period=period, rules=rules,
+                                  camera=cfg.camera, ts=ts, tol=tol))
     windows.sort(key=lambda w: (not w["eligible"], -w["score"]))
     for k, w in enumerate(windows, 1):
         w["rank"] = k
@@ -465,7 +466,7 @@ def _boresight(cfg: OpsConfig):
     return vec / np.linalg.norm(vec)
 
 
-def _judge(tt, pole, inside, radar, sunlit, sun_angle, period, rules, camera, ts, tol):
+def _judge(tt, pole, inside, radar, sunlit, *, sun_angle, period, rules, camera, ts, tol):
     """Apply the seed 001 Sec. 5 rules to one candidate ejection at TT Julian date ``tt``."""
     t_iso = _iso(ts.tt_jd(tt))
     reasons, eligible = [], True

@@ -218,11 +218,11 @@ def propagate(roe: ArrayLike, dt: ArrayLike, a: float, inc: float, j2: bool = Tr
         The propagated ROE, the broadcast shape of ``roe``, ``dt`` and ``da_dot``.
     """
     r = np.asarray(roe, dtype=float)
-    return stack_last(propagate_elements(components(r), dt, a, inc, j2, da_dot))
+    return stack_last(propagate_elements(components(r), dt, a, inc, j2, da_dot=da_dot))
 
 
 def propagate_elements(elements: Sequence[ArrayLike], dt: ArrayLike, a: float, inc: float, j2: bool = True,
-                       da_dot: ArrayLike = 0.0) -> tuple:
+                       *, da_dot: ArrayLike = 0.0) -> tuple:
     """:func:`propagate` on the six ROE given apart, ``(da, dl, dex, dey, dix, diy)`` (arrays that broadcast with
     ``dt`` and ``da_dot``); returns the six propagated elements apart. The same arithmetic as :func:`propagate`
     (which is this function plus a stack), for vectorized callers that need only some elements: contiguous
@@ -264,14 +264,14 @@ def _elements(elements, dt, da_dot, rates, out_of_plane=True):
         dl_new = dl + rates.dl_da * da_int - rates.dl_dix * dix * dt
     else:
         dl_new = dl - rates.dl_da * da_int
-    da_new, dex_new, dey_new = _in_plane(da, dex, dey, dt, da_dot, rates)
+    da_new, dex_new, dey_new = _in_plane(da, dex, dey, dt, da_dot, rates=rates)
     if not out_of_plane:
         return da_new, dl_new, dex_new, dey_new, None, None
     diy_new = diy + rates.diy_da * da_int + rates.diy_dix * dix * dt if j2 else diy + 0.0 * dt
     return da_new, dl_new, dex_new, dey_new, dix + 0.0 * dt, diy_new
 
 
-def propagate_in_plane(da: ArrayLike, dex: ArrayLike, dey: ArrayLike, dt: ArrayLike, a: float, inc: float,
+def propagate_in_plane(da: ArrayLike, dex: ArrayLike, dey: ArrayLike, dt: ArrayLike, a: float, *, inc: float,
                        j2: bool = True, da_dot: ArrayLike = 0.0) -> tuple:
     """The da, dex and dey of :func:`propagate_elements` alone (what the radial motion R/a = da - dex cos u -
     dey sin u needs), with its arithmetic: the same values to the bit, without forming dl, dix and diy.
@@ -297,10 +297,10 @@ def propagate_in_plane(da: ArrayLike, dex: ArrayLike, dey: ArrayLike, dt: ArrayL
         The propagated ``(da, dex, dey)``, each of the broadcast shape.
     """
     dt = np.asarray(dt, dtype=float)
-    return _in_plane(da, dex, dey, dt, np.asarray(da_dot, dtype=float), secular_rates(a, inc, j2))
+    return _in_plane(da, dex, dey, dt, np.asarray(da_dot, dtype=float), rates=secular_rates(a, inc, j2))
 
 
-def _in_plane(da, dex, dey, dt, da_dot, rates):
+def _in_plane(da, dex, dey, dt, da_dot, *, rates):
     """da under the drag drift and the e vector turned by J2: the in-plane part of :func:`propagate_elements`."""
     return (da + da_dot * dt, *_rotate_e(dex, dey, dt, rates))
 

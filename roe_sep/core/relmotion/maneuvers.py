@@ -88,14 +88,10 @@ def dispersed_dv(dv_rtn: ArrayLike, factor: ArrayLike, eps: ArrayLike,
     commanded burn itself, which is Eq. (22) exactly: dv_s = f R(eps) dv (the ejection, every burn that is not
     a reduced drift-stop).
 
-    For a drift-stop commanded with a reduction |p|, ``reference`` is the *unreduced* burn (:func:`unreduced_burns`).
-    Seed 002 Eq. (18) decides it: "δv*_T2 = δv_T2 + e2 − |p|": the error e2 is added to the nominal
-    δv_T2 of Eq. (16) (+0.162718 m/s) and the reduction |p| subtracted after it, so e2 = (f2 − 1) δv_T2 of the
-    unreduced burn; Eqs. (20)-(21) and the design value "assuming a maximum under performance of 3σ for both
-    maneuvers, a reduction value of p = 0.0732231 m/s is determined" (= 3 (0.10 + 0.05) 0.162718) size e2 on that
-    same unreduced δv_T2, and Eq. (22) multiplies "the second maneuver" of Eq. (16) by f2. Seed 000 (Eqs. 19, 21
-    and Sec. IV) says the same. The attitude error rotates the whole commanded burn (the reduction included: the
-    thruster points once); it is linear, so R(eps) commutes with f.
+    For a drift-stop commanded with a reduction |p|, ``reference`` is the *unreduced* burn (:func:`unreduced_burns`):
+    seed 002 Eq. (18), δv*_T2 = δv_T2 + e2 − |p|, adds the error e2 = (f2 − 1) δv_T2 to the nominal δv_T2 of
+    Eq. (16) and subtracts |p| after it, and Eqs. (20)-(21) size e2 on that unreduced δv_T2 (so does seed 000,
+    Eqs. 19, 21). The attitude error rotates the whole commanded burn (the thruster points once).
 
     Parameters
     ----------

@@ -39,7 +39,7 @@ class Chief:
         return self.u0 + arg_latitude_rate(self.a, self.inc, j2) * (np.asarray(t, dtype=float) - self.t0)
 
 
-def trajectory(roe0: ArrayLike, t0: float, burns: Iterable[Burn], times: ArrayLike, chief: Chief, j2: bool = True,
+def trajectory(roe0: ArrayLike, t0: float, burns: Iterable[Burn], times: ArrayLike, chief: Chief, *, j2: bool = True,
                da_dot: float = 0.0) -> np.ndarray:
     """ROE ``(len(times), 6)`` at ``times`` [s] (any order, all >= t0) from ``roe0`` at ``t0`` under ``burns``.
 
@@ -71,11 +71,11 @@ def trajectory(roe0: ArrayLike, t0: float, burns: Iterable[Burn], times: ArrayLi
     times = np.asarray(times, dtype=float)
     if np.any(times < t0):
         raise ValueError("trajectory times must not precede t0")
-    return segments_at(burn_segments(roe0, t0, burns, chief, j2, da_dot), times, t0, chief, j2, da_dot)
+    return segments_at(burn_segments(roe0, t0, burns, chief, j2, da_dot=da_dot), times, t0, chief, j2, da_dot=da_dot)
 
 
 def burn_segments(roe0: ArrayLike, t0: float, burns: Iterable[Burn], chief: Chief, j2: bool = True,
-                  da_dot: float = 0.0) -> list:
+                  *, da_dot: float = 0.0) -> list:
     """The coast arcs of :func:`trajectory`: ``[(t_start, state, t_end)]``, the state at ``t0`` until the first
     burn (>= ``t0``), then the post-burn state at each burn's epoch until the next one (the last until ``inf``).
 
@@ -106,7 +106,7 @@ def burn_segments(roe0: ArrayLike, t0: float, burns: Iterable[Burn], chief: Chie
 
 
 def segments_at(arcs: list, times: ArrayLike, t0: float, chief: Chief, j2: bool = True,
-                da_dot: float = 0.0) -> np.ndarray:
+                *, da_dot: float = 0.0) -> np.ndarray:
     """ROE ``(len(times), 6)`` at ``times`` [s] (all >= ``t0``, unchecked) on the arcs of :func:`burn_segments`:
     each sample propagated from the start of its arc (a sample exactly at a burn epoch sees the post-burn state).
 
@@ -157,4 +157,4 @@ def state_at(roe0: ArrayLike, t0: float, burns: Iterable[Burn], t: float, chief:
     numpy.ndarray, shape (6,)
         Dimensionless ROE at ``t``.
     """
-    return trajectory(roe0, t0, burns, np.array([t]), chief, j2, da_dot)[0]
+    return trajectory(roe0, t0, burns, np.array([t]), chief, j2=j2, da_dot=da_dot)[0]

@@ -274,7 +274,7 @@ class AnomalyWatch:
         self.knowledge = (float(t), roe, chief, cov, float(da_dot))
         self.burns = []
 
-    def od(self, t_now: float, t_od: float, roe: ArrayLike, cov6: ArrayLike, chief: Chief, da_dot: float,
+    def od(self, t_now: float, t_od: float, roe: ArrayLike, cov6: ArrayLike, chief: Chief, *, da_dot: float,
            residual_rms: float, measurements: int) -> list[Detection]:
         """An OD solution at ``t_od`` [s] (dimensionless ROE, its a*ROE covariance (6, 6) [m^2], the drift rate
         [1/s], the residual RMS in sigmas over ``measurements``), published at ``t_now``: ``od_residuals`` and

@@ -1,44 +1,28 @@
 """The carrier camera's check of the ejection before the blind drift-stop, without ROS: the bearing measurement
 model (the simulator's camera), the lines of sight the commanded ejection predicts for a fraction f1 of its impulse,
 and the test whether the bearing history says the SPL delivered far less than commanded (a weak ejection,
-``spl_weak``), which the planner acts on (docs/contingencies.md).
+``spl_weak``), which the planner acts on. Measurements and history: docs/contingencies.md, "A weak ejection holds
+the blind drift-stop".
 
-What bearings observe. In the linear relative motion (seed 002 Eq. 2 for the impulse, the secular propagation with
-J2) a single impulse from a common origin gives a trajectory proportional to the impulse, so a scaled ejection
-flies the same lines of sight (angles-only cannot observe the scale of a pure impulse). The differential drag (seed
-002 Eqs. 23-24) adds an along-track offset of about 0.75 n a da_dot t^2 (47 m 2.4 h after the ejection of the
-default scenario) that does not scale with the impulse. The relative position is f1 X(t) + g Y(t) (X: the commanded
-impulse's, Y: the nominal drag's, g the true drag over the nominal), so its direction depends on g / f1 alone: the
-camera measures the *apparent* fraction f1 / g, fitted here as f1 with the nominal drag.
+What bearings observe. In the linear relative motion (seed 002 Eq. 2, the secular propagation with J2) a single
+impulse from a common origin flies lines of sight that do not depend on its scale; the differential drag (seed 002
+Eqs. 23-24) adds an along-track offset of about 0.75 n a da_dot t^2 that does not scale. The relative position is
+f1 X(t) + g Y(t) (X the commanded impulse's, Y the nominal drag's, g the true drag over the nominal), so its
+direction depends on g / f1 alone: the camera measures the *apparent* fraction f1 / g.
 
-The nominal set. The SPL's magnitude is f1 ~ N(1, ``spl_sigma`` = 0.1) (seed 002 Eq. 22) and the differential
-ballistic coefficient g ~ N(1, ``ballistic_sigma`` = 0.2) (the scenario's dispersion): a nominal ejection has
-f1 / g >= (1 - k 0.1) / (1 + k 0.2) = 0.4375 for k = 3 sigmas of both (:func:`nominal_fraction`; the joint
-probability of f1 / g below that is 1.2e-5 for independent normal draws). A fixed bound on the fitted f1 ignores the
-drag's share: the nodes' test seed 3 draws f1 = 0.744 and g = 1.41 (f1 / g = 0.53), which the old bound of 0.5 with
-the secular model's bias (below) held.
+The nominal set: f1 ~ N(1, ``spl_sigma``) (seed 002 Eq. 22) and g ~ N(1, ``ballistic_sigma``) give f1 / g >=
+(1 - k spl_sigma) / (1 + k ballistic_sigma) for k sigmas of both (:func:`nominal_fraction`).
 
-The model (:func:`predicted_los`). The truth the camera sees is the osculating relative position in the carrier's
-osculating RTN frame (the nonlinear truth: J2-J4, drag). A mean-element model read as positions errs by the J2
-short-periodic terms: the ejection's osculating impulse taken as mean ROE (0.26 m of a da in the default scenario)
-drifts 1.5 n t a da along-track, which mimics the drag and biased the fitted f1 / g by about -20 %. So the impulse
-is applied to the carrier's osculating state, both spacecraft are turned into mean elements (first-order
-Brouwer-Lyddane, :mod:`roe_sep.core.truth.mean_osc`), the mean ROE propagate secularly (J2, drag) and are turned
-back into the osculating relative position. Against the nonlinear truth with the drawn f1 and g the remaining error
-is below 0.9 m of position over the 2 h before the drift-stop (0.2 m in the first minutes, when it is 0.16 deg at
-60-80 m of range; a few thousandths of a degree at kilometers): a position floor ``floor`` of 1 m, a bearing error
-of sqrt(sigma^2 + (floor / rho)^2) per axis at the range rho the commanded ejection predicts, besides the camera's
-0.02 deg (an assumption: centroid and attitude knowledge; no seed gives it).
+The model (:func:`predicted_los`): the camera sees the osculating relative position in the carrier's osculating RTN
+frame. The impulse is applied to the carrier's osculating state, both spacecraft are turned into mean elements
+(first-order Brouwer-Lyddane, :mod:`roe_sep.core.truth.mean_osc`), the mean ROE propagate secularly (J2, drag) and
+are turned back into the osculating relative position. A position floor ``floor`` gives a bearing error of
+sqrt(sigma^2 + (floor / rho)^2) per axis at the predicted range rho, besides the camera's sigma (an assumption:
+centroid and attitude knowledge; no seed gives it).
 
 The test (:func:`check_ejection`): the best apparent fraction on a grid against the best one in the nominal set
-(>= the bound), the chi-square gain beyond the chi-square(1) quantile 1 - alpha. Measured on the nonlinear truth
-(``studies/ejection_camera_study.py``): no nominal seed of 1000-1199 holds (200 runs; the smallest fitted f1 / g
-0.47, every best fit inside the nominal set, gain 0); f1 = 0.1 and 0.2 are held in 100 of 100 seeds, f1 = 0.3 in 94
-of 100 (missed only with g <= 0.67: a drag 1.7 sigmas low makes it look like a nominal 0.43), f1 = 0.4 in 66 of
-100. The detection boundary is f1 / g of about 0.42 (held up to 0.457, flown from 0.397).
-
-The carrier points the camera along the line of sight the commanded ejection predicts: by the scale invariance a
-weak ejection stays near it (a few degrees at most), within the field of view of Eq. 11.
+(>= the bound); weak when the chi-square gain exceeds the chi-square(1) quantile 1 - alpha. The carrier points the
+camera along the predicted line of sight: a weak ejection stays near it, within the field of view of Eq. 11.
 """
 
 import math
@@ -134,7 +118,7 @@ def nominal_fraction(spl_sigma: float, drag_sigma: float, sigmas: float = 3.0) -
 
 
 def predicted_los(fractions: ArrayLike, dv_commanded: ArrayLike, t_ejection: float, chief_mean: ArrayLike,
-                  da_dot: float, times: ArrayLike, j2: bool = True) -> np.ndarray:
+                  da_dot: float, *, times: ArrayLike, j2: bool = True) -> np.ndarray:
     """The unit lines of sight ``(F, m, 3)`` (carrier osculating RTN) at ``times`` [s] after ejections of each of
     ``fractions`` ``(F,)`` times the commanded impulse at ``t_ejection`` [s]: the impulse on the carrier's osculating
     state, mean ROE of the pair (first-order Brouwer-Lyddane, Eq. 1), their secular propagation with J2 and the
@@ -162,12 +146,12 @@ def predicted_los(fractions: ArrayLike, dv_commanded: ArrayLike, t_ejection: flo
     numpy.ndarray, shape (F, m, 3)
         The unit lines of sight (NaN rows where the position is zero).
     """
-    pos = _positions(fractions, dv_commanded, t_ejection, chief_mean, da_dot, times, j2)
+    pos = _positions(fractions, dv_commanded, t_ejection, chief_mean, da_dot, times=times, j2=j2)
     with np.errstate(invalid="ignore", divide="ignore"):
         return pos / np.linalg.norm(pos, axis=-1, keepdims=True)
 
 
-def _positions(fractions, dv_commanded, t_ejection, chief_mean, da_dot, times, j2):
+def _positions(fractions, dv_commanded, t_ejection, chief_mean, da_dot, *, times, j2):
     """The relative positions ``(F, m, 3)`` [m] of :func:`predicted_los`."""
     f = np.atleast_1d(np.asarray(fractions, dtype=float))
     t = np.atleast_1d(np.asarray(times, dtype=float))
@@ -176,7 +160,7 @@ def _positions(fractions, dv_commanded, t_ejection, chief_mean, da_dot, times, j
     start = np.broadcast_to(pair_state(kep, kep), f.shape + (12,))
     roe0 = mean_roe(apply_impulse(start, f[:, None] * dv, np.ones(f.shape, dtype=bool)))  # (F, 6)
     chief = Chief(float(kep[0]), float(kep[2]), float(kep[4] + kep[5]), float(t_ejection))
-    roe = np.stack([trajectory(r, float(t_ejection), [], t, chief, j2, da_dot) for r in roe0])  # (F, m, 6)
+    roe = np.stack([trajectory(r, float(t_ejection), [], t, chief, j2=j2, da_dot=da_dot) for r in roe0])  # (F, m, 6)
     kc = propagate_chief(kep, t - float(t_ejection), j2)
     kc[..., 3:] = np.mod(kc[..., 3:], 2.0 * math.pi)  # the conversions want angles in one turn
     kc = np.broadcast_to(kc, roe.shape)
@@ -213,40 +197,31 @@ def check_ejection(times: ArrayLike, measured: ArrayLike, dv_commanded: ArrayLik
     """Whether the camera's bearing history says the ejection was weak: the apparent fraction f1 / g on
     :data:`FRACTIONS` whose predicted lines of sight (:func:`predicted_los`, the nominal drag) fit the measured ones
     best, against the best one in the nominal set (>= ``bound``, :func:`nominal_fraction`). ``weak`` when the best is
-    below ``bound`` and fits better by more than the chi-square(1) quantile 1 - ``alpha``. Each bearing's error per
-    axis is sqrt(``sigma``^2 + (``floor`` / rho)^2), rho the range the commanded ejection predicts (module
-    docstring).
+    below ``bound`` and fits better by more than the chi-square(1) quantile 1 - ``alpha`` (module docstring).
 
     Parameters
     ----------
-    times : array_like, shape (m,)
-        The measurement epochs [s], after ``t_ejection``.
-    measured : array_like, shape (m, 3)
-        The measured unit lines of sight, carrier RTN (:func:`camera_bearing`).
-    dv_commanded : array_like, shape (3,)
-        The commanded ejection [m/s], RTN.
-    t_ejection : float
-        The ejection epoch [s] (the deployer's release switch).
+    times, measured : array_like, shapes (m,) and (m, 3)
+        The measurement epochs [s] after ``t_ejection``; the measured unit lines of sight, carrier RTN
+        (:func:`camera_bearing`).
+    dv_commanded, t_ejection : array_like, shape (3,); float
+        The commanded ejection [m/s], RTN; its epoch [s] (the deployer's release switch).
     chief_mean : array_like, shape (6,)
         The carrier's mean elements [a m, e, i rad, raan rad, argp rad, M rad] at ``t_ejection``.
     da_dot : float
         The nominal differential-drag rate of da [1/s].
-    sigma : float
-        The camera's 1-sigma bearing error per axis [rad].
-    floor : float
-        The model's 1-sigma position error [m] against the truth.
-    bound : float
-        The smallest apparent fraction of a nominal ejection (:func:`nominal_fraction`).
-    alpha : float
-        The false-alarm probability of the test (chi-square, 1 dof).
+    sigma, floor : float
+        The camera's 1-sigma bearing error per axis [rad]; the model's 1-sigma position error [m] against the truth.
+    bound, alpha : float
+        The smallest apparent fraction of a nominal ejection (:func:`nominal_fraction`); the test's false-alarm
+        probability (chi-square, 1 dof).
     j2 : bool
         With the J2 secular rates.
 
     Returns
     -------
     EjectionCheck
-        The best apparent fraction, its chi-square gain over the nominal set, the samples used, the verdict and
-        the bound.
+        The best apparent fraction, its chi-square gain, the samples used, the verdict and the bound.
     """
     t = np.asarray(times, dtype=float).reshape(-1)
     meas = np.asarray(measured, dtype=float).reshape(-1, 3)
@@ -254,8 +229,8 @@ def check_ejection(times: ArrayLike, measured: ArrayLike, dv_commanded: ArrayLik
     t, meas = t[keep], meas[keep]
     if len(t) == 0:
         return EjectionCheck(math.nan, 0.0, 0, False, float(bound))
-    los = predicted_los(FRACTIONS, dv_commanded, t_ejection, chief_mean, da_dot, t, j2)
-    rho = np.linalg.norm(_positions(1.0, dv_commanded, t_ejection, chief_mean, da_dot, t, j2)[0], axis=-1)
+    los = predicted_los(FRACTIONS, dv_commanded, t_ejection, chief_mean, da_dot, times=t, j2=j2)
+    rho = np.linalg.norm(_positions(1.0, dv_commanded, t_ejection, chief_mean, da_dot, times=t, j2=j2)[0], axis=-1)
     sig = np.sqrt(sigma * sigma + (floor / np.maximum(rho, 1e-3)) ** 2)
     cost = bearing_cost(meas, los, sig)
     cost = np.where(np.isfinite(cost), cost, np.inf)

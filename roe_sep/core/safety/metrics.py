@@ -83,18 +83,16 @@ def approaching(roe: ArrayLike) -> np.ndarray:
     return r[..., 0] * r[..., 1] > 0.0
 
 
-def nearest_crossing(roe0: ArrayLike, u0: ArrayLike, duration: float, a: float, inc: float, j2: bool = True,
+def nearest_crossing(roe0: ArrayLike, u0: ArrayLike, duration: float, a: float, inc: float, *, j2: bool = True,
                      da_dot: ArrayLike = 0.0, t_min: float | None = None,
                      iterations: int = 3) -> tuple[np.ndarray, np.ndarray]:
     """Smallest along-track distance |T| at a transit through the R = 0 plane in ``(t_min, duration]`` seconds.
 
-    Seed 002 Fig. 8 / seed 001 AC2. ``roe0`` ``(..., 6)`` is the dimensionless state at t = 0, when the chief is at
-    mean argument of latitude ``u0`` [rad]. In each revolution m the transit candidates come from the Keplerian
+    Seed 002 Fig. 8 / seed 001 AC2. In each revolution m the transit candidates come from the Keplerian
     solution of R/a = da - |de| cos(u - phi) = 0 with the elements at that revolution's start,
     u = phi +- arccos(da/|de|), and are refined by Newton iterations on the full secular model (:func:`propagate`
-    then :func:`roe_to_rtn`), so J2 and differential drag are included. ``t_min`` (default: a tenth of an orbit)
-    excludes the trivial transit at t = 0 right after an ejection. An orbit without radial motion (da = de = 0)
-    lies in the R = 0 plane: its distance is |T| at ``t_min``.
+    then :func:`roe_to_rtn`: J2 and drag included). ``t_min`` excludes the trivial transit at t = 0 after an
+    ejection. An orbit without radial motion (da = de = 0) lies in the R = 0 plane: its distance is |T| at ``t_min``.
 
     Parameters
     ----------
@@ -104,18 +102,12 @@ def nearest_crossing(roe0: ArrayLike, u0: ArrayLike, duration: float, a: float, 
         The chief's mean argument of latitude at t = 0 [rad].
     duration : float
         End of the window [s].
-    a : float
-        The chief's semi-major axis [m].
-    inc : float
-        The chief's inclination [rad].
-    j2 : bool
-        With the J2 secular rates.
-    da_dot : array_like, shape (...)
-        Differential-drag rate of da [1/s].
-    t_min : float, optional
-        Start of the window [s] (exclusive); default a tenth of an orbit.
-    iterations : int
-        Newton iterations per transit candidate.
+    a, inc : float
+        The chief's semi-major axis [m] and inclination [rad].
+    j2, da_dot : bool; array_like, shape (...)
+        With the J2 secular rates; the differential-drag rate of da [1/s].
+    t_min, iterations : float, optional; int
+        Start of the window [s] (exclusive; default a tenth of an orbit); Newton iterations per candidate.
 
     Returns
     -------
@@ -127,13 +119,15 @@ def nearest_crossing(roe0: ArrayLike, u0: ArrayLike, duration: float, a: float, 
     r0 = np.asarray(roe0, dtype=float)
     batch = r0.shape[:-1]
     if not batch and np.ndim(u0) == 0 and np.ndim(da_dot) == 0:
-        return nearest_crossing_one(r0, u0, duration, ChiefRates.of(a, inc, j2), da_dot, t_min, iterations)
+        return nearest_crossing_one(r0, u0, duration, ChiefRates.of(a, inc, j2), da_dot, t_min=t_min,
+                                    iterations=iterations)
     u0 = np.broadcast_to(np.asarray(u0, dtype=float), batch)
     dad = np.broadcast_to(np.asarray(da_dot, dtype=float), batch)
     # the six elements apart, contiguous (no strided (..., 6) views, no stack)
     el = tuple(np.ascontiguousarray(r0[..., k]) for k in range(6))
     flat = (np.abs(r0[..., 0]) < 1e-12) & (np.hypot(r0[..., 2], r0[..., 3]) < 1e-12)
-    return _crossing(r0, el, u0, dad, duration, ChiefRates.of(a, inc, j2), t_min, iterations, len(batch), flat)
+    return _crossing(r0, el, u0, dad, duration, chief=ChiefRates.of(a, inc, j2), t_min=t_min, iterations=iterations,
+                     n_batch=len(batch), flat=flat)
 
 
 class ChiefRates(NamedTuple):
@@ -153,10 +147,8 @@ class ChiefRates(NamedTuple):
 
         Parameters
         ----------
-        a : float
-            The chief's semi-major axis [m].
-        inc : float
-            The chief's inclination [rad].
+        a, inc : float
+            The chief's semi-major axis [m] and inclination [rad].
         j2 : bool
             With the J2 secular rates.
 
@@ -169,12 +161,11 @@ class ChiefRates(NamedTuple):
 
 
 def nearest_crossing_one(r0: ArrayLike, u0: float, duration: float, chief: ChiefRates, da_dot: float = 0.0,
-                         t_min: float | None = None, iterations: int = 3) -> tuple[np.floating, np.ndarray]:
+                         *, t_min: float | None = None, iterations: int = 3) -> tuple[np.floating, np.ndarray]:
     """:func:`nearest_crossing` of one state, the chief's rates given: the same operations on the same values,
     element by element, without the batch's broadcasting and gathers (a state assessment's transits are 2-3
-    revolutions, a few candidates: the wrappers were most of the cost). An element is the same whether computed in
-    a batch or alone (elementwise operations), and the nearest transit is picked by argmin, as the batch does along
-    its candidates.
+    revolutions, a few candidates). An element is the same computed in a batch or alone (elementwise operations,
+    the nearest transit picked by argmin as in the batch).
 
     Parameters
     ----------
@@ -188,26 +179,24 @@ def nearest_crossing_one(r0: ArrayLike, u0: float, duration: float, chief: Chief
         The chief's a, i, J2 flag and rates (:meth:`ChiefRates.of`).
     da_dot : float
         Differential-drag rate of da [1/s].
-    t_min : float, optional
-        Start of the window [s] (exclusive); default a tenth of an orbit.
-    iterations : int
-        Newton iterations per transit candidate.
+    t_min, iterations : float, optional; int
+        As for :func:`nearest_crossing`.
 
     Returns
     -------
     t_abs : numpy.floating
-        The dimensionless |T|/a of the nearest transit (``inf`` if none), as :func:`nearest_crossing` returns it
-        for one state.
+        The dimensionless |T|/a of the nearest transit (``inf`` if none), as :func:`nearest_crossing` returns it.
     t : numpy.ndarray, shape ()
         Its time [s] (``nan`` if none).
     """
     r0 = np.asarray(r0, dtype=float)
     el = r0.tolist()
     flat = abs(el[0]) < 1e-12 and np.hypot(el[2], el[3]) < 1e-12
-    return _crossing(r0, el, float(u0), np.asarray(da_dot, dtype=float), duration, chief, t_min, iterations, 0, flat)
+    return _crossing(r0, el, float(u0), np.asarray(da_dot, dtype=float), duration, chief=chief, t_min=t_min,
+                     iterations=iterations, n_batch=0, flat=flat)
 
 
-def _crossing(r0, el, u0, dad, duration, chief: "ChiefRates", t_min, iterations, n_batch, flat):
+def _crossing(r0, el, u0, dad, duration, *, chief: "ChiefRates", t_min, iterations, n_batch, flat):
     """The body of :func:`nearest_crossing` and :func:`nearest_crossing_one`: ``el`` the six elements apart (arrays
     of the batch's shape, or the floats of one state), ``n_batch`` the batch's dimensions, ``flat`` where there is
     no radial motion (a boolean array, or one bool). Candidates lie on a leading axis, samples last."""
@@ -219,7 +208,7 @@ def _crossing(r0, el, u0, dad, duration, chief: "ChiefRates", t_min, iterations,
     lead = (-1,) + (1,) * n_batch
     with np.errstate(invalid="ignore", divide="ignore"):  # circular (de = 0) samples give NaN: masked below
         t_rev = (period * np.arange(int(np.ceil(duration / period)) + 1)).reshape(lead)
-        da_s, dex_s, dey_s = _in_plane(da0, dex0, dey0, t_rev, dad, rates)
+        da_s, dex_s, dey_s = _in_plane(da0, dex0, dey0, t_rev, dad, rates=rates)
         de, phi = np.hypot(dex_s, dey_s), np.arctan2(dey_s, dex_s)
         psi = np.arccos(np.clip(da_s / de, -1.0, 1.0))
         u_start = u0 + u_dot * t_rev
@@ -228,7 +217,7 @@ def _crossing(r0, el, u0, dad, duration, chief: "ChiefRates", t_min, iterations,
         # one candidate of each kind per revolution, within half a revolution of that revolution's start
         t = np.concatenate([t_rev, t_rev]) + wrap_angle(cand - u_start2) / u_dot
         for _ in range(iterations):  # Newton on R = 0 with the full secular model (only the R and T components of
-            da, dex, dey = _in_plane(da0, dex0, dey0, t, dad, rates)  # roe_to_rtn, with its expressions)
+            da, dex, dey = _in_plane(da0, dex0, dey0, t, dad, rates=rates)  # roe_to_rtn, with its expressions)
             u = u0 + u_dot * t
             s, c = np.sin(u), np.cos(u)
             pos_r = da - dex * c - dey * s

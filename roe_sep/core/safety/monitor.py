@@ -127,7 +127,7 @@ def _in_fov_one(end: list, limits: MonitorLimits) -> bool:
 
 
 def assess(roe0: ArrayLike, t0: float, chief: Chief, limits: MonitorLimits, burns: Iterable[Burn] = (),
-           t_end: float | None = None, j2: bool = True, da_dot: float = 0.0) -> Assessment:
+           *, t_end: float | None = None, j2: bool = True, da_dot: float = 0.0) -> Assessment:
     """Assess the trajectory from dimensionless ``roe0`` at ``t0`` [s] under ``burns`` up to ``t_end``.
 
     ``t_end`` defaults to ``t0 + limits.window`` (a state), a plan check passes its last burn + ``plan_horizon``.
@@ -149,10 +149,8 @@ def assess(roe0: ArrayLike, t0: float, chief: Chief, limits: MonitorLimits, burn
         Relative impulses (a plan's, or none for a state).
     t_end : float, optional
         End of the window [s]; default ``t0 + limits.window``.
-    j2 : bool
-        With the J2 secular rates.
-    da_dot : float
-        Differential-drag rate of da [1/s].
+    j2, da_dot : bool, float
+        With the J2 secular rates; the differential-drag rate of da [1/s].
 
     Returns
     -------
@@ -167,10 +165,10 @@ def assess(roe0: ArrayLike, t0: float, chief: Chief, limits: MonitorLimits, burn
     burn_epochs = [b.epoch for b in burns if b.epoch >= t0]
     if burn_epochs or not (times < np.inf).all():
         # under burns: the trajectory's arcs; its columns are the elements below
-        roes = trajectory(roe0, t0, burns, times, chief, j2, da_dot)
+        roes = trajectory(roe0, t0, burns, times, chief, j2=j2, da_dot=da_dot)
         el = tuple(roes.T)
         last_burn = max(burn_epochs, default=t0)
-        start = trajectory(roe0, t0, burns, np.array([last_burn]), chief, j2, da_dot)[0] if burn_epochs \
+        start = trajectory(roe0, t0, burns, np.array([last_burn]), chief, j2=j2, da_dot=da_dot)[0] if burn_epochs \
             else roes[0]
     else:
         # one coast arc: the trajectory's propagation from roe0 (segments_at), its six elements kept apart

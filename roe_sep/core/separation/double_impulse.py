@@ -282,14 +282,10 @@ def plan_drift_stop(dv1_rtn: ArrayLike, u1: float, epoch1: float, a: float, inc:
     ----------
     dv1_rtn : array_like, shape (3,)
         The commanded ejection [m/s], relative, RTN.
-    u1 : float
-        The carrier's mean argument of latitude at the ejection [rad].
-    epoch1 : float
-        The ejection epoch [s].
-    a : float
-        The carrier's semi-major axis [m].
-    inc : float
-        The carrier's inclination [rad].
+    u1, epoch1 : float
+        The carrier's mean argument of latitude [rad] and the epoch [s] at the ejection.
+    a, inc : float
+        The carrier's semi-major axis [m] and inclination [rad].
     k : int
         Odd number of half revolutions from the ejection to the drift-stop.
     p : float

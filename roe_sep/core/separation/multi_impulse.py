@@ -1,13 +1,12 @@
 """Multi-impulse separation: SPL ejection at the orbit pole, then purely tangential carrier burns (seed 001 Sec. 3).
 
-Seed 001 replaces the double impulse of seeds 000/002 (one large drift-stop with a radial component, about 1.33 m/s)
-because the carrier thrusters give at most ~0.3 m/s per burn, quantized to 1 mm/s (seed 001 Sec. 2.1, constraint 2),
-and the SPL delivers 1.53 m/s (fixed size, free direction). The plan built here:
+Seed 001 replaces the double impulse of seeds 000/002 (one large drift-stop with a radial component): the carrier
+thrusters give at most ~0.3 m/s per burn, quantized to 1 mm/s (seed 001 Sec. 2.1), the SPL a fixed 1.53 m/s:
 
-1. **Ejection** at u1 = 90 deg (orbit north pole, seed 001 Sec. 2.2 item 3), components chosen as seed 001 Sec. 3:
+1. **Ejection** at u1 = 90 deg (orbit north pole, seed 001 Sec. 2.2 item 3), components as in seed 001 Sec. 3:
 
-   * tangential: the least value that keeps the drift outward under the SPL under-performance, the preliminary
-     study's criterion (seed 002 Eq. 10): |dvT1| = e~ = spl_sigma |dv| (10 % of the SPL size), sign from safety #2;
+   * tangential: the least value keeping the drift outward under SPL under-performance (seed 002 Eq. 10):
+     |dvT1| = e~ = spl_sigma |dv|, sign from safety #2;
    * normal: the relative inclination vector of the initial conditions, n a di_F = dvN1 (Eq. 2), with di_F the
      largest size still in the camera field of view at the smallest admissible separation (Table 2 a_di_max,
      visibility #3, Eq. 11): the larger dvN1, the smaller the radial part the carrier has to undo; the margin of
@@ -26,9 +25,8 @@ and the SPL delivers 1.53 m/s (fixed size, free direction). The plan built here:
    shortest path to the ray anti-parallel to di with |de| >= the minimum R-N distance (seed 001 Sec. 3 'minimum
    delta-v fashion'; tangential burns: sum |dvT| >= n a/2 max(|Delta da|, |Delta de|)).
 
-Every carrier burn is quantized to ``dv_quantum`` and split into burns of at most ``max_burn``, repeated at the same
-argument of latitude on consecutive revolutions. Impulses are *relative* (picosatellite w.r.t. carrier, seed
-convention); the carrier burns the opposite.
+Every burn is quantized to ``dv_quantum``, split into burns of at most ``max_burn`` on consecutive revolutions, and
+*relative* (picosatellite w.r.t. carrier; the carrier burns the opposite).
 """
 
 import math
@@ -347,14 +345,10 @@ def plan_carrier_burns(dv1_rtn: ArrayLike, u1: float, epoch1: float, a: float, i
     ----------
     dv1_rtn : array_like, shape (3,)
         The commanded ejection [m/s], relative, RTN.
-    u1 : float
-        The carrier's mean argument of latitude at the ejection [rad].
-    epoch1 : float
-        The ejection epoch [s].
-    a : float
-        The carrier's semi-major axis [m].
-    inc : float
-        The carrier's inclination [rad].
+    u1, epoch1 : float
+        The carrier's mean argument of latitude [rad] and the epoch [s] at the ejection.
+    a, inc : float
+        The carrier's semi-major axis [m] and inclination [rad].
     sep : SeparationConfig
         Reduction sizing (Eq. 21), the minimum R-N distance and the side (leading/following).
     mcfg : MultiImpulseConfig
@@ -399,14 +393,14 @@ def plan_carrier_burns(dv1_rtn: ArrayLike, u1: float, epoch1: float, a: float, i
         plan.append(CarrierBurn("drift_reduction", u, epoch_of(u), -rel, rel))
         burns.append(Burn(epoch_of(u), tuple(rel)))
     t_red = plan[-1].epoch if plan else epoch1
-    roe_red = trajectory(np.zeros(6), epoch1, burns, [t_red], chief, j2, da_dot)[0]
+    roe_red = trajectory(np.zeros(6), epoch1, burns, [t_red], chief, j2=j2, da_dot=da_dot)[0]
 
     # tangential pair on the predicted state at the earliest pair epoch
     t_p = epoch1 + mcfg.pair_delay
     if plan and t_p <= t_red:
         raise ValueError(f"pair_delay ({mcfg.pair_delay} s) must exceed the drift reduction "
                          f"({t_red - epoch1:.0f} s after the ejection)")
-    roe_p = trajectory(np.zeros(6), epoch1, burns, [t_p], chief, j2, da_dot)[0]
+    roe_p = trajectory(np.zeros(6), epoch1, burns, [t_p], chief, j2=j2, da_dot=da_dot)[0]
     dde = anti_parallel_target(roe_p[2:4], roe_p[4:6], de_min, not sep.leading) - roe_p[2:4]
     # the state at the pair's first burn (up to one revolution later) differs by the J2 rotation of de and the
     # drag drift: refine once at that epoch
@@ -415,7 +409,7 @@ def plan_carrier_burns(dv1_rtn: ArrayLike, u1: float, epoch1: float, a: float, i
     for _ in range(2):
         u_a, x1, x2 = pair(roe_p[0], dde, n, a)
         u_first = first_u_after(u_a, float(u_p))
-        roe_a = trajectory(np.zeros(6), epoch1, burns, [epoch_of(u_first)], chief, j2, da_dot)[0]
+        roe_a = trajectory(np.zeros(6), epoch1, burns, [epoch_of(u_first)], chief, j2=j2, da_dot=da_dot)[0]
         dde = anti_parallel_target(roe_a[2:4], roe_a[4:6], de_min, not sep.leading) - roe_a[2:4]
         roe_p = roe_a
     u_a, x1, x2 = pair(roe_a[0], dde, n, a)
@@ -428,12 +422,12 @@ def plan_carrier_burns(dv1_rtn: ArrayLike, u1: float, epoch1: float, a: float, i
     plan.sort(key=lambda b: b.epoch)
     all_burns = [burns[0]] + [Burn(b.epoch, tuple(b.dv_relative_rtn)) for b in plan]
     t_ic = plan[-1].epoch
-    roe_f = trajectory(np.zeros(6), epoch1, all_burns, [t_ic], chief, j2, da_dot)[0]
+    roe_f = trajectory(np.zeros(6), epoch1, all_burns, [t_ic], chief, j2=j2, da_dot=da_dot)[0]
     p_eff = abs(dv1[1]) - abs(sum(float(b.dv_carrier_rtn[1]) for b in plan if b.purpose == "drift_reduction"))
     return CarrierPlan(tuple(plan), float(p_eff), roe_red, roe_f, t_ic)
 
 
-def drift_free_state(dv1: ArrayLike, u1: float, a: float, inc: float, plan: CarrierPlan, sep: SeparationConfig,
+def drift_free_state(dv1: ArrayLike, u1: float, a: float, inc: float, plan: CarrierPlan, *, sep: SeparationConfig,
                      j2: bool = True, da_dot: float = 0.0) -> np.ndarray:
     """ROE right after the nominal drift reduction for the SPL under-performance that leaves no drift.
 
@@ -448,10 +442,8 @@ def drift_free_state(dv1: ArrayLike, u1: float, a: float, inc: float, plan: Carr
         The commanded ejection [m/s], relative, RTN.
     u1 : float
         The carrier's mean argument of latitude at the ejection [rad].
-    a : float
-        The carrier's semi-major axis [m].
-    inc : float
-        The carrier's inclination [rad].
+    a, inc : float
+        The carrier's semi-major axis [m] and inclination [rad].
     plan : CarrierPlan
         The plan of :func:`plan_carrier_burns` (its drift-reduction burns, epochs from the ejection at 0).
     sep : SeparationConfig
@@ -472,7 +464,7 @@ def drift_free_state(dv1: ArrayLike, u1: float, a: float, inc: float, plan: Carr
     burns = [Burn(0.0, tuple(f1 * dv1))] + [Burn(b.epoch, tuple(b.dv_relative_rtn)) for b in plan.burns
                                             if b.purpose == "drift_reduction"]
     t_red = max(b.epoch for b in burns)
-    return trajectory(np.zeros(6), 0.0, burns, [t_red], chief, j2, da_dot)[0]
+    return trajectory(np.zeros(6), 0.0, burns, [t_red], chief, j2=j2, da_dot=da_dot)[0]
 
 
 @dataclass(frozen=True)
@@ -576,7 +568,7 @@ def design(sep: SeparationConfig = SeparationConfig(), mcfg: MultiImpulseConfig 
     def margin(t_abs):  # AC3 of the drift-free sample after the drift reduction, minus the requirement [m]
         dv1 = ejection(t_abs)
         plan = plan_carrier_burns(dv1, u1, 0.0, a, inc, cfg, mcfg, j2, da_dot)
-        return a * float(min_rn_distance(drift_free_state(dv1, u1, a, inc, plan, cfg, j2, da_dot))) \
+        return a * float(min_rn_distance(drift_free_state(dv1, u1, a, inc, plan, sep=cfg, j2=j2, da_dot=da_dot))) \
             - cfg.min_rn_distance
 
     t_lo = abs(spl_tangential(e_tilde, cfg.leading))  # Eq. (10): outward drift under the SPL error

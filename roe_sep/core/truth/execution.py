@@ -59,7 +59,7 @@ class BurnExecution:
     """The pending burns and their execution on ``truth`` (a :class:`~.simulated.SimulatedTruth`). ``report(level,
     text)`` (level 'WARN' or 'ERROR') says why a burn or a plan was not taken as it came."""
 
-    def __init__(self, truth, errors, ejection_delay, require_approval, report, contingency=None):
+    def __init__(self, truth, errors, ejection_delay, require_approval, report, *, contingency=None):
         self.truth, self.errors, self.ejection_delay = truth, errors, ejection_delay
         self.contingency = contingency  # a TruthContingency: moves, drops or changes burns; None: none
         self.require_approval = require_approval

@@ -3,36 +3,30 @@
 Force model (per spacecraft, inertial equator-and-equinox-of-date frame of :mod:`roe_sep.core.od.radar`):
 
 * Zonal geopotential to degree 2, 3 or 4 (EGM96 J2..J4): U = mu/r [1 - sum_n J_n (R_E/r)^n P_n(z/r)] (Vallado,
-  *Fundamentals of Astrodynamics and Applications*, 4th ed., Eq. 8-19 restricted to m = 0); the acceleration is
-  grad U, differentiated symbolically by heyoka (no hand-expanded gradients to get wrong).
+  *Fundamentals of Astrodynamics and Applications*, 4th ed., Eq. 8-19, m = 0); grad U differentiated by heyoka.
 * Atmospheric drag a = -1/2 B rho(h) |v_r| v_r (Vallado Eq. 8-28), B = c_d A / m per spacecraft, v_r = v -
-  omega_E x r relative to an atmosphere co-rotating with the Earth, h = |r| - R_E (spherical altitude).
-  Density: an explicit choice of two models (:func:`truth_atmosphere`, ``ATMOSPHERES``):
+  omega_E x r relative to an atmosphere co-rotating with the Earth, h = |r| - R_E (spherical altitude). Density: an
+  explicit choice of two models (:func:`truth_atmosphere`, ``ATMOSPHERES``):
 
   * ``normalised`` (default, the seeds' assumption): the exponential model rho = rho_ref exp(-(h - h_ref) / H)
-    with the scale height H of Vallado's exponential atmosphere (Table 8-4) for the band containing the orbit,
-    normalised (:meth:`Atmosphere.normalised`) so that the *orbit-mean* drag of the carrier's osculating orbit,
-    <rho(h) |v_r| (v_r . v)>, equals the stated density times v^2 = mu / a: the density the linear model of seed
-    002 Eqs. (23)-(24) assumes (1 g/km^3). Referenced at the mean altitude a - R_E instead
-    (:meth:`Atmosphere.scaled`), the truth's drag is 4.8 % below Eq. (24): the spherical altitude of the
-    sun-synchronous orbit averages 4.2 km above a - R_E (the Earth's flattening and the short-period J2 terms of
-    the radius) and the co-rotating atmosphere adds 1.7 % of relative velocity.
-  * ``msis``: NRLMSIS 2.0 (Emmert et al., Earth and Space Science 2021) through the ``pymsis`` package (the
-    model's data ship with it, nothing is downloaded; F10.7, its 81-day mean and Ap are parameters, never
-    looked up). heyoka needs the density as an expression, so :class:`MsisAtmosphere` fits ln rho by least
-    squares over the band the pair flies through (the nominal orbit over the propagation span, +-20 km radially)
-    in the basis :func:`msis_basis`: polynomials of the direction in a frame turning with the Sun (the diurnal
+    with the scale height H of Vallado's Table 8-4 for the orbit's band, normalised (:meth:`Atmosphere.normalised`)
+    so that the *orbit-mean* drag <rho(h) |v_r| (v_r . v)> equals the stated density times v^2 = mu / a (seed 002
+    Eqs. 23-24). Referenced at the mean altitude a - R_E instead (:meth:`Atmosphere.scaled`), the
+    truth's drag is below Eq. (24) (the flattening and J2 raise the mean spherical altitude; docs/seeds.md).
+  * ``msis``: NRLMSIS 2.0 (Emmert et al., Earth and Space Science 2021) through ``pymsis`` (F10.7, its 81-day mean
+    and Ap are parameters, never looked up). heyoka needs the density as an expression, so :class:`MsisAtmosphere` fits
+    ln rho by least squares over the band the pair flies through (the nominal orbit over the propagation span, +-20 km
+    radially) in the basis :func:`msis_basis`: polynomials of the direction in a frame turning with the Sun (the diurnal
     bulge, latitude and season) times a quadratic in altitude. The fit's RMS error in ln rho is reported.
+
 Integrator: heyoka's adaptive Taylor method (Biscani & Izzo, MNRAS 2021), JIT-compiled with LLVM. Both spacecraft
 form one 12-dimensional system so that they share every step: integration error is then common-mode and largely
-cancels in the relative state. The compiled integrator is cached per process and configuration
-(:func:`pair_integrator`, about 2-5 s to compile on first use); batch mode (SIMD lanes, one sample pair each) and a
-thread pool over blocks of lanes run the Monte Carlo (:func:`propagate_pairs`) and the sweeps
-(:func:`propagate_pairs_grid`).
+cancels in the relative state. The compiled integrator is cached (:func:`pair_integrator`); batch mode (SIMD lanes)
+and a thread pool run the Monte Carlo (:func:`propagate_pairs`) and the sweeps (:func:`propagate_pairs_grid`).
 
-State layout: ``(..., 12)`` = chief (carrier) position [m], velocity [m/s], then deputy (picosatellite) likewise.
-Parameters: ``[B_chief, B_deputy, *atmosphere.pars()]``: exponential ``[rho_ref, h_ref, H]`` (kg/m^3, m, m),
-msis ``[alpha_0, h_0, c_1 .. c_46]`` (rad, m, fit coefficients).
+State ``(..., 12)``: chief (carrier) position [m], velocity [m/s], then deputy (picosatellite). Parameters:
+``[B_chief, B_deputy, *atmosphere.pars()]``: exponential ``[rho_ref, h_ref, H]`` (kg/m^3, m, m), msis
+``[alpha_0, h_0, c_1 .. c_46]`` (rad, m, fit coefficients).
 """
 
 import copy
@@ -194,7 +188,7 @@ def msis_basis(x: "np.ndarray | hy.expression", y: "np.ndarray | hy.expression",
 N_MSIS_BASIS = 46
 
 
-def _sun_frame(pos_x, pos_y, pos_z, r, alpha, cos=np.cos, sin=np.sin):
+def _sun_frame(pos_x, pos_y, pos_z, r, alpha, *, cos=np.cos, sin=np.sin):
     ca, sa = cos(alpha), sin(alpha)
     return (pos_x * ca + pos_y * sa) / r, (pos_y * ca - pos_x * sa) / r, pos_z / r
 
@@ -214,7 +208,7 @@ def ecef_to_geodetic(r_ef: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarra
 
 
 def nrlmsis_density(pos: ArrayLike, t: ArrayLike, epoch_utc: str = DEFAULT_EPOCH_UTC, f107: float = 140.0,
-                    f107a: float = 140.0, ap: float = 15.0) -> np.ndarray:
+                    f107a: float = 140.0, *, ap: float = 15.0) -> np.ndarray:
     """NRLMSIS 2.0 total mass density [kg/m^3] (``pymsis``, version 2.0) at inertial positions ``pos`` ``(N, 3)``
     [m] and times ``t`` ``(N,)`` [s after ``epoch_utc``]: Earth-fixed by the GMST rotation (the frame of
     :mod:`roe_sep.core.od.radar`), WGS-84 geodetic coordinates, the given F10.7 (previous day), its 81-day mean
@@ -275,7 +269,7 @@ class MsisAtmosphere:
 
     @classmethod
     def fit(cls, chief_mean: ArrayLike, span: float, epoch_utc: str = DEFAULT_EPOCH_UTC, f107: float = 140.0,
-            f107a: float = 140.0, ap: float = 15.0, step: float = 60.0) -> "MsisAtmosphere":
+            f107a: float = 140.0, *, ap: float = 15.0, step: float = 60.0) -> "MsisAtmosphere":
         """Fit to NRLMSIS 2.0 (:func:`nrlmsis_density`) along the nominal orbit of ``chief_mean`` (mean elements at
         t = 0, secular J2, osculating positions) every ``step`` s over [0, ``span``] s, at radial offsets of
         0, +-``MSIS_SPAN``/2 and +-``MSIS_SPAN``.
@@ -306,7 +300,7 @@ class MsisAtmosphere:
         offsets = np.linspace(-MSIS_SPAN, MSIS_SPAN, 5)
         pts = np.concatenate([pos * (1.0 + o / r) for o in offsets])
         tt = np.tile(t, offsets.size)
-        rho = nrlmsis_density(pts, tt, epoch_utc, f107, f107a, ap)
+        rho = nrlmsis_density(pts, tt, epoch_utc, f107, f107a, ap=ap)
         alpha0 = float(sun_right_ascension(julian_date(epoch_utc)))
         h0 = float(chief_mean[0]) - R_EARTH
         basis = np.stack(_basis_numpy(pts, tt, alpha0, h0), axis=-1)
@@ -384,7 +378,7 @@ ATMOSPHERES = ("normalised", "msis")
 
 
 def truth_atmosphere(model: str, density: float, chief_mean: ArrayLike, span: float = 3.0 * SECONDS_PER_DAY,
-                     epoch_utc: str = DEFAULT_EPOCH_UTC, f107: float = 140.0, f107a: float = 140.0,
+                     epoch_utc: str = DEFAULT_EPOCH_UTC, *, f107: float = 140.0, f107a: float = 140.0,
                      ap: float = 15.0) -> "Atmosphere | MsisAtmosphere":
     """The truth's atmosphere by name: ``normalised`` (:meth:`Atmosphere.normalised` to ``density``, the default)
     or ``msis`` (:meth:`MsisAtmosphere.fit` over ``span`` s from ``epoch_utc``; ``density`` unused).
@@ -410,7 +404,7 @@ def truth_atmosphere(model: str, density: float, chief_mean: ArrayLike, span: fl
     if model == "normalised":
         return Atmosphere.normalised(density, chief_mean)
     if model == "msis":
-        return MsisAtmosphere.fit(chief_mean, span, epoch_utc, f107, f107a, ap)
+        return MsisAtmosphere.fit(chief_mean, span, epoch_utc, f107, f107a, ap=ap)
     raise ValueError(f"atmosphere must be one of {ATMOSPHERES}, got {show(model)}")
 
 
@@ -492,7 +486,7 @@ def density_expression(kind: str, x: "hy.expression", y: "hy.expression", z: "hy
     if kind == "exponential":
         return hy.par[2] * hy.exp((hy.par[3] + R_EARTH - r) / hy.par[4])
     if kind == "msis":
-        sx, sy, sz = _sun_frame(x, y, z, r, hy.par[2] + SUN_RATE * hy.time, hy.cos, hy.sin)
+        sx, sy, sz = _sun_frame(x, y, z, r, hy.par[2] + SUN_RATE * hy.time, cos=hy.cos, sin=hy.sin)
         terms = msis_basis(sx, sy, sz, (r - R_EARTH - hy.par[3]) / MSIS_SCALE)
         log_rho = hy.par[4] * terms[0]
         for k, term in enumerate(terms[1:], start=5):
@@ -679,7 +673,7 @@ def _pars(b_chief, b_deputy, atmosphere):
 
 
 def propagate_pair(state0: ArrayLike, t0: float, times: ArrayLike, maneuvers: Iterable[Maneuver], b_chief: float,
-                   b_deputy: float, atmosphere: Atmosphere, zonals: int = 4, tol: float = DEFAULT_TOL) -> np.ndarray:
+                   *, b_deputy: float, atmosphere: Atmosphere, zonals: int = 4, tol: float = DEFAULT_TOL) -> np.ndarray:
     """Integrate one pair from ``state0`` at ``t0`` and return the states ``(len(times), 12)`` at ``times``.
 
     ``maneuvers`` (:class:`Maneuver`, epochs >= t0) are applied at their epochs; a sample exactly at a burn epoch
@@ -754,7 +748,7 @@ def _check(outcome):
 
 
 # ---------------------------------------------------------------- many pairs (Monte Carlo, sweeps)
-def _batch_worker(template, states, pars, t0, grid, out, lo, hi):
+def _batch_worker(template, states, pars, t0, grid, *, out, lo, hi):
     """Propagate lanes ``lo:hi`` of ``states`` ``(12, N)`` from t0, ``batch_size`` lanes at a time (one integrator
     per worker thread; heyoka releases the GIL while it integrates). ``grid`` is the end time (float: ``states`` is
     overwritten with the final states) or sorted output times ``(n_t,)`` (states at those times go to ``out``
@@ -775,7 +769,7 @@ def _batch_worker(template, states, pars, t0, grid, out, lo, hi):
         states[:, j:j + bs] = ta.state
 
 
-def _run_lanes(states0, t0, grid, b_chief, b_deputy, atmosphere, zonals, tol, workers):
+def _run_lanes(states0, t0, grid, b_chief, b_deputy, *, atmosphere, zonals, tol, workers):
     """The lane layout shared by :func:`propagate_pairs` and :func:`propagate_pairs_grid`: states and parameters
     ``(12 | 5, N)`` padded to a multiple of the batch size, blocks of lanes over a thread pool of ``workers``
     (default: the cores available). Returns ``(final states (12, N_pad), grid output (n_t, 12, N_pad) or None)``."""
@@ -796,7 +790,7 @@ def _run_lanes(states0, t0, grid, b_chief, b_deputy, atmosphere, zonals, tol, wo
     workers = workers or len(os.sched_getaffinity(0))
     blocks = np.linspace(0, npad // bs, workers + 1).astype(int) * bs
     with ThreadPoolExecutor(max_workers=workers) as pool:
-        futures = [pool.submit(_batch_worker, template, states, pars, t0, grid, out, lo, hi)
+        futures = [pool.submit(_batch_worker, template, states, pars, t0, grid, out=out, lo=lo, hi=hi)
                    for lo, hi in zip(blocks[:-1], blocks[1:]) if hi > lo]
         for f in futures:
             f.result()
@@ -804,7 +798,7 @@ def _run_lanes(states0, t0, grid, b_chief, b_deputy, atmosphere, zonals, tol, wo
 
 
 def propagate_pairs(states0: ArrayLike, t0: float, t1: float, b_chief: ArrayLike, b_deputy: ArrayLike,
-                    atmosphere: Atmosphere, zonals: int = 4, tol: float = DEFAULT_TOL,
+                    *, atmosphere: Atmosphere, zonals: int = 4, tol: float = DEFAULT_TOL,
                     workers: int | None = None) -> np.ndarray:
     """Propagate N pairs ``(N, 12)`` from ``t0`` to ``t1`` [s]: heyoka batch mode (``simd_size`` pairs per
     integrator call, each lane with its own adaptive steps) over a thread pool of ``workers`` (default: the
@@ -834,12 +828,13 @@ def propagate_pairs(states0: ArrayLike, t0: float, t1: float, b_chief: ArrayLike
         The states at ``t1``.
     """
     n = np.shape(states0)[0]
-    states, _ = _run_lanes(states0, t0, float(t1), b_chief, b_deputy, atmosphere, zonals, tol, workers)
+    states, _ = _run_lanes(states0, t0, float(t1), b_chief, b_deputy, atmosphere=atmosphere, zonals=zonals, tol=tol,
+                           workers=workers)
     return states[:, :n].T.copy()
 
 
 def propagate_pairs_grid(states0: ArrayLike, t0: float, times: ArrayLike, b_chief: ArrayLike, b_deputy: ArrayLike,
-                         atmosphere: Atmosphere, zonals: int = 4, tol: float = DEFAULT_TOL,
+                         *, atmosphere: Atmosphere, zonals: int = 4, tol: float = DEFAULT_TOL,
                          workers: int | None = None) -> np.ndarray:
     """As :func:`propagate_pairs`, but the states of every pair at the sorted ``times`` >= ``t0`` [s] (heyoka's
     dense output, exact to the integrator tolerance between steps). Returns ``(N, len(times), 12)``.
@@ -864,7 +859,8 @@ def propagate_pairs_grid(states0: ArrayLike, t0: float, times: ArrayLike, b_chie
     if times.ndim != 1 or times.size == 0 or times[0] < t0 or np.any(np.diff(times) < 0.0):
         raise ValueError("times must be a non-empty sorted 1-D array starting at or after t0")
     n = np.shape(states0)[0]
-    _, out = _run_lanes(states0, t0, times, b_chief, b_deputy, atmosphere, zonals, tol, workers)
+    _, out = _run_lanes(states0, t0, times, b_chief, b_deputy, atmosphere=atmosphere, zonals=zonals, tol=tol,
+                        workers=workers)
     return np.moveaxis(out[:, :, :n], -1, 0).copy()
 
 
@@ -942,7 +938,7 @@ class NonlinearTruth:
     """
 
     def __init__(self, chief0: ArrayLike, t0: float, b_chief: float, b_deputy: float, atmosphere: Atmosphere,
-                 zonals: int = 4, da_dot: float = 0.0):
+                 *, zonals: int = 4, da_dot: float = 0.0):
         self.chief0 = np.asarray(chief0, dtype=float)
         self.t0 = float(t0)
         self.da_dot = float(da_dot)

@@ -54,7 +54,7 @@ class Dispersed:
 
 
 def dispersed_truth(scenario: "Scenario", carrier: "DoubleImpulseDesign | MultiImpulseDesign", raan: float, u0: float,
-                    seed: int, disperse: bool, dynamics: str, j2: bool, ejection_delay_max: float,
+                    seed: int, *, disperse: bool, dynamics: str, j2: bool, ejection_delay_max: float,
                     contingency: ContingencyConfig | None = None) -> Dispersed:
     """The run of ``seed``. The draws are those of ``numpy.random.default_rng(seed)`` in a fixed order (ballistic
     factor, then the execution errors), the ejection delay and the contingency each from its own stream of the
@@ -66,14 +66,10 @@ def dispersed_truth(scenario: "Scenario", carrier: "DoubleImpulseDesign | MultiI
         The scenario (:func:`roe_sep.core.config.load_scenario`): its dispersions, drag and execution errors.
     carrier : DoubleImpulseDesign or MultiImpulseDesign
         The scenario's separation design: the carrier's ``a`` [m] and ``inc`` [rad].
-    raan : float
-        The carrier's right ascension of the ascending node [rad] at sim time 0.
-    u0 : float
-        The carrier's mean argument of latitude [rad] at sim time 0.
-    seed : int
-        The run seed.
-    disperse : bool
-        False: no drag uncertainty, no execution errors, no ejection delay.
+    raan, u0 : float
+        The carrier's right ascension of the ascending node and mean argument of latitude [rad] at sim time 0.
+    seed, disperse : int, bool
+        The run seed; False: no drag uncertainty, no execution errors, no ejection delay.
     dynamics : str
         'secular' (:class:`~.secular.TruthModel`) or 'nonlinear' (:class:`~.nonlinear.NonlinearTruth`).
     j2 : bool
@@ -208,7 +204,7 @@ class SimulatedTruth:
     drops those after it. Every sample is the value of its own epoch, whatever the pass it was evaluated in (the
     evaluation is element-wise), so the samples are those of a pass per step to the bit."""
 
-    def __init__(self, model, truth_period, distance_step, departure, on_samples, on_hour):
+    def __init__(self, model, truth_period, distance_step, departure, on_samples, *, on_hour):
         self.model = model
         self.truth_period, self.distance_step = truth_period, distance_step
         self.closest = ClosestApproach(departure)

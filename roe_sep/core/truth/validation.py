@@ -175,7 +175,7 @@ def model_trajectory(case: Case, times: ArrayLike, model: str = "j2drag", densit
     j2 = model != "keplerian"
     rho = case.density if density is None else density
     da_dot = float(drag_da_dot(case.b_deputy - case.b_chief, rho, case.a)) if model == "j2drag" else 0.0
-    return trajectory(np.zeros(6), 0.0, case.burns(), times, case.chief, j2, da_dot)
+    return trajectory(np.zeros(6), 0.0, case.burns(), times, case.chief, j2=j2, da_dot=da_dot)
 
 
 def truth_states(case: Case, times: ArrayLike, zonals: int = 4) -> np.ndarray:
@@ -196,7 +196,8 @@ def truth_states(case: Case, times: ArrayLike, zonals: int = 4) -> np.ndarray:
         Inertial position [m] and velocity [m/s] of the carrier, then of the picosatellite.
     """
     s0 = pair_state(case.chief_mean, case.chief_mean)
-    return propagate_pair(s0, 0.0, times, case.maneuvers, case.b_chief, case.b_deputy, case.atmosphere, zonals)
+    return propagate_pair(s0, 0.0, times, case.maneuvers, case.b_chief, b_deputy=case.b_deputy,
+                          atmosphere=case.atmosphere, zonals=zonals)
 
 
 @dataclass
@@ -220,7 +221,7 @@ class ModelError:
 
 
 def model_errors(case: Case, days: Sequence[float] = (1, 2, 3), step: float = 60.0, models: Iterable[str] = MODELS,
-                 zonals: int = 4, effective: bool = False) -> list[ModelError]:
+                 zonals: int = 4, *, effective: bool = False) -> list[ModelError]:
     """Model error of each of ``models`` against the nonlinear truth (see the module docstring).
 
     One truth integration serves every model. The RTN comparison samples every ``step`` seconds. ``effective``
@@ -302,7 +303,7 @@ class NonlinearSweep:
 
 
 def nonlinear_sweep(d: DoubleImpulseDesign, mc: MonteCarloConfig, p_values: Iterable[float], zonals: int = MC_ZONALS,
-                    tol: float = MC_TOL, workers: int | None = None) -> NonlinearSweep:
+                    tol: float = MC_TOL, *, workers: int | None = None) -> NonlinearSweep:
     """The Monte Carlo p sweep with nonlinear propagation, every array over the sample axis (no per-sample loop).
 
     Per sample: the dispersed ejection (Eq. 22, f1, eps1) applied to the picosatellite at u1; both spacecraft
@@ -346,7 +347,7 @@ def nonlinear_sweep(d: DoubleImpulseDesign, mc: MonteCarloConfig, p_values: Iter
     s1 = apply_impulse(s0, dispersed_dv(d.dv1_rtn, draws.f1, draws.eps1), np.ones(n, bool))
     dt_stop = d.k * math.pi / float(arg_latitude_rate(a, d.inc, True))
     t0 = time.perf_counter()
-    s_stop = propagate_pairs(s1, 0.0, dt_stop, b_c, b_d, atm, zonals, tol, workers)
+    s_stop = propagate_pairs(s1, 0.0, dt_stop, b_c, b_d, atmosphere=atm, zonals=zonals, tol=tol, workers=workers)
     lin = sweep(d, mc, p_values)
     rows, agreement, diffs = [], [], {}
     for lrow in lin.rows:
@@ -354,7 +355,8 @@ def nonlinear_sweep(d: DoubleImpulseDesign, mc: MonteCarloConfig, p_values: Iter
         dv2_own = dispersed_dv(0.0 - d.drift_stop_dv(pv), draws.f2, draws.eps2, 0.0 - d.drift_stop_dv(0.0))
         s2 = apply_impulse(s_stop, dv2_own, np.zeros(n, bool))
         roe2 = mean_roe(s2)
-        s_h = propagate_pairs(s2, dt_stop, dt_stop + mc.horizon, b_c, b_d, atm, zonals, tol, workers)
+        s_h = propagate_pairs(s2, dt_stop, dt_stop + mc.horizon, b_c, b_d, atmosphere=atm, zonals=zonals, tol=tol,
+                              workers=workers)
         out = Outcome(roe2, mean_roe(s_h), min_rn_distance(roe2) * a)
         rows.append(summarize(d, mc, pv, out))
         lo = lin.outcomes[pv]

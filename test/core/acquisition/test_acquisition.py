@@ -63,7 +63,7 @@ def check_plan(plan, roe0, chief, da_dot, cfg, target_band=True):
     burns = [Burn(float(t), tuple(-dv)) for t, dv in zip(plan.epochs, plan.dv_carrier)]  # carrier -> relative
     period = 2 * math.pi / arg_latitude_rate(chief.a, chief.inc, cfg.j2)
     times = np.append(np.arange(chief.t0, plan.t_final, period / 200.0), plan.t_final)
-    traj = trajectory(roe0, chief.t0, burns, times, chief, cfg.j2, da_dot) * chief.a
+    traj = trajectory(roe0, chief.t0, burns, times, chief, j2=cfg.j2, da_dot=da_dot) * chief.a
     f = traj[-1]
     np.testing.assert_allclose(f, plan.final_roe * chief.a, atol=1e-6)
     s = math.copysign(1.0, roe0[1])
@@ -107,7 +107,7 @@ def test_typical_post_drift_stop_state(typical):
 
 def test_prediction_is_the_shared_trajectory(typical):
     t = np.linspace(CHIEF.t0, typical.t_final, 7)
-    direct = trajectory(TYPICAL, CHIEF.t0, typical.burns(), t, CHIEF, True, DA_DOT)
+    direct = trajectory(TYPICAL, CHIEF.t0, typical.burns(), t, CHIEF, j2=True, da_dot=DA_DOT)
     np.testing.assert_allclose(direct[-1], typical.final_roe, atol=1e-15)
     assert typical.burns()[0].dv_rel == tuple(-typical.dv_carrier[0])
 
@@ -216,7 +216,7 @@ def test_lp_maps_equal_single_burn_trajectories():
     axes = parse_axes("RTN")
     eff = carrier_burn_effects(epochs, axes, CHIEF)
     path = grid_response(eff, step, A, INC, True, component=1)
-    final = response_at(eff, epochs, epochs[-1], A, INC, True)
+    final = response_at(eff, epochs, epochs[-1], A, INC, j2=True)
     for k, j in ((0, 1), (5, 0), (17, 2), (len(epochs) - 1, 1)):
         dv = np.zeros(3)
         dv[axes[j]] = 1.0

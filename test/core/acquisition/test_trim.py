@@ -113,7 +113,7 @@ def test_trim_refused_when_it_alone_would_break_another_initial_condition():
 
     roe0 = state(-12.0)
     d = plan_trim(roe0, CHIEF, DA_DOT, [], T_F, T0 + MARGIN, 1.0, 1.0 / 86400.0, 5.0, CFG)
-    free = trajectory(roe0, T0, [], [d.t_final], CHIEF, CFG.j2, DA_DOT)[0]
+    free = trajectory(roe0, T0, [], [d.t_final], CHIEF, j2=CFG.j2, da_dot=DA_DOT)[0]
     kept, trimmed = float(min_rn_distance(free)) * A, float(min_rn_distance(d.final_roe)) * A
     assert d.trim and not d.problems and trimmed < kept - 5.0
     cfg = dataclasses.replace(CFG, min_ei=0.5 * (kept + trimmed))

@@ -79,12 +79,13 @@ def test_analytical_moments_match_the_simulation():
     t = np.array([400.0, 3000.0, 6000.0])
     pos1 = simulated_positions(CFG, dr, s1, 20.0, t)
     p1 = drag_acceleration(-s1.delta_q, CFG.density, CFG.a)
-    mean, var = position_moments(t, s1.velocity, np.array(20.0), p1, CFG.sigma, CFG.n)
+    mean, var = position_moments(t, s1.velocity, np.array(20.0), p1, CFG.sigma, n=CFG.n)
     assert np.mean(pos1, axis=0) == pytest.approx(mean, abs=4 * np.sqrt(var.max() / 2e5) + 1e-6)
     assert np.var(pos1, axis=0) == pytest.approx(var, rel=0.03, abs=1e-6)
     pos2 = simulated_positions(CFG, dr, s2, 31.0, t)
     p2 = drag_acceleration(-s2.delta_q, CFG.density, CFG.a)
-    pm, pv = pair_moments(t, s1.velocity, np.array(20.0), p1, s2.velocity, np.array(31.0), p2, CFG.sigma, CFG.n)
+    pm, pv = pair_moments(t, s1.velocity, np.array(20.0), p1, s2.velocity, dtj=np.array(31.0), pj=p2, sigma=CFG.sigma,
+                          n=CFG.n)
     rel = pos1 - pos2
     assert np.mean(rel, axis=0) == pytest.approx(pm, abs=4 * np.sqrt(pv.max() / 2e5) + 1e-6)
     assert np.var(rel, axis=0) == pytest.approx(pv, rel=0.03, abs=1e-6)
@@ -172,7 +173,7 @@ def test_analytical_pair_region_is_more_conservative_when_the_lighter_drag_goes_
         si, sj = cfg.sats[0], cfg.sats[j]
         safe, _, _ = pair_tables(cfg, si, sj)
         ana_min = cfg.delays[safe[0]][0] - cfg.min_delay
-        stat_min = statistical_min_delay_difference(cfg, dr, si, sj, cfg.min_delay, np.arange(1.0, 30.0))
+        stat_min = statistical_min_delay_difference(cfg, dr, si, sj, cfg.min_delay, differences=np.arange(1.0, 30.0))
         assert stat_min is not None and stat_min <= ana_min
 
 
@@ -196,7 +197,7 @@ def test_envelope_pair_regions_lie_inside_the_statistical_ones():
         rel = simulated_positions(cfg, dr, s1, anchor, t) - simulated_positions(cfg, dr, s2, anchor + ana_max, t)
         assert np.mean(np.max(np.linalg.norm(rel, axis=-1), axis=-1) <= cfg.r_max) >= cfg.p_required
     # heavier first from 22 s: the statistical pair is below P* at 6 and 10 s too (0.978 / 0.992 measured)
-    assert statistical_min_delay_difference(cfg, dr, s2, s1, 22.0, [6.0, 10.0]) is None
+    assert statistical_min_delay_difference(cfg, dr, s2, s1, 22.0, differences=[6.0, 10.0]) is None
 
 
 @pytest.fixture(scope="module")

@@ -131,7 +131,7 @@ def test_nearest_crossing_matches_propagate_and_roe_to_rtn():
         mc = MonteCarloConfig(samples=2000, seed=3, j2=j2)
         dr = draw(d0, mc)
         roe1, pre = ejection_roe(d0, dr), pre_stop(d0, mc, dr)
-        best, t = nearest_crossing(roe1, d0.u1, time_to_stop(d0, mc), d0.a, d0.inc, j2, pre.da_dot)
+        best, t = nearest_crossing(roe1, d0.u1, time_to_stop(d0, mc), d0.a, d0.inc, j2=j2, da_dot=pre.da_dot)
         ok = np.isfinite(best)
         assert ok.mean() > 0.9
         u = d0.u1 + arg_latitude_rate(d0.a, d0.inc, j2) * t[ok]

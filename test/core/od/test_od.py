@@ -297,11 +297,11 @@ def test_drag_decays_the_eccentricity_at_the_gauss_averaged_rate():
     x = np.append(ROE0, -74.0 / 86400.0 / A)
     de = ROE0[2:4]
     ecc = np.array([-3.5e-4, 7e-5])
-    drift = drag_de_drift(x, de, 86400.0, A, h_scale, ecc, a_chief_dot=-37.0 / 86400.0)
+    drift = drag_de_drift(x, de, 86400.0, A, h_scale, ecc=ecc, a_chief_dot=-37.0 / 86400.0)
     expected = k * 86400.0 * (A * x[6] * ecc + (-37.0 / 86400.0 + A * x[6]) * de)
     np.testing.assert_allclose(drift, expected, rtol=1e-12)
     # 1.4 m/day of a de along -e_c from the carrier's eccentricity (|e_c| = 3.6e-4) at -74 m/day of a*da_dot
-    carrier_only = drag_de_drift(x, np.zeros(2), 86400.0, A, h_scale, ecc)
+    carrier_only = drag_de_drift(x, np.zeros(2), 86400.0, A, h_scale, ecc=ecc)
     assert A * np.linalg.norm(carrier_only) == pytest.approx(1.44, abs=0.01)
     assert carrier_only @ ecc < 0.0
 
@@ -315,7 +315,7 @@ def test_drag_de_drift_integrates_the_growing_rate_and_the_turning_carrier_e():
     ecc, ecc_rate = np.array([-3.5e-4, 7e-5]), np.array([-6.2e-5, 1.8e-5]) / 86400.0
     a_dot = -165.0 / 86400.0
     dt = np.array([-150000.0, -3600.0, 0.0, 40000.0])
-    got = drag_de_drift(x, de, dt, A, h_scale, ecc, ecc_rate, a_dot, gamma)
+    got = drag_de_drift(x, de, dt, A, h_scale, ecc=ecc, ecc_rate=ecc_rate, a_chief_dot=a_dot, growth=gamma)
     k = 0.5 / h_scale + 0.5 / A
     for j, d in enumerate(dt):
         tau = np.linspace(0.0, d, 20001)
@@ -391,5 +391,5 @@ def test_secular_drift_removes_orbit_periodic_terms():
     t4 = t[four][-1] - t_ref
     assert slope4 == pytest.approx(c1 + 2 * c2 * t4, rel=1e-2)  # a line: the mean rate of the span
     assert secular_drift(t[t < 0.9 * period], a_da[t < 0.9 * period], 0.0, period) is None
-    state = secular_state([1.0, 2.0, 3.0, 4.0, 5.0, 6.0], t, a_da, t_ref, period, u)
+    state = secular_state([1.0, 2.0, 3.0, 4.0, 5.0, 6.0], t, a_da, t_ref, period, u=u)
     np.testing.assert_allclose(state, [c0, 2.0, 3.0, 4.0, 5.0, 6.0, c1], rtol=1e-9)

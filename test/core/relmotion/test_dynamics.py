@@ -139,7 +139,7 @@ def test_the_in_plane_propagation_is_propagate_elements_da_dex_dey():
     el = rng.normal(0.0, 1e-4, (6, 50))
     dt = rng.uniform(0.0, 86400.0, 50)
     for j2 in (True, False):
-        full = propagate_elements(el, dt, 6893137.0, 1.7, j2, -1e-12)
-        part = propagate_in_plane(el[0], el[2], el[3], dt, 6893137.0, 1.7, j2, -1e-12)
+        full = propagate_elements(el, dt, 6893137.0, 1.7, j2, da_dot=-1e-12)
+        part = propagate_in_plane(el[0], el[2], el[3], dt, 6893137.0, inc=1.7, j2=j2, da_dot=-1e-12)
         for x, y in zip(part, (full[0], full[2], full[3])):
             assert np.array_equal(x, y)

@@ -54,20 +54,20 @@ def test_the_nominal_set_is_three_sigmas_of_spl_and_drag():
 def test_a_scaled_impulse_flies_nearly_the_same_lines_of_sight_without_drag():
     """Linear: the same lines of sight; the Cartesian position of the curved relative orbit differs by the curvature
     only, y^2 / 2r radially (y / 2r = 0.02 deg at 6 km along-track), against 1.1 deg that the drag turns f1 = 0.1."""
-    a, b = predicted_los([1.0, 0.3], D.dv1_rtn, 0.0, CHIEF, 0.0, TIMES)
+    a, b = predicted_los([1.0, 0.3], D.dv1_rtn, 0.0, CHIEF, 0.0, times=TIMES)
     assert np.max(angle_deg(a, b)) < 0.025
 
 
 def test_the_bearings_see_f1_over_the_drag():
     """f1 X + g Y: half the impulse with half the drag flies the nominal lines of sight (to the J2 terms)."""
-    nominal = predicted_los([1.0], D.dv1_rtn, 0.0, CHIEF, DA_DOT, TIMES)[0]
-    half = predicted_los([0.5], D.dv1_rtn, 0.0, CHIEF, 0.5 * DA_DOT, TIMES)[0]
-    weak = predicted_los([0.5], D.dv1_rtn, 0.0, CHIEF, DA_DOT, TIMES)[0]
+    nominal = predicted_los([1.0], D.dv1_rtn, 0.0, CHIEF, DA_DOT, times=TIMES)[0]
+    half = predicted_los([0.5], D.dv1_rtn, 0.0, CHIEF, 0.5 * DA_DOT, times=TIMES)[0]
+    weak = predicted_los([0.5], D.dv1_rtn, 0.0, CHIEF, DA_DOT, times=TIMES)[0]
     assert np.max(angle_deg(nominal, half)) < 0.025 < 0.1 < np.max(angle_deg(nominal, weak))
 
 
 def test_with_drag_a_weak_ejection_turns_the_line_of_sight():
-    los = predicted_los([1.0, 0.8, 0.5, 0.3, 0.1], D.dv1_rtn, 0.0, CHIEF, DA_DOT, TIMES)
+    los = predicted_los([1.0, 0.8, 0.5, 0.3, 0.1], D.dv1_rtn, 0.0, CHIEF, DA_DOT, times=TIMES)
     turn = [float(np.max(angle_deg(los[0], x))) for x in los[1:]]
     assert turn[0] < 0.05 < turn[1] < turn[2] < turn[3]  # module docstring: 0.03, 0.13, 0.30, 1.1 deg
     assert turn[3] == pytest.approx(1.1, abs=0.15)
@@ -75,7 +75,7 @@ def test_with_drag_a_weak_ejection_turns_the_line_of_sight():
 
 def truth_bearings(f1, g, seed):
     """Bearings of an ejection of f1 under g times the nominal drag (the model itself as truth, the camera's noise)."""
-    pos_los = predicted_los([f1], D.dv1_rtn, 0.0, CHIEF, g * DA_DOT, TIMES)[0]
+    pos_los = predicted_los([f1], D.dv1_rtn, 0.0, CHIEF, g * DA_DOT, times=TIMES)[0]
     return camera_bearing(pos_los * 1000.0, SIGMA, np.random.default_rng(seed))
 
 

@@ -35,11 +35,11 @@ def test_right_after_ejection_passive_safety_comes_from_the_crossing_distance():
 def test_drift_stop_plan_check_and_a_bad_plan():
     roe = delta_roe(D.dv1_rtn, D.u1, D.a, D.n)
     stop = plan_drift_stop(D.dv1_rtn, D.u1, 0.0, D.a, D.inc, 3, 0.06)
-    good = assess(roe, 0.0, CHIEF, LIM, [Burn(stop.epoch, tuple(stop.dv_relative_rtn))], stop.epoch + 86400)
+    good = assess(roe, 0.0, CHIEF, LIM, [Burn(stop.epoch, tuple(stop.dv_relative_rtn))], t_end=stop.epoch + 86400)
     assert good.safe and not good.approaching
     # a drift-stop with the wrong tangential sign doubles the drift towards evaporation
     bad_dv = stop.dv_relative_rtn * np.array([1, -1, 1])
-    bad = assess(roe, 0.0, CHIEF, LIM, [Burn(stop.epoch, tuple(bad_dv))], stop.epoch + 86400)
+    bad = assess(roe, 0.0, CHIEF, LIM, [Burn(stop.epoch, tuple(bad_dv))], t_end=stop.epoch + 86400)
     assert not bad.safe and "evaporation" in bad.failed
 
 

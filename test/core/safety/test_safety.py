@@ -69,7 +69,7 @@ def test_nearest_crossing_matches_brute_force(f1, j2, dad):
     u1 = np.radians(88.0)
     roe0 = delta_roe(dv1, u1, A, N)
     dur = 3 * np.pi / N
-    fast, t = nearest_crossing(roe0, u1, dur, A, INC, j2, dad)
+    fast, t = nearest_crossing(roe0, u1, dur, A, INC, j2=j2, da_dot=dad)
     assert fast * A == pytest.approx(_brute_crossing(roe0, u1, dur, j2, dad) * A, abs=0.5)
     assert 0 < t <= dur
 

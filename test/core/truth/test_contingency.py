@@ -129,15 +129,16 @@ def test_draws_are_seeded_in_range_and_fixed_values_kept():
 
 # ---------------------------------------------------------------------------------------------------- the simulator
 def world(contingency=None, seed=3):
-    return dispersed_truth(Scenario(), D, 0.3, D.u1 - 0.2, seed, True, "secular", True, 10.0, contingency)
+    return dispersed_truth(Scenario(), D, 0.3, D.u1 - 0.2, seed, disperse=True, dynamics="secular", j2=True,
+                           ejection_delay_max=10.0, contingency=contingency)
 
 
 def fly(contingency=None, seed=3, plans=None):
     """The ejection at t = 100 s and the plans (source, burns), every burn flown at its epoch (approved):
     the executed burns [(epoch, u, dv, spacecraft, purpose)], the contingency drawn."""
     w = world(contingency, seed)
-    truth = SimulatedTruth(w.model, 60.0, 10.0, 1000.0, lambda e, s: None, lambda: None)
-    ex = BurnExecution(truth, w.errors, w.ejection_delay, False, lambda lvl, text: None, w.contingency)
+    truth = SimulatedTruth(w.model, 60.0, 10.0, 1000.0, lambda e, s: None, on_hour=lambda: None)
+    ex = BurnExecution(truth, w.errors, w.ejection_delay, False, lambda lvl, text: None, contingency=w.contingency)
     ex.eject(100.0, [0.0, 0.0, 1.41], "picosatellite", "ejection")
     if plans is None:
         plans = [(DRIFT_STOP, [(3000.0, [0.3, 0.05, 0.0], "carrier", "drift_stop")]),

@@ -44,7 +44,8 @@ def test_numerical_orbit_has_constant_mean_elements():
 
     kep = np.array([A, 0.0, INC, 0.3, 0.0, 1.0])
     t = np.linspace(0, 6 * 3600, 217)
-    s = propagate_pair(pair_state(kep, kep), 0, t, (), 0.0, 0.0, Atmosphere.scaled(1e-12, 515e3), zonals=2)
+    s = propagate_pair(pair_state(kep, kep), 0, t, (), 0.0, b_deputy=0.0, atmosphere=Atmosphere.scaled(1e-12, 515e3),
+                       zonals=2)
     osc = mo.cartesian_to_kepler(s[:, :3], s[:, 3:6])
     mean = mo.cartesian_to_mean(s[:, :3], s[:, 3:6])
     assert np.ptp(osc[:, 0]) > 15e3

@@ -49,9 +49,9 @@ def test_batch_equals_scalar_and_tolerances():
     dv = np.array([[-1.33, -0.16, 0.44], [-1.2, 0.1, 0.3], [0.5, 0.2, -0.1]])
     s0 = nl.apply_impulse(np.broadcast_to(nl.pair_state(CHIEF, CHIEF), (3, 12)), dv, np.ones(3, bool))
     b_d = np.array([0.023, 0.02, 0.0])
-    batch = nl.propagate_pairs(s0, 0.0, 20000.0, 0.0079, b_d, ATM, zonals=2, tol=1e-12)
+    batch = nl.propagate_pairs(s0, 0.0, 20000.0, 0.0079, b_d, atmosphere=ATM, zonals=2, tol=1e-12)
     for k in range(3):
-        one = nl.propagate_pair(s0[k], 0.0, [20000.0], (), 0.0079, b_d[k], ATM, zonals=2)[0]
+        one = nl.propagate_pair(s0[k], 0.0, [20000.0], (), 0.0079, b_deputy=b_d[k], atmosphere=ATM, zonals=2)[0]
         rel_b = batch[k, 6:9] - batch[k, :3]
         rel_s = one[6:9] - one[:3]
         assert np.linalg.norm(rel_b - rel_s) < 1e-3  # 1 mm: tolerance 1e-12 vs 1e-15, batch vs scalar
@@ -63,7 +63,7 @@ def test_heyoka_agrees_with_solve_ivp():
     s0 = nl.apply_impulse(nl.pair_state(CHIEF, CHIEF), [-1.33, -0.16, 0.44], True)
     pars = np.array([0.0079, 0.023, *ATM.pars()])
     t = 3 * 5700.0
-    hy_ = nl.propagate_pair(s0, 0.0, [t], (), 0.0079, 0.023, ATM, zonals=2)[0]
+    hy_ = nl.propagate_pair(s0, 0.0, [t], (), 0.0079, b_deputy=0.023, atmosphere=ATM, zonals=2)[0]
     sp = solve_ivp(nl.pair_rhs, (0, t), s0, method="DOP853", rtol=1e-12, atol=1e-6, args=(pars, 2)).y[:, -1]
     assert np.linalg.norm((hy_[6:9] - hy_[:3]) - (sp[6:9] - sp[:3])) < 0.01  # m
 
@@ -84,7 +84,7 @@ def test_differential_drag_rate_is_derived_factor_of_model():
     from roe_sep.core.relmotion.orbit import circular_speed
 
     t = np.arange(0.0, 43200.0 + 1, 20.0)
-    s = nl.propagate_pair(nl.pair_state(CHIEF, CHIEF), 0.0, t, (), 0.0079, 0.0230, ATM, zonals=2)
+    s = nl.propagate_pair(nl.pair_state(CHIEF, CHIEF), 0.0, t, (), 0.0079, b_deputy=0.0230, atmosphere=ATM, zonals=2)
     da = nl.mean_roe(s)[:, 0] * A
     rate = np.polyfit(t, da, 1)[0]
     r, v = s[:, :3], s[:, 3:6]
@@ -135,13 +135,13 @@ def test_propagate_pairs_grid_is_the_single_pair_propagation():
     s = np.concatenate([r, v, r, v])
     s0 = nl.apply_impulse(np.stack([s] * 5), np.array([[0.1 * k, 1.0, -0.2] for k in range(5)]), np.ones(5, bool))
     times = np.array([50.0, 3000.0, 20000.0])
-    grid = nl.propagate_pairs_grid(s0, 0.0, times, 0.0, 0.01, ATM, zonals=2, tol=1e-12)
+    grid = nl.propagate_pairs_grid(s0, 0.0, times, 0.0, 0.01, atmosphere=ATM, zonals=2, tol=1e-12)
     assert grid.shape == (5, 3, 12)
     for k in (0, 4):
-        one = nl.propagate_pair(s0[k], 0.0, times, [], 0.0, 0.01, ATM, zonals=2, tol=1e-12)
+        one = nl.propagate_pair(s0[k], 0.0, times, [], 0.0, b_deputy=0.01, atmosphere=ATM, zonals=2, tol=1e-12)
         assert np.max(np.abs(grid[k, :, :3] - one[:, :3])) < 1e-3  # m, after 20,000 s
     with pytest.raises(ValueError, match="sorted"):
-        nl.propagate_pairs_grid(s0, 0.0, times[::-1], 0.0, 0.01, ATM)
+        nl.propagate_pairs_grid(s0, 0.0, times[::-1], 0.0, 0.01, atmosphere=ATM)
 
 
 def test_normalised_atmosphere_gives_the_model_drag_rate():
@@ -154,7 +154,7 @@ def test_normalised_atmosphere_gives_the_model_drag_rate():
     assert norm.rho_ref / ATM.rho_ref == pytest.approx(1e-12 / nl.effective_density(ATM, CHIEF), rel=1e-12)
     assert 0.93 < nl.effective_density(ATM, CHIEF) / 1e-12 < 0.97
     t = np.arange(0.0, 43200.0 + 1, 20.0)
-    s = nl.propagate_pair(nl.pair_state(CHIEF, CHIEF), 0.0, t, (), 0.0079, 0.0230, norm, zonals=2)
+    s = nl.propagate_pair(nl.pair_state(CHIEF, CHIEF), 0.0, t, (), 0.0079, b_deputy=0.0230, atmosphere=norm, zonals=2)
     rate = np.polyfit(t, nl.mean_roe(s)[:, 0] * A, 1)[0]
     assert rate == pytest.approx(drag_da_dot(0.0230 - 0.0079, 1e-12, A) * A, rel=0.015)
 
@@ -185,7 +185,7 @@ def test_nrlmsis_atmosphere_fit_and_integrator_expression():
 
     class Raw:
         def density_at(self, pos, t):
-            return nl.nrlmsis_density(pos, t, m.epoch_utc, m.f107, m.f107a, m.ap)
+            return nl.nrlmsis_density(pos, t, m.epoch_utc, m.f107, m.f107a, ap=m.ap)
 
     raw = nl.effective_density(Raw(), chief, span=43200.0, samples=720)
     assert nl.effective_density(m, chief, span=43200.0, samples=720) == pytest.approx(raw, rel=0.01)

@@ -18,7 +18,7 @@ def timeline(truth_period=60.0):
     out = {"samples": [], "hours": []}
     model = TruthModel(chief_from_u(D.a, D.inc, 0.3, D.u1), 0.0, 0.0)
     truth = SimulatedTruth(model, truth_period, 10.0, 1000.0, lambda e, s: out["samples"].extend(e),
-                           lambda: out["hours"].append(truth.t))
+                           on_hour=lambda: out["hours"].append(truth.t))
     return truth, out
 
 
@@ -134,7 +134,7 @@ def test_nonlinear_samples_evaluated_ahead_are_each_steps_to_the_bit(step):
         out = []
         truth = SimulatedTruth(model if ahead else PerStep(model), 60.0, 10.0, 1000.0,
                                lambda e, s: out.append((list(e), [np.asarray(a).tobytes() for a in
-                                                                   (s[0], s[1], *s[2])])), lambda: None)
+                                                                   (s[0], s[1], *s[2])])), on_hour=lambda: None)
         pending = list(burns)
         for t_to in STEPS[step]:
             while pending and pending[0][0] <= t_to:  # as BurnExecution.execute and the sim node

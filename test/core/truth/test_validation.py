@@ -140,7 +140,7 @@ def test_cli_rejects_bad_input(capsys):
         _parser().parse_args(["propagate", "--roe", "1,2,3"])
     assert exc.value.code == 2
     with pytest.raises(ValueError, match="--alt"):
-        cli_nonlinear.propagate_report([0] * 6, -1.0, None, 0.0, 1.0, 600.0, "j2", load_scenario())
+        cli_nonlinear.propagate_report([0] * 6, -1.0, None, 0.0, 1.0, step=600.0, model="j2", scenario=load_scenario())
     with pytest.raises(SystemExit) as exc:
         _parser().parse_args(["validate", "--atmosphere", "normalised,jacchia"])
     assert exc.value.code == 2
