@@ -22,10 +22,22 @@ def refusal(state: str, request: tuple[int, str], available: Iterable[tuple[int,
             names: Mapping[int, str] | None = None) -> str | None:
     """Why a change-state request is refused (None: it is valid from ``state``).
 
-    ``request`` is the (id, label) of the requested transition as the ChangeState service received it: a non-empty
-    label names the transition (the id is then ignored, as rclpy does), else the id does. ``available`` holds the
-    (id, label) of every transition that leaves the current state ``state``; ``names`` the labels of transition ids
-    (all of the state machine's), for the reason, which names the state, the transition and the valid ones.
+    Parameters
+    ----------
+    state : str
+        The node's current state label.
+    request : tuple of (int, str)
+        The (id, label) of the requested transition as the ChangeState service received it: a non-empty label names
+        the transition (the id is then ignored, as rclpy does), else the id does.
+    available : iterable of (int, str)
+        The (id, label) of every transition that leaves ``state``.
+    names : mapping of int to str, optional
+        The labels of transition ids (all of the state machine's), to name a requested id in the reason.
+
+    Returns
+    -------
+    str or None
+        The reason, naming the state, the transition and the valid ones; None for a valid request.
     """
     transition_id, label = request
     available = list(available)
