@@ -43,16 +43,27 @@ def exit_process(code):
     :func:`can_skip_teardown` (module docstring). Never returns."""
     if not isinstance(code, int) or isinstance(code, bool) or not can_skip_teardown():
         sys.exit(code)
+    end_now(code, exit_handlers=True, c_stdio=True)
+
+
+def end_now(code: int, *, exit_handlers: bool, c_stdio: bool):
+    """``os._exit(code)`` after a garbage collection, the ``atexit`` handlers if ``exit_handlers``, Python's standard
+    streams flushed, and C's if ``c_stdio``. The one end of a process that skips the interpreter's teardown:
+    :func:`exit_process`, and a forked campaign run (:mod:`roe_sep.campaign.forkserver`, without the handlers and
+    C buffers it inherited from the fork server). Never returns."""
     # the nodes, executors and entities of the process are garbage in reference cycles (a node's callbacks are its
     # bound methods): collected, their rcl handles go, and with the last node rmw deletes the DDS participant (its
-    # shared-memory segment in /dev/shm with it; skipped, the segment of a suite of managed nodes was left behind)
+    # shared-memory segment in /dev/shm with it; skipped, a suite of managed nodes, and every forked run, left its
+    # segment behind)
     gc.collect()
-    atexit._run_exitfuncs()  # noqa: SLF001 -- the handlers Python's own exit runs first
+    if exit_handlers:
+        atexit._run_exitfuncs()  # noqa: SLF001 -- the handlers Python's own exit runs first
     for stream in (sys.stdout, sys.stderr):
         try:
             if stream is not None:
                 stream.flush()
-        except (OSError, ValueError):  # a closed stream (a reader that went away): nothing to flush to
+        except Exception:  # noqa: BLE001 -- a closed stream (a reader that went away): nothing to flush to
             pass
-    ctypes.CDLL(None).fflush(None)  # C's stdio: what a library printed through it
+    if c_stdio:
+        ctypes.CDLL(None).fflush(None)  # C's stdio: what a library printed through it
     os._exit(code & 0xFF)

@@ -17,6 +17,7 @@
 #
 #   scripts/ros2_cli.sh            # setup (cached) + every check; output dir build/ros2cli/checks
 #   scripts/ros2_cli.sh setup      # setup only
+#   scripts/ros2_cli.sh lifecycle  # setup + the check of invalid lifecycle transitions only (checks/lifecycle.txt)
 #   ROS2_SOURCES=/path scripts/ros2_cli.sh
 #   ROS2_CLI_DURATION=20000 scripts/ros2_cli.sh   # sim duration [s] of the launch run (default 20000)
 set -euo pipefail
@@ -199,6 +200,75 @@ r2() {
   [[ $code == 0 ]] || printf '(exit status %s)\n' "$code"
 }
 
+# every managed node started by `ros2 run` with the default autostart (active at once), `ros2 run roe_sep
+# lifecycle_manager` beside them (it reads each node's state and adopts the active ones), then transitions invalid
+# from the active state sent from outside: ChangeState by id and by label (`ros2 service call`), and `ros2 lifecycle
+# set` (which checks the available transitions itself). Every node must still run and answer, and the manager exit
+# 0 on SIGINT. `scripts/ros2_cli.sh lifecycle` runs this check alone (after the setup).
+check_invalid_transitions() {
+  local share n p code manager deadline active
+  local managed=(planner radar_od ic_planner safety_monitor)
+  share="$(ros2 pkg prefix --share roe_sep)"
+  printf '/**:\n  ros__parameters:\n    use_sim_time: false\n    scenario_file: %s\nplanner:\n  ros__parameters:\n    mc_samples: 2000\n' \
+    "$share/config/default.yaml" > "$OUT/params_lifecycle.yaml"
+  for n in "${managed[@]}"; do
+    setsid ros2 run roe_sep "$n" --ros-args --params-file "$share/config/bag_params.yaml" \
+      --params-file "$OUT/params_lifecycle.yaml" > "$OUT/run_lifecycle_$n.log" 2>&1 &
+    PIDS+=($!)
+  done
+  deadline=$((SECONDS + 120))
+  while :; do  # until every node says active (autostart), at most 120 s
+    active=0
+    for n in "${managed[@]}"; do
+      timeout 30 ros2 lifecycle get "/$n" --no-daemon --spin-time 2 2>/dev/null | grep -q '^active' && active=$((active + 1))
+    done
+    [[ $active == "${#managed[@]}" || $SECONDS -ge $deadline ]] && break
+    sleep 1
+  done
+  setsid ros2 run roe_sep lifecycle_manager > "$OUT/run_lifecycle_manager.log" 2>&1 &
+  manager=$!
+  PIDS+=("$manager")
+  deadline=$((SECONDS + 120))
+  until grep -q "managed nodes active\|ERROR" "$OUT/run_lifecycle_manager.log" 2>/dev/null || [[ $SECONDS -ge $deadline ]]; do
+    sleep 1
+  done
+  {
+  section "manager beside active nodes (autostart)"
+  cat "$OUT/run_lifecycle_manager.log"
+  section "invalid transitions"
+  for n in "${managed[@]}"; do
+    r2 service call "/$n/change_state" lifecycle_msgs/srv/ChangeState '{transition: {id: 1}}'
+    r2 service call "/$n/change_state" lifecycle_msgs/srv/ChangeState '{transition: {label: cleanup}}'
+    r2 lifecycle set "/$n" configure --no-daemon --spin-time 3
+  done
+  section "after the invalid transitions"
+  for n in "${managed[@]}"; do
+    r2 lifecycle get "/$n" --no-daemon --spin-time 3
+    r2 param get "/$n" autostart --no-daemon --spin-time 3
+  done
+  section "node processes"
+  for p in "${PIDS[@]}"; do
+    if kill -0 "$p" 2>/dev/null; then printf 'running: %s\n' "$(ps -o args= "$p" | grep -o 'roe_sep [a-z_]*')"; else
+      code=0; wait "$p" || code=$?; printf 'exited with status %s: pid %s\n' "$code" "$p"; fi
+  done
+  section "node logs (warnings, errors)"
+  for n in "${managed[@]}"; do
+    grep -h "WARN\|ERROR\|Traceback\|RCLError" "$OUT/run_lifecycle_$n.log" | sed "s|^|$n: |" || true
+  done
+  section "manager SIGINT"
+  kill -INT -- "-$manager" 2>/dev/null || true
+  code=0
+  wait "$manager" || code=$?
+  printf 'lifecycle_manager exit status %s\n' "$code"
+  } > "$OUT/lifecycle.txt" 2>&1
+  cleanup
+}
+if [[ "$MODE" == "lifecycle" ]]; then
+  check_invalid_transitions
+  say "lifecycle check: $OUT/lifecycle.txt"
+  exit 0
+fi
+
 {
 section "pkg executables"
 r2 pkg executables roe_sep
@@ -294,6 +364,9 @@ r2 lifecycle get /planner --no-daemon --spin-time 3
 } > "$OUT/managed.txt" 2>&1
 cleanup
 printf '$ (log of planner k:=2)\n%s\n' "$(grep -i 'configure failed' "$OUT/run_managed_planner.log")" >> "$OUT/managed.txt"
+
+check_invalid_transitions
+say "invalid transitions: $(grep -c '^active \[3\]' "$OUT/lifecycle.txt") of 4 managed nodes active after them"
 
 # the whole scenario with ros2 launch (report.json in OUT/launch), the XML front-end with the managed start-up
 # (OUT/launch_xml), and `roe-sep run` of the colcon install for the same seed and duration (OUT/run): the same report

@@ -35,6 +35,7 @@ import threading
 import time
 
 from ..children import die_with, spawn
+from ..process_exit import end_now
 
 POLL = 0.05  # s between checks of the request pipe and of exited children (a child's SIGCHLD wakes it sooner)
 
@@ -107,15 +108,9 @@ def _child(argv, log, parent):
     except BaseException as exc:  # noqa: BLE001  (the child's last word goes to its log, never up into the server)
         print(f"{type(exc).__name__}: {exc}", file=sys.stderr)
     finally:
-        # the run's nodes and executor are garbage in reference cycles: collected, rmw deletes the run's DDS
-        # participant, and its shared-memory segment in /dev/shm (549 KB) with it; os._exit alone left one per run
-        gc.collect()
-        for stream in (sys.stdout, sys.stderr):
-            try:
-                stream.flush()
-            except Exception:  # noqa: BLE001
-                pass
-        os._exit(int(code) & 0xFF if isinstance(code, int) else 1)
+        # never back into the server's loop: the run's garbage collected (its DDS participant and shared-memory
+        # segment go), its output flushed, os._exit (not the server's atexit handlers; docs/developers.md)
+        end_now(int(code) if isinstance(code, int) else 1, exit_handlers=False, c_stdio=False)
 
 
 def preload():
@@ -195,7 +190,8 @@ def serve():
                 continue
             out.flush()
             # the server's objects out of the collector's sight in the child (gc.freeze's use): its collections, the
-            # last one above too, walk the run's objects only, and write to no inherited page
+            # last one before its os._exit too (process_exit.end_now), walk the run's objects only, and write to no
+            # inherited page
             gc.freeze()
             pid = os.fork()
             if pid == 0:

@@ -1,11 +1,14 @@
 """lifecycle_manager: ordered start-up of managed nodes, the way nav2's lifecycle manager does it.
 
-Calls ``/<node>/change_state`` (lifecycle_msgs/srv/ChangeState) for every node of ``node_names``: ``configure``
-for each, in order, then ``activate`` for each, in order. A transition that fails stops the start-up: the manager
-logs which node and transition failed (the node's own log says why, e.g. the parameter error of its
-``configure``), publishes an ERROR on ``/diagnostics`` and exits with status 1. When every node is active it
-publishes OK "managed nodes active" and keeps running (so that a launch does not see it exit); on SIGINT/SIGTERM it
-exits 0 and leaves the nodes as they are.
+For every node of ``node_names``: ``configure`` for each, in order, then ``activate`` for each, in order. Before
+each step it reads the node's state (``/<node>/get_state``) and decides (:func:`roe_sep.core.lifecycle.
+startup_action`): a node still in the step's start state gets the transition (``/<node>/change_state``,
+lifecycle_msgs/srv/ChangeState); a node past it (already configured, or active: one that started itself with
+``autostart``) is adopted as it is; a node in any other state (finalized, unknown) fails the start-up. A transition
+that fails stops the start-up: the manager logs which node and transition failed (the node's own log says why, e.g.
+the parameter error of its ``configure``), publishes an ERROR on ``/diagnostics`` and exits with status 1. When
+every node is active it publishes OK "managed nodes active" and keeps running (so that a launch does not see it
+exit); on SIGINT/SIGTERM it exits 0, whatever state it found, and leaves the nodes as they are.
 
 The start-up never blocks the executor: it is a generator (:meth:`LifecycleManager.startup`) resumed by a timer on
 the steady clock every :data:`TICK` s, which yields while it waits for a service, a response or the request
@@ -29,10 +32,10 @@ from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 
 from .. import interfaces
+from ..core.lifecycle import GOAL, startup_action
 from .diagnostics import ERROR, OK, publish_status
 from .params import declare
 
-GOAL = {"configure": "inactive", "activate": "active"}
 ATTEMPTS = 3  # calls of a transition that got no answer
 MATCH_DELAY = 0.5  # s
 TICK = 0.05  # s (steady time) between two steps of the start-up
@@ -96,27 +99,44 @@ class LifecycleManager(Node):
         return None if result is None else result.current_state.label
 
     def startup(self):
-        """Generator: configure, then activate, every node in order; returns (ok, message)."""
+        """Generator: configure, then activate, every node in order, adopting those already past a step; returns
+        (ok, message)."""
         for label, transition in STEPS:
             for name in self.node_names:
-                for _ in range(ATTEMPTS):
-                    request = ChangeState.Request()
-                    request.transition.id = transition
-                    result, problem = yield from self._call(ChangeState, f"/{name}/change_state", request)
-                    if problem is None:
+                state = None
+                for _ in range(ATTEMPTS):  # a lost request or response: ask again
+                    state = yield from self.state(name)
+                    if state is not None:
                         break
-                    # no answer: a lost request or a lost response; the node's state tells which
-                    if (yield from self.state(name)) == GOAL[label]:
-                        problem, result = None, ChangeState.Response(success=True)
-                        break
-                    self.get_logger().warning(f"{problem}; asking again")
-                if problem is None and not result.success:
-                    problem = (f"{label} of /{name} failed (state now {(yield from self.state(name))!r}; the node's "
-                               f"log says why, e.g. a parameter error)")
+                action = startup_action(label, state)
+                if action == "adopt":
+                    self.get_logger().info(f"/{name}: {label} already done (state {state!r}), adopted")
+                    continue
+                if action == "fail":
+                    why = "no answer from its get_state" if state is None else f"state {state!r}"
+                    return False, f"{label} of /{name} impossible: {why}"
+                problem = yield from self._transition(name, label, transition)
                 if problem is not None:
                     return False, problem
                 self.get_logger().info(f"/{name}: {label} ok")
         return True, f"managed nodes active: {', '.join(self.node_names)}"
+
+    def _transition(self, name, label, transition):
+        """Generator: None once the transition is done, else why it failed."""
+        for _ in range(ATTEMPTS):
+            request = ChangeState.Request()
+            request.transition.id = transition
+            result, problem = yield from self._call(ChangeState, f"/{name}/change_state", request)
+            if problem is None:
+                break
+            # no answer: a lost request or a lost response; the node's state tells which
+            if (yield from self.state(name)) == GOAL[label]:
+                return None
+            self.get_logger().warning(f"{problem}; asking again")
+        if problem is None and not result.success:
+            problem = (f"{label} of /{name} failed (state now {(yield from self.state(name))!r}; the node's "
+                       f"log says why, e.g. a parameter error)")
+        return problem
 
     def destroy_node(self):
         self._startup.close()  # a start-up still waiting destroys its client now, while the node exists

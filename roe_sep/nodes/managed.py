@@ -14,11 +14,17 @@ nodes (``roe-sep run``, ``ros2 run roe_sep planner``, a test or a composed proce
 a parameter error then raises :class:`~.params.ParameterError` from the constructor (``main`` exits with status 2).
 ``autostart:=false`` leaves the node unconfigured for a lifecycle manager (:mod:`.lifecycle_manager`, ``ros2
 lifecycle set``).
+
+A change-state request whose transition is not valid from the node's current state (``configure`` of an active
+node, a raw ChangeState call with any transition id) is refused: a failed response (``success=false``) and a WARN
+naming the state and the transition (:func:`roe_sep.core.lifecycle.refusal`); the node goes on as it was. rclpy alone
+raises ``RCLError`` inside the service callback, which ends the node's process.
 """
 
 from rclpy.lifecycle import Node as LifecycleNode
 from rclpy.lifecycle import TransitionCallbackReturn
 
+from ..core.lifecycle import refusal
 from .params import ParameterError, declare
 
 
@@ -27,6 +33,8 @@ class ManagedNode(LifecycleNode):
 
     def __init__(self, node_name, **kwargs):
         super().__init__(node_name, **kwargs)
+        self._change_state = self._service_change_state.callback  # rclpy's, called for a valid request only
+        self._service_change_state.callback = self._on_change_state_request
         self.transition_error = None  # why the last transition failed (an exception), None if it did not
         self._quiet = False  # no log of a failed transition (autostart: the constructor raises it)
         self._activated = []  # (destroy function, entity) created by activate()
@@ -48,6 +56,18 @@ class ManagedNode(LifecycleNode):
         """Create the publishers, subscriptions, services and timers; start working."""
 
     # ---------------------------------------------------------------- transitions
+    def _on_change_state_request(self, request, response):
+        """The ChangeState service: rclpy's for a transition valid from the current state, else a refusal."""
+        _, state = self._state_machine.current_state
+        available = [(t[0], t[1]) for t in self._state_machine.available_transitions]
+        names = {t[0]: t[1] for t in self._state_machine.transition_graph}
+        why = refusal(state, (request.transition.id, request.transition.label), available, names=names)
+        if why is None:
+            return self._change_state(request, response)
+        self.get_logger().warning(why)
+        response.success = False
+        return response
+
     def _entities(self):
         return [(self.destroy_publisher, e) for e in self.publishers] + \
             [(self.destroy_subscription, e) for e in self.subscriptions] + \

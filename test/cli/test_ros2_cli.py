@@ -89,6 +89,34 @@ def test_lifecycle_transitions_with_ros2_lifecycle_set(checks):
     assert "configure failed: parameter 'k' must be an odd integer in [1, 99], got 2" in bad
 
 
+def test_invalid_transitions_leave_every_managed_node_running(checks):
+    """Every managed node by ``ros2 run`` (autostart: active), ``ros2 run roe_sep lifecycle_manager`` beside them,
+    then transitions invalid from 'active' sent with ``ros2 service call`` (ChangeState by id and by label) and ``ros2
+    lifecycle set``: the manager adopted every node, each request was refused with a WARN, every node still runs and
+    answers, and the manager exits 0 on SIGINT."""
+    text = checks["lifecycle"]
+    adopted = section(text, "manager beside active nodes")
+    for name in MANAGED:
+        assert f"/{name}: configure already done (state 'active'), adopted" in adopted, adopted
+    assert "managed nodes active" in adopted and "ERROR" not in adopted
+    sent = section(text, "invalid transitions")
+    assert sent.count("ChangeState_Response(success=False)") == 2 * len(MANAGED), sent
+    assert "success=True" not in sent
+    assert sent.count("Unknown transition requested") == len(MANAGED), sent  # ros2 lifecycle set checks itself
+    after = section(text, "after the invalid transitions")
+    states = dict(re.findall(r"^\$ ros2 lifecycle get /(\w+).*\n(.*)$", after, re.M))
+    assert states == dict.fromkeys(MANAGED, "active [3]"), after
+    assert after.count("Boolean value is: True") == len(MANAGED), after  # each answers its parameter services
+    running = section(text, "node processes")
+    assert sorted(re.findall(r"^running: roe_sep (\w+)$", running, re.M)) == sorted([*MANAGED, "lifecycle_manager"])
+    logs = section(text, "node logs")
+    for name in MANAGED:
+        assert f"[{name}]: transition 'configure' [1] refused: not valid from state 'active'" in logs, logs
+        assert f"[{name}]: transition 'cleanup' refused: not valid from state 'active'" in logs, logs
+    assert "Traceback" not in logs and "RCLError" not in logs and "ERROR" not in logs, logs
+    assert "lifecycle_manager exit status 0" in section(text, "manager SIGINT")
+
+
 def test_launch_runs_the_scenario_to_the_report_of_roe_sep_run(checks):
     reports = {name: json.loads((CHECKS / name / "report.json").read_text(encoding="utf-8"))
                for name in ("run", "launch", "launch_xml")}

@@ -4,11 +4,12 @@
 import time
 
 import pytest
-from lifecycle_msgs.msg import State  # noqa: E402
-from lifecycle_msgs.srv import GetState  # noqa: E402
+from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402
+from lifecycle_msgs.msg import State, Transition  # noqa: E402
+from lifecycle_msgs.srv import ChangeState, GetState  # noqa: E402
 from rcl_interfaces.srv import ListParameters  # noqa: E402
 from rclpy.lifecycle import TransitionCallbackReturn  # noqa: E402
-from rosutil import init, rclpy, start_node, stop_node, wait_exit  # noqa: I001  (skips without rclpy)
+from rosutil import init, rclpy, spin_until, start_node, stop_node, wait_exit  # noqa: I001  (skips without rclpy)
 
 from roe_sep import interfaces  # noqa: E402
 from roe_sep.nodes.params import ParameterError  # noqa: E402
@@ -163,3 +164,99 @@ def test_lifecycle_manager_stops_at_a_failed_configure():
     assert code == 1, out
     assert "configure of /planner failed (state now 'unconfigured'" in out
     assert "configure failed: parameter 'k' must be an odd integer in [1, 99], got 4" in out_p
+
+
+def _change_state(spin, client, transition_id, transition_label=""):
+    """The ChangeState response's success, None when there was no answer; ``spin(future)`` spins until it is done."""
+    request = ChangeState.Request()
+    request.transition.id, request.transition.label = transition_id, transition_label
+    future = client.call_async(request)
+    spin(future)
+    return future.result().success if future.done() else None
+
+
+def test_an_invalid_transition_is_refused_and_the_node_goes_on(context, capfd):
+    """rclpy alone raises RCLError ('Transition is not registered') inside the service callback: the executor, and
+    with it the node's process, ends. The managed node refuses the request (success false, a WARN) instead."""
+    context("use_sim_time:=false")
+    node = SafetyMonitorNode()  # autostart: active
+    probe = rclpy.create_node("change_state_probe")
+    executor = rclpy.executors.SingleThreadedExecutor()
+    executor.add_node(node)
+    executor.add_node(probe)
+
+    def spin(future):
+        executor.spin_until_future_complete(future, timeout_sec=10.0)
+    try:
+        client = probe.create_client(ChangeState, "/safety_monitor/change_state")
+        assert client.wait_for_service(timeout_sec=10.0)
+        for request in [(Transition.TRANSITION_CONFIGURE, ""), (0, "configure"), (0, "activate"),
+                        (Transition.TRANSITION_UNCONFIGURED_SHUTDOWN, ""), (99, ""), (0, "")]:
+            assert _change_state(spin, client, *request) is False, request
+            assert label(node) == "active" and len(subscribers(node, interfaces.TRUTH_ROE_TOPIC)) == 1
+        # the node goes on: valid transitions still work, and an invalid one from 'inactive' is refused too
+        assert _change_state(spin, client, Transition.TRANSITION_DEACTIVATE) is True
+        assert label(node) == "inactive"
+        assert _change_state(spin, client, 0, "deactivate") is False and label(node) == "inactive"
+        assert _change_state(spin, client, 0, "activate") is True and label(node) == "active"
+    finally:
+        executor.shutdown()
+        probe.destroy_node()
+        node.destroy_node()
+    err = capfd.readouterr().err
+    assert "transition 'configure' [1] refused: not valid from state 'active' (valid: deactivate [4], shutdown [7])" \
+        in err, err
+    assert "transition 'deactivate' refused: not valid from state 'inactive'" in err, err
+
+
+MANAGED_ARGS = {"safety_monitor": (), "planner": FAST_PLANNER, "radar_od": (), "ic_planner": ()}
+
+
+def test_lifecycle_manager_adopts_active_nodes_that_refuse_invalid_transitions():
+    """Every managed node started with autostart (active), the manager beside them: it reads each node's state and
+    adopts it (no configure of an active node, which killed it); then invalid transitions sent from outside are
+    refused; every node still runs and answers, and the manager exits 0 on SIGINT."""
+    nodes = {name: start_node(name, "-p", "use_sim_time:=false", *args) for name, args in MANAGED_ARGS.items()}
+    rclpy.init()
+    probe = rclpy.create_node("adopt_probe")
+    reports = []
+    probe.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC,
+                              lambda m: reports.extend(s.message for s in m.status
+                                                       if s.name == "roe_sep/lifecycle_manager"),
+                              interfaces.DIAGNOSTICS)
+    manager = None
+    active = State.PRIMARY_STATE_ACTIVE
+    try:
+        deadline = time.monotonic() + 120.0
+        while (states := {n: _state(probe, n) for n in nodes}) != dict.fromkeys(nodes, active):
+            assert time.monotonic() < deadline, states
+            time.sleep(0.5)
+        manager = start_node("lifecycle_manager", "-p", f"node_names:={list(nodes)!r}")
+        assert spin_until(probe, lambda: reports, timeout=120.0), "no status of the lifecycle_manager"
+        refused = {}
+
+        def spin(future):
+            rclpy.spin_until_future_complete(probe, future, timeout_sec=10.0)
+        for name in nodes:
+            client = probe.create_client(ChangeState, f"/{name}/change_state")
+            assert client.wait_for_service(timeout_sec=10.0)
+            refused[name] = [_change_state(spin, client, *request)
+                             for request in [(Transition.TRANSITION_CONFIGURE, ""), (0, "cleanup")]]
+            probe.destroy_client(client)
+        states = {n: _state(probe, n) for n in nodes}
+    finally:
+        probe.destroy_node()
+        rclpy.try_shutdown()
+        code_m, out_m = stop_node(manager) if manager is not None else (None, "")
+        outs = {name: stop_node(proc) for name, proc in nodes.items()}
+    assert reports[0] == f"managed nodes active: {', '.join(nodes)}", (reports, out_m)
+    assert code_m == 0, out_m
+    for name in nodes:
+        assert f"/{name}: configure already done (state 'active'), adopted" in out_m, out_m
+        assert f"/{name}: activate already done (state 'active'), adopted" in out_m, out_m
+    assert ": configure ok" not in out_m and ": activate ok" not in out_m, out_m
+    assert refused == dict.fromkeys(nodes, [False, False]), (refused, outs)
+    assert states == dict.fromkeys(nodes, active), (states, outs)
+    for name, (code, out) in outs.items():
+        assert code == 0 and "Traceback" not in out and "RCLError" not in out, (name, out)
+        assert "transition 'configure' [1] refused: not valid from state 'active'" in out, (name, out)
