@@ -24,7 +24,7 @@ psi = 1 - s^2 the in-plane part is u + s w and the normal part is cos psi h, so 
 
 whose minimum and maximum are closed form (:func:`psi_extrema`). Over Omega the conditions are decided by branch
 and bound on cells [Omega_c - delta, Omega_c + delta]. With e' = de/dtheta = -sin theta e_x + cos theta n_psi
-(n_psi a unit vector in the y-z plane, |e'| = |e''| = 1), |dr/dOmega| is bounded over the cell by the smaller of
+(n_psi a unit vector in the y-z plane, |e'| = |e''| = 1), |dr/dOmega| is bounded over the cell by the smaller of::
 
     L1 = s_max(V_i dt_i M_i - V_j dt_j M_j)
          + min(V_j dt_j s_max(M_j), V_i dt_i s_max(M_i)) |dt_i - dt_j| (Omega_c + delta)

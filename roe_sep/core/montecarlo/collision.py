@@ -2,7 +2,7 @@
 carrier (beyond ``departure_distance``, as the simulator's closest-approach tracking), comes back within a hard-body
 radius ``R`` of it before the horizon. Pure numpy.
 
-Trajectory model: the one of the Monte Carlo (:mod:`.sweep`): the dispersed ejection (Eq. 22), the secular ROE
+Trajectory model: that of the Monte Carlo (:mod:`.montecarlo.sweep`): the dispersed ejection (Eq. 22), the secular ROE
 propagation with drag (Eqs. 23-24, J2 optional) to the drift-stop, the dispersed drift-stop with reduction p, and
 ``horizon`` of drift after it; the relative position is the linear ROE -> RTN map
 (:func:`~roe_sep.core.relmotion.roe.roe_to_rtn`) at every instant. Arc A (ejection to drift-stop) is evaluated from

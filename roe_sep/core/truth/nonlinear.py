@@ -23,6 +23,7 @@ Force model (per spacecraft, inertial equator-and-equinox-of-date frame of :mod:
     squares over the band the pair flies through (the nominal orbit over the propagation span, +-20 km radially)
     in the basis :func:`msis_basis`: polynomials of the direction in a frame turning with the Sun (the diurnal
     bulge, latitude and season) times a quadratic in altitude. The fit's RMS error in ln rho is reported.
+
 Integrator: heyoka's adaptive Taylor method (Biscani & Izzo, MNRAS 2021), JIT-compiled with LLVM. Both spacecraft
 form one 12-dimensional system so that they share every step: integration error is then common-mode and largely
 cancels in the relative state. The compiled integrator is cached per process and configuration
