@@ -254,7 +254,8 @@ def render(text, blocks):
 # ---------------------------------------------------------------------------------------------- figures
 # a measured figure in a page: <!-- figure: bench/results/FILE.json KEY [FORMAT] -->VALUE<!-- /figure -->, VALUE
 # rendered from the JSON result file (KEY a dotted path, list indices as numbers; FORMAT a format spec, default "")
-FIGURE = re.compile(r"<!-- figure: (?P<file>\S+) (?P<key>\S+)(?: (?P<fmt>\S+))? -->(?P<value>.*?)<!-- /figure -->")
+FIGURE = re.compile(r"<!-- figure: (?P<file>bench/results/\S+) (?P<key>\S+)(?: (?P<fmt>\S+))? -->"
+                    r"(?P<value>.*?)<!-- /figure -->")
 PAGES = [ROOT / "README.md"] + sorted((ROOT / "docs").glob("*.md"))
 
 
