@@ -8,7 +8,7 @@ PY    := $(VENV)/bin/python
 # extra arguments, e.g.  make test ARGS='-k planner -x'
 ARGS ?=
 
-.PHONY: setup demo test test-unit golden bench smoke chaos clean distclean
+.PHONY: setup demo test test-unit docs golden bench smoke chaos clean distclean
 
 setup:
 	@bash scripts/bootstrap.sh
@@ -23,6 +23,12 @@ test: setup
 test-unit: setup
 	bash scripts/test.sh -m "not dds and not slow" $(ARGS)
 
+# the API reference from the docstrings (docs/api: Sphinx autodoc + autosummary, numpydoc), warnings as errors;
+# out/docs/index.html (test/test_api_docs.py builds it the same way)
+docs: setup
+	rm -rf out/docs docs/api/generated
+	$(PY) -m sphinx -W --keep-going -b html -q docs/api out/docs
+
 # re-record the reference run bags/default_run and its report from the current code, with the command it was
 # recorded with (seed 0, the scenario's default); test/cli/test_golden.py compares a fresh run with it
 golden: setup
@@ -31,7 +37,8 @@ golden: setup
 	rm -rf bags/default_run && cp -r out/golden/bag bags/default_run
 	cp out/golden/report.json bags/default_run.report.json
 
-# fault injection alone: every node killed in turn, every topic fuzzed, 553 bad command-line inputs
+# fault injection alone: every node killed in turn, every topic fuzzed, the bad command-line inputs of
+# test/cli/test_cli_bad_input.py (docs/failures.md)
 chaos: setup
 	bash scripts/test.sh -m fault -s $(ARGS)
 

@@ -18,6 +18,8 @@ Top of the layering (like the command line): it imports the nodes to evaluate th
 import argparse
 import ast
 import importlib
+import json
+import re
 import sys
 from pathlib import Path
 
@@ -249,19 +251,58 @@ def render(text, blocks):
     return text
 
 
+# ---------------------------------------------------------------------------------------------- figures
+# a measured figure in a page: <!-- figure: bench/results/FILE.json KEY [FORMAT] -->VALUE<!-- /figure -->, VALUE
+# rendered from the JSON result file (KEY a dotted path, list indices as numbers; FORMAT a format spec, default "")
+FIGURE = re.compile(r"<!-- figure: (?P<file>bench/results/\S+) (?P<key>\S+)(?: (?P<fmt>\S+))? -->"
+                    r"(?P<value>.*?)<!-- /figure -->")
+PAGES = [ROOT / "README.md"] + sorted((ROOT / "docs").glob("*.md"))
+
+
+def figure_value(file: str, key: str, fmt: str = "") -> str:
+    """The figure ``key`` of the result file ``file`` (relative to the repository) formatted with ``fmt``;
+    ValueError when the file does not hold it."""
+    try:
+        value = json.loads((ROOT / file).read_text(encoding="utf-8"))
+        for part in key.split("."):
+            value = value[int(part)] if isinstance(value, list) else value[part]
+    except (OSError, ValueError, KeyError, IndexError) as exc:
+        raise ValueError(f"figure {file} {key}: {exc!r}") from None
+    if not isinstance(value, (int, float)) or isinstance(value, bool):
+        raise ValueError(f"figure {file} {key}: not a number: {value!r}")
+    return format(value, fmt)
+
+
+def render_figures(text):
+    """``text`` with the value of every figure marker rendered from its result file."""
+    def one(m):
+        head = m[0][:m.start("value") - m.start()]
+        return f"{head}{figure_value(m['file'], m['key'], m['fmt'] or '')}<!-- /figure -->"
+
+    return FIGURE.sub(one, text)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(prog="python -m roe_sep.docgen", description=__doc__.splitlines()[0])
     ap.add_argument("file", nargs="?", default=str(DOC), help="the page with the marked blocks")
     ap.add_argument("--check", action="store_true", help="exit 1 if the blocks are stale, write nothing")
+    ap.add_argument("--figures", action="store_true",
+                    help="render the figure markers of README.md and docs/*.md from bench/results/ instead")
     args = ap.parse_args(argv)
-    path = Path(args.file)
+    if args.figures:
+        return max([_update(page, render_figures, args.check) for page in PAGES])
+    return _update(Path(args.file), lambda text: render(text, generated()), args.check)
+
+
+def _update(path, rendering, check):
+    """Rewrite (with ``check``: only compare) ``path`` as ``rendering`` renders it; exit status 0, 1 stale, 2 error."""
     try:
         text = path.read_text(encoding="utf-8")
-        new = render(text, generated())
+        new = rendering(text)
     except (OSError, ValueError) as exc:
         print(f"docgen: error: {path}: {exc}", file=sys.stderr)
         return 2
-    if args.check:
+    if check:
         if new != text:
             print(f"docgen: {path} is stale: run python -m roe_sep.docgen", file=sys.stderr)
             return 1

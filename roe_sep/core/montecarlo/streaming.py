@@ -1,5 +1,5 @@
-"""The p sweep of :mod:`.sweep` streamed in fixed-size blocks: constant memory at any sample count, and the same
-result for every chunk size and worker count.
+"""The p sweep of :mod:`~roe_sep.core.montecarlo.sweep` streamed in fixed-size blocks: constant memory at any
+sample count, and the same result for every chunk size and worker count.
 
 Random numbers: sample block ``b`` (``block`` samples, the last one shorter) draws its dispersions with
 :func:`.sweep.draw` from its own generator, seeded by the child ``b`` of the run's ``numpy.random.SeedSequence``
@@ -7,7 +7,7 @@ Random numbers: sample block ``b`` (``block`` samples, the last one shorter) dra
 reproducible alone, and a chunk (the unit of work: ``chunk_size / block`` consecutive blocks evaluated as one
 vectorized batch) can be computed anywhere, in any order.
 
-Evaluation: each chunk runs the per-sample physics of :mod:`.sweep` (:func:`~.sweep.pre_stop`,
+Evaluation: each chunk runs the per-sample physics of :mod:`~roe_sep.core.montecarlo.sweep` (:func:`~.sweep.pre_stop`,
 :func:`~.sweep.after_stop`) on its draws and then :func:`~.sweep.summarize` on every block's slice, so the streamed
 statistics are the same functions as the in-memory sweep. Only running statistics are kept: for every key of a
 summary row, ``p_*`` fractions become integer counts (``n_*``), ``*_mean`` values sums, ``*_min``/``*_max``
@@ -84,7 +84,7 @@ def concat_draws(parts: Sequence[Draws]) -> Draws:
 
 def chunk_draws(design: DoubleImpulseDesign, mc: MonteCarloConfig, first: int, count: int,
                 block: int = BLOCK_SIZE) -> tuple[Draws, list[int]]:
-    """(draws of blocks ``first .. first + count - 1`` concatenated, their sizes).
+    """(draws of blocks ``first`` to ``first + count - 1`` concatenated, their sizes).
 
     Parameters
     ----------
