@@ -322,13 +322,14 @@ def write_message(path, message, fmt="xml"):
 
 
 def read_message(source):
-    """Message object of an NDM file (XML or KVN, detected by the library) or of its text; NdmError on failure."""
+    """Message object of an NDM file (XML or KVN, detected by the library) or of its text; NdmError (one line) on
+    failure."""
     try:
         if isinstance(source, (str, os.PathLike)) and not str(source).lstrip().startswith(("<", "CCSDS_")):
             return NdmIo().from_path(source)
         return NdmIo().from_string(str(source))
     except Exception as exc:  # noqa: BLE001  (the library raises many kinds: report them as one)
-        raise NdmError(f"not a readable CCSDS NDM: {exc.__class__.__name__}: {exc}") from None
+        raise NdmError(" ".join(f"not a readable CCSDS NDM: {exc.__class__.__name__}: {exc}".split())) from None
 
 
 def _num(x):

@@ -252,9 +252,9 @@ def _observation(row, tag, timetag, m, k, *, legs, freqs):
             raise NdmError(f"{where}: ANGLE_2 {show(math.degrees(a2))} deg is outside [-90, 90]")
         a1 %= 2 * math.pi
     tau = 0.0 if range_m is None else range_m / C_LIGHT  # one-way light time
-    transmit = timetag if m["ref"] == "TRANSMIT" else timetag - timedelta(seconds=legs * tau)
-    at_spacecraft = transmit + timedelta(seconds=0.0 if m["path"] == (m["path"][0], 1) else tau)
-    receive = transmit + timedelta(seconds=legs * tau)
+    transmit = 0.0 if m["ref"] == "TRANSMIT" else -legs * tau  # [s] after the time tag
+    at_spacecraft = timetag + timedelta(seconds=transmit + (0.0 if m["path"] == (m["path"][0], 1) else tau))
+    receive = timetag + timedelta(seconds=transmit + legs * tau)
     return Observation(epoch=at_spacecraft, timetag=timetag, receive_epoch=receive, timetag_ref=m["ref"],
                        path=m["path"], participants=m["names"], range_m=range_m, angle_type=m["angle_type"],
                        angle_1=a1, angle_2=a2, reference_frame=m["frame"], segment=k)
