@@ -132,6 +132,7 @@ def test_range_units_need_a_transmit_frequency_and_a_known_band():
 
 @pytest.mark.parametrize("replace, match", [
     ({"= UTC": "= TDB"}, "TIME_SYSTEM TDB is not supported"),
+    ({"= km": "= m"}, "'m' is not a valid RangeUnitsType"),  # not a 503.0 unit: the library refuses the file
     ({"= AZEL": "= XSYE"}, "ANGLE_TYPE XSYE is not supported"),
     ({"= 1,2,1": "= 1,2,3"}, "PATH 1,2,3 is not supported"),
     ({"= 1,2,1": "= 1,2\nPATH_1 = 2,1"}, "PATH_1 2,1 is not supported"),
