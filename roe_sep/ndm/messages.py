@@ -25,6 +25,7 @@ from ccsds_ndm.ndm_io import NdmIo
 from ..errors import NdmError, show
 from . import frames
 from .options import FORMATS
+from .tdm_reader import read_observations
 
 ORIGINATOR = "ROE_SEP"
 SCHEMA_LOCATION = "https://sanaregistry.org/r/ndmxml_unqualified/ndmxml-2.0.0-master-2.0.xsd"
@@ -374,8 +375,6 @@ def read_tdm(source, epoch_utc, sigma_range=None, sigma_angle=None):
     given here. NdmError naming what is wrong: what the reader refuses, RADEC angles, an uplink path, a time tag
     without all three of range, azimuth and elevation, no measurement at all, or no sigma.
     """
-    from .tdm_reader import read_observations
-
     start = frames.parse_epoch(epoch_utc)
     msg = read_message(source)
     obs = read_observations(msg, span=(start, start + timedelta(seconds=TDM_SPAN_S)))

@@ -190,8 +190,9 @@ def _in_force(series, epoch):
     return max(before, key=lambda p: p[0])[1] if before else None
 
 
-def read_observations(source, span=None) -> list:
-    """The :class:`Observation` of every time tag with RANGE or angles of a TDM (path, text or read message).
+def read_observations(msg, span=None) -> list:
+    """The :class:`Observation` of every time tag with RANGE or angles of a TDM message (as
+    :func:`roe_sep.ndm.messages.read_message` reads it).
 
     ``span`` (two UTC datetimes or ISO strings, optional): the epochs the file is used for; an observation outside
     refused. Range: the value + CORRECTION_RANGE unless CORRECTIONS_APPLIED = YES, as light time (km / c, s, or RU
@@ -199,9 +200,6 @@ def read_observations(source, span=None) -> list:
     the epochs follow ±range/c from the time tag (CCSDS 503.0-B-2 §3.3, §3.5). Angles: degrees + CORRECTION_ANGLE_n
     likewise, as radians. NdmError (one line, the keyword and its value) for anything else (module docstring).
     """
-    from .messages import read_message
-
-    msg = source if hasattr(source, "body") else read_message(source)
     if type(msg).__name__ not in ("Tdm", "TdmType"):
         raise NdmError(f"expected a TDM, got {type(msg).__name__.removesuffix('Type').upper()}")
     lo, hi = (frames.parse_epoch(s) for s in span) if span is not None else (None, None)

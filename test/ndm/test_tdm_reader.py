@@ -10,11 +10,16 @@ import pytest
 
 from roe_sep.errors import NdmError
 from roe_sep.ndm import messages as ndm
-from roe_sep.ndm.tdm_reader import C_LIGHT, read_observations
+from roe_sep.ndm import tdm_reader
+from roe_sep.ndm.tdm_reader import C_LIGHT
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "ccsds_examples"
 EPOCH = "2016-07-01T00:00:00"
 UTC = timezone.utc
+
+
+def read_observations(source, span=None):
+    return tdm_reader.read_observations(ndm.read_message(source), span)
 
 
 def _ours(**replace):
