@@ -176,7 +176,7 @@ def _rows(seg, where):
             if f.name in MEASUREMENTS:
                 rows.setdefault(ob.epoch, {})[f.name] = value
             elif base == "transmit_freq":
-                freq.setdefault(f.name, []).append((ob.epoch, value))
+                freq.setdefault(f.name, []).append((parse_tdm_epoch(ob.epoch), value))
             others.add(f.name.upper())
     if not rows:
         kinds = ", ".join(sorted(others)) or "none"
@@ -185,8 +185,12 @@ def _rows(seg, where):
 
 
 def _in_force(series, epoch):
-    """The value of (epoch, value) pairs at the latest epoch at or before ``epoch`` (None before the first)."""
-    before = [(parse_tdm_epoch(e), v) for e, v in series if parse_tdm_epoch(e) <= parse_tdm_epoch(epoch)]
+    """The value of (datetime, value) pairs at the latest one at or before the CCSDS ``epoch`` (None before the
+    first)."""
+    if not series:
+        return None
+    at = parse_tdm_epoch(epoch)
+    before = [(e, v) for e, v in series if e <= at]
     return max(before, key=lambda p: p[0])[1] if before else None
 
 
