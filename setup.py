@@ -42,6 +42,7 @@ setup(
         'heyoka',
         'pymsis',
         'ccsds-ndm',
+        'pyerfa',
         'foxglove-sdk',
         'dask[distributed]',
     ],

@@ -14,7 +14,7 @@ import math
 import os
 import tempfile
 from dataclasses import dataclass, field
-from datetime import datetime, timezone
+from datetime import datetime, timedelta, timezone
 from pathlib import Path
 
 import numpy as np
@@ -25,6 +25,7 @@ from ccsds_ndm.ndm_io import NdmIo
 from ..errors import NdmError, show
 from . import frames
 from .options import FORMATS
+from .tdm_reader import read_observations
 
 ORIGINATOR = "ROE_SEP"
 SCHEMA_LOCATION = "https://sanaregistry.org/r/ndmxml_unqualified/ndmxml-2.0.0-master-2.0.xsd"
@@ -322,13 +323,14 @@ def write_message(path, message, fmt="xml"):
 
 
 def read_message(source):
-    """Message object of an NDM file (XML or KVN, detected by the library) or of its text; NdmError on failure."""
+    """Message object of an NDM file (XML or KVN, detected by the library) or of its text; NdmError (one line) on
+    failure."""
     try:
         if isinstance(source, (str, os.PathLike)) and not str(source).lstrip().startswith(("<", "CCSDS_")):
             return NdmIo().from_path(source)
         return NdmIo().from_string(str(source))
     except Exception as exc:  # noqa: BLE001  (the library raises many kinds: report them as one)
-        raise NdmError(f"not a readable CCSDS NDM: {exc.__class__.__name__}: {exc}") from None
+        raise NdmError(" ".join(f"not a readable CCSDS NDM: {exc.__class__.__name__}: {exc}".split())) from None
 
 
 def _num(x):
@@ -356,55 +358,49 @@ def _comment_value(comments, key):
     return None
 
 
-def read_tdm(source, epoch_utc, sigma_range=None, sigma_angle=None):
-    """Radar measurements of a TDM (file path or text): AZEL angles + RANGE in km, grouped by epoch.
+TDM_SPAN_S = 31 * 86400.0
+"""The span after the run's epoch a TDM's measurements may fall in [s]: the longest run (a horizon up to 30 days after
+the drift-stop, :class:`roe_sep.core.config.MonteCarloConfig`, plus the day before it)."""
 
-    Each segment: PARTICIPANT_1 is the station, the pass id is the number after ``_PASS_`` in TRACK_ID (else the
-    segment's 1-based index). Sigmas from the ``SIGMA_RANGE_M``/``SIGMA_ANGLE_DEG`` metadata comments, else the
-    ``sigma_range`` [m] / ``sigma_angle`` [rad] given here. Raises NdmError naming what is wrong: not a TDM, no
-    measurement at all, a time
-    system other than UTC, angles other than AZEL, range units other than km, an epoch without all three of range,
-    azimuth and elevation, a non-finite or out-of-range value, or no sigma.
+
+def read_tdm(source, epoch_utc, sigma_range=None, sigma_angle=None):
+    """Radar measurements of a TDM (file path or text): RANGE with AZEL angles, grouped by time tag, read by
+    :func:`roe_sep.ndm.tdm_reader.read_observations` (units, paths, corrections, time systems; epochs within
+    :data:`TDM_SPAN_S` after ``epoch_utc``).
+
+    Each measurement: the station is the path's last participant (it receives and points: a two-way path or a
+    downlink), its stamp the receive time there (the radar's stamp), the range the one-way range; the pass id is the
+    number after ``_PASS_`` in TRACK_ID (else the segment's 1-based index). Sigmas from the
+    ``SIGMA_RANGE_M``/``SIGMA_ANGLE_DEG`` metadata comments, else the ``sigma_range`` [m] / ``sigma_angle`` [rad]
+    given here. NdmError naming what is wrong: what the reader refuses, RADEC angles, an uplink path, a time tag
+    without all three of range, azimuth and elevation, no measurement at all, or no sigma.
     """
+    start = frames.parse_epoch(epoch_utc)
     msg = read_message(source)
-    if type(msg).__name__ not in ("Tdm", "TdmType"):  # the reader answers with the NDM/XML 4.0.0 models
-        raise NdmError(f"expected a TDM, got {type(msg).__name__.removesuffix('Type').upper()}")
+    obs = read_observations(msg, span=(start, start + timedelta(seconds=TDM_SPAN_S)))
+    segments = msg.body.segment
     out = []
-    for k, seg in enumerate(msg.body.segment, start=1):
-        md = seg.metadata
-        where = f"TDM segment {k}"
-        if getattr(md.time_system, "value", md.time_system).upper() != "UTC":
-            raise NdmError(f"{where}: TIME_SYSTEM {md.time_system} is not supported (UTC)")
-        if md.angle_type is None or md.angle_type.value.upper() != "AZEL":
-            raise NdmError(f"{where}: ANGLE_TYPE {md.angle_type and md.angle_type.value} is not supported (AZEL)")
-        if md.range_units is not None and md.range_units.value.lower() != "km":
-            raise NdmError(f"{where}: RANGE_UNITS {md.range_units.value} is not supported (km)")
+    for o in obs:
+        where = f"TDM segment {o.segment}"
+        md = segments[o.segment - 1].metadata
+        if o.path[-1] != 1:
+            raise NdmError(f"{where}: PATH {','.join(map(str, o.path))} ends at the spacecraft (the station must "
+                           "receive)")
+        if o.range_m is None or o.angle_1 is None:
+            raise NdmError(f"{where}: epoch {frames.utc_string(o.timetag, 0.0)} lacks one of RANGE, ANGLE_1, ANGLE_2")
+        if o.angle_type != "AZEL":
+            raise NdmError(f"{where}: ANGLE_TYPE {o.angle_type} is not supported for radar measurements (AZEL)")
         sr = _comment_value(md.comment, SIGMA_RANGE_KEY)
         sa = _comment_value(md.comment, SIGMA_ANGLE_KEY)
         sr = sr if sr is not None else sigma_range
         sa = math.radians(sa) if sa is not None else sigma_angle
         if sr is None or sa is None or not (sr > 0 and sa > 0 and math.isfinite(sr) and math.isfinite(sa)):
             raise NdmError(f"{where}: no positive measurement sigma (comments {SIGMA_RANGE_KEY}, {SIGMA_ANGLE_KEY})")
-        track = md.track_id or ""
-        _, sep, tail = track.rpartition("_PASS_")
-        pass_id = int(tail) if sep and tail.isdigit() else k
-        rows = {}
-        for ob in seg.data.observation:
-            row = rows.setdefault(ob.epoch, [None, None, None])
-            for i, v in enumerate((_num(ob.range), _num(ob.angle_1), _num(ob.angle_2))):
-                if v is not None:
-                    row[i] = v
-        for epoch, (rng, az, el) in rows.items():
-            if rng is None or az is None or el is None:
-                raise NdmError(f"{where}: epoch {epoch} lacks one of RANGE, ANGLE_1, ANGLE_2")
-            if not all(math.isfinite(x) for x in (rng, az, el)) or rng <= 0 or not -90 <= el <= 90:
-                raise NdmError(f"{where}: epoch {epoch}: range {rng} km, az {az} deg, el {el} deg out of range")
-            try:
-                t = frames.sim_time(epoch_utc, epoch)
-            except ValueError as exc:
-                raise NdmError(f"{where}: {exc}") from None
-            out.append(Measurement(t, md.participant_1, pass_id, (rng * 1000.0, math.radians(az) % (2 * math.pi),
-                                                                  math.radians(el)), float(sr), float(sa)))
+        _, sep, tail = str(getattr(md, "track_id", None) or "").rpartition("_PASS_")
+        pass_id = int(tail) if sep and tail.isdigit() and int(tail) < 2**32 else o.segment
+        t = (o.receive_epoch - start).total_seconds()
+        out.append(Measurement(t, o.participants[-1], pass_id, (o.range_m, o.angle_1, o.angle_2), float(sr),
+                               float(sa)))
     if not out:
         raise NdmError("the TDM holds no RANGE/ANGLE_1/ANGLE_2 measurement")
     out.sort(key=lambda m: (m.t, m.station))

@@ -17,7 +17,8 @@ In (``input_dir``, '' = off): every ``*.xml``, ``*.kvn`` or ``*.tdm`` file that 
 (:func:`roe_sep.ndm.messages.read_tdm`, sim time from ``epoch_utc``) and its measurements are published on
 ``/ground/radar_measurements`` (RadarMeasurement, the ``/radar/measurements`` layout; ``radar_od`` takes them in
 alongside its own); the file then moves to ``input_dir/processed/``. A file that is not a valid TDM moves to
-``input_dir/rejected/`` with an ERROR on ``/diagnostics`` naming the file and the reason; the node keeps running.
+``input_dir/rejected/`` with ``<name>.reason`` beside it (the reason, one line) and an ERROR on ``/diagnostics``
+naming the file and the reason: whatever reading it raises, the node (and the recorder of its process) keeps running.
 
 Parameters: :data:`roe_sep.nodes.parameters.GROUND_BRIDGE` (``ground_bridge --help``, docs/parameters.md).
 """
@@ -46,6 +47,7 @@ from rosgraph_msgs.msg import Clock
 
 from .. import interfaces
 from ..core.config import ConfigError, load_scenario
+from ..errors import RoeSepError
 from ..ndm import frames
 from ..ndm.live import LiveSet
 from ..ndm.options import Options
@@ -91,6 +93,7 @@ class GroundBridgeNode(Node):
         self.last_periodic_wall = time.monotonic()  # and its wall time (the node's start before the first)
         self.files_in = 0
         self.files_rejected = 0
+        self.unmovable = set()  # rejected files that could not be moved aside
         self.input = Path(inp) if inp else None
         self._interface(float(poll))
         self._status(OK, f"writing {self.fmt} files to {self.out}" +
@@ -192,31 +195,55 @@ class GroundBridgeNode(Node):
 
     # --- in -------------------------------------------------------------------------------------------------------
     def scan_input(self):
+        """Every new file of ``input_dir``, each on its own: whatever reading or publishing it raises (a library's
+        AttributeError as much as an NdmError) rejects that file (:meth:`_reject`), never the node."""
         for path in sorted(self.input.iterdir()):
-            if not path.is_file() or path.name.startswith(".") or path.suffix.lower() not in INPUT_SUFFIXES:
+            if (not path.is_file() or path.name.startswith(".") or path.suffix.lower() not in INPUT_SUFFIXES
+                    or path in self.unmovable):
                 continue
-            from ..ndm.messages import NdmError, read_tdm
-
             try:
-                meas = read_tdm(path, self.opts.epoch_utc, *self.sigma)
-            except (NdmError, OSError, UnicodeDecodeError) as exc:
-                self.files_rejected += 1
-                target = self._move(path, "rejected")
-                text = f"TDM {path.name} rejected ({exc}); moved to {target}"
-                self.get_logger().error(text)
-                self._status(ERROR, text)
+                n = self._publish_tdm(path)
+            except Exception as exc:  # noqa: BLE001  (a bad file never stops the node, nor its process's recorder)
+                self._reject(path, exc)
                 continue
-            for m in meas:
-                msg = RadarMeasurement(station=m.station, pass_id=int(m.pass_id), range=float(m.z[0]),
-                                       azimuth=float(m.z[1]), elevation=float(m.z[2]),
-                                       sigma_range=float(m.sigma_range), sigma_angle=float(m.sigma_angle))
-                msg.header.stamp = sec_to_time(m.t)
-                msg.header.frame_id = m.station
-                self.ext_pub.publish(msg)
             self.files_in += 1
             target = self._move(path, "processed")
-            self._status(OK, f"TDM {path.name}: {len(meas)} measurements published on {EXTERNAL_RADAR_TOPIC}")
-            self.get_logger().info(f"TDM {path.name}: {len(meas)} measurements published, moved to {target}")
+            self._status(OK, f"TDM {path.name}: {n} measurements published on {EXTERNAL_RADAR_TOPIC}")
+            self.get_logger().info(f"TDM {path.name}: {n} measurements published, moved to {target}")
+
+    def _publish_tdm(self, path):
+        """The measurements of the TDM ``path`` on ``/ground/radar_measurements``; how many."""
+        from ..ndm.messages import read_tdm
+
+        meas = read_tdm(path, self.opts.epoch_utc, *self.sigma)
+        msgs = []
+        for m in meas:  # every message built before the first is sent: a bad value sends none
+            msg = RadarMeasurement(station=m.station, pass_id=int(m.pass_id), range=float(m.z[0]),
+                                   azimuth=float(m.z[1]), elevation=float(m.z[2]),
+                                   sigma_range=float(m.sigma_range), sigma_angle=float(m.sigma_angle))
+            msg.header.stamp = sec_to_time(m.t)
+            msg.header.frame_id = m.station
+            msgs.append(msg)
+        for msg in msgs:
+            self.ext_pub.publish(msg)
+        return len(msgs)
+
+    def _reject(self, path, exc):
+        """``path`` to ``input_dir/rejected/`` with ``<name>.reason`` beside it (the reason, one line), an ERROR on
+        ``/diagnostics`` naming both; a file that cannot be moved is left where it is and skipped from then on."""
+        self.files_rejected += 1
+        said = str(exc) if isinstance(exc, RoeSepError) else f"{exc.__class__.__name__}: {exc}"
+        reason = " ".join(said.split())
+        try:
+            target = self._move(path, "rejected")
+            target.with_name(target.name + ".reason").write_text(reason + "\n")
+            where = f"moved to {target}"
+        except OSError as err:
+            self.unmovable.add(path)
+            where = f"left in place ({err.__class__.__name__}: {err})"
+        text = f"TDM {path.name} rejected ({reason}); {where}"
+        self.get_logger().error(text)
+        self._status(ERROR, text)
 
     def _move(self, path, sub):
         target = self.input / sub / path.name

@@ -392,12 +392,14 @@ def test_tdm_checks_units_time_system_and_completeness():
     ms = ndm.read_tdm(text, EPOCH)
     assert [(m.t, m.station, m.pass_id) for m in ms] == [(10.0, "TIRA", 4), (20.0, "TIRA", 4)]
     assert ms[0].sigma_angle == pytest.approx(1.7e-4) and ms[0].sigma_range == 10.0
-    with pytest.raises(ndm.NdmError, match="TIME_SYSTEM"):
-        ndm.read_tdm(text.replace("= UTC", "= TAI"), EPOCH)
-    with pytest.raises(ndm.NdmError, match="ANGLE_TYPE"):
+    with pytest.raises(ndm.NdmError, match="TIME_SYSTEM TDB is not supported"):
+        ndm.read_tdm(text.replace("= UTC", "= TDB"), EPOCH)
+    with pytest.raises(ndm.NdmError, match="REFERENCE_FRAME None is not supported for RADEC"):
         ndm.read_tdm(text.replace("= AZEL", "= RADEC"), EPOCH)
+    with pytest.raises(ndm.NdmError, match="ANGLE_TYPE RADEC is not supported for radar measurements"):
+        ndm.read_tdm(text.replace("= AZEL", "= RADEC\nREFERENCE_FRAME = EME2000"), EPOCH)
     dropped = "\n".join(line for line in text.splitlines() if not line.startswith("ANGLE_2") or "00:20" not in line)
-    with pytest.raises(ndm.NdmError, match="lacks one of"):
+    with pytest.raises(ndm.NdmError, match="ANGLE_1 and ANGLE_2 come in pairs"):
         ndm.read_tdm(dropped, EPOCH)
     no_sigma = "\n".join(line for line in text.splitlines() if "SIGMA" not in line)
     with pytest.raises(ndm.NdmError, match="no positive measurement sigma"):
