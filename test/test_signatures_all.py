@@ -26,11 +26,8 @@ HELD_POSITIONAL = {
     "roe_sep/core/separation/double_impulse.py plan_drift_stop",  # nodes/planner.py
     "roe_sep/core/separation/multi_impulse.py plan_carrier_burns",  # nodes/planner.py
     "roe_sep/core/relmotion/dynamics.py propagate",  # nodes/radar_od.py
-    "roe_sep/nodes/planner.py PlannerNode._multi_plan",
-    "roe_sep/nodes/radar_od.py RadarODNode._passes",
-    "roe_sep/nodes/radar_od.py RadarODNode.measure",
 }
-HELD_DOCSTRINGS = {"roe_sep/nodes/ic_planner.py <module>", "roe_sep/nodes/planner.py <module>"}
+HELD_DOCSTRINGS: set[str] = set()
 
 
 def functions(tree: ast.Module):
