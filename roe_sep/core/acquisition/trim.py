@@ -1,7 +1,8 @@
 """The final drift trim of the initial-condition acquisition: a late OD, the predicted a da at the IC epoch, and one
 quantized tangential carrier burn when that prediction is not safely inside the drift tolerance.
 
-Why. The acquisition plan of :mod:`.planner` nulls the drift at the IC epoch t_F from an OD made about a day
+Why. The acquisition plan of :mod:`roe_sep.core.acquisition.planner` nulls the drift at the IC epoch t_F from an OD
+made about a day
 earlier; the OD's drift-rate error carried that far and the execution errors of the burns flown after it leave
 |a da_F| outside the tolerance in some runs (docs/campaigns.md, "Why 9 runs missed the initial conditions"). A
 flight-dynamics team closes the loop on the last information: a final radar OD shortly before t_F, then a trim

@@ -18,7 +18,7 @@ in-plane part is u + s w and the normal part cos psi h, so over psi
     |r|^2 = alpha + 2 beta s + gamma s^2 on s in [-1, 1],  alpha = |u|^2 + h^2, beta = u.w, gamma = |w|^2 - h^2,
 
 extrema in closed form (:func:`psi_extrema`). Over Omega: branch and bound on cells [Omega_c - delta, Omega_c +
-delta], |dr/dOmega| bounded over a cell (|de/dtheta| = |d2e/dtheta2| = 1) by the smaller of
+delta], |dr/dOmega| bounded over a cell (|de/dtheta| = |d2e/dtheta2| = 1) by the smaller of::
 
     L1 = s_max(V_i dt_i M_i - V_j dt_j M_j)
          + min(V_j dt_j s_max(M_j), V_i dt_i s_max(M_i)) |dt_i - dt_j| (Omega_c + delta)

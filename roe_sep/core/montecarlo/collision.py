@@ -2,7 +2,8 @@
 carrier (beyond ``departure_distance``, as the simulator's closest-approach tracking), comes back within a hard-body
 radius ``R`` of it before the horizon. Pure numpy.
 
-Trajectory model: the Monte Carlo's (:mod:`.sweep`: dispersed ejection, Eq. 22; secular ROE with drag, Eqs. 23-24;
+Trajectory model: the Monte Carlo's (:mod:`roe_sep.core.montecarlo.sweep`: dispersed ejection, Eq. 22; secular ROE
+with drag, Eqs. 23-24;
 dispersed drift-stop with reduction p; ``horizon`` of drift after it), the relative position the linear ROE -> RTN
 map (:func:`~roe_sep.core.relmotion.roe.roe_to_rtn`). Arc A (ejection to drift-stop) is evaluated from
 :func:`~.sweep.pre_stop`'s state at the drift-stop (the secular model is a flow, exact backwards), arc B from

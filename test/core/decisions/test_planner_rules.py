@@ -72,7 +72,7 @@ def bearings(state, f1, seed=7):
     mc = SC.monte_carlo
     da_dot = float(drag_da_dot(mc.delta_b, mc.density, D.a))
     times = np.arange(60.0, state.in_force.t_stop - CONFIG.hold_lead, 60.0)
-    los = camera_bearing(predicted_los([f1], D.dv1_rtn, 0.0, CHIEF, da_dot, times)[0] * 1000.0,
+    los = camera_bearing(predicted_los([f1], D.dv1_rtn, 0.0, CHIEF, da_dot, times=times)[0] * 1000.0,
                          CONFIG.camera_sigma, np.random.default_rng(seed))
     for t, v in zip(times, los):
         state, _ = rules.on_bearing(state, float(t), v, CONFIG)
