@@ -5,8 +5,8 @@ radius ``R`` of it before the horizon. Pure numpy.
 Trajectory model: the Monte Carlo's (:mod:`roe_sep.core.montecarlo.sweep`: dispersed ejection, Eq. 22; secular ROE
 with drag, Eqs. 23-24; dispersed drift-stop with reduction p; ``horizon`` of drift after it), the relative position
 the linear ROE -> RTN map (:func:`~roe_sep.core.relmotion.roe.roe_to_rtn`). Arc A (ejection to drift-stop) is
-evaluated from :func:`~.sweep.pre_stop`'s state at the drift-stop (the secular model is a flow, exact backwards), arc B from
-:func:`~.sweep.after_stop`'s: the physics is the sweep's.
+evaluated from :func:`~.sweep.pre_stop`'s state at the drift-stop (the secular model is a flow, exact backwards),
+arc B from :func:`~.sweep.after_stop`'s: the physics is the sweep's.
 
 Minimum distance (:func:`min_distance`): f(t) = |r(t)|^2 sampled ``steps_per_orbit`` times per orbit (the drift-stop
 epoch a grid point), from where it first decreases after exceeding ``departure_distance`` to the horizon. Every grid
