@@ -207,7 +207,7 @@ r2() {
 # 0 on SIGINT. `scripts/ros2_cli.sh lifecycle` runs this check alone (after the setup).
 check_invalid_transitions() {
   local share n p code manager deadline active
-  local managed=(planner radar_od ic_planner safety_monitor)
+  local managed=(planner radar radar_od ic_planner safety_monitor)
   share="$(ros2 pkg prefix --share roe_sep)"
   printf '/**:\n  ros__parameters:\n    use_sim_time: false\n    scenario_file: %s\nplanner:\n  ros__parameters:\n    mc_samples: 2000\n' \
     "$share/config/default.yaml" > "$OUT/params_lifecycle.yaml"
@@ -300,7 +300,7 @@ foxglove_view:
   ros__parameters:
     port: 0
 EOF
-EXES=(planner radar_od ic_planner safety_monitor ejector ground_bridge recorder analysis_server foxglove_view sim)
+EXES=(planner radar radar_od ic_planner safety_monitor ejector ground_bridge recorder analysis_server foxglove_view sim)
 for exe in "${EXES[@]}"; do
   setsid ros2 run roe_sep "$exe" --ros-args --params-file "$SHARE/config/bag_params.yaml" --params-file "$OUT/params.yaml" \
     > "$OUT/run_$exe.log" 2>&1 &
@@ -326,13 +326,13 @@ done
 section "topic list"
 r2 topic list --no-daemon --spin-time 3 -t
 section "lifecycle"
-for n in planner radar_od ic_planner safety_monitor; do r2 lifecycle get "/$n" --no-daemon --spin-time 3; done
+for n in planner radar radar_od ic_planner safety_monitor; do r2 lifecycle get "/$n" --no-daemon --spin-time 3; done
 r2 lifecycle list /planner --no-daemon --spin-time 3
 section "param"
 r2 param list /planner --no-daemon --spin-time 3
 r2 param get /planner k --no-daemon --spin-time 3
 r2 param get /planner autostart --no-daemon --spin-time 3
-r2 param get /radar_od seed --no-daemon --spin-time 3
+r2 param get /radar seed --no-daemon --spin-time 3
 section "topic echo/hz"
 r2 topic echo /separation/drift_stop_plan --once --no-daemon --spin-time 3 --qos-durability transient_local \
   --qos-reliability reliable --timeout 5
