@@ -246,7 +246,7 @@ class RadarNode(ManagedNode):
         kep_tr = np.repeat(np.array([c[1][2] for c in calls]), sizes, axis=0)
         chief = propagate_chief(kep_tr, epochs - t_tr)
         rate = np.repeat([self.truth_rate(c[1][0], c[1][1]) for c in calls], sizes)
-        roe = propagate(roe_tr, epochs - t_tr, kep_tr[:, 0], kep_tr[:, 2], True, rate)
+        roe = propagate(roe_tr, epochs - t_tr, kep_tr[:, 0], kep_tr[:, 2], True, da_dot=rate)
         theta = gmst(self.jd0 + epochs / SECONDS_PER_DAY)
         # the relative position serves the separation and every station's look angles: formed once
         rel = rtn_position(roe, chief[:, 4] + chief[:, 5])
