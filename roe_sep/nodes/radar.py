@@ -47,7 +47,7 @@ from .diagnostics import ERROR, OK, WARN, publish_status
 from .lockstep import Lockstep
 from .managed import ManagedNode
 from .params import ParameterError, declare
-from .radar_stations import parse_truth, stations_of
+from .radar_stations import parse_truth, subscribe_burns_and_truth, tracking_of
 
 CHUNK = 10000  # measurement epochs propagated at once
 
@@ -58,19 +58,14 @@ class RadarNode(ManagedNode):
 
     def configure(self):
         """Parameters and start-up work (the managed node's ``configure`` transition)."""
-        self.stations, self.jd0 = stations_of(self)
-        self.site_ef = [s.ecef for s in self.stations]
-        self.site_enu = [s.enu for s in self.stations]
+        self.stations, self.jd0, self.site_ef, self.site_enu, self.sigma = tracking_of(self)
         self.mask = math.radians(declare(self, "elevation_mask_deg"))
-        sigma_range = declare(self, "sigma_range_m")
-        sigma_angle = declare(self, "sigma_angle_deg")
         self.dt = declare(self, "sample_interval")
         self.min_sep = declare(self, "min_separation")
         self.min_pass = declare(self, "min_pass_measurements")
         seed = declare(self, "seed")
         scenario_file = declare(self, "scenario_file")
         contingency = declare(self, "contingency")
-        self.sigma = np.array([sigma_range, math.radians(sigma_angle), math.radians(sigma_angle)])
         self.rng = np.random.default_rng(seed)
         self.contingency = self._contingency(scenario_file, contingency, seed, [s.name for s in self.stations])
 
@@ -116,11 +111,7 @@ class RadarNode(ManagedNode):
         self.meas_pub = ls.publisher(RadarMeasurement, interfaces.RADAR_TOPIC, interfaces.STREAM)
         self.pass_pub = ls.publisher(RadarPass, interfaces.RADAR_PASS_TOPIC, interfaces.STREAM)
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
-        # a burn and the truth right after it share a stamp: the burn is processed first
-        ls.subscribe(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, self.on_maneuver, interfaces.EXECUTED,
-                     stamp=lambda m: time_to_sec(m.epoch), what="executed maneuver")
-        ls.subscribe(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, self.on_truth, interfaces.STREAM,
-                     what="truth message", raw=True)  # every sample: decoded from its bytes (Lockstep.subscribe)
+        subscribe_burns_and_truth(self, ls)
         self.create_subscription(Clock, interfaces.CLOCK_TOPIC, self.on_clock, interfaces.CLOCK_SUB)
         publish_status(self, self.diag_pub, OK, "waiting for truth", self._values())
 

@@ -54,7 +54,7 @@ from .diagnostics import ERROR, OK, publish_status
 from .lockstep import Lockstep
 from .managed import ManagedNode
 from .params import declare
-from .radar_stations import parse_truth, stations_of
+from .radar_stations import parse_truth, subscribe_burns_and_truth, tracking_of
 
 
 class RadarODNode(ManagedNode):
@@ -63,12 +63,8 @@ class RadarODNode(ManagedNode):
 
     def configure(self):
         """Parameters and start-up work (the managed node's ``configure`` transition)."""
-        self.stations, self.jd0 = stations_of(self)
+        self.stations, self.jd0, self.site_ef, self.site_enu, self.sigma = tracking_of(self)
         self.names = [st.name for st in self.stations]
-        self.site_ef = [s.ecef for s in self.stations]
-        self.site_enu = [s.enu for s in self.stations]
-        sigma_range = declare(self, "sigma_range_m")
-        sigma_angle = declare(self, "sigma_angle_deg")
         self.passes_required = declare(self, "passes_required")
         self.min_arc = declare(self, "min_arc")
         self.min_pass = declare(self, "min_pass_measurements")
@@ -78,7 +74,6 @@ class RadarODNode(ManagedNode):
         self.density_walk = declare(self, "density_walk")
         self.drag_terms = declare(self, "od_drag_terms")
         self.drag = (scale_height, ratio)
-        self.sigma = np.array([sigma_range, math.radians(sigma_angle), math.radians(sigma_angle)])
         self.estimates = 0
         self.received = 0
         self._forget()
@@ -100,10 +95,7 @@ class RadarODNode(ManagedNode):
         self.lockstep = ls = Lockstep(self)
         self.od_pub = ls.publisher(OrbitDetermination, interfaces.OD_TOPIC, interfaces.LATCHED)
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
-        ls.subscribe(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, self.on_maneuver, interfaces.EXECUTED,
-                     stamp=lambda m: time_to_sec(m.epoch), what="executed maneuver")
-        ls.subscribe(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, self.on_truth, interfaces.STREAM,
-                     what="truth message", raw=True)  # every sample: decoded from its bytes (Lockstep.subscribe)
+        subscribe_burns_and_truth(self, ls)
         # a pass's measurements before its end (declaration order: the rank of equal stamps)
         ls.subscribe(RadarMeasurement, interfaces.RADAR_TOPIC, self.on_measurement, interfaces.STREAM,
                      what="radar measurement")

@@ -1,9 +1,12 @@
-"""The ic_planner's decisions (docs/run.md, "Decisions"): when an OD solution re-plans the acquisition, when the
-final OD trims it, when a committed burn defers a re-plan, when a departing burn re-plans or re-trims.
+"""The ic_planner's decisions (docs/run.md, "Decisions"): when an OD solution re-plans the acquisition, when the final
+OD trims it, when a committed burn defers a re-plan, when a departing burn re-plans or re-trims.
 
 Each ``on_<event>(state, event, config)`` returns ``(new_state, actions)``: :class:`PublishPlan` and the shared
-:class:`~.common.Status` / :class:`~.common.Log`. The physics is :mod:`roe_sep.core.acquisition` (seed 001 Sec. 4:
-the linear program and its quantized re-solve; seed 002 Eq. 2 for the trim and the departure of a burn).
+:class:`~.common.Status` / :class:`~.common.Log`. The rules take ``state`` (:class:`IcPlannerState`, what the ic_planner
+knows before the event), ``od`` (an :class:`OdSolution`), ``now`` (the decision time [s]) and ``config``
+(:class:`IcPlannerConfig`, the node's parameters) as they need them. The physics is :mod:`roe_sep.core.acquisition`
+(seed 001 Sec. 4: the linear program and its quantized re-solve; seed 002 Eq. 2 for the trim and the departure of a
+burn).
 """
 
 import dataclasses
@@ -162,12 +165,10 @@ def on_separation_plan(state: IcPlannerState, burn_epochs: Iterable[float], conf
 
     Parameters
     ----------
-    state : IcPlannerState
-        What the ic_planner knows before the event.
+    state, config
+        As every rule takes them (module docstring).
     burn_epochs : iterable of float
         The separation plan's burn epochs [s] (none: no separation plan).
-    config : IcPlannerConfig
-        The node's parameters.
 
     Returns
     -------
@@ -183,14 +184,12 @@ def on_own_plan(state: IcPlannerState, burns: Sequence[PlannedBurn], t_final: fl
 
     Parameters
     ----------
-    state : IcPlannerState
-        What the ic_planner knows before the event.
+    state, config
+        As every rule takes them (module docstring).
     burns : sequence of PlannedBurn
         The plan's burns.
     t_final : float
         Its IC epoch [s].
-    config : IcPlannerConfig
-        The node's parameters.
 
     Returns
     -------
@@ -209,14 +208,10 @@ def on_od(state: IcPlannerState, od: OdSolution, now: float, config: IcPlannerCo
 
     Parameters
     ----------
-    state : IcPlannerState
-        What the ic_planner knows before the event.
-    od : OdSolution
-        The OD solution.
+    state, od, config
+        As every rule takes them (module docstring).
     now : float
         The node's time [s].
-    config : IcPlannerConfig
-        The node's parameters.
 
     Returns
     -------
@@ -242,12 +237,10 @@ def on_executed(state: IcPlannerState, burn: PlannedBurn, config: IcPlannerConfi
 
     Parameters
     ----------
-    state : IcPlannerState
-        What the ic_planner knows before the event.
+    state, config
+        As every rule takes them (module docstring).
     burn : PlannedBurn
         The executed maneuver as its record carries it.
-    config : IcPlannerConfig
-        The node's parameters.
 
     Returns
     -------
@@ -275,12 +268,10 @@ def after_burn(state: IcPlannerState, burn: PlannedBurn, config: IcPlannerConfig
 
     Parameters
     ----------
-    state : IcPlannerState
-        What the ic_planner knows before the event.
+    state, config
+        As every rule takes them (module docstring).
     burn : PlannedBurn
         The executed carrier burn (purpose "ic_acquisition").
-    config : IcPlannerConfig
-        The node's parameters.
 
     Returns
     -------
@@ -315,14 +306,8 @@ def decide(state: IcPlannerState, od: OdSolution, now: float, config: IcPlannerC
 
     Parameters
     ----------
-    state : IcPlannerState
-        What the ic_planner knows before the event.
-    od : OdSolution
-        The OD solution.
-    now : float
-        The decision time [s].
-    config : IcPlannerConfig
-        The node's parameters.
+    state, od, now, config
+        As every rule takes them (module docstring).
 
     Returns
     -------
@@ -388,14 +373,8 @@ def final_trim(state: IcPlannerState, od: OdSolution, now: float, config: IcPlan
 
     Parameters
     ----------
-    state : IcPlannerState
-        What the ic_planner knows before the event.
-    od : OdSolution
-        The OD solution.
-    now : float
-        The decision time [s].
-    config : IcPlannerConfig
-        The node's parameters.
+    state, od, now, config
+        As every rule takes them (module docstring).
     after_burn : bool
         Again after a departing burn: a plan is published only for a trim.
 
@@ -451,8 +430,8 @@ def committed_burn(state: IcPlannerState, t_od: float, now: float, planning_marg
 
     Parameters
     ----------
-    state : IcPlannerState
-        What the ic_planner knows before the event.
+    state
+        As every rule takes them (module docstring).
     t_od, now : float
         The OD's epoch and the decision time [s].
     planning_margin : float
@@ -480,14 +459,8 @@ def start_state(state: IcPlannerState, od: OdSolution, now: float, config: IcPla
 
     Parameters
     ----------
-    state : IcPlannerState
-        What the ic_planner knows before the event.
-    od : OdSolution
-        The OD solution.
-    now : float
-        The decision time [s].
-    config : IcPlannerConfig
-        The node's parameters.
+    state, od, now, config
+        As every rule takes them (module docstring).
 
     Returns
     -------
@@ -521,14 +494,8 @@ def plan_problems(state: IcPlannerState, od: OdSolution, now: float, config: IcP
 
     Parameters
     ----------
-    state : IcPlannerState
-        What the ic_planner knows before the event.
-    od : OdSolution
-        The OD solution.
-    now : float
-        The decision time [s].
-    config : IcPlannerConfig
-        The node's parameters.
+    state, od, now, config
+        As every rule takes them (module docstring).
 
     Returns
     -------
@@ -554,14 +521,8 @@ def trim_decision(state: IcPlannerState, od: OdSolution, now: float, config: IcP
 
     Parameters
     ----------
-    state : IcPlannerState
-        What the ic_planner knows before the event.
-    od : OdSolution
-        The OD solution.
-    now : float
-        The decision time [s].
-    config : IcPlannerConfig
-        The node's parameters.
+    state, od, now, config
+        As every rule takes them (module docstring).
     kept : sequence of PlannedBurn
         The burns of the plan in force still to fly.
 
@@ -585,14 +546,8 @@ def make_plan(state: IcPlannerState, od: OdSolution, now: float, config: IcPlann
 
     Parameters
     ----------
-    state : IcPlannerState
-        What the ic_planner knows before the event.
-    od : OdSolution
-        The OD solution.
-    now : float
-        The decision time [s].
-    config : IcPlannerConfig
-        The node's parameters.
+    state, od, now, config
+        As every rule takes them (module docstring).
     keep_arc : bool
         No burn in the final OD's radar arc (:func:`radar_arc`).
 
@@ -627,14 +582,12 @@ def aimed(od: OdSolution, final_roe: ArrayLike, t_final: float, config: IcPlanne
 
     Parameters
     ----------
-    od : OdSolution
-        The OD solution.
+    od, config
+        As every rule takes them (module docstring).
     final_roe : array_like, shape (6,)
         The plan's dimensionless ROE at ``t_final``.
     t_final : float
         The IC epoch [s].
-    config : IcPlannerConfig
-        The node's parameters.
 
     Returns
     -------
@@ -652,12 +605,10 @@ def drift_sigma(od: OdSolution, t_final: float | None, config: IcPlannerConfig) 
 
     Parameters
     ----------
-    od : OdSolution
-        The OD solution.
+    od, config
+        As every rule takes them (module docstring).
     t_final : float or None
         The IC epoch [s].
-    config : IcPlannerConfig
-        The node's parameters.
 
     Returns
     -------
@@ -675,12 +626,8 @@ def plan_knowledge(state: IcPlannerState, od: OdSolution, config: IcPlannerConfi
 
     Parameters
     ----------
-    state : IcPlannerState
-        What the ic_planner knows before the event.
-    od : OdSolution
-        The OD solution.
-    config : IcPlannerConfig
-        The node's parameters.
+    state, od, config
+        As every rule takes them (module docstring).
 
     Returns
     -------
@@ -699,12 +646,10 @@ def radar_arc(od: OdSolution, t_final: float, config: IcPlannerConfig) -> tuple 
 
     Parameters
     ----------
-    od : OdSolution
-        The OD solution.
+    od, config
+        As every rule takes them (module docstring).
     t_final : float
         The IC epoch [s].
-    config : IcPlannerConfig
-        The node's parameters.
 
     Returns
     -------

@@ -1,10 +1,12 @@
-"""The planner's decisions (docs/run.md, "Decisions"): the blind drift-stop of a commanded ejection, its hold when
-the camera sees a weak ejection, its replacement when none is on record, its completion when the one on record
-departs from its command.
+"""The planner's decisions (docs/run.md, "Decisions"): the blind drift-stop of a commanded ejection, its hold when the
+camera sees a weak ejection, its replacement when none is on record, its completion when the one on record departs
+from its command.
 
-Each ``on_<event>(state, ..., config)`` returns ``(new_state, actions)``: :class:`PublishPlan`,
-:class:`StopBearings` and the shared :class:`~.common.Status` / :class:`~.common.Log`. Physics: seed 002 Eqs. 9,
-13, 18 (:func:`~roe_sep.core.separation.double_impulse.plan_drift_stop`), seed 001 Sec. 3
+Each ``on_<event>(state, ..., config)`` returns ``(new_state, actions)``: :class:`PublishPlan`, :class:`StopBearings`
+and the shared :class:`~.common.Status` / :class:`~.common.Log`; the rules take ``state`` (:class:`PlannerState`, what
+the planner knows before the event; a drift-stop check wants one in force), ``t`` (the sim time [s] of a check) and
+``config`` (:class:`PlannerConfig`, the node's parameters) as they need them. Physics: seed 002 Eqs. 9, 13, 18
+(:func:`~roe_sep.core.separation.double_impulse.plan_drift_stop`), seed 001 Sec. 3
 (:func:`~roe_sep.core.separation.multi_impulse.plan_carrier_burns`), and
 :func:`~roe_sep.core.safety.ejection_check.check_ejection` for the camera.
 """
@@ -146,12 +148,10 @@ def on_ejection(state: PlannerState, ejection: Ejection, config: PlannerConfig) 
 
     Parameters
     ----------
-    state : PlannerState
-        What the planner knows before the event.
+    state, config
+        As every rule takes them (module docstring).
     ejection : Ejection
         The commanded ejection.
-    config : PlannerConfig
-        The node's parameters.
 
     Returns
     -------
@@ -178,14 +178,12 @@ def on_executed(state: PlannerState, burn: PlannedBurn, wall: float, config: Pla
 
     Parameters
     ----------
-    state : PlannerState
-        What the planner knows before the event.
+    state, config
+        As every rule takes them (module docstring).
     burn : PlannedBurn
         The executed maneuver as its record carries it.
     wall : float
         The wall time [s] it arrived (:func:`record_recovered`).
-    config : PlannerConfig
-        The node's parameters.
 
     Returns
     -------
@@ -204,14 +202,12 @@ def on_bearing(state: PlannerState, t: float, los: ArrayLike, config: PlannerCon
 
     Parameters
     ----------
-    state : PlannerState
-        What the planner knows before the event.
+    state, config
+        As every rule takes them (module docstring).
     t : float
         The bearing's epoch [s].
     los : array_like, shape (3,)
         The unit line of sight.
-    config : PlannerConfig
-        The node's parameters.
 
     Returns
     -------
@@ -230,8 +226,8 @@ def record_recovered(state: PlannerState, wall: float, lockstep: bool) -> bool:
 
     Parameters
     ----------
-    state : PlannerState
-        What the planner knows before the event.
+    state
+        As every rule takes them (module docstring).
     wall : float
         The wall time [s] now.
     lockstep : bool
@@ -254,16 +250,12 @@ def on_step(state: PlannerState, t: float, wall: float, lockstep: bool, config: 
 
     Parameters
     ----------
-    state : PlannerState
-        What the planner knows before the event.
-    t : float
-        The sim time [s] of the check.
+    state, t, config
+        As every rule takes them (module docstring).
     wall : float
         The wall time [s] (:func:`record_recovered`).
     lockstep : bool
         Whether the record holds every message (a lockstep run).
-    config : PlannerConfig
-        The node's parameters.
 
     Returns
     -------
@@ -322,12 +314,8 @@ def camera_decision(state: PlannerState, t: float, config: PlannerConfig) -> tup
 
     Parameters
     ----------
-    state : PlannerState
-        What the planner knows before the event.
-    t : float
-        The sim time [s] of the check.
-    config : PlannerConfig
-        The node's parameters.
+    state, t, config
+        As every rule takes them (module docstring).
 
     Returns
     -------
@@ -367,12 +355,12 @@ def orbits_later(ejection: Ejection, t: float, t_burn: float, config: PlannerCon
 
     Parameters
     ----------
+    config
+        As every rule takes them (module docstring).
     ejection : Ejection
         The commanded ejection (its chief's a and i give the period, with J2 when ``config.j2``).
     t, t_burn : float
         The finding's time and the burn's epoch [s].
-    config : PlannerConfig
-        The node's parameters.
 
     Returns
     -------
@@ -390,12 +378,8 @@ def missing(state: PlannerState, t: float, config: PlannerConfig) -> bool:
 
     Parameters
     ----------
-    state : PlannerState
-        What the planner knows (a drift-stop in force).
-    t : float
-        The sim time [s] of the check.
-    config : PlannerConfig
-        The node's parameters.
+    state, t, config
+        As every rule takes them (module docstring).
 
     Returns
     -------
@@ -414,12 +398,8 @@ def replace_missing(state: PlannerState, t: float, config: PlannerConfig) -> tup
 
     Parameters
     ----------
-    state : PlannerState
-        What the planner knows (a drift-stop in force).
-    t : float
-        The sim time [s] of the check.
-    config : PlannerConfig
-        The node's parameters.
+    state, t, config
+        As every rule takes them (module docstring).
 
     Returns
     -------
@@ -445,12 +425,8 @@ def check_executed(state: PlannerState, t: float, config: PlannerConfig) -> tupl
 
     Parameters
     ----------
-    state : PlannerState
-        What the planner knows (a drift-stop in force).
-    t : float
-        The sim time [s] of the check.
-    config : PlannerConfig
-        The node's parameters.
+    state, t, config
+        As every rule takes them (module docstring).
 
     Returns
     -------
@@ -494,10 +470,10 @@ def separation_plan(ejection: Ejection, config: PlannerConfig, *, k: int | None 
 
     Parameters
     ----------
+    config
+        As every rule takes them (module docstring).
     ejection : Ejection
         The commanded ejection.
-    config : PlannerConfig
-        The node's parameters.
     k : int, optional
         The drift-stop's half-orbit count (default ``config.k``).
     p : float, optional
