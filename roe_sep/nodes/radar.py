@@ -47,7 +47,7 @@ from .diagnostics import ERROR, OK, WARN, publish_status
 from .lockstep import Lockstep
 from .managed import ManagedNode
 from .params import ParameterError, declare
-from .radar_stations import parse_truth, subscribe_burns_and_truth, tracking_of
+from .radar_stations import parse_truth, tracking_of
 
 CHUNK = 10000  # measurement epochs propagated at once
 
@@ -111,7 +111,11 @@ class RadarNode(ManagedNode):
         self.meas_pub = ls.publisher(RadarMeasurement, interfaces.RADAR_TOPIC, interfaces.STREAM)
         self.pass_pub = ls.publisher(RadarPass, interfaces.RADAR_PASS_TOPIC, interfaces.STREAM)
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
-        subscribe_burns_and_truth(self, ls)
+        # a burn and the truth right after it share a stamp: the burn is processed first
+        ls.subscribe(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, self.on_maneuver, interfaces.EXECUTED,
+                     stamp=lambda m: time_to_sec(m.epoch), what="executed maneuver")
+        ls.subscribe(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, self.on_truth, interfaces.STREAM,
+                     what="truth message", raw=True)  # every sample: decoded from its bytes (Lockstep.subscribe)
         self.create_subscription(Clock, interfaces.CLOCK_TOPIC, self.on_clock, interfaces.CLOCK_SUB)
         publish_status(self, self.diag_pub, OK, "waiting for truth", self._values())
 

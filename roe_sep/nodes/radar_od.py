@@ -54,7 +54,7 @@ from .diagnostics import ERROR, OK, publish_status
 from .lockstep import Lockstep
 from .managed import ManagedNode
 from .params import declare
-from .radar_stations import parse_truth, subscribe_burns_and_truth, tracking_of
+from .radar_stations import parse_truth, tracking_of
 
 
 class RadarODNode(ManagedNode):
@@ -95,7 +95,10 @@ class RadarODNode(ManagedNode):
         self.lockstep = ls = Lockstep(self)
         self.od_pub = ls.publisher(OrbitDetermination, interfaces.OD_TOPIC, interfaces.LATCHED)
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
-        subscribe_burns_and_truth(self, ls)
+        ls.subscribe(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, self.on_maneuver, interfaces.EXECUTED,
+                     stamp=lambda m: time_to_sec(m.epoch), what="executed maneuver")
+        ls.subscribe(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, self.on_truth, interfaces.STREAM,
+                     what="truth message", raw=True)  # every sample: decoded from its bytes (Lockstep.subscribe)
         # a pass's measurements before its end (declaration order: the rank of equal stamps)
         ls.subscribe(RadarMeasurement, interfaces.RADAR_TOPIC, self.on_measurement, interfaces.STREAM,
                      what="radar measurement")

@@ -6,14 +6,11 @@ import operator
 from typing import NamedTuple
 
 import numpy as np
-from roe_sep_msgs.msg import ImpulsiveManeuver, RelativeOrbitalElements
 
-from .. import interfaces
 from ..core.constants import R_EARTH
 from ..core.od.radar import Station, julian_date
 from ..validate import ROE_FIELDS
 from .convert import elements_to_array, msg_to_roe, time_to_sec
-from .lockstep import Lockstep
 from .params import ParameterError, declare, require
 
 _ROE_VALUES = operator.attrgetter(*ROE_FIELDS)  # a message's a*ROE [m], in ROE order
@@ -63,16 +60,6 @@ def tracking_of(node) -> Tracking:
     sigma_angle = math.radians(declare(node, "sigma_angle_deg"))
     return Tracking(stations, jd0, [s.ecef for s in stations], [s.enu for s in stations],
                     np.array([sigma_range, sigma_angle, sigma_angle]))
-
-
-def subscribe_burns_and_truth(node, ls: Lockstep) -> None:
-    """Subscribe ``node.on_maneuver`` to the executed maneuvers and ``node.on_truth`` to every truth sample (decoded
-    from its bytes, :meth:`~.lockstep.Lockstep.subscribe`), in this order: a burn and the truth right after it share
-    a stamp, and the burn is processed first."""
-    ls.subscribe(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, node.on_maneuver, interfaces.EXECUTED,
-                 stamp=lambda m: time_to_sec(m.epoch), what="executed maneuver")
-    ls.subscribe(RelativeOrbitalElements, interfaces.TRUTH_ROE_TOPIC, node.on_truth, interfaces.STREAM,
-                 what="truth message", raw=True)
 
 
 def parse_truth(msg):
