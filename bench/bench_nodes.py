@@ -73,7 +73,7 @@ def planner_latency(events):
     d = design()
     t0 = time.perf_counter()
     for _ in range(200):
-        plan_drift_stop(d.dv1_rtn, d.u1, 0.0, d.a, d.inc, 3, 0.06)
+        plan_drift_stop(d.dv1_rtn, d.u1, 0.0, d.a, d.inc, k=3, p=0.06)
     compute = (time.perf_counter() - t0) / 200
     return {"events": events, "median_ms": 1e3 * statistics.median(latencies),
             "p95_ms": 1e3 * sorted(latencies)[int(0.95 * (len(latencies) - 1))],

@@ -170,7 +170,7 @@ def truth_at(truth, t, truth_da_dot):
     i = int(before[-1])
     a = truth.a[i]
     roe = truth.roe[i] / a
-    return propagate(roe, t - truth.stamps[i], a, truth.inc[i], True, truth_da_dot / a / 86400.0) * a
+    return propagate(roe, t - truth.stamps[i], a, truth.inc[i], True, da_dot=truth_da_dot / a / 86400.0) * a
 
 
 CHECKS = {interfaces.TRUTH_ROE_TOPIC: validate.truth, interfaces.EXECUTED_TOPIC: validate.executed,

@@ -58,8 +58,8 @@ def run(seed, f1=None):
     burn = ex.take(ex.due(math.inf)[0])
     truth.advance(burn.epoch)
     done = ex.execute(burn)
-    stop = plan_drift_stop(d.dv1_rtn, chief[4] + chief[5], t_ej, chief[0], chief[2], d.k,
-                           reduction_bounds(d.dv1_rtn[1], scenario.separation)[0], True)
+    stop = plan_drift_stop(d.dv1_rtn, chief[4] + chief[5], t_ej, chief[0], chief[2], k=d.k,
+                           p=reduction_bounds(d.dv1_rtn[1], scenario.separation)[0], j2=True)
     t_end = stop.epoch - planner["hold_lead"].default
     truth.advance(t_end)
     times = np.array(sorted(t for t in samples if done.epoch < t <= t_end))
@@ -67,11 +67,12 @@ def run(seed, f1=None):
     los = camera_bearing(pos, math.radians(sim["camera_sigma_deg"].default), camera_rng(seed))
     mc = scenario.monte_carlo
     check = check_ejection(times, los, d.dv1_rtn, done.epoch, propagate_chief(chief, done.epoch - t_ej),
-                           float(drag_da_dot(mc.delta_b, mc.density, chief[0])),
-                           math.radians(sim["camera_sigma_deg"].default), planner["camera_model_floor"].default,
-                           nominal_fraction(scenario.separation.spl_sigma, mc.ballistic_sigma,
+                           da_dot=float(drag_da_dot(mc.delta_b, mc.density, chief[0])),
+                           sigma=math.radians(sim["camera_sigma_deg"].default),
+                           floor=planner["camera_model_floor"].default,
+                           bound=nominal_fraction(scenario.separation.spl_sigma, mc.ballistic_sigma,
                                             planner["hold_sigmas"].default),
-                           planner["hold_alpha"].default)
+                           alpha=planner["hold_alpha"].default)
     return float(np.linalg.norm(done.dv_rtn) / np.linalg.norm(d.dv1_rtn)), world.drag_factor, check
 
 

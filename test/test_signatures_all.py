@@ -16,17 +16,9 @@ ROOT = Path(__file__).resolve().parents[1]
 MAX_POSITIONAL = 5
 MAX_DOC_LINES = 30
 
-# Offenders kept until the rewrite of the three nodes below merges (their calls still pass these positionally;
-# the nodes are rewritten on other branches): make each keyword-only after the 5th and its node calls keywords,
-# then drop it from here. A listed name that no longer offends fails the test, so the list only shrinks.
-HELD_POSITIONAL = {
-    "roe_sep/core/acquisition/trim.py plan_trim",  # nodes/ic_planner.py
-    "roe_sep/core/relmotion/trajectory.py state_at",  # nodes/ic_planner.py
-    "roe_sep/core/safety/ejection_check.py check_ejection",  # nodes/planner.py
-    "roe_sep/core/separation/double_impulse.py plan_drift_stop",  # nodes/planner.py
-    "roe_sep/core/separation/multi_impulse.py plan_carrier_burns",  # nodes/planner.py
-    "roe_sep/core/relmotion/dynamics.py propagate",  # nodes/radar_od.py
-}
+# Offenders kept while a change is in flight (none now): a listed name that no longer offends fails the test, so
+# the list only shrinks.
+HELD_POSITIONAL: set[str] = set()
 HELD_DOCSTRINGS: set[str] = set()
 
 

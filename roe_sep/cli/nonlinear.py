@@ -77,7 +77,7 @@ def propagate_report(roe_m, altitude, inc_deg, u_deg, days, *, step, model, scen
         from ..core.relmotion.dynamics import drag_da_dot, propagate
 
         da_dot = float(drag_da_dot(b_d - b_c, mc.density, a)) if model == "j2drag" else 0.0
-        out = propagate(roe[None, :], times, a, inc, model != "keplerian", da_dot) * a
+        out = propagate(roe[None, :], times, a, inc, model != "keplerian", da_dot=da_dot) * a
     return {"model": model, "a": a, "altitude": altitude, "inclination_deg": math.degrees(inc), "u0_deg": u_deg,
             "delta_b": b_d - b_c, "density": mc.density, "t": times.tolist(), "roe": out.tolist()}
 

@@ -218,7 +218,7 @@ def od_segments(run: RunMessages, truth: Truth, opts: Options):
             t = t[:-1]
         kep0 = kepler(est.chief)
         a = kep0[0]
-        roe = propagate(roe_of(est), t - t0, a, kep0[2], True, od.a_da_dot / a)
+        roe = propagate(roe_of(est), t - t0, a, kep0[2], True, da_dot=od.a_da_dot / a)
         chief = propagate_chief(kep0, t - t0)
         rd, vd = frames.deputy_state(roe, chief, opts.epoch_utc, t)
         cov = np.asarray(est.covariance, dtype=float).reshape(6, 6) / (a * a)
@@ -262,7 +262,7 @@ def closest_approach(run: RunMessages, truth: Truth, opts: Options):
     first = np.repeat(np.cumsum(counts) - counts, counts)
     dt = (np.arange(k.size) - first) * opts.ca_step
     t = truth.t[k] + dt
-    roe = propagate(truth.roe[k], dt, truth.chief[k, 0], truth.chief[k, 2], True, 0.0)
+    roe = propagate(truth.roe[k], dt, truth.chief[k, 0], truth.chief[k, 2], True, da_dot=0.0)
     chief = propagate_chief(truth.chief[k], dt)
     dist = np.linalg.norm(roe_to_rtn(roe, chief[:, 4] + chief[:, 5])[0], axis=-1) * chief[:, 0]
     away = np.nonzero(dist >= opts.departure_distance)[0]
@@ -284,7 +284,7 @@ def _od_covariance_at(run: RunMessages, t):
         return None
     est = max(ods, key=lambda o: time_to_sec(o.estimate.header.stamp)).estimate
     kep = kepler(est.chief)
-    stm = propagate(np.eye(6), t - time_to_sec(est.header.stamp), kep[0], kep[2], True, 0.0).T
+    stm = propagate(np.eye(6), t - time_to_sec(est.header.stamp), kep[0], kep[2], True, da_dot=0.0).T
     cov = np.asarray(est.covariance, dtype=float).reshape(6, 6) / kep[0] ** 2
     return stm @ cov @ stm.T
 

@@ -47,7 +47,7 @@ from .diagnostics import ERROR, OK, WARN, publish_status
 from .lockstep import Lockstep
 from .managed import ManagedNode
 from .params import ParameterError, declare
-from .radar_stations import parse_truth, stations_of
+from .radar_stations import parse_truth, tracking_of
 
 CHUNK = 10000  # measurement epochs propagated at once
 
@@ -58,19 +58,14 @@ class RadarNode(ManagedNode):
 
     def configure(self):
         """Parameters and start-up work (the managed node's ``configure`` transition)."""
-        self.stations, self.jd0 = stations_of(self)
-        self.site_ef = [s.ecef for s in self.stations]
-        self.site_enu = [s.enu for s in self.stations]
+        self.stations, self.jd0, self.site_ef, self.site_enu, self.sigma = tracking_of(self)
         self.mask = math.radians(declare(self, "elevation_mask_deg"))
-        sigma_range = declare(self, "sigma_range_m")
-        sigma_angle = declare(self, "sigma_angle_deg")
         self.dt = declare(self, "sample_interval")
         self.min_sep = declare(self, "min_separation")
         self.min_pass = declare(self, "min_pass_measurements")
         seed = declare(self, "seed")
         scenario_file = declare(self, "scenario_file")
         contingency = declare(self, "contingency")
-        self.sigma = np.array([sigma_range, math.radians(sigma_angle), math.radians(sigma_angle)])
         self.rng = np.random.default_rng(seed)
         self.contingency = self._contingency(scenario_file, contingency, seed, [s.name for s in self.stations])
 
@@ -246,7 +241,7 @@ class RadarNode(ManagedNode):
         kep_tr = np.repeat(np.array([c[1][2] for c in calls]), sizes, axis=0)
         chief = propagate_chief(kep_tr, epochs - t_tr)
         rate = np.repeat([self.truth_rate(c[1][0], c[1][1]) for c in calls], sizes)
-        roe = propagate(roe_tr, epochs - t_tr, kep_tr[:, 0], kep_tr[:, 2], True, rate)
+        roe = propagate(roe_tr, epochs - t_tr, kep_tr[:, 0], kep_tr[:, 2], True, da_dot=rate)
         theta = gmst(self.jd0 + epochs / SECONDS_PER_DAY)
         # the relative position serves the separation and every station's look angles: formed once
         rel = rtn_position(roe, chief[:, 4] + chief[:, 5])

@@ -54,7 +54,7 @@ from .diagnostics import ERROR, OK, publish_status
 from .lockstep import Lockstep
 from .managed import ManagedNode
 from .params import declare
-from .radar_stations import parse_truth, stations_of
+from .radar_stations import parse_truth, tracking_of
 
 
 class RadarODNode(ManagedNode):
@@ -63,12 +63,8 @@ class RadarODNode(ManagedNode):
 
     def configure(self):
         """Parameters and start-up work (the managed node's ``configure`` transition)."""
-        self.stations, self.jd0 = stations_of(self)
+        self.stations, self.jd0, self.site_ef, self.site_enu, self.sigma = tracking_of(self)
         self.names = [st.name for st in self.stations]
-        self.site_ef = [s.ecef for s in self.stations]
-        self.site_enu = [s.enu for s in self.stations]
-        sigma_range = declare(self, "sigma_range_m")
-        sigma_angle = declare(self, "sigma_angle_deg")
         self.passes_required = declare(self, "passes_required")
         self.min_arc = declare(self, "min_arc")
         self.min_pass = declare(self, "min_pass_measurements")
@@ -78,7 +74,6 @@ class RadarODNode(ManagedNode):
         self.density_walk = declare(self, "density_walk")
         self.drag_terms = declare(self, "od_drag_terms")
         self.drag = (scale_height, ratio)
-        self.sigma = np.array([sigma_range, math.radians(sigma_angle), math.radians(sigma_angle)])
         self.estimates = 0
         self.received = 0
         self._forget()

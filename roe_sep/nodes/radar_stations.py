@@ -1,8 +1,11 @@
-"""What the radar sensor (:mod:`.radar`) and the OD (:mod:`.radar_od`) share: the ground stations and the epoch of
-their parameters, and the truth message's chief as both read it."""
+"""What the radar sensor (:mod:`.radar`) and the OD (:mod:`.radar_od`) share: the ground stations, the epoch and the
+measurement sigmas of their parameters, and the truth message's chief as both read it."""
 
 import math
 import operator
+from typing import NamedTuple
+
+import numpy as np
 
 from ..core.constants import R_EARTH
 from ..core.od.radar import Station, julian_date
@@ -32,6 +35,31 @@ def stations_of(node):
             from exc
     return [Station(s, math.radians(la), math.radians(lo), float(h))
             for s, la, lo, h in zip(names, lats, lons, alts)], jd0
+
+
+class Tracking(NamedTuple):
+    """The parameters the sensor and the OD read alike (:func:`tracking_of`)."""
+
+    stations: list
+    """The ground stations (:class:`~roe_sep.core.od.radar.Station`)."""
+    jd0: float
+    """Julian date of sim time 0."""
+    site_ef: list
+    """Each station's ECEF position [m]."""
+    site_enu: list
+    """Each station's local east-north-up frame (rows in ECEF)."""
+    sigma: np.ndarray
+    """The measurement 1-sigma ``[range [m], azimuth [rad], elevation [rad]]``."""
+
+
+def tracking_of(node) -> Tracking:
+    """The node's stations and epoch (:func:`stations_of`) and its ``sigma_range_m`` and ``sigma_angle_deg``;
+    ParameterError as :func:`stations_of` and :func:`~.params.declare` say."""
+    stations, jd0 = stations_of(node)
+    sigma_range = declare(node, "sigma_range_m")
+    sigma_angle = math.radians(declare(node, "sigma_angle_deg"))
+    return Tracking(stations, jd0, [s.ecef for s in stations], [s.enu for s in stations],
+                    np.array([sigma_range, sigma_angle, sigma_angle]))
 
 
 def parse_truth(msg):

@@ -64,7 +64,7 @@ class Knowledge:
             self.arcs = (burns, burn_segments(self.roe, self.t, burns, self.chief, j2, da_dot=self.da_dot))
         arcs = self.arcs[1]
         if not t_now >= max(self.t, arcs[-1][0]):  # before t (an error) or before a burn: as it always was
-            return state_at(self.roe, self.t, burns, t_now, self.chief, j2, self.da_dot)
+            return state_at(self.roe, self.t, burns, t_now, self.chief, j2=j2, da_dot=self.da_dot)
         return segments_at(arcs[-1:], np.array([t_now]), self.t, self.chief, j2, da_dot=self.da_dot)[0]
 
 

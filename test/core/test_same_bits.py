@@ -175,8 +175,8 @@ def test_propagate_and_the_rtn_position_are_the_stacked_forms():
     dt = rng.uniform(0, 1e5, 50)
     a, inc = rng.uniform(6.6e6, 7.2e6, 50), rng.uniform(0.1, 3.0, 50)
     for j2 in (True, False):
-        assert same(propagate(roe, dt, a, inc, j2, 1e-11), old_propagate(roe, dt, a, inc, j2, 1e-11))
-        assert same(propagate(roe[0], dt, 6.9e6, 1.7, j2, 0.0), old_propagate(roe[0], dt, 6.9e6, 1.7, j2, 0.0))
+        assert same(propagate(roe, dt, a, inc, j2, da_dot=1e-11), old_propagate(roe, dt, a, inc, j2, 1e-11))
+        assert same(propagate(roe[0], dt, 6.9e6, 1.7, j2, da_dot=0.0), old_propagate(roe[0], dt, 6.9e6, 1.7, j2, 0.0))
         assert same(propagate(roe[0], 100.0, 6.9e6, 1.7, j2), old_propagate(roe[0], 100.0, 6.9e6, 1.7, j2))
     u = rng.uniform(-5, 5, 50)
     assert same(rtn_position(roe, u), old_rtn_position(roe, u))

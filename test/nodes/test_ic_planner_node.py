@@ -114,7 +114,7 @@ def test_plan_bad_estimate_and_replan_policy(ground):
 
         # an OD made after the executed burns re-plans the rest of the acquisition (correction), burns in the future
         t_new = max(early) + 1000.0
-        roe_new = state_at(ROE0, T_OD, ref.burns(), t_new, chief, True, DA_DOT)
+        roe_new = state_at(ROE0, T_OD, ref.burns(), t_new, chief, j2=True, da_dot=DA_DOT)
         ground.od_pub.publish(od_message(roe_new, t_new, solved=t_new + 500.0, u=float(chief.u_at(t_new))))
         assert spin_until(ground, lambda: len(ground.plans) >= 2, timeout=30)
         new = ground.plans[-1]
@@ -152,7 +152,7 @@ def test_final_od_trims_the_drift_at_the_ic_epoch(ground):
         t_od = now - 600.0
         chief = Chief(a=A, inc=D.inc, u0=U0, t0=T_OD)
         burns = [b for b in plan_burns(plan.maneuvers) if b.epoch <= t_od]
-        roe = state_at(ROE0, T_OD, burns, t_od, chief, True, DA_DOT) + np.array([8.0, 0, 0, 0, 0, 0]) / A
+        roe = state_at(ROE0, T_OD, burns, t_od, chief, j2=True, da_dot=DA_DOT) + np.array([8.0, 0, 0, 0, 0, 0]) / A
         ground.sim_time = now
         spin_until(ground, lambda: False, timeout=1.5)
         ground.od_pub.publish(od_message(roe, t_od, solved=now, u=float(wrap_angle(chief.u_at(t_od))), sigma=0.5))

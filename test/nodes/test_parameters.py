@@ -189,6 +189,9 @@ def test_every_executable_answers_help(script):
 @pytest.mark.parametrize("script,args,needles", [
     ("planner", ["-p", "mc_samples:=1000000000"], ["planner", "'mc_samples'", "an integer in [1, 2000000]"]),
     ("radar_od", ["-p", "stations:=[]"], ["radar_od", "'stations'", "a non-empty list of distinct station names"]),
+    ("radar", ["-p", "seed:=abc"], ["radar", "'seed'", "an integer in [0, 4294967295]", "'abc'"]),
+    ("radar", ["-p", "station_latitudes_deg:=[1.0,2.0]"], ["radar", "'station_latitudes_deg'",
+                                                           "one per station of 'stations'"]),
     ("recorder", ["-p", "topics:=[1,2]"], ["recorder", "'topics'", "a list of topic names", "[1, 2]"]),
     ("sim", ["-p", "duration:=600"], ["sim", "'duration'", "(600.0, not 600)"]),
     ("safety_monitor", ["--params-file", "{missing}"], ["safety_monitor", "--params-file", "{missing}",

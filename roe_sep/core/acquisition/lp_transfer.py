@@ -115,7 +115,7 @@ def drift_offset(dt: ArrayLike, a: float, inc: float, j2: bool = True, da_dot: f
         The dimensionless ROE offset.
     """
     dt = np.asarray(dt, dtype=float)
-    return propagate(np.zeros(6), dt, a, inc, j2, da_dot)
+    return propagate(np.zeros(6), dt, a, inc, j2, da_dot=da_dot)
 
 
 def carrier_burn_effects(epochs: ArrayLike, axes: tuple[int, ...], chief: Chief, j2: bool = True) -> np.ndarray:

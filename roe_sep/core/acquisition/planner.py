@@ -264,7 +264,7 @@ def _build(roe0, chief, da_dot, cfg, t_earliest, *, no_burns=()):
             f"(OD epoch + {t_earliest - chief.t0:.0f} s) and the end of the window (OD epoch + {cfg.window:.0f} s)")
     # the burn-free motion until the first opportunity must respect the minimum separation by itself
     early = np.linspace(chief.t0, epochs[0], 64)
-    early_dl = s * a * propagate(x0, early - chief.t0, a, chief.inc, cfg.j2, da_dot)[:, 1]
+    early_dl = s * a * propagate(x0, early - chief.t0, a, chief.inc, cfg.j2, da_dot=da_dot)[:, 1]
     if early_dl.min() < cfg.a_dl_min:
         raise AcquisitionInfeasible(
             f"the mean along-track separation is {early_dl.min():.0f} m before the first burn opportunity, below "
@@ -275,7 +275,7 @@ def _build(roe0, chief, da_dot, cfg, t_earliest, *, no_burns=()):
     effects = carrier_burn_effects(epochs, axes, chief, cfg.j2) * q  # (K, J, 6) per quantum
     t_f = float(epochs[-1])
     final = a * response_at(effects, epochs, t_f, a, chief.inc, j2=cfg.j2).reshape(k_count * j_count, 6).T
-    free = a * propagate(x0, np.concatenate([epochs, [t_f]]) - chief.t0, a, chief.inc, cfg.j2, da_dot)
+    free = a * propagate(x0, np.concatenate([epochs, [t_f]]) - chief.t0, a, chief.inc, cfg.j2, da_dot=da_dot)
     step = float(epochs[1] - epochs[0])
     path = s * a * grid_response(effects, step, a, chief.inc, cfg.j2, component=1).reshape(k_count, -1)
     path_pre = None

@@ -292,7 +292,7 @@ def trim_problems(final_roe: ArrayLike, a: float, cfg: AcquisitionConfig, leadin
 
 
 def plan_trim(roe0: ArrayLike, chief: Chief, da_dot: float, burns: Sequence[Burn], t_final: float,
-              t_earliest: float, sigma_a_da: float, sigma_rate: float, tolerance: float,
+              *, t_earliest: float, sigma_a_da: float, sigma_rate: float, tolerance: float,
               cfg: AcquisitionConfig = AcquisitionConfig(), ei_tolerance_deg: float = 10.0, t_od: float | None = None,
               sigma_burns: float = 0.0) -> TrimDecision:
     """The trim decision, made at ``t_final``; a trim aims at the (possibly later) t_F it leaves. The "too uncertain"

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ...stamps import sec_nanosec, time_to_sec
 from ..relmotion.roe import wrap_angle
@@ -41,14 +42,48 @@ class Log:
     text: str
 
 
-def status(level: int, message: str, values: dict, log: str | None = "info", **kwargs) -> Status:
-    """A :class:`Status` logged (at ``log``) and published with the ``values`` dict."""
+def status(level: int, message: str, values: dict, log: str | None = "info", **kwargs: Any) -> Status:
+    """A :class:`Status` logged (at ``log``) and published with the ``values`` dict.
+
+    Parameters
+    ----------
+    level : int
+        :data:`OK`, :data:`WARN` or :data:`ERROR` (diagnostic_msgs/DiagnosticStatus levels).
+    message : str
+        The status message, also the logged text unless ``log_text`` is given.
+    values : dict
+        The status values, in their order.
+    log : str or None
+        The logger level ("debug", "info", "warning", "error"); None: published only.
+    **kwargs
+        The other fields of :class:`Status` (``log_text``, ``part``, ``stamp``).
+
+    Returns
+    -------
+    Status
+        The action.
+    """
     return Status(level, message, tuple(values.items()), log, **kwargs)
 
 
-def guarded(rejected: str, failed: str, values: dict, fn: Callable, *args, **kwargs) -> tuple:
-    """``(fn(*args, **kwargs), ())``, or ``(None, (ERROR status,))``: a ValueError is a bad input or no solution
-    (``rejected``), anything else a bug (``failed``, logged with its traceback) that must not take a node down."""
+def guarded(rejected: str, failed: str, values: dict, fn: Callable, *args: Any, **kwargs: Any) -> tuple[Any, tuple]:
+    """``fn(*args, **kwargs)`` with its failure as an ERROR status: a ValueError is a bad input or no solution, anything
+    else a bug (logged with its traceback) that must not take a node down.
+
+    Parameters
+    ----------
+    rejected, failed : str
+        The message's prefix for a ValueError and for any other exception.
+    values : dict
+        The values of the ERROR status.
+    fn : callable
+        The step to run, with ``*args`` and ``**kwargs``.
+
+    Returns
+    -------
+    tuple
+        ``(fn's result, ())``, or ``(None, (Status,))`` when it raised.
+    """
     try:
         return fn(*args, **kwargs), ()
     except ValueError as exc:
@@ -91,8 +126,25 @@ class PlannedBurn(Stamped):
     purpose: str
 
     @classmethod
-    def at(cls, epoch: float, u: float, dv_rtn, spacecraft: str, purpose: str) -> "PlannedBurn":
-        """The burn a message built at ``epoch`` [s] carries (``u`` wrapped to [-pi, pi))."""
+    def at(cls, epoch: float, u: float, dv_rtn: ArrayLike, spacecraft: str, purpose: str) -> "PlannedBurn":
+        """The burn a message built at ``epoch`` carries.
+
+        Parameters
+        ----------
+        epoch : float
+            The burn's epoch [s] (sim time), stamped as ``sec``, ``nanosec``.
+        u : float
+            Its mean argument of latitude [rad], wrapped to [-pi, pi).
+        dv_rtn : array_like, shape (3,)
+            The impulse [m/s] in the burning spacecraft's RTN frame.
+        spacecraft, purpose : str
+            "carrier" or "picosatellite"; the message's purpose ("drift_stop", "ic_acquisition", ...).
+
+        Returns
+        -------
+        PlannedBurn
+            The burn, its numbers as Python floats.
+        """
         sec, nanosec = sec_nanosec(epoch)
         return cls(sec, nanosec, float(wrap_angle(u)), tuple(float(c) for c in dv_rtn), spacecraft, purpose)
 

@@ -1,22 +1,34 @@
-"""The ic_planner's decisions (docs/run.md, "Decisions"): when an OD solution re-plans the acquisition, when the
-final OD trims it, when a committed burn defers a re-plan, when a departing burn re-plans or re-trims.
+"""The ic_planner's decisions (docs/run.md, "Decisions"): when an OD solution re-plans the acquisition, when the final
+OD trims it, when a committed burn defers a re-plan, when a departing burn re-plans or re-trims.
 
 Each ``on_<event>(state, event, config)`` returns ``(new_state, actions)``: :class:`PublishPlan` and the shared
-:class:`~.common.Status` / :class:`~.common.Log`. The physics is :mod:`roe_sep.core.acquisition` (seed 001 Sec. 4:
-the linear program and its quantized re-solve; seed 002 Eq. 2 for the trim and the departure of a burn).
+:class:`~.common.Status` / :class:`~.common.Log`. The rules take ``state`` (:class:`IcPlannerState`, what the ic_planner
+knows before the event), ``od`` (an :class:`OdSolution`), ``now`` (the decision time [s]) and ``config``
+(:class:`IcPlannerConfig`, the node's parameters) as they need them. The physics is :mod:`roe_sep.core.acquisition`
+(seed 001 Sec. 4: the linear program and its quantized re-solve; seed 002 Eq. 2 for the trim and the departure of a
+burn).
 """
 
 import dataclasses
 import functools
 import math
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..acquisition.lp_transfer import grid_epochs
-from ..acquisition.planner import AcquisitionConfig, AcquisitionInfeasible, check_inputs, plan_acquisition
+from ..acquisition.planner import (
+    AcquisitionConfig,
+    AcquisitionInfeasible,
+    AcquisitionPlan,
+    check_inputs,
+    plan_acquisition,
+)
 from ..acquisition.trim import (
     CLUSTER_GAP,
+    TrimDecision,
     a_da_change,
     burns_drift_sigma,
     drift_lattice,
@@ -148,13 +160,42 @@ def _shown(value):
     return f"{value:.6g}" if isinstance(value, float) else value
 
 
-def on_separation_plan(state: IcPlannerState, burn_epochs, config: IcPlannerConfig) -> tuple:
-    """The separation plan's burn epochs [s]: the acquisition starts from an OD made after the last one."""
+def on_separation_plan(state: IcPlannerState, burn_epochs: Iterable[float], config: IcPlannerConfig) -> tuple:
+    """The separation plan: the acquisition starts from an OD made after its last burn.
+
+    Parameters
+    ----------
+    state, config
+        As every rule takes them (module docstring).
+    burn_epochs : iterable of float
+        The separation plan's burn epochs [s] (none: no separation plan).
+
+    Returns
+    -------
+    tuple
+        ``(new state, actions)``.
+    """
     return dataclasses.replace(state, separation_end=max(burn_epochs, default=None)), ()
 
 
-def on_own_plan(state: IcPlannerState, burns, t_final: float, config: IcPlannerConfig) -> tuple:
-    """The latched acquisition plan (``burns``, IC epoch ``t_final`` [s]): a restarted ic_planner continues it."""
+def on_own_plan(state: IcPlannerState, burns: Sequence[PlannedBurn], t_final: float, config: IcPlannerConfig) -> tuple:
+    """The latched acquisition plan, read back: a restarted ic_planner continues it (a state with an IC epoch keeps
+    its own).
+
+    Parameters
+    ----------
+    state, config
+        As every rule takes them (module docstring).
+    burns : sequence of PlannedBurn
+        The plan's burns.
+    t_final : float
+        Its IC epoch [s].
+
+    Returns
+    -------
+    tuple
+        ``(new state, actions)``.
+    """
     if state.t_final is not None or not burns:
         return state, ()
     return dataclasses.replace(state, t_final=t_final, burn_epochs=tuple(b.epoch for b in burns),
@@ -162,8 +203,21 @@ def on_own_plan(state: IcPlannerState, burns, t_final: float, config: IcPlannerC
 
 
 def on_od(state: IcPlannerState, od: OdSolution, now: float, config: IcPlannerConfig) -> tuple:
-    """A new OD solution at ``now`` [s]: ignored unless newer than the last one and made after the separation
-    plan; else :func:`decide`."""
+    """A new OD solution: ignored unless newer than the last one and made after the separation plan; else
+    :func:`decide`.
+
+    Parameters
+    ----------
+    state, od, config
+        As every rule takes them (module docstring).
+    now : float
+        The node's time [s].
+
+    Returns
+    -------
+    tuple
+        ``(new state, actions)``.
+    """
     key = (od.stamp, od.epoch)
     if state.last_key is not None and key <= state.last_key:
         return state, (Log("debug", f"OD solution {key} is not newer than {state.last_key}: ignored"),)
@@ -179,7 +233,20 @@ def on_od(state: IcPlannerState, od: OdSolution, now: float, config: IcPlannerCo
 
 def on_executed(state: IcPlannerState, burn: PlannedBurn, config: IcPlannerConfig) -> tuple:
     """An executed maneuver on record: a carrier burn is flown (ERROR status for a malformed one); with
-    ``replan_on_burn`` an acquisition burn may re-plan (:func:`after_burn`)."""
+    ``replan_on_burn`` an acquisition burn may re-plan (:func:`after_burn`).
+
+    Parameters
+    ----------
+    state, config
+        As every rule takes them (module docstring).
+    burn : PlannedBurn
+        The executed maneuver as its record carries it.
+
+    Returns
+    -------
+    tuple
+        ``(new state, actions)``.
+    """
     if burn.spacecraft != "carrier":
         return state, ()
     try:
@@ -197,7 +264,20 @@ def on_executed(state: IcPlannerState, burn: PlannedBurn, config: IcPlannerConfi
 def after_burn(state: IcPlannerState, burn: PlannedBurn, config: IcPlannerConfig) -> tuple:
     """An executed acquisition burn departing from its plan by more than half the trim lattice in a da (seed 002
     Eq. 2: a Delta da = 2 dvT / n), or the committed burn a departure's re-plan waited for: re-plan the rest from the
-    last OD and the record, or re-trim once the final OD decided."""
+    last OD and the record, or re-trim once the final OD decided.
+
+    Parameters
+    ----------
+    state, config
+        As every rule takes them (module docstring).
+    burn : PlannedBurn
+        The executed carrier burn (purpose "ic_acquisition").
+
+    Returns
+    -------
+    tuple
+        ``(new state, actions)``; ValueError on a bad estimate (the caller guards it).
+    """
     t, od = burn.epoch, state.last_od
     if od is None or state.plan_in_force is None or state.t_final is None or t >= state.t_final:
         return state, ()
@@ -222,8 +302,18 @@ def after_burn(state: IcPlannerState, burn: PlannedBurn, config: IcPlannerConfig
 
 
 def decide(state: IcPlannerState, od: OdSolution, now: float, config: IcPlannerConfig) -> tuple:
-    """What the OD does at ``now`` [s]: the final trim, a re-plan, or nothing (docs/run.md, "Decisions");
-    ``(state, actions, deferred)``, ``deferred`` True when a committed burn of the plan in force kept it."""
+    """What an OD solution does: the final trim, a re-plan, or nothing (docs/run.md, "Decisions").
+
+    Parameters
+    ----------
+    state, od, now, config
+        As every rule takes them (module docstring).
+
+    Returns
+    -------
+    tuple
+        ``(new state, actions, deferred)``; ``deferred`` True when a committed burn of the plan in force kept it.
+    """
     cfg = config.cfg
     arc = radar_arc(od, state.t_final, config) if state.t_final is not None else None
     final_band = state.t_final is not None and now < state.t_final < now + 2.0 * cfg.planning_margin
@@ -279,8 +369,20 @@ def decide(state: IcPlannerState, od: OdSolution, now: float, config: IcPlannerC
 def final_trim(state: IcPlannerState, od: OdSolution, now: float, config: IcPlannerConfig, *,
                after_burn: bool = False) -> tuple:
     """The final OD's drift trim from the first newer solution near t_F whose flown burns are all on record
-    (:func:`~roe_sep.core.acquisition.trim.plan_trim`); ``after_burn``: again after a departing burn, publishing only a
-    trim. ``(state, actions)``."""
+    (:func:`~roe_sep.core.acquisition.trim.plan_trim`).
+
+    Parameters
+    ----------
+    state, od, now, config
+        As every rule takes them (module docstring).
+    after_burn : bool
+        Again after a departing burn: a plan is published only for a trim.
+
+    Returns
+    -------
+    tuple
+        ``(new state, actions)``.
+    """
     if state.t_final is not None and now >= state.t_final:
         text = (f"OD at t = {od.epoch:.1f} s not used: it arrives after the IC epoch t = {state.t_final:.1f} s "
                 "without a final OD trim decision before it")
@@ -324,8 +426,22 @@ def _updated(pairs: tuple, new: dict) -> tuple:
 
 def committed_burn(state: IcPlannerState, t_od: float, now: float, planning_margin: float) -> float | None:
     """A burn epoch [s] of the plan in force that a re-plan must not touch: due within ``planning_margin`` from
-    ``now``, or executed after the OD epoch ``t_od`` without its record yet; t_F when the acquisition is (nearly)
-    complete; None when re-planning is free."""
+    ``now``, or executed after the OD epoch without its record yet.
+
+    Parameters
+    ----------
+    state
+        As every rule takes them (module docstring).
+    t_od, now : float
+        The OD's epoch and the decision time [s].
+    planning_margin : float
+        The least time [s] between a decision and a burn it plans.
+
+    Returns
+    -------
+    float or None
+        The burn's epoch [s]; t_F when the acquisition is (nearly) complete; None when re-planning is free.
+    """
     flown = {round(b.epoch, 3) for b in state.executed}
     for t in state.burn_epochs or ():
         if round(t, 3) in flown:  # flown (a re-plan after a burn starts at that burn's epoch)
@@ -339,7 +455,19 @@ def committed_burn(state: IcPlannerState, t_od: float, now: float, planning_marg
 
 def start_state(state: IcPlannerState, od: OdSolution, now: float, config: IcPlannerConfig) -> tuple:
     """The best knowledge at max(OD epoch, now, the latest burn on record): the estimate plus every carrier burn
-    flown since its epoch, as (ROE, Chief there, da_dot [1/s]); ValueError on a bad estimate."""
+    flown since its epoch.
+
+    Parameters
+    ----------
+    state, od, now, config
+        As every rule takes them (module docstring).
+
+    Returns
+    -------
+    tuple
+        ``(roe, chief, da_dot)``: the dimensionless ROE (6,), the :class:`Chief` at that time and the drag
+        [1/s]; ValueError on a bad estimate.
+    """
     a, inc, j2 = od.a, od.kep[2], config.cfg.j2
     if not (math.isfinite(a) and a > 6.4e6):
         raise ValueError(f"chief semi-major axis {a} m is not a valid low Earth orbit")
@@ -362,7 +490,18 @@ def _to_fly(state: IcPlannerState, kept, t0: float) -> tuple:
 
 def plan_problems(state: IcPlannerState, od: OdSolution, now: float, config: IcPlannerConfig) -> list:
     """The initial conditions that the plan in force misses at t_F by this OD (:func:`trim_problems`, and the drift
-    beyond ``ic_drift_tolerance``: a smaller one is the final trim's); [] when it meets them."""
+    beyond ``ic_drift_tolerance``: a smaller one is the final trim's).
+
+    Parameters
+    ----------
+    state, od, now, config
+        As every rule takes them (module docstring).
+
+    Returns
+    -------
+    list of str
+        One line a missed condition; [] when the plan meets them all. ValueError on a bad estimate.
+    """
     roe0, chief, da_dot = start_state(state, od, now, config)
     flown = {round(b.epoch, 3) for b in state.executed}
     kept = [b for b in state.plan_in_force or () if b.epoch >= chief.t0 and round(b.epoch, 3) not in flown]
@@ -375,9 +514,23 @@ def plan_problems(state: IcPlannerState, od: OdSolution, now: float, config: IcP
     return problems
 
 
-def trim_decision(state: IcPlannerState, od: OdSolution, now: float, config: IcPlannerConfig, kept):
-    """:func:`plan_trim` from the OD with the ``kept`` burns of the plan in force still to fly and the burns flown
-    after the decision time."""
+def trim_decision(state: IcPlannerState, od: OdSolution, now: float, config: IcPlannerConfig,
+                  kept: Sequence[PlannedBurn]) -> TrimDecision:
+    """:func:`plan_trim` from the OD with the burns of the plan in force still to fly and the burns flown after the
+    decision time.
+
+    Parameters
+    ----------
+    state, od, now, config
+        As every rule takes them (module docstring).
+    kept : sequence of PlannedBurn
+        The burns of the plan in force still to fly.
+
+    Returns
+    -------
+    TrimDecision
+        The decision; :class:`AcquisitionInfeasible` (a ValueError) when the trim would break an initial condition.
+    """
     roe0, chief, da_dot = start_state(state, od, now, config)
     to_fly, burns = _to_fly(state, kept, chief.t0)
     return plan_trim(roe0, chief, da_dot, burns, state.t_final, t_earliest=now + config.cfg.planning_margin,
@@ -387,9 +540,22 @@ def trim_decision(state: IcPlannerState, od: OdSolution, now: float, config: IcP
 
 
 def make_plan(state: IcPlannerState, od: OdSolution, now: float, config: IcPlannerConfig, *,
-              keep_arc: bool = True) -> tuple:
-    """``(PublishPlan, core plan)`` for one OD solution (:func:`plan_acquisition`, the e/i planned with the OD's
-    uncertainty as margin, ``ei_margin_sigmas``); ValueError on a bad estimate or no solution."""
+              keep_arc: bool = True) -> tuple[PublishPlan, AcquisitionPlan]:
+    """The acquisition plan of one OD solution (:func:`plan_acquisition`, the e/i planned with the OD's uncertainty
+    as margin, ``ei_margin_sigmas``; without that margin when it has no solution).
+
+    Parameters
+    ----------
+    state, od, now, config
+        As every rule takes them (module docstring).
+    keep_arc : bool
+        No burn in the final OD's radar arc (:func:`radar_arc`).
+
+    Returns
+    -------
+    tuple
+        ``(PublishPlan, core plan)``; ValueError on a bad estimate or no solution.
+    """
     roe0, chief, da_dot = start_state(state, od, now, config)
     t_start = chief.t0
     # corrections of an acquisition in progress aim at its IC epoch; a first plan opens a new window
@@ -411,24 +577,63 @@ def make_plan(state: IcPlannerState, od: OdSolution, now: float, config: IcPlann
     return PublishPlan(t_start, burns, *aimed(od, plan.final_roe, plan.t_final, config), plan.t_final), plan
 
 
-def aimed(od: OdSolution, final_roe, t_final: float, config: IcPlannerConfig) -> tuple:
-    """``(ROE, chief elements)`` a plan aims at: ``final_roe`` with the OD's chief propagated to ``t_final`` [s]."""
+def aimed(od: OdSolution, final_roe: ArrayLike, t_final: float, config: IcPlannerConfig) -> tuple:
+    """What a plan aims at: its final ROE with the OD's chief propagated to the IC epoch.
+
+    Parameters
+    ----------
+    od, config
+        As every rule takes them (module docstring).
+    final_roe : array_like, shape (6,)
+        The plan's dimensionless ROE at ``t_final``.
+    t_final : float
+        The IC epoch [s].
+
+    Returns
+    -------
+    tuple
+        ``(roe, kep)``: the ROE and the chief's mean elements ``[a, e, i, raan, argp, M]`` (angles wrapped), as
+        floats.
+    """
     kep = propagate_chief(np.array(od.kep, dtype=float), t_final - od.epoch, config.cfg.j2)
     kep[3:] = wrap_angle(kep[3:])
     return tuple(float(x) for x in final_roe), tuple(float(x) for x in kep)
 
 
 def drift_sigma(od: OdSolution, t_final: float | None, config: IcPlannerConfig) -> float | None:
-    """1-sigma [m] of a da at ``t_final`` predicted from the OD (:func:`predicted_drift_sigma`); None without
-    ``trim`` or t_F."""
+    """The 1-sigma of a da at the IC epoch predicted from the OD (:func:`predicted_drift_sigma`).
+
+    Parameters
+    ----------
+    od, config
+        As every rule takes them (module docstring).
+    t_final : float or None
+        The IC epoch [s].
+
+    Returns
+    -------
+    float or None
+        The 1-sigma [m]; None without ``trim`` or IC epoch.
+    """
     if not config.trim or t_final is None:
         return None
     return predicted_drift_sigma(od.sigma_a_da, od.a_da_dot_sigma, t_final - od.epoch)
 
 
 def plan_knowledge(state: IcPlannerState, od: OdSolution, config: IcPlannerConfig) -> float | None:
-    """1-sigma [m] of a da at t_F as the plan in force knows it: its OD's, with the execution errors of the burns
-    flown since (``burn_sigma`` of 2 |dvT| / n each, seed 002 Eq. 2); None without a plan (or ``trim``)."""
+    """The 1-sigma of a da at t_F as the plan in force knows it: its OD's, with the execution errors of the burns
+    flown since (``burn_sigma`` of 2 |dvT| / n each, seed 002 Eq. 2).
+
+    Parameters
+    ----------
+    state, od, config
+        As every rule takes them (module docstring).
+
+    Returns
+    -------
+    float or None
+        The 1-sigma [m]; None without a plan (or ``trim``).
+    """
     if state.plan_sigma is None:
         return None
     flown = [b.dv_rel[1] for b in state.executed if b.epoch > state.plan_od_epoch]
@@ -436,9 +641,21 @@ def plan_knowledge(state: IcPlannerState, od: OdSolution, config: IcPlannerConfi
 
 
 def radar_arc(od: OdSolution, t_final: float, config: IcPlannerConfig) -> tuple | None:
-    """``(start, last_rise, end)`` [s] of the final OD's burn-free radar arc for the IC epoch ``t_final``
-    (:func:`final_od_arc` of the predicted TIRA passes of the OD's chief); None with ``trim`` or ``final_od_arc``
-    off, or without one."""
+    """The final OD's burn-free radar arc for the IC epoch (:func:`final_od_arc` of the predicted TIRA passes of
+    the OD's chief).
+
+    Parameters
+    ----------
+    od, config
+        As every rule takes them (module docstring).
+    t_final : float
+        The IC epoch [s].
+
+    Returns
+    -------
+    tuple or None
+        ``(start, last_rise, end)`` [s]; None with ``trim`` or ``final_od_arc`` off, or without an arc.
+    """
     if not (config.trim and config.final_od_arc):
         return None
     return _arc(tuple(od.kep), od.epoch, t_final, config.final_od_arc, config.jd0, j2=config.cfg.j2)

@@ -1,10 +1,12 @@
-"""The planner's decisions (docs/run.md, "Decisions"): the blind drift-stop of a commanded ejection, its hold when
-the camera sees a weak ejection, its replacement when none is on record, its completion when the one on record
-departs from its command.
+"""The planner's decisions (docs/run.md, "Decisions"): the blind drift-stop of a commanded ejection, its hold when the
+camera sees a weak ejection, its replacement when none is on record, its completion when the one on record departs
+from its command.
 
-Each ``on_<event>(state, ..., config)`` returns ``(new_state, actions)``: :class:`PublishPlan`,
-:class:`StopBearings` and the shared :class:`~.common.Status` / :class:`~.common.Log`. Physics: seed 002 Eqs. 9,
-13, 18 (:func:`~roe_sep.core.separation.double_impulse.plan_drift_stop`), seed 001 Sec. 3
+Each ``on_<event>(state, ..., config)`` returns ``(new_state, actions)``: :class:`PublishPlan`, :class:`StopBearings`
+and the shared :class:`~.common.Status` / :class:`~.common.Log`; the rules take ``state`` (:class:`PlannerState`, what
+the planner knows before the event; a drift-stop check wants one in force), ``t`` (the sim time [s] of a check) and
+``config`` (:class:`PlannerConfig`, the node's parameters) as they need them. Physics: seed 002 Eqs. 9, 13, 18
+(:func:`~roe_sep.core.separation.double_impulse.plan_drift_stop`), seed 001 Sec. 3
 (:func:`~roe_sep.core.separation.multi_impulse.plan_carrier_burns`), and
 :func:`~roe_sep.core.safety.ejection_check.check_ejection` for the camera.
 """
@@ -15,6 +17,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ...stamps import sec_nanosec
 from ..relmotion.dynamics import arg_latitude_rate, drag_da_dot, propagate_chief, raan_rate
@@ -141,7 +144,20 @@ def values(state: PlannerState, config: PlannerConfig) -> dict:
 
 
 def on_ejection(state: PlannerState, ejection: Ejection, config: PlannerConfig) -> tuple:
-    """A commanded ejection: its drift-stop (or multi-impulse) plan, or an ERROR status for a malformed event."""
+    """A commanded ejection: its drift-stop (or multi-impulse) plan (:func:`separation_plan`).
+
+    Parameters
+    ----------
+    state, config
+        As every rule takes them (module docstring).
+    ejection : Ejection
+        The commanded ejection.
+
+    Returns
+    -------
+    tuple
+        ``(new state, actions)``; an ERROR status for a malformed event.
+    """
     try:
         plan = separation_plan(ejection, config)
     except ValueError as exc:
@@ -157,8 +173,23 @@ def on_ejection(state: PlannerState, ejection: Ejection, config: PlannerConfig) 
 
 
 def on_executed(state: PlannerState, burn: PlannedBurn, wall: float, config: PlannerConfig) -> tuple:
-    """An executed maneuver on record at wall time ``wall`` [s]: a carrier drift-stop, or the release (the
-    ejection's epoch: when, not how fast)."""
+    """An executed maneuver on record: a carrier drift-stop, or the release (the ejection's epoch: when, not how
+    fast).
+
+    Parameters
+    ----------
+    state, config
+        As every rule takes them (module docstring).
+    burn : PlannedBurn
+        The executed maneuver as its record carries it.
+    wall : float
+        The wall time [s] it arrived (:func:`record_recovered`).
+
+    Returns
+    -------
+    tuple
+        ``(new state, actions)``.
+    """
     if burn.spacecraft == "carrier" and burn.purpose == "drift_stop":
         return dataclasses.replace(state, executed_stops=(*state.executed_stops, (burn.epoch, burn.dv_rtn))), ()
     if burn.purpose == "ejection" and state.released is None:
@@ -166,8 +197,23 @@ def on_executed(state: PlannerState, burn: PlannedBurn, wall: float, config: Pla
     return state, ()
 
 
-def on_bearing(state: PlannerState, t: float, los, config: PlannerConfig) -> tuple:
-    """The camera's measured line of sight ``los`` (3,) at ``t`` [s], kept until the decision."""
+def on_bearing(state: PlannerState, t: float, los: ArrayLike, config: PlannerConfig) -> tuple:
+    """The camera's measured line of sight, kept until the camera's decision (only with ``hold``).
+
+    Parameters
+    ----------
+    state, config
+        As every rule takes them (module docstring).
+    t : float
+        The bearing's epoch [s].
+    los : array_like, shape (3,)
+        The unit line of sight.
+
+    Returns
+    -------
+    tuple
+        ``(new state, actions)``.
+    """
     if not config.hold or state.camera_done:
         return state, ()
     return dataclasses.replace(state, bearings=(*state.bearings, (t, tuple(float(c) for c in los)))), ()
@@ -176,7 +222,22 @@ def on_bearing(state: PlannerState, t: float, los, config: PlannerConfig) -> tup
 def record_recovered(state: PlannerState, wall: float, lockstep: bool) -> bool:
     """Whether the executed-maneuver record is complete enough to say a drift-stop is missing: the executed ejection
     is on it and, without ``lockstep`` (where every round holds every message), ``RECORD_SETTLE`` wall seconds have
-    passed since it arrived (a restarted planner's latched history taken in full)."""
+    passed since it arrived (a restarted planner's latched history taken in full).
+
+    Parameters
+    ----------
+    state
+        As every rule takes them (module docstring).
+    wall : float
+        The wall time [s] now.
+    lockstep : bool
+        Whether the run is in lockstep.
+
+    Returns
+    -------
+    bool
+        True when a missing drift-stop may be told from the record.
+    """
     if state.released is None:
         return False
     return lockstep or wall - state.record_since >= RECORD_SETTLE
@@ -185,8 +246,22 @@ def record_recovered(state: PlannerState, wall: float, lockstep: bool) -> bool:
 def on_step(state: PlannerState, t: float, wall: float, lockstep: bool, config: PlannerConfig) -> tuple:
     """Sim-time checks at ``t`` [s] (wall time ``wall``; ``lockstep``: the record holds every message): the camera's
     decision before the drift-stop (:func:`camera_decision`), a missing drift-stop's replacement
-    (:func:`missing`, :func:`replace_missing`), a departing one's completion (:func:`check_executed`). A failed check
-    is an ERROR."""
+    (:func:`missing`, :func:`replace_missing`), a departing one's completion (:func:`check_executed`).
+
+    Parameters
+    ----------
+    state, t, config
+        As every rule takes them (module docstring).
+    wall : float
+        The wall time [s] (:func:`record_recovered`).
+    lockstep : bool
+        Whether the record holds every message (a lockstep run).
+
+    Returns
+    -------
+    tuple
+        ``(new state, actions)``; a failed check adds an ERROR status.
+    """
     if state.in_force is None:
         return state, ()
     actions = ()
@@ -210,14 +285,43 @@ def on_step(state: PlannerState, t: float, wall: float, lockstep: bool, config: 
 
 
 def finding(name: str, t: float, text: str, extra: dict) -> Status:
-    """A contingency the planner acted on: logged and a named WARN ``contingency`` status stamped ``t`` [s]."""
+    """A contingency the planner acted on: logged, and a WARN status on the ``contingency`` part.
+
+    Parameters
+    ----------
+    name : str
+        The contingency's name ("weak_ejection", "drift_stop_replaced", ...), the status value ``contingency``.
+    t : float
+        The finding's sim time [s]: the status's stamp and its ``epoch_s``.
+    text : str
+        What was found and done.
+    extra : dict
+        More status values.
+
+    Returns
+    -------
+    Status
+        The action.
+    """
     return status(WARN, f"{name}: {text}", {"contingency": name, "epoch_s": f"{t:.1f}", **extra}, "warning",
                   part="contingency", stamp=t)
 
 
 def camera_decision(state: PlannerState, t: float, config: PlannerConfig) -> tuple:
-    """Test the camera's bearings against the commanded ejection; withdraw the drift-stop of a weak one (an empty
-    plan)."""
+    """Test the camera's bearings against the commanded ejection
+    (:func:`~roe_sep.core.safety.ejection_check.check_ejection`); withdraw the drift-stop of a weak one (an empty
+    plan).
+
+    Parameters
+    ----------
+    state, t, config
+        As every rule takes them (module docstring).
+
+    Returns
+    -------
+    tuple
+        ``(new state, actions)``.
+    """
     f = state.in_force
     if not config.hold or state.released is None or t >= f.t_stop or not state.bearings:
         return state, ()
@@ -247,16 +351,41 @@ def camera_decision(state: PlannerState, t: float, config: PlannerConfig) -> tup
 
 
 def orbits_later(ejection: Ejection, t: float, t_burn: float, config: PlannerConfig) -> tuple:
-    """Whole orbits after ``t_burn`` [s] (at least one) to the first epoch ``retry_margin`` after the finding at
-    ``t`` [s], and the orbit's period [s]: where a replaced or completed drift-stop flies at its argument of
-    latitude."""
+    """Where a replaced or completed drift-stop flies at its argument of latitude: whole orbits after the burn.
+
+    Parameters
+    ----------
+    config
+        As every rule takes them (module docstring).
+    ejection : Ejection
+        The commanded ejection (its chief's a and i give the period, with J2 when ``config.j2``).
+    t, t_burn : float
+        The finding's time and the burn's epoch [s].
+
+    Returns
+    -------
+    tuple
+        ``(orbits, period)``: the whole orbits (at least one) after ``t_burn`` to the first epoch ``retry_margin``
+        after ``t``, and the period [s].
+    """
     period = 2.0 * math.pi / float(arg_latitude_rate(ejection.kep[0], ejection.kep[2], config.j2))
     return max(1, math.ceil((t + config.retry_margin - t_burn) / period - 1e-9)), period
 
 
 def missing(state: PlannerState, t: float, config: PlannerConfig) -> bool:
     """Whether the record shows no drift-stop ``retry_tolerance`` after the epoch of the one in force (not replaced
-    yet)."""
+    yet).
+
+    Parameters
+    ----------
+    state, t, config
+        As every rule takes them (module docstring).
+
+    Returns
+    -------
+    bool
+        True for a missing drift-stop.
+    """
     f = state.in_force
     if t <= f.t_stop + config.retry_tolerance or round(f.t_stop, 3) in state.retried:
         return False
@@ -265,7 +394,18 @@ def missing(state: PlannerState, t: float, config: PlannerConfig) -> bool:
 
 def replace_missing(state: PlannerState, t: float, config: PlannerConfig) -> tuple:
     """The missing drift-stop in force replaced: the same one whole orbits later (seed 002 Eqs. 9, 18), a new plan
-    stamped with the finding at ``t`` [s]."""
+    stamped with the finding.
+
+    Parameters
+    ----------
+    state, t, config
+        As every rule takes them (module docstring).
+
+    Returns
+    -------
+    tuple
+        ``(new state, actions)``.
+    """
     f = state.in_force
     k = config.k if f.k is None else f.k
     orbits, _ = orbits_later(f.ejection, t, f.t_stop, config)
@@ -281,7 +421,18 @@ def replace_missing(state: PlannerState, t: float, config: PlannerConfig) -> tup
 def check_executed(state: PlannerState, t: float, config: PlannerConfig) -> tuple:
     """Complete the drift-stop in force when the record's drift-stop departs from its command (beyond ``makeup_z``
     sigmas or ``makeup_pointing``): the rest, commanded minus executed, whole orbits later at the same argument of
-    latitude (seed 002 Eq. 2 is linear in the burn at a given u)."""
+    latitude (seed 002 Eq. 2 is linear in the burn at a given u).
+
+    Parameters
+    ----------
+    state, t, config
+        As every rule takes them (module docstring).
+
+    Returns
+    -------
+    tuple
+        ``(new state, actions)``.
+    """
     f = state.in_force
     done = [(e, dv) for e, dv in state.executed_stops if e >= f.t_stop - config.retry_tolerance]
     if not done or config.strategy == "multi_impulse":
@@ -315,8 +466,24 @@ def check_executed(state: PlannerState, t: float, config: PlannerConfig) -> tupl
 def separation_plan(ejection: Ejection, config: PlannerConfig, *, k: int | None = None,
                     p: float | None = None) -> PublishPlan:
     """The plan of one commanded ejection: the drift-stop k pi later with reduction ``p`` (defaults: the config's;
-    seed 002 Eqs. 9, 18, 21) or every multi-impulse carrier burn (seed 001 Sec. 3); ValueError on a malformed
-    event (NaN, impossible orbit)."""
+    seed 002 Eqs. 9, 18, 21) or every multi-impulse carrier burn (seed 001 Sec. 3).
+
+    Parameters
+    ----------
+    config
+        As every rule takes them (module docstring).
+    ejection : Ejection
+        The commanded ejection.
+    k : int, optional
+        The drift-stop's half-orbit count (default ``config.k``).
+    p : float, optional
+        The drift reduction [m/s] (default ``config.p``, or the least of :func:`reduction_bounds`).
+
+    Returns
+    -------
+    PublishPlan
+        The plan; ValueError on a malformed event (NaN, impossible orbit).
+    """
     a, e, inc, raan, argp = ejection.kep[:5]
     if not (math.isfinite(a) and a > 6.4e6 and math.isfinite(inc) and math.isfinite(raan)):
         raise ValueError(f"chief elements are not a valid low Earth orbit (a = {a} m, i = {inc} rad)")

@@ -190,7 +190,7 @@ def relative_motion(roe0: ArrayLike, t: ArrayLike, a: float, inc: ArrayLike, da_
     """
     r0 = np.asarray(roe0, dtype=float)[..., None, :]
     inc = np.asarray(inc, dtype=float)[..., None]
-    return propagate(r0, np.asarray(t, dtype=float), a, inc, j2, np.asarray(da_dot, dtype=float)[..., None])
+    return propagate(r0, np.asarray(t, dtype=float), a, inc, j2, da_dot=np.asarray(da_dot, dtype=float)[..., None])
 
 
 def relative_distance(roe: ArrayLike, u: ArrayLike, a: float) -> np.ndarray:

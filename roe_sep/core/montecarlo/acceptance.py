@@ -110,12 +110,12 @@ def run(design: MultiImpulseDesign, mc: MonteCarloConfig = MonteCarloConfig()) -
         dt = (b.u - u_state) / u_rate
         crossings.append(nearest_crossing(state, u_state, dt, a, inc, j2=mc.j2, da_dot=da_dot,
                                           t_min=None if u_state == design.u1 else 1e-3)[0])
-        state = propagate(state, dt, a, inc, mc.j2, da_dot)
+        state = propagate(state, dt, a, inc, mc.j2, da_dot=da_dot)
         state = state + delta_roe(dispersed_dv(b.dv_relative_rtn, d.f2, d.eps2, ref), b.u, a, n)
         u_state = b.u
     crossings.append(nearest_crossing(state, u_state, mc.horizon, a, inc, j2=mc.j2, da_dot=da_dot, t_min=1e-3)[0])
     crossing = np.min(np.stack(crossings), axis=0) * a
-    roe_h = propagate(state, mc.horizon, a, inc, mc.j2, da_dot)
+    roe_h = propagate(state, mc.horizon, a, inc, mc.j2, da_dot=da_dot)
     side = 1.0 if cfg.leading else -1.0
     min_rn = min_rn_distance(state) * a
     thr = float(drift_free_threshold(cfg.a_dl_min, n, mc.horizon))

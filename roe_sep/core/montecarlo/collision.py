@@ -200,7 +200,7 @@ def arcs(design: DoubleImpulseDesign, mc: MonteCarloConfig, d: Draws, p: float) 
     roe = np.stack([pre.roe_before_stop, out.roe_after_stop])
     va, aa = _bounds(pre.roe_before_stop, pre.da_dot, a, inc, mc.j2, duration=pre.dt_stop)
     # arc A is evaluated backwards from t_stop: bound with the state at its start as well (the larger of the two)
-    roe1 = propagate(pre.roe_before_stop, -pre.dt_stop, a, inc, mc.j2, pre.da_dot)
+    roe1 = propagate(pre.roe_before_stop, -pre.dt_stop, a, inc, mc.j2, da_dot=pre.da_dot)
     va1, aa1 = _bounds(roe1, pre.da_dot, a, inc, mc.j2, duration=pre.dt_stop)
     vb, ab = _bounds(out.roe_after_stop, pre.da_dot, a, inc, mc.j2, duration=mc.horizon)
     return Arcs(a, inc, mc.j2, design.u1, arg_latitude_rate(a, inc, mc.j2), pre.dt_stop, pre.dt_stop + mc.horizon,
@@ -211,7 +211,7 @@ def _dist2(arc: Arcs, idx, t):
     """|r|^2 [m^2] of samples ``idx`` at times ``t`` [s after the ejection] (same shapes or broadcastable)."""
     which = (np.asarray(t) >= arc.t_stop).astype(np.intp)
     roe = arc.roe[which, idx]
-    st = propagate(roe, t - arc.t_stop, arc.a, arc.inc, arc.j2, arc.da_dot[idx])
+    st = propagate(roe, t - arc.t_stop, arc.a, arc.inc, arc.j2, da_dot=arc.da_dot[idx])
     pos, _ = roe_to_rtn(st, arc.u1 + arc.u_rate * t)
     return np.sum(pos * pos, axis=-1) * arc.a**2
 
@@ -281,7 +281,7 @@ def _grid_dist2(arc: Arcs, t):
     out = np.empty((arc.da_dot.size, t.size))
     for j, sel in enumerate((t < arc.t_stop, t >= arc.t_stop)):
         tt = t[sel][None, :]
-        st = propagate(arc.roe[j][:, None, :], tt - arc.t_stop, arc.a, arc.inc, arc.j2, arc.da_dot[:, None])
+        st = propagate(arc.roe[j][:, None, :], tt - arc.t_stop, arc.a, arc.inc, arc.j2, da_dot=arc.da_dot[:, None])
         pos, _ = roe_to_rtn(st, arc.u1 + arc.u_rate * tt)
         out[:, sel] = np.sum(pos * pos, axis=-1) * arc.a**2
     return out

@@ -52,9 +52,9 @@ class EvaporationModel:
         d, mc = self.design, self.mc
         h = mc.horizon if horizon is None else float(horizon)
         db = self.db_factor if db is None else db
-        free = propagate(self.roe_stop, h, d.a, d.inc, mc.j2, 0.0)[:, 1]
-        drag = (propagate(self.drag_roe_stop, h, d.a, d.inc, mc.j2, 0.0)
-                + propagate(np.zeros(6), h, d.a, d.inc, mc.j2, self.unit_da_dot))[1]
+        free = propagate(self.roe_stop, h, d.a, d.inc, mc.j2, da_dot=0.0)[:, 1]
+        drag = (propagate(self.drag_roe_stop, h, d.a, d.inc, mc.j2, da_dot=0.0)
+                + propagate(np.zeros(6), h, d.a, d.inc, mc.j2, da_dot=self.unit_da_dot))[1]
         return (free + db * drag) * d.a
 
     def db(self, ballistic_sigma: float | None = None, db_scale: float = 1.0) -> np.ndarray:
@@ -150,7 +150,7 @@ def evaporation_model(design: DoubleImpulseDesign, mc: MonteCarloConfig, d: Draw
     """
     a, inc = design.a, design.inc
     dt_stop = time_to_stop(design, mc)
-    roe_stop = propagate(ejection_roe(design, d), dt_stop, a, inc, mc.j2, 0.0) + drift_stop_delta_roe(design, d, p)
+    roe_stop = propagate(ejection_roe(design, d), dt_stop, a, inc, mc.j2) + drift_stop_delta_roe(design, d, p)
     unit = float(drag_da_dot(mc.delta_b, mc.density, a)) if mc.drag else 0.0
-    drag_stop = propagate(np.zeros(6), dt_stop, a, inc, mc.j2, unit)
+    drag_stop = propagate(np.zeros(6), dt_stop, a, inc, mc.j2, da_dot=unit)
     return EvaporationModel(design, mc, float(p), roe_stop, drag_stop, unit, np.asarray(d.db_factor, dtype=float))

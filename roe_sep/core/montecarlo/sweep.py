@@ -205,7 +205,7 @@ def pre_stop(design: DoubleImpulseDesign, mc: MonteCarloConfig, d: Draws) -> Pre
     da_dot = drag_da_dot(mc.delta_b * d.db_factor, mc.density, a) if mc.drag else np.zeros_like(d.f1)
     dt_stop = time_to_stop(design, mc)
     crossing, _ = nearest_crossing(roe1, design.u1, dt_stop, a, inc, j2=mc.j2, da_dot=da_dot)
-    return PreStop(propagate(roe1, dt_stop, a, inc, mc.j2, da_dot), da_dot, crossing * a, dt_stop)
+    return PreStop(propagate(roe1, dt_stop, a, inc, mc.j2, da_dot=da_dot), da_dot, crossing * a, dt_stop)
 
 
 def after_stop(design: DoubleImpulseDesign, mc: MonteCarloConfig, d: Draws, pre: PreStop, p: float) -> Outcome:
@@ -229,7 +229,7 @@ def after_stop(design: DoubleImpulseDesign, mc: MonteCarloConfig, d: Draws, pre:
     roe2 = np.empty_like(pre.roe_before_stop)  # pre.roe_before_stop + drift_stop_delta_roe(design, d, p)
     for k, change in enumerate(drift_stop_delta_roe_fast(design, d, p)):
         np.add(pre.roe_before_stop[:, k], change, out=roe2[:, k])
-    roe_h = propagate(roe2, mc.horizon, design.a, design.inc, mc.j2, pre.da_dot)
+    roe_h = propagate(roe2, mc.horizon, design.a, design.inc, mc.j2, da_dot=pre.da_dot)
     return Outcome(roe2, roe_h, min_rn_distance(roe2) * design.a)
 
 

@@ -308,7 +308,7 @@ def propagate_state(x: ArrayLike, dt: ArrayLike, a: float, inc: float, j2: bool 
     """
     x = np.asarray(x, dtype=float)
     dt = np.asarray(dt, dtype=float)
-    roe = propagate(x[..., :6], dt, a, inc, j2, x[..., 6])
+    roe = propagate(x[..., :6], dt, a, inc, j2, da_dot=x[..., 6])
     if not drag:
         return roe
     curve = x[..., 6] * np.asarray(growth, dtype=float)  # d2 da / dt2 [1/s^2]

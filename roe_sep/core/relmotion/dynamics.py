@@ -192,7 +192,7 @@ def drag_short_period_de(da_dot: ArrayLike, a: ArrayLike, u: ArrayLike) -> np.nd
     return np.stack([k * np.sin(u), -k * np.cos(u)], axis=-1)
 
 
-def propagate(roe: ArrayLike, dt: ArrayLike, a: float, inc: float, j2: bool = True,
+def propagate(roe: ArrayLike, dt: ArrayLike, a: float, inc: float, j2: bool = True, *,
               da_dot: ArrayLike = 0.0) -> np.ndarray:
     """Propagate dimensionless ROE over ``dt`` [s] with the secular model above (Keplerian alone: ``j2=False,
     da_dot=0``).

@@ -98,7 +98,7 @@ def burn_segments(roe0: ArrayLike, t0: float, burns: Iterable[Burn], chief: Chie
     arcs = []
     for b in order:
         arcs.append((t_state, state, b.epoch))
-        state = propagate(state, b.epoch - t_state, chief.a, chief.inc, j2, da_dot)
+        state = propagate(state, b.epoch - t_state, chief.a, chief.inc, j2, da_dot=da_dot)
         state = state + delta_roe(np.asarray(b.dv_rel, dtype=float), chief.u_at(b.epoch, j2), chief.a, n)
         t_state = b.epoch
     arcs.append((t_state, state, np.inf))
@@ -130,18 +130,18 @@ def segments_at(arcs: list, times: ArrayLike, t0: float, chief: Chief, j2: bool 
     if len(arcs) == 1 and times.ndim == 1:  # one coast arc (no burn): every sample of it, as the loop below
         t_state, state, hi = arcs[0]
         if (times < hi).all():
-            return propagate(state, times - t_state, chief.a, chief.inc, j2, da_dot)
+            return propagate(state, times - t_state, chief.a, chief.inc, j2, da_dot=da_dot)
     out = np.empty(times.shape + (6,))
     lo = -np.inf
     for k, (t_state, state, hi) in enumerate(arcs):
         sel = (times >= max(lo, t0)) & (times < hi) if k else (times < hi)
         if np.any(sel):
-            out[sel] = propagate(state, times[sel] - t_state, chief.a, chief.inc, j2, da_dot)
+            out[sel] = propagate(state, times[sel] - t_state, chief.a, chief.inc, j2, da_dot=da_dot)
         lo = hi
     return out
 
 
-def state_at(roe0: ArrayLike, t0: float, burns: Iterable[Burn], t: float, chief: Chief, j2: bool = True,
+def state_at(roe0: ArrayLike, t0: float, burns: Iterable[Burn], t: float, chief: Chief, *, j2: bool = True,
              da_dot: float = 0.0) -> np.ndarray:
     """The ROE at one time under ``burns``: :func:`trajectory` at ``times = [t]``.
 

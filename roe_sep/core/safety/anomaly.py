@@ -126,7 +126,7 @@ def ei_transition(a: float, inc: float, dt: float, j2: bool) -> np.ndarray:
     numpy.ndarray, shape (4, 4)
         The transition of the (dimensionless or a-scaled) e/i components of the ROE over ``dt``.
     """
-    cols = propagate(np.eye(6), dt, a, inc, j2, 0.0)  # row k: the propagated unit vector e_k
+    cols = propagate(np.eye(6), dt, a, inc, j2, da_dot=0.0)  # row k: the propagated unit vector e_k
     return cols.T[EI, EI]
 
 
@@ -323,7 +323,7 @@ class AnomalyWatch:
         if self.knowledge is not None and t_od >= self.knowledge[0]:
             t0, roe0, chief0, cov0, da0 = self.knowledge
             burns = [b for b, _ in self.burns if b.epoch >= t0 and b.epoch <= t_od]
-            pred = state_at(roe0, t0, burns, t_od, chief0, self.j2, da0)
+            pred = state_at(roe0, t0, burns, t_od, chief0, j2=self.j2, da_dot=da0)
             # each covariance carried from its own epoch (J2 turns the relative eccentricity vector)
             p_pred = ei_transition(chief0.a, chief0.inc, t_od - t0, self.j2)
             p_pred = p_pred @ cov0 @ p_pred.T

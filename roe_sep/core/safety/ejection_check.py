@@ -192,7 +192,7 @@ def bearing_cost(measured: ArrayLike, predicted: ArrayLike, sigma: ArrayLike) ->
 
 
 def check_ejection(times: ArrayLike, measured: ArrayLike, dv_commanded: ArrayLike, t_ejection: float,
-                   chief_mean: ArrayLike, da_dot: float, sigma: float, floor: float, bound: float, alpha: float,
+                   chief_mean: ArrayLike, *, da_dot: float, sigma: float, floor: float, bound: float, alpha: float,
                    j2: bool = True) -> EjectionCheck:
     """Whether the camera's bearing history says the ejection was weak: the apparent fraction f1 / g on
     :data:`FRACTIONS` whose predicted lines of sight (:func:`predicted_los`, the nominal drag) fit the measured ones

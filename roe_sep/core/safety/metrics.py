@@ -236,7 +236,7 @@ def _crossing(r0, el, u0, dad, duration, *, chief: "ChiefRates", t_min, iteratio
     # an orbit with no radial motion at all (da = 0, de = 0) stays in the R = 0 plane: it "transits" everywhere,
     # at the along-track distance it has at t_min
     if np.any(flat):
-        pos_min, _ = roe_to_rtn(propagate(r0, t_min, a, inc, j2, dad), u0 + u_dot * t_min)
+        pos_min, _ = roe_to_rtn(propagate(r0, t_min, a, inc, j2, da_dot=dad), u0 + u_dot * t_min)
         best = np.where(flat, np.abs(pos_min[..., 1]), best)
         t_best = np.where(flat, t_min, t_best)
     return best, t_best

@@ -92,7 +92,7 @@ class DoubleImpulseDesign:
     def final_roe(self, p: float = 0.0, j2: bool = False) -> np.ndarray:
         """Dimensionless ROE ``(6,)`` right after a nominally executed drift-stop with reduction ``p`` [m/s] (Eq. 2;
         Keplerian unless ``j2``)."""
-        return plan_drift_stop(self.dv1_rtn, self.u1, 0.0, self.a, self.inc, self.k, p, j2).aimed_roe
+        return plan_drift_stop(self.dv1_rtn, self.u1, 0.0, self.a, self.inc, k=self.k, p=p, j2=j2).aimed_roe
 
 
 def drift_stop_dv(dv1_rtn: ArrayLike, p: float = 0.0) -> np.ndarray:
@@ -271,7 +271,7 @@ class DriftStopPlan:
     p: float  # m/s
 
 
-def plan_drift_stop(dv1_rtn: ArrayLike, u1: float, epoch1: float, a: float, inc: float, k: int, p: float,
+def plan_drift_stop(dv1_rtn: ArrayLike, u1: float, epoch1: float, a: float, inc: float, *, k: int, p: float,
                     j2: bool = True) -> DriftStopPlan:
     """Plan the drift-stop k pi after a commanded ejection ``dv1_rtn`` at ``u1`` [rad] and ``epoch1`` [s].
 

@@ -332,7 +332,7 @@ class CarrierPlan:
     ic_epoch: float  # s
 
 
-def plan_carrier_burns(dv1_rtn: ArrayLike, u1: float, epoch1: float, a: float, inc: float, sep: SeparationConfig,
+def plan_carrier_burns(dv1_rtn: ArrayLike, u1: float, epoch1: float, a: float, inc: float, *, sep: SeparationConfig,
                        mcfg: MultiImpulseConfig, j2: bool = True, da_dot: float = 0.0) -> CarrierPlan:
     """Blind drift reduction and the tangential e-vector pair for a commanded ejection ``dv1_rtn`` at ``u1``.
 
@@ -381,7 +381,7 @@ def plan_carrier_burns(dv1_rtn: ArrayLike, u1: float, epoch1: float, a: float, i
     stop_rel = float(drift_stop_dv(np.array([0.0, dv1[1], 0.0]), p)[1])
     stop_parts = split_burn(-stop_rel, mcfg.max_burn, mcfg.dv_quantum)  # carrier burns
     u_from = u1 + 2.0 * math.pi * mcfg.min_stop_delay_rev
-    roe_guess = propagate(roe1, (u_from - u1) / u_rate, a, inc, j2, da_dot)
+    roe_guess = propagate(roe1, (u_from - u1) / u_rate, a, inc, j2, da_dot=da_dot)
     dde = anti_parallel_target(roe_guess[2:4], roe_guess[4:6], de_min, not sep.leading) - roe_guess[2:4]
     phase = math.atan2(dde[1], dde[0]) + (0.0 if stop_rel > 0 else math.pi)  # 2 dvT (cos u, sin u) along dde
     u_stop = first_u_after(phase, u_from)
@@ -567,7 +567,7 @@ def design(sep: SeparationConfig = SeparationConfig(), mcfg: MultiImpulseConfig 
 
     def margin(t_abs):  # AC3 of the drift-free sample after the drift reduction, minus the requirement [m]
         dv1 = ejection(t_abs)
-        plan = plan_carrier_burns(dv1, u1, 0.0, a, inc, cfg, mcfg, j2, da_dot)
+        plan = plan_carrier_burns(dv1, u1, 0.0, a, inc, sep=cfg, mcfg=mcfg, j2=j2, da_dot=da_dot)
         return a * float(min_rn_distance(drift_free_state(dv1, u1, a, inc, plan, sep=cfg, j2=j2, da_dot=da_dot))) \
             - cfg.min_rn_distance
 
@@ -585,7 +585,7 @@ def design(sep: SeparationConfig = SeparationConfig(), mcfg: MultiImpulseConfig 
             lo, hi = (mid, hi) if margin(mid) < 0.0 else (lo, mid)
         t_ac3 = hi
     dv1 = ejection(max(t_lo, t_ac3))
-    plan = plan_carrier_burns(dv1, u1, 0.0, a, inc, cfg, mcfg, j2, da_dot)
+    plan = plan_carrier_burns(dv1, u1, 0.0, a, inc, sep=cfg, mcfg=mcfg, j2=j2, da_dot=da_dot)
     return MultiImpulseDesign(cfg, mcfg, a, n, inc, u1, e_tilde, a_di, dv1, plan, b, t_lo, t_ac3)
 
 

@@ -63,7 +63,7 @@ class TruthModel:
         if not self.separated:
             return np.zeros(np.shape(dt) + (6,))
         return propagate(self.roe if np.ndim(dt) == 0 else self.roe[None, :], dt, self.a, self.inc, self.j2,
-                         self.da_dot)
+                         da_dot=self.da_dot)
 
     def samples(self, t: ArrayLike) -> tuple:
         """Carrier mean elements ``(T, 6)``, ROE ``(T, 6)`` and the RTN state (position [m], velocity [m/s], each

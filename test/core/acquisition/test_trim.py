@@ -45,8 +45,15 @@ def state(a_da_at_tf, t_f=T_F, a_dl=7400.0):
 
 def a_da_at(roe0, t, burns):
     """a da [m] at ``t`` with the secular propagation and Eq. 2 (a Delta da = 2 dvT / n) applied by hand."""
-    x = propagate(np.asarray(roe0, dtype=float), t - T0, A, INC, True, DA_DOT)
+    x = propagate(np.asarray(roe0, dtype=float), t - T0, A, INC, True, da_dot=DA_DOT)
     return float(x[0] * A) + sum(2.0 * b.dv_rel[1] / N for b in burns if b.epoch <= t)
+
+
+def decide(roe0, burns=(), **kw):
+    """:func:`plan_trim` at T0 for the IC epoch T_F, a trim no earlier than T0 + MARGIN, a 5 m tolerance and the
+    default config unless ``kw`` says otherwise (``sigma_a_da`` and ``sigma_rate`` always)."""
+    kw = {"t_final": T_F, "t_earliest": T0 + MARGIN, "tolerance": 5.0, "cfg": CFG} | kw
+    return plan_trim(roe0, CHIEF, DA_DOT, list(burns), kw.pop("t_final"), **kw)
 
 
 def test_threshold_from_tolerance_and_sigma():
@@ -59,14 +66,14 @@ def test_threshold_from_tolerance_and_sigma():
 
 
 def test_no_trim_inside_the_threshold_keeps_the_ic_epoch():
-    d = plan_trim(state(1.5), CHIEF, DA_DOT, [], T_F, T0 + MARGIN, 0.5, 1.0 / 86400.0, 5.0, CFG)
+    d = decide(state(1.5), sigma_a_da=0.5, sigma_rate=1.0 / 86400.0)
     assert not d.trim and d.dv_t == 0.0 and d.epoch is None and d.t_final == T_F
     assert d.predicted_a_da == pytest.approx(1.5, abs=1e-6)
     assert d.threshold == pytest.approx(5.0 - 3.0 * d.sigma_a_da)
     assert d.final_roe[0] * A == pytest.approx(1.5, abs=1e-6)
     # the drift-rate error grows from the OD's epoch, not from the decision time
     rate = 1.0 / 86400.0
-    late = plan_trim(state(1.5), CHIEF, DA_DOT, [], T_F, T0 + MARGIN, 0.5, rate, 5.0, CFG, t_od=T0 - 43200.0)
+    late = decide(state(1.5), sigma_a_da=0.5, sigma_rate=rate, t_od=T0 - 43200.0)
     assert late.sigma_a_da == pytest.approx(predicted_drift_sigma(0.5, rate, T_F - T0 + 43200.0))
     assert late.sigma_a_da > d.sigma_a_da
 
@@ -76,7 +83,7 @@ def test_trim_nulls_the_drift_at_the_moved_ic_epoch(a_da_tf):
     """The trim falls after t_F (the OD came 1700 s before it): t_F moves one grid step past the trim, and the
     a da there, propagated independently, is within half the lattice of zero."""
     roe0 = state(a_da_tf)
-    d = plan_trim(roe0, CHIEF, DA_DOT, [], T_F, T0 + MARGIN, 1.0, 1.5 / 86400.0, 5.0, CFG)
+    d = decide(roe0, sigma_a_da=1.0, sigma_rate=1.5 / 86400.0)
     assert d.trim and d.predicted_a_da == pytest.approx(a_da_tf, abs=1e-6)
     assert T0 + MARGIN <= d.epoch < T0 + MARGIN + STEP + 1e-6
     assert d.t_final == pytest.approx(d.epoch + STEP)
@@ -95,11 +102,11 @@ def test_trim_before_the_ic_epoch_keeps_it_and_counts_the_burns_still_to_fly():
     committed = Burn(T0 + 3000.0, (0.0, -0.004, 0.0))  # relative -4 mm/s: a da -7.3 m
     roe0 = state(1.0 + 7.3, t_f)
     before = a_da_at(roe0, t_f, [committed])
-    d = plan_trim(roe0, CHIEF, DA_DOT, [committed], t_f, T0 + MARGIN, 0.5, 1.0 / 86400.0, 5.0, CFG)
+    d = decide(roe0, [committed], t_final=t_f, sigma_a_da=0.5, sigma_rate=1.0 / 86400.0)
     assert d.predicted_a_da == pytest.approx(before, abs=1e-6)
     assert not d.trim  # |1.0 m| inside the threshold
     roe0 = state(4.5 + 7.3, t_f)
-    d = plan_trim(roe0, CHIEF, DA_DOT, [committed], t_f, T0 + MARGIN, 0.5, 1.0 / 86400.0, 5.0, CFG)
+    d = decide(roe0, [committed], t_final=t_f, sigma_a_da=0.5, sigma_rate=1.0 / 86400.0)
     assert d.trim and d.t_final == t_f and d.epoch < t_f
     after = a_da_at(roe0, t_f, [committed, Burn(d.epoch, (0.0, -d.dv_t, 0.0))])
     assert abs(after) <= 0.5 * drift_lattice(A, CFG.dv_quantum) + 1e-9
@@ -112,22 +119,22 @@ def test_trim_refused_when_it_alone_would_break_another_initial_condition():
     from roe_sep.core.safety.metrics import min_rn_distance
 
     roe0 = state(-12.0)
-    d = plan_trim(roe0, CHIEF, DA_DOT, [], T_F, T0 + MARGIN, 1.0, 1.0 / 86400.0, 5.0, CFG)
+    d = decide(roe0, sigma_a_da=1.0, sigma_rate=1.0 / 86400.0)
     free = trajectory(roe0, T0, [], [d.t_final], CHIEF, j2=CFG.j2, da_dot=DA_DOT)[0]
     kept, trimmed = float(min_rn_distance(free)) * A, float(min_rn_distance(d.final_roe)) * A
     assert d.trim and not d.problems and trimmed < kept - 5.0
     cfg = dataclasses.replace(CFG, min_ei=0.5 * (kept + trimmed))
     with pytest.raises(AcquisitionInfeasible, match="would break the initial conditions: minimum R-N distance"):
-        plan_trim(roe0, CHIEF, DA_DOT, [], T_F, T0 + MARGIN, 1.0, 1.0 / 86400.0, 5.0, cfg)
+        decide(roe0, sigma_a_da=1.0, sigma_rate=1.0 / 86400.0, cfg=cfg)
     with pytest.raises(AcquisitionInfeasible, match="not finite"):
-        plan_trim(state(8.0), CHIEF, DA_DOT, [], T_F, T0 + MARGIN, math.nan, 1.0 / 86400.0, 5.0, CFG)
+        decide(state(8.0), sigma_a_da=math.nan, sigma_rate=1.0 / 86400.0)
 
 
 def test_trim_still_nulls_the_drift_when_an_initial_condition_is_missed_anyway():
     """dl already out of its band (4000 m < a_dl_min): the ICs are missed with or without the trim, which still
     flies and nulls the drift (holding the formation); the decision names what is missed."""
     roe0 = state(8.0, a_dl=4000.0)
-    d = plan_trim(roe0, CHIEF, DA_DOT, [], T_F, T0 + MARGIN, 1.0, 1.0 / 86400.0, 5.0, CFG)
+    d = decide(roe0, sigma_a_da=1.0, sigma_rate=1.0 / 86400.0)
     assert d.trim and len(d.problems) == 1 and "a dl_F| = 3909" in d.problems[0]
     assert d.summary()["missed"] == d.problems[0]
     after = a_da_at(roe0, d.t_final, [Burn(d.epoch, (0.0, -d.dv_t, 0.0))])
@@ -136,9 +143,9 @@ def test_trim_still_nulls_the_drift_when_an_initial_condition_is_missed_anyway()
 
 def test_no_trim_from_an_od_too_uncertain_to_place_a_da_inside_the_tolerance():
     """sigma > tolerance / 3: the trim could not put a da inside the tolerance with 3-sigma confidence."""
-    d = plan_trim(state(12.0), CHIEF, DA_DOT, [], T_F, T0 + MARGIN, 1.7, 0.0, 5.0, CFG)
+    d = decide(state(12.0), sigma_a_da=1.7, sigma_rate=0.0)
     assert d.sigma_a_da == pytest.approx(1.7) and not d.trim and d.t_final == T_F
-    assert plan_trim(state(12.0), CHIEF, DA_DOT, [], T_F, T0 + MARGIN, 1.6, 0.0, 5.0, CFG).trim
+    assert decide(state(12.0), sigma_a_da=1.6, sigma_rate=0.0).trim
 
 
 def test_final_od_arc_from_the_passes_before_the_ic_epoch():
@@ -195,13 +202,13 @@ def test_the_burns_still_to_fly_widen_the_decision_sigma():
     still to fly (its 5 % error: 0.68 m) the sigma is 0.71 m, the threshold 2.86 m, and the trim flies. The "too
     uncertain" rule stays the OD's own: a large burn to fly does not stop the trim."""
     roe0 = state(3.9)
-    d = plan_trim(roe0, CHIEF, DA_DOT, [], T_F, T0 + MARGIN, 0.2, 0.0, 5.0, CFG)
+    d = decide(roe0, sigma_a_da=0.2, sigma_rate=0.0)
     assert not d.trim and d.threshold == pytest.approx(4.4)
     s = burns_drift_sigma([0.0075], A, 0.05)
-    d = plan_trim(roe0, CHIEF, DA_DOT, [], T_F, T0 + MARGIN, 0.2, 0.0, 5.0, CFG, sigma_burns=s)
+    d = decide(roe0, sigma_a_da=0.2, sigma_rate=0.0, sigma_burns=s)
     assert d.trim and d.sigma_a_da == pytest.approx(math.hypot(0.2, s))
     assert d.threshold == pytest.approx(5.0 - 3.0 * math.hypot(0.2, s))
-    assert plan_trim(roe0, CHIEF, DA_DOT, [], T_F, T0 + MARGIN, 0.2, 0.0, 5.0, CFG, sigma_burns=10.0).trim
+    assert decide(roe0, sigma_a_da=0.2, sigma_rate=0.0, sigma_burns=10.0).trim
 
 
 def test_ei_margin_is_the_larger_sigma_along_the_e_and_i_vectors():

@@ -50,7 +50,7 @@ def test_an_ejection_gets_its_drift_stop(planned):
     state, actions = planned
     assert kinds(actions) == ["PublishPlan", "Log", "Status"]
     plan = actions[0]
-    stop = plan_drift_stop(np.array(D.dv1_rtn), D.u1, 0.0, D.a, D.inc, 3, 0.06, True)
+    stop = plan_drift_stop(np.array(D.dv1_rtn), D.u1, 0.0, D.a, D.inc, k=3, p=0.06, j2=True)
     (burn,) = plan.burns
     assert burn.dv_rtn == pytest.approx(stop.dv_carrier_rtn, abs=1e-15) and burn.epoch == pytest.approx(stop.epoch)
     assert plan.strategy == "double_impulse" and plan.p_reduction == 0.06 and plan.stamp == (0, 0)

@@ -135,6 +135,6 @@ def test_nearest_crossing_matches_propagate_and_roe_to_rtn():
         ok = np.isfinite(best)
         assert ok.mean() > 0.9
         u = d0.u1 + arg_latitude_rate(d0.a, d0.inc, j2) * t[ok]
-        pos, _ = roe_to_rtn(propagate(roe1[ok], t[ok], d0.a, d0.inc, j2, pre.da_dot[ok]), u)
+        pos, _ = roe_to_rtn(propagate(roe1[ok], t[ok], d0.a, d0.inc, j2, da_dot=pre.da_dot[ok]), u)
         assert np.all(np.abs(pos[:, 0]) < 1e-9)
         assert np.array_equal(np.abs(pos[:, 1]), best[ok])

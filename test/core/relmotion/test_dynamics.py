@@ -70,8 +70,8 @@ def test_j2_diy_drift_driven_by_dix():
 @given(roe=roe_st, t1=st.floats(0, 2e5), t2=st.floats(0, 2e5), dad=st.floats(-1e-9, 1e-9), j2=st.booleans())
 @settings(max_examples=100, deadline=None)
 def test_transition_composes(roe, t1, t2, dad, j2):
-    once = propagate(roe, t1 + t2, A, INC, j2, dad)
-    twice = propagate(propagate(roe, t1, A, INC, j2, dad), t2, A, INC, j2, dad)
+    once = propagate(roe, t1 + t2, A, INC, j2, da_dot=dad)
+    twice = propagate(propagate(roe, t1, A, INC, j2, da_dot=dad), t2, A, INC, j2, da_dot=dad)
     np.testing.assert_allclose(twice, once, rtol=1e-9, atol=1e-13)
 
 
@@ -94,7 +94,7 @@ def test_broadcasting_over_samples_and_times():
     rng = np.random.default_rng(3)
     roes = rng.normal(0, 1e-4, (10, 6))
     ts = np.linspace(0, 1e4, 4)
-    out = propagate(roes[:, None, :], ts, A, INC, True, rng.normal(0, 1e-10, 10)[:, None])
+    out = propagate(roes[:, None, :], ts, A, INC, True, da_dot=rng.normal(0, 1e-10, 10)[:, None])
     assert out.shape == (10, 4, 6)
 
 

@@ -84,13 +84,15 @@ def truth_bearings(f1, g, seed):
 def test_the_verdict_on_the_default_design(f1, g, weak):
     """The corners of the nominal set fly (f1 / g >= 0.4375); f1 = 0.3 is held unless the drag is low enough to make
     it look nominal (g = 0.6: f1 / g = 0.5)."""
-    check = check_ejection(TIMES, truth_bearings(f1, g, 7), D.dv1_rtn, 0.0, CHIEF, DA_DOT, SIGMA, 1.0, BOUND, 1e-3)
+    check = check_ejection(TIMES, truth_bearings(f1, g, 7), D.dv1_rtn, 0.0, CHIEF,
+                           da_dot=DA_DOT, sigma=SIGMA, floor=1.0, bound=BOUND, alpha=1e-3)
     assert check.weak is weak and check.samples == len(TIMES) and check.bound == BOUND
     assert check.f1 == pytest.approx(min(f1 / g, 2.0), abs=0.05 + 0.1 * f1 / g)
 
 
 def test_no_bearing_no_verdict_and_the_cost_leaves_out_nan_rows():
-    check = check_ejection([], np.zeros((0, 3)), D.dv1_rtn, 0.0, CHIEF, DA_DOT, SIGMA, 1.0, BOUND, 1e-3)
+    check = check_ejection([], np.zeros((0, 3)), D.dv1_rtn, 0.0, CHIEF,
+                           da_dot=DA_DOT, sigma=SIGMA, floor=1.0, bound=BOUND, alpha=1e-3)
     assert check.samples == 0 and not check.weak
     m = np.array([[1.0, 0.0, 0.0], [np.nan, 0.0, 0.0]])
     assert float(bearing_cost(m, np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0]]), 1.0)) == pytest.approx(2.0)

@@ -12,7 +12,7 @@ LIM = MonitorLimits()
 
 
 def test_nominal_after_drift_stop_is_safe_and_receding():
-    stop = plan_drift_stop(D.dv1_rtn, D.u1, 0.0, D.a, D.inc, 3, 0.06)
+    stop = plan_drift_stop(D.dv1_rtn, D.u1, 0.0, D.a, D.inc, k=3, p=0.06)
     chief = Chief(D.a, D.inc, stop.u2, stop.epoch)
     res = assess(stop.aimed_roe, stop.epoch, chief, LIM)
     assert res.safe and not res.approaching
@@ -34,7 +34,7 @@ def test_right_after_ejection_passive_safety_comes_from_the_crossing_distance():
 
 def test_drift_stop_plan_check_and_a_bad_plan():
     roe = delta_roe(D.dv1_rtn, D.u1, D.a, D.n)
-    stop = plan_drift_stop(D.dv1_rtn, D.u1, 0.0, D.a, D.inc, 3, 0.06)
+    stop = plan_drift_stop(D.dv1_rtn, D.u1, 0.0, D.a, D.inc, k=3, p=0.06)
     good = assess(roe, 0.0, CHIEF, LIM, [Burn(stop.epoch, tuple(stop.dv_relative_rtn))], t_end=stop.epoch + 86400)
     assert good.safe and not good.approaching
     # a drift-stop with the wrong tangential sign doubles the drift towards evaporation

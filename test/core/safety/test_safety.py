@@ -54,7 +54,7 @@ def test_approaching_drift_direction():
 def _brute_crossing(roe0, u0, duration, j2, dad):
     t = np.linspace(0, duration, 400001)
     udot = arg_latitude_rate(A, INC, j2)
-    pos, _ = roe_to_rtn(propagate(roe0, t, A, INC, j2, dad), u0 + udot * t)
+    pos, _ = roe_to_rtn(propagate(roe0, t, A, INC, j2, da_dot=dad), u0 + udot * t)
     r = pos[:, 0]
     idx = np.nonzero((np.sign(r[1:]) != np.sign(r[:-1])) & (t[1:] > 0.1 * 2 * np.pi / udot))[0]
     if idx.size == 0:

@@ -36,7 +36,7 @@ def test_tangential_is_the_least_with_ac3_for_the_drift_free_sample():
 
     def rn(t):
         dv1 = np.array([mi.spl_radial(1.53, -t, dvn), -t, dvn])
-        plan = mi.plan_carrier_burns(dv1, D.u1, 0.0, a, inc, cfg, D.multi, True, 0.0)
+        plan = mi.plan_carrier_burns(dv1, D.u1, 0.0, a, inc, sep=cfg, mcfg=D.multi, j2=True, da_dot=0.0)
         return mi.min_rn_distance(mi.drift_free_state(dv1, D.u1, a, inc, plan, sep=cfg)) * a
 
     t = D.dv_t_ac3

@@ -339,10 +339,10 @@ def test_a_weak_ejection_makes_the_first_od_inconsistent():
         w.ejection(100.0, dv, chief, 0.0)
         from roe_sep.core.relmotion.dynamics import propagate
 
-        truth = propagate(f1 * nominal, t - 100.0, D.a, D.inc, True, 0.0)
+        truth = propagate(f1 * nominal, t - 100.0, D.a, D.inc, True, da_dot=0.0)
         assert [d.name for d in w.od(**od_of(truth, t, chief))] == expect, f1
     # a second OD is predicted from the first
-    assert w.od(**od_of(propagate(truth, 3600.0, D.a, D.inc, True, 0.0), t + 3600.0, chief)) == []
+    assert w.od(**od_of(propagate(truth, 3600.0, D.a, D.inc, True, da_dot=0.0), t + 3600.0, chief)) == []
 
 
 def test_od_residuals_beyond_their_chi_square():
