@@ -16,14 +16,15 @@ of degree ``INTERPOLATION_DEGREE``) and with the velocities (the OEM's own ephem
 propagator, Dormand-Prince 8(5,3), the J2 field of EIGEN-5C about the ITRF's pole), generates two-way ranges and
 azimuth/elevation from TIRA every 10 s above the elevation mask with seeded Gaussian noise (its measurement
 generation package: ``Generator``, ``RangeBuilder``, ``AngularAzElBuilder``, an ``ElevationDetector`` scheduler)
-and writes them with its own TDM writer; the carrier's ephemeris with its own OEM writer; the truth (both states
-every 60 s over the arc, EME2000) as JSON.
+and writes them with its own TDM writer; the carrier's ephemeris with its own OEM writer; the truth (both states at
+every time tag, EME2000) as JSON.
 
     scripts/orekit_crosscheck.py residuals OEM TDM [--json]
     scripts/orekit_crosscheck.py generate --seed N --out DIR [--format kvn|xml] [--hours H]
 """
 
 import argparse
+import functools
 import json
 import math
 import os
@@ -45,7 +46,6 @@ SIGMA_ANGLE_DEG = 0.01
 """The radar's 1-sigma noise (the radar node's ``sigma_range_m`` and ``sigma_angle_deg`` defaults)."""
 STEP_S = 10.0
 """The radar's measurement period [s] (the reference run's TDM: a time tag every 10 s)."""
-TRUTH_STEP_S = 60.0
 PASS_GAP_S = 600.0
 """Measurements farther apart than this [s] are two passes (a LEO pass lasts under 15 min, passes are >= 90 min
 apart)."""
@@ -73,6 +73,7 @@ def context(finals=None):
     return _CONTEXT
 
 
+@functools.lru_cache(maxsize=1)
 def eop_span(ctx):
     """(first, last) UTC ISO dates of the EOP Orekit loaded (IERS 2010)."""
     from org.orekit.utils import IERSConventions
@@ -315,8 +316,9 @@ def generate_measurements(ctx, ephemeris, station, start, end, seed):
     builders = [RangeBuilder(_noise(seed, [SIGMA_RANGE_M]), station, True, SIGMA_RANGE_M, 1.0, sat),
                 AngularAzElBuilder(_noise(seed + 1, [sa, sa]), station, [sa, sa], [1.0, 1.0], sat)]
     for b in builders:
+        # a handler that does not stop at the first set, and a check step that misses no pass
         detector = ElevationDetector(station.getBaseFrame()).withConstantElevation(
-            math.radians(ELEVATION_MASK_DEG)).withHandler(ContinueOnEvent()).withMaxCheck(STEP_S)  # not stop; no pass missed
+            math.radians(ELEVATION_MASK_DEG)).withHandler(ContinueOnEvent()).withMaxCheck(STEP_S)
         gen.addScheduler(EventBasedScheduler(b, FixedStepSelector(STEP_S, utc), ephemeris, detector,
                                              SignSemantic.FEASIBLE_MEASUREMENT_WHEN_POSITIVE))
     gathering = GatheringSubscriber()
@@ -454,8 +456,8 @@ def _pv(state, frame):
 def generate(seed, out, fmt="kvn", hours=24.0, carrier_step=STEP_S):
     """Files of one seeded geometry (:func:`scenario_geometry`) made by Orekit into ``out``: ``radar.tdm.<fmt>``
     (the picosatellite tracked from TIRA), ``carrier.oem.<fmt>`` (the carrier every ``carrier_step`` s, its GPS
-    ephemeris) and ``truth.json`` (the geometry, both spacecraft's EME2000 states every 60 s and at every time tag's
-    whole second, the EOP span used).
+    ephemeris) and ``truth.json`` (the geometry, both spacecraft's EME2000 states at every time tag ``t`` [s after the
+    geometry's epoch], the passes, the EOP span used).
 
     Returns
     -------
@@ -490,13 +492,13 @@ def generate(seed, out, fmt="kvn", hours=24.0, carrier_step=STEP_S):
     n = int(float(hours) * 3600.0 / carrier_step) + 1
     write_oem(ctx, [ephem["CARRIER"].propagate(start.shiftedBy(k * carrier_step)) for k in range(n)],
               out / f"carrier.oem.{fmt}", fmt, object_id="CARRIER")
-    t = np.arange(0.0, float(hours) * 3600.0 + 1e-9, TRUTH_STEP_S)
+    t = np.array([float(r[0].durationFrom(start)) for r in rows])
     truth = {"geometry": geo, "eop": list(eop_span(ctx)), "measurements": len(rows),
              "passes": [[float(p[0][0].durationFrom(start)), float(p[-1][0].durationFrom(start)), len(p)]
                         for p in _passes(rows)],
              "t": t.tolist()}
     for name, e in ephem.items():
-        pvs = [_pv(e.propagate(start.shiftedBy(float(x))), eme) for x in t]
+        pvs = [_pv(e.propagate(r[0]), eme) for r in rows]
         truth[name.lower()] = {"position_m": [p for p, _ in pvs], "velocity_m_s": [v for _, v in pvs]}
     (out / "truth.json").write_text(json.dumps(truth, allow_nan=False), encoding="utf-8")
     return truth
