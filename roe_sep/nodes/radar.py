@@ -35,8 +35,8 @@ from rosgraph_msgs.msg import Clock
 
 from .. import interfaces
 from ..core.config import ConfigError, load_scenario
-from ..core.constants import SECONDS_PER_DAY
-from ..core.od.radar import deputy_earth_fixed, gmst, look_angles, relative_distance, truth_da_rate, visible
+from ..core.frames import gcrs_to_itrs
+from ..core.od.radar import deputy_earth_fixed, look_angles, relative_distance, truth_da_rate, visible
 from ..core.od.sensor import noisy_measurement, pass_lost, trackable
 from ..core.relmotion.dynamics import propagate, propagate_chief
 from ..core.relmotion.roe import rtn_position
@@ -247,11 +247,11 @@ class RadarNode(ManagedNode):
         chief = propagate_chief(kep_tr, epochs - t_tr)
         rate = np.repeat([self.truth_rate(c[1][0], c[1][1]) for c in calls], sizes)
         roe = propagate(roe_tr, epochs - t_tr, kep_tr[:, 0], kep_tr[:, 2], True, rate)
-        theta = gmst(self.jd0 + epochs / SECONDS_PER_DAY)
+        earth = gcrs_to_itrs(self.jd0, epochs)
         # the relative position serves the separation and every station's look angles: formed once
         rel = rtn_position(roe, chief[:, 4] + chief[:, 5])
         sep = relative_distance(roe, kep_tr[:, 0], None, rel)
-        r_ef = deputy_earth_fixed(roe, chief, theta, rel)
+        r_ef = deputy_earth_fixed(roe, chief, earth, rel)
         z = [look_angles(r_ef, self.site_ef[s], self.site_enu[s]) for s in range(len(self.stations))]
         # the pass logic reads the epochs and the visibility one epoch at a time: as Python values (the same
         # floats and truth values), not NumPy scalars

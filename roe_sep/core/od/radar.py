@@ -1,14 +1,11 @@
 """Ground-station radar geometry and measurement model (seed 001 Sec. 5: radar tracking of the picosatellite).
 
-Frames and models of this stub, chosen for a consistent simulation/estimation pair rather than for arc-second
-astrometry:
+Frames and models:
 
-* Time: sim time ``t`` [s] counts from a calendar epoch given as a Julian date ``jd0`` (UTC). UT1 = UTC is assumed
-  (|UT1 - UTC| < 0.9 s, i.e. < 6.6e-5 rad of Earth rotation: up to 270 m of station position along its parallel;
-  simulator and estimator share the convention, so it does not bias this stub's estimates).
-* Earth rotation: the inertial frame is the equator and equinox of date; Earth-fixed = inertial rotated by the
-  Greenwich mean sidereal time (IAU 1982, :func:`gmst`). Nutation (the equation of the equinoxes, < 1.2 s of
-  time) and polar motion (< 0.5 arcsec) are ignored; the chief's RAAN is referred to the same frame.
+* Time: sim time ``t`` [s] counts from a calendar epoch given as a Julian date ``jd0`` (UTC).
+* Earth orientation: the inertial frame is the GCRF; Earth-fixed = ITRF, rotated by the matrix of
+  :func:`roe_sep.core.frames.gcrs_to_itrs` (IAU 2000B precession-nutation with frame bias, Earth rotation angle of
+  UT1, polar motion, IERS EOP). The chief's RAAN is referred to the GCRF equator and origin.
 * Chief (carrier): its *mean* near-circular elements (a, i, raan, u) are used as if they were osculating
   (:func:`chief_position_velocity`, circular orbit, e neglected). The short-periodic J2 terms (~km) and the
   eccentricity (a e ~ km for a frozen orbit) shift the absolute position of both spacecraft together; the relative
@@ -54,8 +51,8 @@ def julian_date(epoch_utc: datetime | str) -> float:
     """Julian date of a UTC calendar epoch: JD = 2440587.5 + (POSIX seconds) / 86400.
 
     ``epoch_utc`` is a :class:`datetime` or an ISO-8601 string (``2016-07-01T00:00:00``, optional ``Z`` or
-    ``+hh:mm``); a naive value is taken as UTC. POSIX time has no leap seconds, so this is the UTC Julian date (used
-    as UT1, see the module docstring). Raises ValueError for an unparseable string.
+    ``+hh:mm``); a naive value is taken as UTC. POSIX time has no leap seconds, so this is the UTC Julian date
+    (:mod:`roe_sep.core.frames` takes it to TT and UT1). Raises ValueError for an unparseable string.
     """
     if isinstance(epoch_utc, str):
         text = epoch_utc.strip()
@@ -65,17 +62,6 @@ def julian_date(epoch_utc: datetime | str) -> float:
     if epoch_utc.tzinfo is None:
         epoch_utc = epoch_utc.replace(tzinfo=timezone.utc)
     return JD_UNIX_EPOCH + epoch_utc.timestamp() / SECONDS_PER_DAY
-
-
-def gmst(jd_ut1: ArrayLike) -> np.ndarray:
-    """Greenwich mean sidereal time [rad, 0..2pi) from the UT1 Julian date, IAU 1982 (Vallado Eq. 3-47).
-
-    theta = 67310.54841 s + (876600 h + 8640184.812866 s) T + 0.093104 s T^2 - 6.2e-6 s T^3,
-    T = (JD_UT1 - 2451545.0) / 36525 Julian centuries; seconds of time, 86400 s = 2 pi.
-    """
-    t = (np.asarray(jd_ut1, dtype=float) - JD_J2000) / 36525.0
-    seconds = 67310.54841 + (876600.0 * 3600.0 + 8640184.812866) * t + 0.093104 * t**2 - 6.2e-6 * t**3
-    return np.mod(seconds, SECONDS_PER_DAY) * (2.0 * np.pi / SECONDS_PER_DAY)
 
 
 def sun_right_ascension(jd: ArrayLike) -> np.ndarray:
@@ -167,16 +153,6 @@ TIRA = Station("TIRA", math.radians(50.6166), math.radians(7.1296), 300.0)
 """FHR's Tracking and Imaging Radar, Wachtberg near Bonn: 50.6166 N, 7.1296 E; the site is at about 260 m above sea
 level (the nearby highest point of Wachtberg is 269 m) and the geoid is about 47 m above WGS-84 there, so about
 300 m ellipsoidal height."""
-
-
-def earth_rotation_matrix(theta: ArrayLike) -> np.ndarray:
-    """Inertial (of date) -> Earth-fixed rotation R3(theta) about z by the sidereal angle ``theta`` [rad],
-    ``(..., 3, 3)``: x_ef = cos th x + sin th y, y_ef = -sin th x + cos th y, z_ef = z."""
-    th = np.asarray(theta, dtype=float)
-    c, s = np.cos(th), np.sin(th)
-    m = np.zeros(th.shape + (3, 3))  # the stacked rows (c, s, 0), (-s, c, 0), (0, 0, 1), filled in place
-    m[..., 0, 0], m[..., 0, 1], m[..., 1, 0], m[..., 1, 1], m[..., 2, 2] = c, s, -s, c, 1.0
-    return m
 
 
 def chief_position_velocity(a: ArrayLike, inc: ArrayLike, raan: ArrayLike,
@@ -315,16 +291,16 @@ def look_position(z: np.ndarray, site_ef: ArrayLike, site_enu: ArrayLike) -> np.
     return np.asarray(site_ef, dtype=float) + np.einsum("...ji,...j->...i", site_enu, enu)
 
 
-def observe(roe: ArrayLike, chief_kep: ArrayLike, theta: ArrayLike, site_ef: ArrayLike,
+def observe(roe: ArrayLike, chief_kep: ArrayLike, earth: ArrayLike, site_ef: ArrayLike,
             site_enu: ArrayLike) -> np.ndarray:
     """The measurement function: [range, az, el] of the picosatellite seen from a station.
 
-    :func:`deputy_position` -> Earth-fixed with :func:`earth_rotation_matrix` (sidereal angle ``theta``, e.g.
-    :func:`gmst`) -> :func:`look_angles`. Broadcasts over leading axes (epochs, samples).
+    :func:`deputy_position` -> Earth-fixed by ``earth``, the GCRS -> ITRS rotation of the epochs
+    (:func:`roe_sep.core.frames.gcrs_to_itrs`) -> :func:`look_angles`. Broadcasts over leading axes (epochs, samples).
 
     Parameters
     ----------
-    roe, chief_kep, theta
+    roe, chief_kep, earth
         As for :func:`deputy_earth_fixed`.
     site_ef, site_enu : array_like, shapes (3,) and (3, 3)
         The station's Earth-fixed position [m] and ENU rotation (:attr:`Station.ecef`, :attr:`Station.enu`).
@@ -334,35 +310,35 @@ def observe(roe: ArrayLike, chief_kep: ArrayLike, theta: ArrayLike, site_ef: Arr
     numpy.ndarray, shape (..., 3)
         [range, az, el] [m, rad, rad].
     """
-    return look_angles(deputy_earth_fixed(roe, chief_kep, theta), site_ef, site_enu)
+    return look_angles(deputy_earth_fixed(roe, chief_kep, earth), site_ef, site_enu)
 
 
-def deputy_earth_fixed(roe: ArrayLike, chief_kep: ArrayLike, theta: ArrayLike,
+def deputy_earth_fixed(roe: ArrayLike, chief_kep: ArrayLike, earth: ArrayLike,
                        rel: ArrayLike | None = None) -> np.ndarray:
     """The Earth-fixed position of the picosatellite that :func:`observe` looks at: :func:`deputy_position`
-    rotated by :func:`earth_rotation_matrix` (the same for every station: formed once for several).
+    rotated by ``earth`` (GCRS -> ITRS; the same for every station: formed once for several).
 
     Parameters
     ----------
     roe, chief_kep, rel
         As for :func:`deputy_position`.
-    theta : array_like, shape (...)
-        The sidereal angle [rad].
+    earth : array_like, shape (..., 3, 3)
+        The GCRS -> ITRS rotation of the epochs (:func:`roe_sep.core.frames.gcrs_to_itrs`).
 
     Returns
     -------
     numpy.ndarray, shape (..., 3)
         The position [m].
     """
-    return np.einsum("...ij,...j->...i", earth_rotation_matrix(theta), deputy_position(roe, chief_kep, rel))
+    return np.einsum("...ij,...j->...i", earth, deputy_position(roe, chief_kep, rel))
 
 
-def chief_elevation(chief_kep: ArrayLike, theta: ArrayLike, site_ef: ArrayLike, site_enu: ArrayLike) -> np.ndarray:
+def chief_elevation(chief_kep: ArrayLike, earth: ArrayLike, site_ef: ArrayLike, site_enu: ArrayLike) -> np.ndarray:
     """Elevation of the chief itself (roe = 0) from a station: the carrier's passes.
 
     Parameters
     ----------
-    chief_kep, theta, site_ef, site_enu
+    chief_kep, earth, site_ef, site_enu
         As for :func:`observe`.
 
     Returns
@@ -370,7 +346,7 @@ def chief_elevation(chief_kep: ArrayLike, theta: ArrayLike, site_ef: ArrayLike, 
     numpy.ndarray, shape (...)
         The elevation [rad].
     """
-    return observe(np.zeros(6), chief_kep, theta, site_ef, site_enu)[..., 2]
+    return observe(np.zeros(6), chief_kep, earth, site_ef, site_enu)[..., 2]
 
 
 def visible(elevation: ArrayLike, mask: float) -> np.ndarray:
