@@ -41,6 +41,8 @@ setup(
         'sgp4',
         'heyoka',
         'pymsis',
+        'pyerfa',
+        'astropy-iers-data',
         'ccsds-ndm',
         'pyerfa',
         'foxglove-sdk',
