@@ -516,7 +516,7 @@ def test_orekit_reads_the_set_as_written_and_refuses_broken_files(exported, run,
     theirs = good[f"ephemeris.oem.{fmt}"]["segments"]
     assert [s["object_id"] for s in theirs] == [s.metadata.object_id for s in ours]
     for o, t in zip(ours, theirs):
-        assert (t["ref_frame"], t["time_system"], t["interpolation"]) == ("EME2000", "UTC", "LAGRANGE")
+        assert (t["ref_frame"], t["time_system"], t["interpolation"]) == ("EME2000", "UTC", "HERMITE")
         assert t["n_states"] == len(o.data.state_vector)
         sv = o.data.state_vector[0]
         assert np.allclose(t["first_state"]["position_m"], np.array([sv.x.value, sv.y.value, sv.z.value]) * 1e3,
