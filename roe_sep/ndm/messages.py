@@ -199,7 +199,8 @@ SIGMA_ANGLE_KEY = "SIGMA_ANGLE_DEG"
 
 def build_tdm(epoch_utc, passes, comments=()):
     """TDM 2.0, one segment per :class:`TrackingPass`: AZEL angles [deg], RANGE [km], PARTICIPANT_1 the station,
-    PARTICIPANT_2 the target, two-way path 1,2,1 with the one-way geometric range (no light time) at the time tag.
+    PARTICIPANT_2 the target, two-way path 1,2,1, receive time tag: RANGE is half the round-trip light time times c
+    (:func:`roe_sep.core.od.radar.two_way_look`), the angles those of the received signal.
     The TDM has no keyword for the measurement noise: it goes into metadata comments ``SIGMA_RANGE_M = ...``,
     ``SIGMA_ANGLE_DEG = ...`` (read back by :func:`read_tdm`)."""
     segs = []
@@ -209,7 +210,9 @@ def build_tdm(epoch_utc, passes, comments=()):
         meta = nd.TdmMetadata(
             comment=[f"{SIGMA_RANGE_KEY} = {_f(p.sigma_range)!r}",
                      f"{SIGMA_ANGLE_KEY} = {_f(math.degrees(p.sigma_angle))!r}",
-                     "RANGE is the one-way geometric station-target distance at the time tag (no light time)"],
+                     "RANGE: two-way light-time range c (tau_up + tau_down) / 2 at the receive time tag, "
+                     "no corrections",
+                     "ANGLE_1/2: azimuth/elevation of the received signal (the target at reflection), no refraction"],
             track_id=f"{p.station}_PASS_{int(p.pass_id)}", time_system=nd.TimeSystemType.UTC,
             start_time=frames.utc_string(epoch_utc, t[0]), stop_time=frames.utc_string(epoch_utc, t[-1]),
             participant_1=p.station, participant_2=p.target, mode=nd.ModeType.SEQUENTIAL, path="1,2,1",

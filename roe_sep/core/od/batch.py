@@ -43,7 +43,7 @@ from ..relmotion.dynamics import (
 )
 from ..relmotion.orbit import mean_motion
 from ..relmotion.roe import roe_to_rtn, wrap_angle
-from .radar import chief_from_kepler, chief_position_velocity, look_position, observe, rtn_matrix
+from .radar import chief_from_kepler, chief_position_velocity, observe, rtn_matrix, two_way_position
 
 STATE_SIZE = 7
 MAX_CONDITION = 1e10
@@ -429,7 +429,8 @@ def jacobian(x: ArrayLike, batch: RadarBatch, t_est: float, j2: bool = True, dra
 def initial_guess(batch: RadarBatch, t_est: float, j2: bool = True, drag: bool = True) -> np.ndarray:
     """Linear starting point: every measurement inverted to a relative RTN position, then unweighted least squares.
 
-    r_rel/a = [R T N]^T (W^T look_position(z) - r_chief) / a (W: ``earth``) is linear in x, exactly: the secular
+    r_rel/a = [R T N]^T (W^T two_way_position(z) - r_chief) / a (W: ``earth``; the light time taken out with the
+    chief's velocity) is linear in x, exactly: the secular
     propagation and the ROE -> RTN map are linear, so its design matrix is the model evaluated on the 7 unit states.
 
     Parameters
@@ -444,8 +445,8 @@ def initial_guess(batch: RadarBatch, t_est: float, j2: bool = True, drag: bool =
     """
     a, inc, raan, u = chief_from_kepler(batch.chief)
     rc, vc = chief_position_velocity(a, inc, raan, u)
-    r_eci = np.einsum("...ji,...j->...i", batch.earth,
-                      look_position(batch.z, batch.site_ef, batch.site_enu))
+    v_ef = np.einsum("...ij,...j->...i", batch.earth, vc)
+    r_eci = np.einsum("...ji,...j->...i", batch.earth, two_way_position(batch.z, v_ef, batch.site_ef, batch.site_enu))
     rel = np.einsum("...ji,...j->...i", rtn_matrix(rc, vc), r_eci - rc) / a[:, None]
     unit = np.eye(STATE_SIZE)
     roe = model_roe(unit, batch, t_est, j2, drag)

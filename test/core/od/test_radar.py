@@ -16,6 +16,7 @@ from roe_sep.core.od.radar import (
     Station,
     add_noise,
     chief_elevation,
+    chief_from_kepler,
     chief_position_velocity,
     deputy_position,
     enu_matrix,
@@ -30,6 +31,8 @@ from roe_sep.core.od.radar import (
     rtn_matrix,
     sun_right_ascension,
     truth_da_rate,
+    two_way_look,
+    two_way_position,
     visible,
 )
 from roe_sep.core.relmotion.dynamics import propagate_chief, sun_synchronous_inclination
@@ -134,7 +137,11 @@ def test_deputy_position_is_chief_plus_rtn_offset():
     earth = gcrs_to_itrs(JD0, 4000.0)
     z = observe(np.stack([roe, 0 * roe]), kep, earth, TIRA.ecef, TIRA.enu)
     r_ef = earth @ deputy_position(roe, kep)
-    np.testing.assert_allclose(z[0], look_angles(r_ef, TIRA.ecef, TIRA.enu))
+    state = np.stack([r_ef, earth @ chief_position_velocity(*chief_from_kepler(kep))[1]])
+    np.testing.assert_allclose(z[0], two_way_look(state, TIRA.ecef, TIRA.enu))
+    assert 0.0 < abs(z[0, 0] - look_angles(r_ef, TIRA.ecef, TIRA.enu)[0]) < 60.0  # the light time's tens of metres
+    # two_way_position inverts it (to the chief's velocity)
+    np.testing.assert_allclose(two_way_position(z[0], state[1], TIRA.ecef, TIRA.enu), r_ef, atol=1e-3, rtol=0)
     assert z[1, 2] == pytest.approx(chief_elevation(kep, earth, TIRA.ecef, TIRA.enu))
     # the Earth-fixed frame turns eastwards: a fixed inertial point drifts west by omega_E dt about the pole
     x = np.linalg.solve(earth, [1.0, 0.0, 0.0])
@@ -202,3 +209,39 @@ def test_truth_da_rate_is_the_secant_of_da():
     roe1 = roe0 + np.array([-3e-8, 1e-6, 1.0, 1.0, 1.0, 1.0])
     assert truth_da_rate(100.0, roe0, 160.0, roe1) == pytest.approx(-3e-8 / 60.0, rel=1e-12)
     assert truth_da_rate(160.0, roe1, 160.0, roe1) == 0.0  # no span: no rate
+
+
+def test_observe_is_the_two_way_light_time_measurement_at_the_receive_tag():
+    """observe() against the light-time equations solved here to convergence with the model's own motion (the
+    picosatellite's secular orbit at the reflection epoch, the station by the Earth's orientation at the transmit
+    epoch): range to 0.1 m, angles to 0.1 urad over a pass; the instantaneous geometric range differs by tens of
+    metres (the range rate times the light time)."""
+    from roe_sep.core.constants import SPEED_OF_LIGHT
+
+    kep0 = np.array([A, 0.0, INC, raan_from_ltan(9.5, JD0), 0.0, 0.3])
+    roe = np.array([-40.0, 8000.0, 150.0, -400.0, 80.0, 350.0]) / A
+    t_all = np.arange(0.0, 86400.0, 10.0)
+    el = observe(roe, propagate_chief(kep0, t_all), gcrs_to_itrs(JD0, t_all), TIRA.ecef, TIRA.enu)[:, 2]
+    t = t_all[el > MASK][:60]
+    assert t.size == 60
+
+    def pos(tk):
+        return deputy_position(roe, propagate_chief(kep0, tk))
+
+    def station(tk):
+        return np.einsum("...ji,j->...i", gcrs_to_itrs(JD0, tk), TIRA.ecef)
+
+    tau_d = np.zeros_like(t)
+    for _ in range(6):
+        tau_d = np.linalg.norm(pos(t - tau_d) - station(t), axis=-1) / SPEED_OF_LIGHT
+    tau_u = np.zeros_like(t)
+    for _ in range(6):
+        tau_u = np.linalg.norm(pos(t - tau_d) - station(t - tau_d - tau_u), axis=-1) / SPEED_OF_LIGHT
+    r_b = np.einsum("nij,nj->ni", gcrs_to_itrs(JD0, t), pos(t - tau_d))
+    expected = look_angles(r_b, TIRA.ecef, TIRA.enu)
+    expected[:, 0] = 0.5 * SPEED_OF_LIGHT * (tau_d + tau_u)
+    z = observe(roe, propagate_chief(kep0, t), gcrs_to_itrs(JD0, t), TIRA.ecef, TIRA.enu)
+    assert np.max(np.abs(z[:, 0] - expected[:, 0])) < 0.1
+    assert np.max(np.abs(z[:, 1:] - expected[:, 1:])) < 1e-7
+    geometric = look_angles(np.einsum("nij,nj->ni", gcrs_to_itrs(JD0, t), pos(t)), TIRA.ecef, TIRA.enu)
+    assert np.max(np.abs(geometric[:, 0] - z[:, 0])) > 15.0
