@@ -9,7 +9,7 @@ flight-dynamics team closes the loop on the last information: a final radar OD s
 uplinked with the planning margin, flown before t_F.
 
 Timeline. :func:`radar_passes` predicts the station's passes of the carrier (the chief's secular elements, the
-sidereal angle of the scenario's epoch). The final OD is the solution after the last pass before t_F;
+IERS Earth of roe_sep.core.frames). The final OD is the solution after the last pass before t_F;
 :func:`final_od_arc` gives its radar arc, from the latest pass that spans radar_od's ``min_arc`` with it and leaves
 three passes in the arc (radar_od restarts its batch after every burn, so the plans keep their burns out of that
 arc: ``no_burns`` of :func:`.planner.plan_acquisition`). The trim is the first grid epoch at or after the solution

@@ -210,7 +210,7 @@ def ecef_to_geodetic(r_ef: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarra
 def nrlmsis_density(pos: ArrayLike, t: ArrayLike, epoch_utc: str = DEFAULT_EPOCH_UTC, f107: float = 140.0,
                     f107a: float = 140.0, *, ap: float = 15.0) -> np.ndarray:
     """NRLMSIS 2.0 total mass density [kg/m^3] (``pymsis``, version 2.0) at inertial positions ``pos`` ``(N, 3)``
-    [m] and times ``t`` ``(N,)`` [s after ``epoch_utc``]: Earth-fixed by the GMST rotation (the frame of
+    [m] and times ``t`` ``(N,)`` [s after ``epoch_utc``]: Earth-fixed by :func:`roe_sep.core.frames.gcrs_to_itrs` (as
     :mod:`roe_sep.core.od.radar`), WGS-84 geodetic coordinates, the given F10.7 (previous day), its 81-day mean
     and daily Ap (every 3-h ap equal to it).
 
