@@ -44,7 +44,6 @@ setup(
         'pyerfa',
         'astropy-iers-data',
         'ccsds-ndm',
-        'pyerfa',
         'foxglove-sdk',
         'dask[distributed]',
     ],

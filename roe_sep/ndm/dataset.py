@@ -132,7 +132,7 @@ def plan_opm(plan, truth: Truth, opts: Options, frame=frames.LOCAL_FRAME, label=
     t0 = time_to_sec(carrier[0].epoch)
     r, v = frames.chief_state(truth.chief_at(t0)[0], opts.epoch_utc, t0)
     comments = [f"roe_sep {label}: strategy {plan.strategy}, computed at sim time {time_to_sec(plan.header.stamp)!r} s",
-                "carrier state: mean near-circular orbit of the simulator (mean of date, precessed IAU 1976)",
+                "carrier state: mean near-circular orbit of the simulator (GCRF, frame bias to EME2000)",
                 f"MAN_DELTA_MASS from the rocket equation, m = {opts.carrier_mass!r} kg, Isp = {opts.carrier_isp!r} s"]
     return build_opm(opts.carrier_name, opts.carrier_name, opts.epoch_utc, t0, r, v=v,
                      burns=_burns(carrier, truth, opts, frame), spacecraft=spacecraft(opts), comments=comments)
