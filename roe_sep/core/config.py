@@ -18,9 +18,9 @@ from dataclasses import dataclass, field
 from os import PathLike
 
 from ..checks import SEED_MAX, check_number, one_line
-from ..errors import ConfigError, show
+from ..errors import ConfigError, EopError, show
 from .constants import SECONDS_PER_DAY
-from .frames import EopError, use_eop_file
+from .frames import use_eop_file
 from .montecarlo.sweep import DEFAULT_P_VALUES, MonteCarloConfig, Spacecraft
 from .separation.double_impulse import SeparationConfig
 from .truth.contingency import ContingencyConfig, contingency_from_dict

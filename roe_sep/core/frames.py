@@ -29,6 +29,7 @@ from functools import lru_cache
 import erfa
 import numpy as np
 
+from ..errors import EopError
 from .constants import ARCSEC, SECONDS_PER_DAY
 
 TT_MINUS_TAI = 32.184
@@ -41,10 +42,6 @@ EOP_ENV = "ROE_SEP_EOP_FILE"
 """Environment variable naming an EOP file (finals2000A format) that replaces the shipped one."""
 
 _eop_path = None
-
-
-class EopError(ValueError):
-    """An EOP file that cannot be read (names the file and the line)."""
 
 
 def default_eop_file() -> str:
