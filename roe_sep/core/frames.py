@@ -28,6 +28,7 @@ from functools import lru_cache
 
 import erfa
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import EopError
 from .constants import ARCSEC, SECONDS_PER_DAY
@@ -51,7 +52,7 @@ def default_eop_file() -> str:
     return IERS_A_FILE
 
 
-def use_eop_file(path=None) -> None:
+def use_eop_file(path: str | os.PathLike | None = None) -> None:
     """Take UT1 - UTC and polar motion from ``path`` (finals2000A format); None: ``$ROE_SEP_EOP_FILE`` or the shipped
     file. The file is read at once, so a bad one fails here with :class:`EopError`."""
     global _eop_path
@@ -97,7 +98,7 @@ def _tai_minus_utc(jd1, jd2):
 _warned = set()
 
 
-def earth_orientation(jd_utc, seconds=0.0):
+def earth_orientation(jd_utc: ArrayLike, seconds: ArrayLike = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """UT1 - UTC [s], x_p, y_p [rad] at UTC ``jd_utc`` + ``seconds``, linear in the table's daily values (UT1 - TAI
     interpolated, continuous across leap seconds). Beyond the table: warns once, holds UT1 - TAI, zero pole."""
     path = _current_eop_path()
@@ -117,33 +118,33 @@ def earth_orientation(jd_utc, seconds=0.0):
     return dut, xp, yp
 
 
-def utc_to_tai(jd1, jd2=0.0):
+def utc_to_tai(jd1: ArrayLike, jd2: ArrayLike = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """TAI two-part Julian date of a UTC one (ERFA ``utctai``, its leap seconds)."""
     return erfa.utctai(jd1, jd2)
 
 
-def tai_to_tt(jd1, jd2=0.0):
+def tai_to_tt(jd1: ArrayLike, jd2: ArrayLike = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """TT = TAI + 32.184 s (ERFA ``taitt``)."""
     return erfa.taitt(jd1, jd2)
 
 
-def tai_to_gps(jd1, jd2=0.0):
+def tai_to_gps(jd1: ArrayLike, jd2: ArrayLike = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """GPS time = TAI - 19 s, as a two-part Julian date."""
     return jd1, np.asarray(jd2, dtype=float) - TAI_MINUS_GPS / SECONDS_PER_DAY
 
 
-def utc_to_tt(jd1, jd2=0.0):
+def utc_to_tt(jd1: ArrayLike, jd2: ArrayLike = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """TT of UTC: :func:`utc_to_tai` then :func:`tai_to_tt`."""
     return tai_to_tt(*utc_to_tai(jd1, jd2))
 
 
-def utc_to_ut1(jd1, jd2=0.0):
+def utc_to_ut1(jd1: ArrayLike, jd2: ArrayLike = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """UT1 of UTC with UT1 - UTC from the EOP table (:func:`earth_orientation`, ERFA ``utcut1``)."""
     dut = earth_orientation(jd1, np.asarray(jd2, dtype=float) * SECONDS_PER_DAY)[0]
     return erfa.utcut1(jd1, jd2, dut)
 
 
-def gcrs_to_itrs(jd_utc, seconds=0.0):
+def gcrs_to_itrs(jd_utc: ArrayLike, seconds: ArrayLike = 0.0) -> np.ndarray:
     """Rotation GCRS -> ITRS ``(..., 3, 3)`` at UTC Julian date ``jd_utc`` + ``seconds`` [s] (module docstring:
     ERFA ``c2t00b`` with the IERS EOP). r_ITRS = M r_GCRS; broadcasts over both arguments."""
     jd1, jd2 = np.broadcast_arrays(np.asarray(jd_utc, dtype=float), np.asarray(seconds, dtype=float) / SECONDS_PER_DAY)
@@ -153,7 +154,7 @@ def gcrs_to_itrs(jd_utc, seconds=0.0):
     return erfa.c2t00b(tt1, tt2, ut1, ut2, xp, yp)
 
 
-def gcrf_to_eme2000():
+def gcrf_to_eme2000() -> np.ndarray:
     """The frame bias B ``(3, 3)`` (IAU 2000, ERFA ``bp00``'s rb, IERS Conventions 2010 Eq. 5.21): r_EME2000 =
     B r_GCRF."""
     return erfa.bp00(2451545.0, 0.0)[0]
