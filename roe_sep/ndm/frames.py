@@ -2,7 +2,7 @@
 -> EME2000, carrier RTN <-> inertial states, Delta-v and covariances.
 
 The simulator and the radar model (:mod:`roe_sep.core.od.radar`) work in the GCRF, with the Earth oriented by
-:mod:`roe_sep.core.frames` (IAU 2000B precession-nutation, UT1 and polar motion from the IERS EOP). CCSDS messages
+:mod:`roe_sep.core.frames` (the one Earth-orientation model: ERFA's IAU 2000B, IERS EOP). CCSDS messages
 state EME2000 (mean equator and equinox of J2000.0), which is the GCRF rotated by the constant frame bias
 (:func:`roe_sep.core.frames.gcrf_to_eme2000`, 23 mas, 0.8 m at the carrier's radius).
 

@@ -4,8 +4,8 @@ Frames and models:
 
 * Time: sim time ``t`` [s] counts from a calendar epoch given as a Julian date ``jd0`` (UTC).
 * Earth orientation: the inertial frame is the GCRF; Earth-fixed = ITRF, rotated by the matrix of
-  :func:`roe_sep.core.frames.gcrs_to_itrs` (IAU 2000B precession-nutation with frame bias, Earth rotation angle of
-  UT1, polar motion, IERS EOP). The chief's RAAN is referred to the GCRF equator and origin.
+  :func:`roe_sep.core.frames.gcrs_to_itrs` (the one Earth-orientation model: ERFA's IAU 2000B with frame bias,
+  Earth rotation angle of UT1, polar motion, IERS EOP). The chief's RAAN is referred to the GCRF equator and origin.
 * Chief (carrier): its *mean* near-circular elements (a, i, raan, u) are used as if they were osculating
   (:func:`chief_position_velocity`, circular orbit, e neglected). The short-periodic J2 terms (~km) and the
   eccentricity (a e ~ km for a frozen orbit) shift the absolute position of both spacecraft together; the relative
