@@ -153,8 +153,15 @@ def _oem_covariance(epoch, cov, frame):
     return nd.OemCovarianceMatrixType(epoch=epoch, cov_ref_frame=frame, **kw)
 
 
+OEM_HERMITE_DEGREE = 7
+"""INTERPOLATION_DEGREE of the OEM segments (Hermite: 4 states, positions and velocities)."""
+
+
 def build_oem(epoch_utc, segments, comments=()):
-    """OEM 2.0 with one segment per :class:`EphemerisSegment` (Lagrange interpolation, degree 7)."""
+    """OEM 2.0 with one segment per :class:`EphemerisSegment`, declared ``INTERPOLATION = HERMITE`` of degree 7
+    (positions and velocities of 4 neighbouring states; fewer in a shorter segment): the velocities are the time
+    derivative of the positions (:func:`roe_sep.ndm.frames.chief_state`), so a reader's Hermite reproduces the
+    trajectory between the states; a Lagrange reader of positions alone loses up to metres at 300 s spacing."""
     out = []
     for s in segments:
         t = np.asarray(s.t, dtype=float)
@@ -163,8 +170,8 @@ def build_oem(epoch_utc, segments, comments=()):
         meta = nd.OemMetadata(comment=list(s.comments), object_name=s.object_name, object_id=s.object_id,
                               center_name=frames.CENTER, ref_frame=frames.INERTIAL_FRAME,
                               time_system=frames.TIME_SYSTEM, start_time=frames.utc_string(epoch_utc, t[0]),
-                              stop_time=frames.utc_string(epoch_utc, t[-1]), interpolation="LAGRANGE",
-                              interpolation_degree=int(min(7, t.size - 1)))
+                              stop_time=frames.utc_string(epoch_utc, t[-1]), interpolation="HERMITE",
+                              interpolation_degree=int(min(OEM_HERMITE_DEGREE, 2 * t.size - 1)))
         states = [_state_vector(nd.StateVectorAccType, frames.utc_string(epoch_utc, tk), rk, vk)
                   for tk, rk, vk in zip(t, s.r, s.v)]
         covs = [_oem_covariance(frames.utc_string(epoch_utc, tc), c, s.cov_frame) for tc, c in s.covariances]
@@ -192,7 +199,8 @@ SIGMA_ANGLE_KEY = "SIGMA_ANGLE_DEG"
 
 def build_tdm(epoch_utc, passes, comments=()):
     """TDM 2.0, one segment per :class:`TrackingPass`: AZEL angles [deg], RANGE [km], PARTICIPANT_1 the station,
-    PARTICIPANT_2 the target, two-way path 1,2,1 with the one-way geometric range (no light time) at the time tag.
+    PARTICIPANT_2 the target, two-way path 1,2,1, receive time tag: RANGE is half the round-trip light time times c
+    (:func:`roe_sep.core.od.radar.two_way_look`), the angles those of the received signal.
     The TDM has no keyword for the measurement noise: it goes into metadata comments ``SIGMA_RANGE_M = ...``,
     ``SIGMA_ANGLE_DEG = ...`` (read back by :func:`read_tdm`)."""
     segs = []
@@ -202,7 +210,9 @@ def build_tdm(epoch_utc, passes, comments=()):
         meta = nd.TdmMetadata(
             comment=[f"{SIGMA_RANGE_KEY} = {_f(p.sigma_range)!r}",
                      f"{SIGMA_ANGLE_KEY} = {_f(math.degrees(p.sigma_angle))!r}",
-                     "RANGE is the one-way geometric station-target distance at the time tag (no light time)"],
+                     "RANGE: two-way light-time range c (tau_up + tau_down) / 2 at the receive time tag, "
+                     "no corrections",
+                     "ANGLE_1/2: azimuth/elevation of the received signal (the target at reflection), no refraction"],
             track_id=f"{p.station}_PASS_{int(p.pass_id)}", time_system=nd.TimeSystemType.UTC,
             start_time=frames.utc_string(epoch_utc, t[0]), stop_time=frames.utc_string(epoch_utc, t[-1]),
             participant_1=p.station, participant_2=p.target, mode=nd.ModeType.SEQUENTIAL, path="1,2,1",
