@@ -162,9 +162,10 @@ def _comment_value(comments, key):
     return None
 
 
-def range_residuals(ctx, oem_path, tdm_path, station=None):
+def range_residuals(ctx, oem_path, tdm_path, station=None, two_way=None):
     """Per TDM segment (pass): TDM RANGE minus Orekit's range of the OEM's tracked object from ``station`` (default
-    TIRA), positions-only and with-velocities interpolation; the light time as the segment declares it.
+    TIRA), positions-only and with-velocities interpolation; the light time as the segment declares it (``two_way``
+    True or False: that light time instead, a negative control).
 
     Returns
     -------
@@ -181,6 +182,7 @@ def range_residuals(ctx, oem_path, tdm_path, station=None):
     tdm = builder.buildTdmParser().parseMessage(DataSource(str(tdm_path)))
     station = tira(ctx) if station is None else station
     sat = ObservableSatellite(0)
+    override = two_way
     objects = {}
     out = []
     for seg in tdm.getSegments():
@@ -193,6 +195,7 @@ def range_residuals(ctx, oem_path, tdm_path, station=None):
             two_way = False
         else:
             raise ValueError(f"{md.getTrackId()}: PATH {path} is neither one- nor two-way")
+        two_way = two_way if override is None else override
         if str(md.getTimetagRef().name()) != "RECEIVE" or path[-1] != 1:
             raise ValueError(f"{md.getTrackId()}: only ranges received at PARTICIPANT_1 are computed here")
         target = names[path[1]]
@@ -239,7 +242,8 @@ def scenario_geometry(seed):
     cfg = SeparationConfig()
     rng = np.random.default_rng(seed)
     a = float(semi_major_axis(cfg.altitude))
-    start = datetime.fromisoformat(DEFAULT_EPOCH_UTC) + timedelta(seconds=round(float(rng.uniform(0.0, 86400.0))))
+    start = datetime.fromisoformat(DEFAULT_EPOCH_UTC) + timedelta(seconds=STEP_S * math.floor(float(rng.uniform(
+        0.0, 86400.0)) / STEP_S))  # on the radar's whole-step grid, as the carrier's OEM states
     epoch = start.isoformat()
     chief = np.array([a, 0.0, float(sun_synchronous_inclination(a)), float(raan_from_ltan(9.5, julian_date(epoch))),
                       0.0, float(rng.uniform(0.0, 2.0 * math.pi))])
@@ -414,21 +418,16 @@ def write_tdm(ctx, rows, path, fmt, *, station_name, target):
 
 def write_oem(ctx, states, path, fmt, *, object_id):
     """Orekit's OEM writer (OEM 2.0, EME2000, UTC): one segment of ``states`` (SpacecraftState), Hermite
-    interpolation of degree 7 declared."""
+    interpolation of degree 7 declared. (The message is built and written whole: Orekit 13.1's
+    ``EphemerisOemWriter`` leaves the ``<segment>`` element out of its XML.)"""
     from java.util import ArrayList
     from org.orekit.files.ccsds.definitions import BodyFacade, CenterName, FrameFacade, TimeSystem
     from org.orekit.files.ccsds.ndm import WriterBuilder
     from org.orekit.files.ccsds.ndm.odm import OdmHeader
-    from org.orekit.files.ccsds.ndm.odm.oem import EphemerisOemWriter, InterpolationMethod, OemMetadata
-    from org.orekit.files.ccsds.utils import FileFormat
-    from org.orekit.files.general import OrekitEphemerisFile
-    from org.orekit.utils import Constants
+    from org.orekit.files.ccsds.ndm.odm.oem import InterpolationMethod, Oem, OemData, OemMetadata, OemSegment
+    from org.orekit.utils import Constants, IERSConventions
 
-    eph = OrekitEphemerisFile()
-    lst = ArrayList()
-    for s in states:
-        lst.add(s)
-    eph.addSatellite(object_id).addNewSegment(lst, 8)
+    eme = ctx.getFrames().getEME2000()
     header = OdmHeader()
     header.setFormatVersion(2.0)
     header.setOriginator("OREKIT")
@@ -437,14 +436,21 @@ def write_oem(ctx, states, path, fmt, *, object_id):
     md.setObjectName(object_id)
     md.setObjectID(object_id)
     md.setCenter(BodyFacade.create(CenterName.EARTH, ctx))
-    md.setReferenceFrame(FrameFacade.map(ctx.getFrames().getEME2000()))
+    md.setReferenceFrame(FrameFacade.map(eme))
     md.setTimeSystem(TimeSystem.UTC)
+    md.setStartTime(states[0].getDate())
+    md.setStopTime(states[-1].getDate())
     md.setInterpolationMethod(InterpolationMethod.HERMITE)
-    sb, _ = _generator(ctx, fmt, str(path))
-    writer = EphemerisOemWriter(WriterBuilder(ctx).buildOemWriter(), header, md,
-                                FileFormat.XML if fmt == "xml" else FileFormat.KVN, str(path), Constants.JULIAN_DAY,
-                                0)
-    writer.write(sb, eph)
+    md.setInterpolationDegree(7)
+    data = OemData()
+    for s in states:
+        data.addData(s.getPVCoordinates(eme), False)
+    segments = ArrayList()
+    segments.add(OemSegment(md, data, Constants.EIGEN5C_EARTH_MU))
+    oem = Oem(header, segments, IERSConventions.IERS_2010, ctx, Constants.EIGEN5C_EARTH_MU)
+    sb, gen = _generator(ctx, fmt, str(path))
+    WriterBuilder(ctx).buildOemWriter().writeMessage(gen, oem)
+    gen.close()
     Path(path).write_text(str(sb.toString()), encoding="utf-8")
 
 

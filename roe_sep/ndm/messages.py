@@ -159,7 +159,8 @@ OEM_HERMITE_DEGREE = 7
 
 def build_oem(epoch_utc, segments, comments=()):
     """OEM 2.0 with one segment per :class:`EphemerisSegment`, declared ``INTERPOLATION = HERMITE`` of degree 7
-    (positions and velocities of 4 neighbouring states; fewer in a shorter segment): the velocities are the time
+    (positions and velocities of 4 neighbouring states; never above the segment's states - 1, as Orekit takes degree
+    + 1 states for its Hermite and refuses a segment with fewer): the velocities are the time
     derivative of the positions (:func:`roe_sep.ndm.frames.chief_state`), so a reader's Hermite reproduces the
     trajectory between the states; a Lagrange reader of positions alone loses up to metres at 300 s spacing."""
     out = []
@@ -171,7 +172,7 @@ def build_oem(epoch_utc, segments, comments=()):
                               center_name=frames.CENTER, ref_frame=frames.INERTIAL_FRAME,
                               time_system=frames.TIME_SYSTEM, start_time=frames.utc_string(epoch_utc, t[0]),
                               stop_time=frames.utc_string(epoch_utc, t[-1]), interpolation="HERMITE",
-                              interpolation_degree=int(min(OEM_HERMITE_DEGREE, 2 * t.size - 1)))
+                              interpolation_degree=int(min(OEM_HERMITE_DEGREE, t.size - 1)))
         states = [_state_vector(nd.StateVectorAccType, frames.utc_string(epoch_utc, tk), rk, vk)
                   for tk, rk, vk in zip(t, s.r, s.v)]
         covs = [_oem_covariance(frames.utc_string(epoch_utc, tc), c, s.cov_frame) for tc, c in s.covariances]
