@@ -155,17 +155,18 @@ class Segments:
 
 
 def _comment_value(comments, key):
+    """The number of a ``KEY = value`` comment (Orekit's KVN lexer reads the comment's underscores as blanks)."""
     for c in comments:
         k, _, v = str(c).partition("=")
-        if k.strip() == key:
+        if "_".join(k.split()) == key:
             return float(v)
     return None
 
 
-def range_residuals(ctx, oem_path, tdm_path, station=None, two_way=None):
+def range_residuals(ctx, oem_path, tdm_path, station=None, light_time=True):
     """Per TDM segment (pass): TDM RANGE minus Orekit's range of the OEM's tracked object from ``station`` (default
-    TIRA), positions-only and with-velocities interpolation; the light time as the segment declares it (``two_way``
-    True or False: that light time instead, a negative control).
+    TIRA), positions-only and with-velocities interpolation; the light time as the segment declares it
+    (``light_time`` False: the geometric distance at the time tag instead, a negative control).
 
     Returns
     -------
@@ -182,7 +183,6 @@ def range_residuals(ctx, oem_path, tdm_path, station=None, two_way=None):
     tdm = builder.buildTdmParser().parseMessage(DataSource(str(tdm_path)))
     station = tira(ctx) if station is None else station
     sat = ObservableSatellite(0)
-    override = two_way
     objects = {}
     out = []
     for seg in tdm.getSegments():
@@ -195,7 +195,6 @@ def range_residuals(ctx, oem_path, tdm_path, station=None, two_way=None):
             two_way = False
         else:
             raise ValueError(f"{md.getTrackId()}: PATH {path} is neither one- nor two-way")
-        two_way = two_way if override is None else override
         if str(md.getTimetagRef().name()) != "RECEIVE" or path[-1] != 1:
             raise ValueError(f"{md.getTrackId()}: only ranges received at PARTICIPANT_1 are computed here")
         target = names[path[1]]
@@ -207,8 +206,10 @@ def range_residuals(ctx, oem_path, tdm_path, station=None, two_way=None):
             date = o.getEpoch()
             _set_reference_dates(station, date)
             model = Range(station, two_way, date, 0.0, 1.0, 1.0, sat)  # Orekit: date = reception for two-way
-            got = [float(o.getMeasurement()) - float(model.estimateWithoutDerivatives(
-                [eph.state(date, v)]).getEstimatedValue()[0]) for v in (False, True)]
+            states = [eph.state(date, v) for v in (False, True)]
+            got = [float(o.getMeasurement()) - (
+                float(model.estimateWithoutDerivatives([s]).getEstimatedValue()[0]) if light_time else
+                float(station.getBaseFrame().getRange(s.getPosition(), s.getFrame(), date))) for s in states]
             rows.append((float(date.durationFrom(seg.getData().getObservations()[0].getEpoch())), *got))
         rows = np.array(rows)
         out.append({"track_id": str(md.getTrackId()), "target": target, "path": path,
