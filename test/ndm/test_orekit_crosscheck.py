@@ -12,7 +12,6 @@ B. Orekit writes, we read: Orekit propagates a carrier and a picosatellite (nume
 The JVM starts once for the module (the ``ctx`` fixture).
 """
 
-import json
 import math
 import sys
 from pathlib import Path
