@@ -77,7 +77,7 @@ def cmd_od(args):
             DEFAULTS["stations"], DEFAULTS["station_latitudes_deg"], DEFAULTS["station_longitudes_deg"],
             DEFAULTS["station_altitudes_m"]))
     settings = oo.Settings(stations=stations, sigma_range=args.sigma_range, sigma_angle=math.radians(args.sigma_angle),
-                           min_pass=args.min_pass, maneuvers=maneuver_epochs(args.maneuvers or []),
+                           min_pass=args.min_pass, min_passes=args.min_passes, maneuvers=maneuver_epochs(args.maneuvers or []),
                            since=args.since, until=args.until, scale_height=DEFAULTS["density_scale_height_m"],
                            ballistic_ratio=DEFAULTS["drag_ballistic_ratio"], drag=DEFAULTS["od_drag_terms"],
                            edit_p=args.edit_p)
@@ -166,6 +166,8 @@ def register(subparsers):
                    help="deg, angle 1-sigma of a TDM without SIGMA_ANGLE_DEG (default 0.01)")
     p.add_argument("--min-pass", type=positive_int, default=DEFAULTS["min_pass_measurements"],
                    help="measurements for a pass to count (default 5)")
+    p.add_argument("--min-passes", type=positive_int, default=DEFAULTS["passes_required"],
+                   help="counted passes the OD needs (default 2, radar_od's passes_required)")
     p.add_argument("--edit-p", type=finite_float(0.0, 0.5, lo_open=True), default=1e-4,
                    help="probability of rejecting a consistent measurement (chi-square, 3 dof; default 1e-4)")
     p.add_argument("--predict", type=finite_float(0.0, 720.0, lo_open=True, unit="h"), default=24.0,

@@ -9,7 +9,8 @@ mean elements at its epoch; the records after the latest carrier maneuver, in pa
 The carrier's orbit comes from its own OEM (its GPS ephemeris, EME2000): each state is turned into the mean
 near-circular elements the measurement model uses as osculating (:func:`chief_elements`, the inverse of
 :func:`roe_sep.ndm.frames.chief_state`: a = |r|, the plane of r x v, u of r in it) and carried to the measurement
-epoch from the nearest state of its segment with the J2 secular rates, as radar_od carries its truth samples
+epoch from the first state at or after it in its segment with the J2 secular rates, as radar_od carries its
+truth samples
 (:func:`~roe_sep.core.relmotion.dynamics.propagate_chief`).
 
 Editing: after each fit, a measurement whose whitened residual triplet has a chi-square (3 degrees of freedom)
@@ -165,11 +166,13 @@ def read_carrier_oem(path, epoch_utc, target=None, carrier=None):
 
 
 def carrier_at(segments, t):
-    """The carrier's mean elements at sim time ``t`` [s] from the nearest state of the segment that holds ``t``
-    (a segment ends at a maneuver: none is crossed) and that state's time; None outside every segment."""
+    """The carrier's mean elements at sim time ``t`` [s] from the first state at or after ``t`` of the segment that
+    holds it (a segment ends at a maneuver: none is crossed), as radar_od carries its truth samples (the sensor
+    simulated its measurements from that sample, so a closed-loop run's files are read as they were made), and that
+    state's time; None outside every segment."""
     for seg in segments:
         if seg.t[0] <= t <= seg.t[-1]:
-            k = int(np.argmin(np.abs(seg.t - t)))
+            k = int(np.searchsorted(seg.t, t))
             if abs(seg.t[k] - t) > CARRIER_GAP_S:
                 return None
             return propagate_chief(seg.kep[k], np.array([t - seg.t[k]]))[0], float(seg.t[k])
@@ -192,14 +195,15 @@ def tdm_epoch(paths):
 @dataclass(frozen=True)
 class Settings:
     """What the offline OD is told: stations (:class:`~roe_sep.core.od.radar.Station`), default sigmas [m, rad]
-    for TDMs without them, measurements a pass needs, maneuver epochs (UTC datetimes), the arc's limits (UTC or
-    None), the drag model's scale height (0: Vallado's) and ballistic ratio, the drag terms, the editing
-    probability."""
+    for TDMs without them, measurements a pass needs, passes the OD needs, maneuver epochs (UTC datetimes), the
+    arc's limits (UTC or None), the drag model's scale height (0: Vallado's) and ballistic ratio, the drag terms,
+    the editing probability."""
 
     stations: tuple
     sigma_range: float
     sigma_angle: float
     min_pass: int
+    min_passes: int = 2
     maneuvers: tuple = ()
     since: object = None
     until: object = None
@@ -274,6 +278,11 @@ def solve(tdms, carrier_oem, s: Settings, carrier_name=None) -> OfflineOD:
             reason = (f"before the latest maneuver ({frames.utc_string(epoch_utc, last_burn)})" if r.t < last_burn
                       else f"its pass has fewer than {s.min_pass} measurements")
             rejected.append(_rej(epoch_utc, r.t, s.stations[r.station].name, -r.pass_id - 1, reason))
+    if len(passes) < s.min_passes:
+        after = "" if last_burn == -math.inf else f" after the latest maneuver ({frames.utc_string(epoch_utc, last_burn)})"
+        raise NdmError(f"{len(passes)} pass{'' if len(passes) == 1 else 'es'} count{'s' if len(passes) == 1 else ''}"
+                       f"{after}, at least {s.min_passes} needed (--min-passes; passes of >= {s.min_pass} "
+                       "measurements)")
     sig = {id(r): sg for r, sg in pairs}
     used.sort(key=lambda r: r.t)
     if 3 * len(used) < STATE_SIZE + 1:
