@@ -113,6 +113,14 @@ def earth_angle(epoch_utc, t):
     return gmst(julian_date(frames.parse_epoch(epoch_utc)) + np.asarray(t, dtype=float) / SECONDS_PER_DAY)
 
 
+def _read(path):
+    """:func:`~roe_sep.ndm.messages.read_message` of a file, its NdmError naming the file."""
+    try:
+        return read_message(path)
+    except NdmError as exc:
+        raise NdmError(f"{path}: {exc}") from None
+
+
 def _num(x):
     return float(getattr(x, "value", x))
 
@@ -122,7 +130,7 @@ def read_carrier_oem(path, epoch_utc, target=None, carrier=None):
     object other than ``target``, the TDMs' tracked object), EME2000 states in km and km/s, time systems of
     :mod:`roe_sep.ndm.tdm_reader`. NdmError (one line) for another frame or centre, an ambiguous or missing
     carrier, or a segment of fewer than 2 states."""
-    msg = read_message(path)
+    msg = _read(path)
     if type(msg).__name__ not in ("Oem", "OemType"):
         raise NdmError(f"{path}: expected an OEM, got {type(msg).__name__.removesuffix('Type').upper()}")
     segs = msg.body.segment
@@ -184,7 +192,7 @@ def tdm_epoch(paths):
     (the path's middle participant, or the other end of a one-way path)."""
     first, target = None, None
     for p in paths:
-        for o in read_observations(read_message(p)):
+        for o in read_observations(_read(p)):
             first = o.timetag if first is None else min(first, o.timetag)
             target = target or next((n for n in o.participants if n != o.participants[-1]), None)
     if first is None:
