@@ -98,9 +98,11 @@ class SpacecraftParameters:
     solar_rad_coeff: float = 0.0
 
 
-def build_opm(object_name, object_id, epoch_utc, t, r, *, v, burns, spacecraft: SpacecraftParameters, comments=()):
-    """OPM 2.0: the spacecraft's EME2000 state [m, m/s] at sim time ``t``, its parameters and its maneuvers
-    (:class:`Burn`)."""
+def build_opm(object_name, object_id, epoch_utc, t, r, *, v, burns, spacecraft: SpacecraftParameters | None,
+              comments=(), covariance=None):
+    """OPM 2.0: the spacecraft's EME2000 state [m, m/s] at sim time ``t``, its parameters (None: none, allowed
+    without maneuvers) and its maneuvers (:class:`Burn`); ``covariance``: the state's 6x6 [m, m/s] EME2000
+    covariance (the OPM covariance section, km^2...), or None."""
     meta = nd.OpmMetadata(object_name=object_name, object_id=object_id, center_name=frames.CENTER,
                           ref_frame=frames.INERTIAL_FRAME, time_system=frames.TIME_SYSTEM)
     mans = [nd.ManeuverParametersType(
@@ -109,17 +111,20 @@ def build_opm(object_name, object_id, epoch_utc, t, r, *, v, burns, spacecraft: 
         man_delta_mass=nd.DeltamassType(value=_f(b.delta_mass), units=nd.MassUnits.KG), man_ref_frame=b.frame,
         man_dv_1=_kms(b.dv[0]), man_dv_2=_kms(b.dv[1]), man_dv_3=_kms(b.dv[2])) for b in burns]
     sc = spacecraft
-    params = nd.SpacecraftParametersType(
+    if sc is None and burns:
+        raise ValueError("an OPM with maneuvers needs the spacecraft parameters (CCSDS 502.0-B-2 Sec. 3.2.4)")
+    params = None if sc is None else nd.SpacecraftParametersType(
         comment=["solar radiation pressure is not modelled (area and coefficient 0)"] if not sc.solar_rad_coeff
         else [], mass=nd.MassType(value=_f(sc.mass), units=nd.MassUnits.KG),
         solar_rad_area=nd.AreaType(value=_f(sc.solar_rad_area), units=nd.AreaUnits.M_2),
         solar_rad_coeff=_f(sc.solar_rad_coeff), drag_area=nd.AreaType(value=_f(sc.drag_area), units=nd.AreaUnits.M_2),
         drag_coeff=_f(sc.drag_coeff))
+    cov = None if covariance is None else _oem_covariance(None, covariance, frames.INERTIAL_FRAME)
     # The comments go into the state vector block, not before it at the data level: both are schema-valid and give
     # the same KVN, but Orekit's XML parser refuses a COMMENT directly under <data>.
     data = nd.OpmData(state_vector=_state_vector(
         nd.StateVectorType, frames.utc_string(epoch_utc, t), r, v, comment=list(comments)),
-        spacecraft_parameters=params, maneuver_parameters=mans)
+        spacecraft_parameters=params, maneuver_parameters=mans, covariance_matrix=cov)
     return nd.Opm(header=_header(), body=nd.OpmBody(segment=nd.OpmSegment(metadata=meta, data=data)))
 
 
@@ -142,7 +147,8 @@ COV_NAMES = ("x", "y", "z", "x_dot", "y_dot", "z_dot")
 
 
 def _oem_covariance(epoch, cov, frame):
-    """OEM covariance block (lower triangle, km^2, km^2/s, km^2/s^2) of a 6x6 [m, m/s] covariance."""
+    """OEM covariance block (lower triangle, km^2, km^2/s, km^2/s^2) of a 6x6 [m, m/s] covariance; with ``epoch``
+    None the OPM's (no epoch: the state's)."""
     c = np.asarray(cov, dtype=float) / 1e6
     kw = {}
     for i in range(6):
@@ -150,6 +156,8 @@ def _oem_covariance(epoch, cov, frame):
             kind = (nd.PositionCovarianceType if i < 3 else
                     nd.PositionVelocityCovarianceType if j < 3 else nd.VelocityCovarianceType)
             kw[f"c{COV_NAMES[i]}_{COV_NAMES[j]}"] = kind(value=_f(c[i, j]))
+    if epoch is None:
+        return nd.OpmCovarianceMatrixType(cov_ref_frame=frame, **kw)
     return nd.OemCovarianceMatrixType(epoch=epoch, cov_ref_frame=frame, **kw)
 
 
