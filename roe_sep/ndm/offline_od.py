@@ -26,7 +26,8 @@ from datetime import timedelta
 import numpy as np
 from scipy import stats
 
-from ..core.constants import R_EARTH, SECONDS_PER_DAY
+from ..core.constants import R_EARTH
+from ..core.frames import gcrf_to_eme2000, gcrs_to_itrs
 from ..core.od.batch import (
     STATE_SIZE,
     DragModel,
@@ -36,7 +37,7 @@ from ..core.od.batch import (
     measurement_residual,
     predict,
 )
-from ..core.od.radar import Station, gmst, julian_date
+from ..core.od.radar import julian_date
 from ..core.od.sensor import RadarRecord, counted_passes
 from ..core.relmotion.dynamics import propagate, propagate_chief
 from ..core.truth.nonlinear import vallado_band
@@ -102,15 +103,15 @@ def chief_elements(r, v):
 
 
 def _eme2000_to_sim(epoch_utc, t):
-    """Rotation ``(..., 3, 3)`` from EME2000 to the simulator's inertial frame at sim times ``t`` (the transpose of
-    :func:`roe_sep.ndm.frames.mod_to_eme2000`)."""
-    return np.swapaxes(frames.mod_to_eme2000(epoch_utc, t), -1, -2)
+    """Rotation ``(..., 3, 3)`` from EME2000 to the simulator's inertial frame, the GCRF, at sim times ``t``: the
+    transpose of the frame bias (:func:`roe_sep.core.frames.gcrf_to_eme2000`, constant)."""
+    return np.broadcast_to(gcrf_to_eme2000().T, np.shape(t) + (3, 3))
 
 
-def earth_angle(epoch_utc, t):
+def earth_rotation(epoch_utc, t):
     """The Earth's orientation at sim times ``t`` [s] as :class:`~roe_sep.core.od.batch.RadarBatch` takes it (the
-    radar_od node's: the sidereal angle of :func:`~roe_sep.core.od.radar.gmst`)."""
-    return gmst(julian_date(frames.parse_epoch(epoch_utc)) + np.asarray(t, dtype=float) / SECONDS_PER_DAY)
+    radar_od node's: the GCRS -> ITRS rotation of :func:`roe_sep.core.frames.gcrs_to_itrs`)."""
+    return gcrs_to_itrs(julian_date(frames.parse_epoch(epoch_utc)), np.asarray(t, dtype=float))
 
 
 def _read(path):
@@ -246,7 +247,7 @@ def _records(tdms, epoch_utc, carrier, s: Settings):
                                "span (or more than 1 h from its states)")
             records.append((RadarRecord(t=m.t, station=names.index(m.station), pass_id=-pid - 1,
                                         z=np.array(m.z, dtype=float), chief=at[0],
-                                        theta=float(earth_angle(epoch_utc, m.t)), truth_t=at[1]),
+                                        earth=earth_rotation(epoch_utc, m.t), truth_t=at[1]),
                             (m.sigma_range, m.sigma_angle)))
     return records, rejected, {v[0]: v[1] for v in pass_names.values()}
 
@@ -258,7 +259,7 @@ def _rej(epoch_utc, t, station, pid, reason):
 def _batch(recs, sigmas, s: Settings):
     return RadarBatch(t=np.array([r.t for r in recs]), z=np.array([r.z for r in recs]),
                       sigma=np.array([[sr, sa, sa] for sr, sa in sigmas]), chief=np.array([r.chief for r in recs]),
-                      theta=np.array([r.theta for r in recs]),
+                      earth=np.array([r.earth for r in recs]),
                       site_ef=np.array([s.stations[r.station].ecef for r in recs]),
                       site_enu=np.array([s.stations[r.station].enu for r in recs]))
 

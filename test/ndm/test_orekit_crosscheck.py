@@ -12,6 +12,7 @@ B. Orekit writes, we read: Orekit propagates a carrier and a picosatellite (nume
 The JVM starts once for the module (the ``ctx`` fixture).
 """
 
+import json
 import math
 import sys
 from pathlib import Path
@@ -154,3 +155,78 @@ def test_our_reader_reads_orekit_tdm_and_oem(ctx, orekit_files):
     sv = oem[0].data.state_vector[0]
     assert np.allclose(np.array([sv.x.value, sv.y.value, sv.z.value]) * 1e3, seg["first_state"]["position_m"],
                        rtol=0, atol=1e-6)
+
+
+GEOMETRIES = 50
+"""Seeded geometries of the NEES check (issue 40 part 6: >= 50)."""
+
+
+def od_of_orekit_files(out):
+    """``roe-sep od --json`` on Orekit's TDM and carrier OEM in ``out`` (in-process: the command's own code)."""
+    import contextlib
+    import io
+
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        rc = main(["od", "--tdm", str(out / "radar.tdm.kvn"), "--carrier-oem", str(out / "carrier.oem.kvn"),
+                   "--json"])
+    assert rc == 0
+    return json.loads(buf.getvalue())
+
+
+def relative_errors(truth, rep):
+    """The OD's relative state against Orekit's truth at the estimate's epoch (a time tag, where the truth is): RTN
+    position error [m] and its covariance (the estimate's mean ROE through the linear map of the carrier's
+    elements as the OD takes them from its OEM: :func:`roe_sep.ndm.offline_od.chief_elements`), and the mean-ROE
+    error (truth: Orekit's states through our first-order Brouwer mean elements) with its covariance.
+
+    Returns
+    -------
+    tuple
+        (position error (3,), its covariance (3, 3), a*ROE error (6,) [m], its covariance (6, 6) [m^2]).
+    """
+    from roe_sep.core.relmotion.roe import kepler_to_roe
+    from roe_sep.core.truth.mean_osc import cartesian_to_mean
+    from roe_sep.ndm.offline_od import chief_elements
+
+    est = rep["estimate"]
+    t_est = frames.sim_time(truth["geometry"]["epoch_utc"], est["epoch"])
+    k = int(np.argmin(np.abs(np.array(truth["t"]) - t_est)))
+    assert abs(truth["t"][k] - t_est) < 1e-6
+    bias = earth_frames.gcrf_to_eme2000()  # Orekit's EME2000 -> the OD's GCRF: r_GCRF = B^T r_EME2000
+    rc, vc, rd, vd = (np.array(truth[o][x][k]) @ bias for o in ("carrier", "picosatellite")
+                      for x in ("position_m", "velocity_m_s"))
+    chief = chief_elements(rc, vc)
+    a = float(chief[0])
+    cov = np.array(est["covariance_a_roe_m2"])[:6, :6]
+    jac = frames.roe_to_rtn_jacobian(chief)[:3] / a
+    rho = frames.roe_rtn_state(np.array(est["a_roe_m"]) / a, chief)[0]
+    err_pos = rho - frames.inertial_to_rtn(rc, vc, rd, vd)[0]
+    err_roe = np.array(est["a_roe_m"]) - a * kepler_to_roe(cartesian_to_mean(rc, vc), cartesian_to_mean(rd, vd))
+    return err_pos, jac @ cov @ jac.T, err_roe, cov
+
+
+@pytest.mark.slow
+def test_roe_sep_od_on_orekit_files_is_consistent_with_orekits_truth(ctx, tmp_path):
+    """``roe-sep od`` on Orekit's TDM and carrier OEM of 50 seeded geometries of the default scenario
+    (orekit_crosscheck.scenario_geometry): its post-fit residuals in their band, and its relative position at the
+    estimate's epoch within its covariance of Orekit's truth: the sum of the NEES (3 degrees of freedom each) in the
+    chi-square band of 3 x 50 degrees of freedom. The mean ROE's NEES (truth through our Brouwer mean elements) is
+    printed beside it."""
+    nees_pos, nees_roe, lines = [], [], []
+    for seed in range(GEOMETRIES):
+        out = tmp_path / str(seed)
+        truth = ox.generate(seed, out)
+        rep = od_of_orekit_files(out)
+        assert rep["consistency"]["in_band"] or rep["consistency"]["chi2_per_dof"] < 1.2, rep["consistency"]
+        e_pos, p_pos, e_roe, p_roe = relative_errors(truth, rep)
+        nees_pos.append(float(e_pos @ np.linalg.solve(p_pos, e_pos)))
+        nees_roe.append(float(e_roe @ np.linalg.solve(p_roe, e_roe)))
+        lines.append(f"seed {seed:2d}: RTN error {np.round(e_pos, 2)} m, 1-sigma {np.round(np.sqrt(np.diag(p_pos)), 2)}"
+                     f" m, NEES {nees_pos[-1]:6.2f} (3 dof), mean-ROE NEES {nees_roe[-1]:6.2f} (6 dof), "
+                     f"chi2/dof {rep['consistency']['chi2_per_dof']:.3f}")
+    lo, hi = band(3 * GEOMETRIES)
+    report = "\n".join(lines) + (f"\nsum of NEES {sum(nees_pos):.1f} (band [{lo:.1f}, {hi:.1f}]), mean "
+                                 f"{np.mean(nees_pos):.2f} (3); mean-ROE NEES mean {np.mean(nees_roe):.2f} (6)")
+    print(report)
+    assert lo <= sum(nees_pos) <= hi, report
