@@ -110,6 +110,20 @@ def test_orekit_reads_our_oem_and_tdm_with_its_earth(ctx, our_files, kind):
     assert lo <= chi2 <= hi, f"chi-square {chi2:.1f} outside [{lo:.1f}, {hi:.1f}] ({dof} dof)\n{table}"
 
 
+@pytest.mark.xfail(strict=True, reason="measured: the pass means are not noise alone (chi-square 80.3 on 12 dof with "
+                   "positions, 56.4 with velocities): the radar simulates each epoch from the next 300-s truth sample "
+                   "propagated back with the J2 secular rates, the OEM holds the samples themselves; noise-free, our "
+                   "range minus Orekit's is within 0.05 m at the samples and up to 16 m between them")
+def test_the_pass_means_of_orekits_residuals_are_the_radars_noise(ctx, our_files):
+    """Each pass's mean residual (TDM minus Orekit, positions-only interpolation) over its noise sigma / sqrt(n):
+    their squares summed over the passes within the chi-square band of as many degrees of freedom (no systematic
+    per pass at the noise's resolution, 1.5 m for a pass of 40)."""
+    passes = ox.range_residuals(ctx, *our_files)
+    t2 = sum(np.mean(p["positions"]) ** 2 * len(p["positions"]) / p["sigma_range_m"] ** 2 for p in passes)
+    lo, hi = band(len(passes))
+    assert lo <= t2 <= hi, f"{t2:.1f} outside [{lo:.1f}, {hi:.1f}] ({len(passes)} dof)"
+
+
 def test_ranges_without_light_time_do_not_fit_our_tdm(ctx, our_files):
     """The check can fail: Orekit's geometric distance at the time tag (no light time, what the TDM of issue 40's
     former radar held) differs from the two-way range the TDM declares by about the range rate times the light time
