@@ -39,7 +39,7 @@ from ..core.od.batch import (
 )
 from ..core.od.radar import julian_date
 from ..core.od.sensor import RadarRecord, counted_passes
-from ..core.relmotion.dynamics import propagate, propagate_chief
+from ..core.relmotion.dynamics import propagate, propagate_chief, raan_rate
 from ..core.truth.nonlinear import vallado_band
 from ..errors import NdmError
 from . import frames
@@ -78,7 +78,8 @@ class OfflineOD:
 def chief_elements(r, v):
     """Mean near-circular elements ``[a, 0, i, raan, 0, u]`` ``(..., 6)`` whose circular orbit
     (:func:`roe_sep.core.od.radar.chief_position_velocity`) passes through ``r`` [m] in the plane of ``r x v`` (the
-    simulator's inertial frame).
+    simulator's inertial frame), the velocity less the plane's nodal turn d raan/dt z x r that an OEM's velocity (the
+    derivative of its positions, :func:`roe_sep.ndm.frames.chief_state`) carries: 1.8e-4 rad of tilt otherwise.
 
     Parameters
     ----------
@@ -92,9 +93,12 @@ def chief_elements(r, v):
     """
     r, v = np.asarray(r, dtype=float), np.asarray(v, dtype=float)
     a = np.linalg.norm(r, axis=-1)
-    h = np.cross(r, v)
-    h = h / np.linalg.norm(h, axis=-1, keepdims=True)
-    inc = np.arccos(np.clip(h[..., 2], -1.0, 1.0))
+    w = np.zeros_like(a)
+    for _ in range(2):  # the plane's own turn, d raan/dt z x r (in the velocity of the positions), taken out
+        h = np.cross(r, v - np.stack([-w * r[..., 1], w * r[..., 0], np.zeros_like(w)], axis=-1))
+        h = h / np.linalg.norm(h, axis=-1, keepdims=True)
+        inc = np.arccos(np.clip(h[..., 2], -1.0, 1.0))
+        w = raan_rate(a, inc)
     raan = np.arctan2(h[..., 0], -h[..., 1])
     node = np.stack([np.cos(raan), np.sin(raan), np.zeros_like(raan)], axis=-1)
     u = np.arctan2(np.sum(r * np.cross(h, node), axis=-1), np.sum(r * node, axis=-1))
