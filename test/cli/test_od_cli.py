@@ -148,10 +148,10 @@ def test_public_example_tdms_read_or_refused_in_one_line(name, files, capsys):
 def test_bad_input_one_line_exit_2(argv, needle, files, capsys, tmp_path):
     short = tmp_path / "short.oem"
     text = files["oem"].read_text()
-    head, _, _ = text.partition("META_START\nCOMMENT truth: the simulator's picosatellite")
+    head = "META_START".join(text.split("META_START")[:3])  # the header and the carrier's first two segments
     lines = head.splitlines()
     keep = [ln for ln in lines if not ln[:4].isdigit() or ln < "2016-07-01T03"]
-    short.write_text("\n".join(keep).replace("STOP_TIME                = 2016-07-04T06:00:00.000000",
+    short.write_text("\n".join(keep).replace("STOP_TIME                = 2016-07-02T00:20:00.000000",
                                              "STOP_TIME                = 2016-07-01T02:59:00.000000") + "\n")
     names = {"missing": str(tmp_path / "none.tdm"), "tdm": str(files["tdm"]), "oem": str(files["oem"]),
              "opm": str(files["opm"]), "short_oem": str(short)}
