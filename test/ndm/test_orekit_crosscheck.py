@@ -189,9 +189,10 @@ def od_of_orekit_files(out):
 
 
 def relative_errors(truth, rep):
-    """The OD's relative state against Orekit's truth at the estimate's epoch (a time tag, where the truth is): RTN
-    position error [m] and its covariance (the estimate's mean ROE through the linear map of the carrier's
-    elements as the OD takes them from its OEM: :func:`roe_sep.ndm.offline_od.chief_elements`), and the mean-ROE
+    """The OD's relative state against Orekit's truth at the estimate's epoch (a time tag, where the truth is): the
+    position error [m] in the OD's RTN frame (of its carrier model, whose position is Orekit's) and its covariance
+    (the estimate's mean ROE through the linear map of the carrier's elements as the OD takes them from its OEM:
+    :func:`roe_sep.ndm.offline_od.chief_elements`), and the mean-ROE
     error (truth: Orekit's states through our first-order Brouwer mean elements) with its covariance.
 
     Returns
@@ -199,6 +200,7 @@ def relative_errors(truth, rep):
     tuple
         (position error (3,), its covariance (3, 3), a*ROE error (6,) [m], its covariance (6, 6) [m^2]).
     """
+    from roe_sep.core.od.radar import chief_from_kepler, chief_position_velocity, rtn_matrix
     from roe_sep.core.relmotion.roe import kepler_to_roe
     from roe_sep.core.truth.mean_osc import cartesian_to_mean
     from roe_sep.ndm.offline_od import chief_elements
@@ -215,7 +217,8 @@ def relative_errors(truth, rep):
     cov = np.array(est["covariance_a_roe_m2"])[:6, :6]
     jac = frames.roe_to_rtn_jacobian(chief)[:3] / a
     rho = frames.roe_rtn_state(np.array(est["a_roe_m"]) / a, chief)[0]
-    err_pos = rho - frames.inertial_to_rtn(rc, vc, rd, vd)[0]
+    rc_model, vc_model = chief_position_velocity(*chief_from_kepler(chief))  # the OD's carrier: rc_model = rc
+    err_pos = rho - rtn_matrix(rc_model, vc_model).T @ (rd - rc)  # in the OD's RTN frame
     err_roe = np.array(est["a_roe_m"]) - a * kepler_to_roe(cartesian_to_mean(rc, vc), cartesian_to_mean(rd, vd))
     return err_pos, jac @ cov @ jac.T, err_roe, cov
 
