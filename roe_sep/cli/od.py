@@ -30,8 +30,8 @@ def station(text):
     except ValueError:
         lat = math.nan
     if len(parts) != 4 or not parts[0] or not (-90 <= lat <= 90 and -180 <= lon <= 360 and -500 <= alt <= 9000):
-        raise argparse.ArgumentTypeError(f"expected NAME,LAT_DEG,LON_DEG,ALT_M (latitude in [-90, 90], longitude in [-180, 360], "
-                         f"height in [-500, 9000] m), got {text!r}")
+        raise argparse.ArgumentTypeError("expected NAME,LAT_DEG,LON_DEG,ALT_M (latitude in [-90, 90], longitude in "
+                                         f"[-180, 360], height in [-500, 9000] m), got {text!r}")
     return Station(parts[0], math.radians(lat), math.radians(lon), alt)
 
 
@@ -77,7 +77,8 @@ def cmd_od(args):
             DEFAULTS["stations"], DEFAULTS["station_latitudes_deg"], DEFAULTS["station_longitudes_deg"],
             DEFAULTS["station_altitudes_m"]))
     settings = oo.Settings(stations=stations, sigma_range=args.sigma_range, sigma_angle=math.radians(args.sigma_angle),
-                           min_pass=args.min_pass, min_passes=args.min_passes, maneuvers=maneuver_epochs(args.maneuvers or []),
+                           min_pass=args.min_pass, min_passes=args.min_passes,
+                           maneuvers=maneuver_epochs(args.maneuvers or []),
                            since=args.since, until=args.until, scale_height=DEFAULTS["density_scale_height_m"],
                            ballistic_ratio=DEFAULTS["drag_ballistic_ratio"], drag=DEFAULTS["od_drag_terms"],
                            edit_p=args.edit_p)
@@ -97,7 +98,7 @@ def cmd_od(args):
         m = r["measurements"]
         print(f"roe-sep od: {m['used']} measurements in {m['passes']} passes ({m['rejected']} rejected), "
               f"{e['iterations']} Gauss-Newton iterations")
-        print(f"estimate at {e['epoch']} UTC (mean ROE of the carrier's RTN, m; 1-sigma):")
+        print(f"estimate at {e['epoch']} UTC: mean a*ROE [m] relative to the carrier, 1-sigma")
         for name, x, s in zip(ROE_NAMES, e["a_roe_m"], e["a_roe_sigma_m"]):
             print(f"  {name:6s} {x:+14.3f} ± {s:.3f}")
         print(f"  a*da_dot {e['a_da_dot_m_s']:+.4e} ± {e['a_da_dot_sigma_m_s']:.1e} m/s")
@@ -173,6 +174,6 @@ def register(subparsers):
     p.add_argument("--predict", type=finite_float(0.0, 720.0, lo_open=True, unit="h"), default=24.0,
                    help="h, span of the OEM prediction (default 24)")
     p.add_argument("--out", help="directory for od_estimate.opm and od_prediction.oem")
-    p.add_argument("--format", choices=("xml", "kvn"), default="kvn", help="file format (default KVN)")
+    p.add_argument("--format", choices=("xml", "kvn"), default="xml", help="NDM/XML (default) or KVN")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=cmd_od)

@@ -36,7 +36,7 @@ from ..core.od.batch import (
     measurement_residual,
     predict,
 )
-from ..core.od.radar import Station, gmst, julian_date
+from ..core.od.radar import gmst, julian_date
 from ..core.od.sensor import RadarRecord, counted_passes
 from ..core.relmotion.dynamics import propagate, propagate_chief
 from ..core.truth.nonlinear import vallado_band
@@ -287,7 +287,8 @@ def solve(tdms, carrier_oem, s: Settings, carrier_name=None) -> OfflineOD:
                       else f"its pass has fewer than {s.min_pass} measurements")
             rejected.append(_rej(epoch_utc, r.t, s.stations[r.station].name, -r.pass_id - 1, reason))
     if len(passes) < s.min_passes:
-        after = "" if last_burn == -math.inf else f" after the latest maneuver ({frames.utc_string(epoch_utc, last_burn)})"
+        after = ("" if last_burn == -math.inf else
+                 f" after the latest maneuver ({frames.utc_string(epoch_utc, last_burn)})")
         raise NdmError(f"{len(passes)} pass{'' if len(passes) == 1 else 'es'} count{'s' if len(passes) == 1 else ''}"
                        f"{after}, at least {s.min_passes} needed (--min-passes; passes of >= {s.min_pass} "
                        "measurements)")

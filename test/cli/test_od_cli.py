@@ -81,7 +81,9 @@ def test_closed_loop_arc_within_its_covariance(files, truth, capsys, until, pass
     assert lo <= value <= hi, f"NEES {value:.2f} outside [{lo:.2f}, {hi:.2f}] (6 dof)"
     c = rep["consistency"]
     assert c["dof"] == 3 * rep["measurements"]["used"] - 7
-    assert c["in_band"], c
+    lo, hi = stats.chi2.ppf([NEES_P / 2, 1 - NEES_P / 2], c["dof"]) / c["dof"]  # the printed band is 95 %
+    assert c["band95"] == pytest.approx(stats.chi2.ppf([0.025, 0.975], c["dof"]) / c["dof"])
+    assert lo <= c["chi2_per_dof"] <= hi, c
     assert all(p["n"] >= 5 and abs(p["range_m_mean"]) < 3 * 10.0 for p in rep["passes"])
 
 
@@ -101,8 +103,8 @@ def test_same_passes_as_the_run_give_the_runs_estimate(files, capsys):
 
 def test_writes_opm_with_covariance_and_oem_prediction(files, capsys, tmp_path):
     code, out, err = run_od(["--tdm", str(files["tdm"]), "--carrier-oem", str(files["oem"]), "--maneuvers",
-                             str(files["opm"]), "--until", ARCS[2][0], "--out", str(tmp_path), "--predict", "2"],
-                            capsys)
+                             str(files["opm"]), "--until", ARCS[2][0], "--out", str(tmp_path), "--predict", "2",
+                             "--format", "kvn"], capsys)
     assert code == 0, err
     assert "consistency: chi-square" in out and "rejected:" in out and "before the latest maneuver" in out
     from roe_sep.ndm.messages import read_message
