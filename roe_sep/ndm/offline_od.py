@@ -8,7 +8,8 @@ mean elements at its epoch; the records after the latest carrier maneuver, in pa
 
 The carrier's orbit comes from its own OEM (its GPS ephemeris, EME2000): each state is turned into the mean
 near-circular elements the measurement model uses as osculating (:func:`chief_elements`, the inverse of
-:func:`roe_sep.ndm.frames.chief_state`: a = |r|, the plane of r x v, u of r in it) and carried to the measurement
+:func:`roe_sep.ndm.frames.chief_state`: a = |r|, the plane of two neighbouring positions with the J2 nodal turn between
+them, u of r in it) and carried to the measurement
 epoch from the first state at or after it in its segment with the J2 secular rates, as radar_od carries its
 truth samples
 (:func:`~roe_sep.core.relmotion.dynamics.propagate_chief`).
@@ -38,7 +39,7 @@ from ..core.od.batch import (
 )
 from ..core.od.radar import gmst, julian_date
 from ..core.od.sensor import RadarRecord, counted_passes
-from ..core.relmotion.dynamics import propagate, propagate_chief
+from ..core.relmotion.dynamics import propagate, propagate_chief, raan_rate
 from ..core.truth.nonlinear import vallado_band
 from ..errors import NdmError
 from . import frames
@@ -74,27 +75,39 @@ class OfflineOD:
     pass_names: dict = field(default_factory=dict)
 
 
-def chief_elements(r, v):
-    """Mean near-circular elements ``[a, 0, i, raan, 0, u]`` ``(..., 6)`` whose circular orbit
-    (:func:`roe_sep.core.od.radar.chief_position_velocity`) passes through ``r`` [m] in the plane of ``r x v`` (the
-    simulator's inertial frame).
+def chief_elements(t, r):
+    """Mean near-circular elements ``[a, 0, i, raan, 0, u]`` ``(n, 6)`` of one ephemeris segment's positions: the
+    circular orbits (:func:`roe_sep.core.od.radar.chief_position_velocity`) through each ``r`` [m] whose planes turn
+    about the pole at the J2 nodal rate (:func:`~roe_sep.core.relmotion.dynamics.raan_rate`), as the carrier's mean
+    elements do. The plane at t_k is that of r_k and its neighbour r_j turned back by -raan_dot (t_j - t_k): the
+    positions alone, whatever velocity the file carries (a circular one, or the derivative of the positions with
+    the nodal term, whose r x v leans by up to raan_dot / n = 2e-4 rad).
 
     Parameters
     ----------
-    r, v : array_like, shape (..., 3)
-        Position [m] and velocity [m/s].
+    t, r : array_like, shapes (n,), (n, 3)
+        Times [s] (n >= 2, increasing) and positions [m] in the simulator's inertial frame.
 
     Returns
     -------
-    numpy.ndarray, shape (..., 6)
+    numpy.ndarray, shape (n, 6)
         a [m], e = 0, i, raan, argp = 0, M = u [rad].
     """
-    r, v = np.asarray(r, dtype=float), np.asarray(v, dtype=float)
+    t, r = np.asarray(t, dtype=float), np.asarray(r, dtype=float)
     a = np.linalg.norm(r, axis=-1)
-    h = np.cross(r, v)
+    j = np.arange(t.size) + 1
+    j[-1] = t.size - 2
+    sign = np.where(j > np.arange(t.size), 1.0, -1.0)[:, None]
+    h = sign * np.cross(r, r[j])
+    for _ in range(2):  # the nodal rate from the plane's inclination (once without the turn: to 2e-4 rad)
+        inc = np.arccos(np.clip(h[:, 2] / np.linalg.norm(h, axis=-1), -1.0, 1.0))
+        turn = -raan_rate(a, inc) * (t[j] - t)
+        c, s_ = np.cos(turn), np.sin(turn)
+        rj = np.stack([c * r[j, 0] - s_ * r[j, 1], s_ * r[j, 0] + c * r[j, 1], r[j, 2]], axis=-1)
+        h = sign * np.cross(r, rj)
     h = h / np.linalg.norm(h, axis=-1, keepdims=True)
-    inc = np.arccos(np.clip(h[..., 2], -1.0, 1.0))
-    raan = np.arctan2(h[..., 0], -h[..., 1])
+    inc = np.arccos(np.clip(h[:, 2], -1.0, 1.0))
+    raan = np.arctan2(h[:, 0], -h[:, 1])
     node = np.stack([np.cos(raan), np.sin(raan), np.zeros_like(raan)], axis=-1)
     u = np.arctan2(np.sum(r * np.cross(h, node), axis=-1), np.sum(r * node, axis=-1))
     zero = np.zeros_like(a)
@@ -163,10 +176,11 @@ def read_carrier_oem(path, epoch_utc, target=None, carrier=None):
         t = np.array([(to_utc(parse_tdm_epoch(s.epoch), ts) - start).total_seconds() for s in sv])
         r = np.array([[_num(s.x), _num(s.y), _num(s.z)] for s in sv]) * 1000.0
         v = np.array([[_num(s.x_dot), _num(s.y_dot), _num(s.z_dot)] for s in sv]) * 1000.0
-        if not (np.all(np.isfinite(r)) and np.all(np.isfinite(v)) and np.all(np.diff(t) > 0.0)):
+        if not (np.all(np.isfinite(r)) and np.all(np.diff(t) > 0.0)):
             raise NdmError(f"{where}: states must be finite, their epochs strictly increasing")
-        rot = _eme2000_to_sim(epoch_utc, t)
-        kep = chief_elements(np.einsum("...ij,...j->...i", rot, r), np.einsum("...ij,...j->...i", rot, v))
+        if not np.all(np.isfinite(v)):
+            raise NdmError(f"{where}: velocities must be finite")
+        kep = chief_elements(t, np.einsum("...ij,...j->...i", _eme2000_to_sim(epoch_utc, t), r))
         if not np.all((kep[:, 0] > R_EARTH + 1e5) & (kep[:, 0] < R_EARTH + 5e6)):
             raise NdmError(f"{where}: the carrier is not in low Earth orbit (|r| from {kep[:, 0].min():.0f} m)")
         out.append(CarrierSegment(t, kep))

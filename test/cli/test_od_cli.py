@@ -89,16 +89,18 @@ def test_closed_loop_arc_within_its_covariance(files, truth, capsys, until, pass
 
 def test_same_passes_as_the_run_give_the_runs_estimate(files, capsys):
     """The run's first OD (passes 1-3, at 21:00:00 = sim 75600 s): the offline OD of the same measurements agrees
-    to a small fraction of its sigma (the carrier from the OEM instead of the truth's elements)."""
+    to a small fraction of its sigma. Not exactly: the carrier's plane comes from the OEM's neighbouring positions
+    (offline_od.chief_elements), and the truth's mean elements scatter from one 300 s sample to the next (0.1 sigma
+    of a*dix here)."""
     run = json.loads((ROOT / "bags" / "default_run.report.json").read_text())["od"]
     rep = solve(files, ARCS[0][0], capsys)
     est = rep["estimate"]
     assert frames.sim_time(EPOCH, est["epoch"]) == pytest.approx(run["epoch"], abs=1e-3)
     assert rep["measurements"]["used"] == run["measurements"]
     z = (np.array(est["a_roe_m"]) - run["estimate"]) / np.array(run["sigma"])
-    assert np.max(np.abs(z)) < 0.1, z
+    assert np.max(np.abs(z)) < 0.2, z
     assert np.allclose(est["a_roe_sigma_m"], run["sigma"], rtol=0.02)
-    assert (est["a_da_dot_m_s"] - run["a_da_dot"]) / run["a_da_dot_sigma"] == pytest.approx(0.0, abs=0.1)
+    assert (est["a_da_dot_m_s"] - run["a_da_dot"]) / run["a_da_dot_sigma"] == pytest.approx(0.0, abs=0.2)
 
 
 def test_writes_opm_with_covariance_and_oem_prediction(files, capsys, tmp_path):
