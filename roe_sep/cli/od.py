@@ -69,7 +69,8 @@ def cmd_od(args):
         if not Path(path).is_file():
             raise NdmError(f"{path}: no such file")
     if args.carrier_oem is None:
-        raise NdmError("no carrier orbit: give the carrier's ephemeris with --carrier-oem FILE (an OEM, EME2000)")
+        raise NdmError("no carrier orbit: give the carrier's ephemeris with --carrier-oem FILE (an OEM, EME2000; a "
+                       "TDM's tracking of the carrier is not its orbit)")
     if args.since and args.until and args.until <= args.since:
         raise ValueError(f"--until {args.until.isoformat()} is not after --since {args.since.isoformat()}")
     stations = tuple(args.station) if args.station else tuple(
@@ -82,7 +83,7 @@ def cmd_od(args):
                            since=args.since, until=args.until, scale_height=DEFAULTS["density_scale_height_m"],
                            ballistic_ratio=DEFAULTS["drag_ballistic_ratio"], drag=DEFAULTS["od_drag_terms"],
                            edit_p=args.edit_p)
-    od = oo.solve(args.tdm, args.carrier_oem, settings, args.carrier)
+    od = oo.solve(args.tdm, args.carrier_oem, settings, args.carrier, args.target)
     est = oo.estimate(od)
     rep = {"tdm": [str(p) for p in args.tdm], "carrier_oem": str(args.carrier_oem),
            "estimate": {k: est[k] for k in ("epoch", "a_roe_m", "a_roe_sigma_m", "a_da_dot_m_s", "a_da_dot_sigma_m_s",
@@ -155,6 +156,8 @@ def register(subparsers):
                    "ephemeris.oem of `roe-sep export`)")
     p.add_argument("--carrier", metavar="NAME", help="the carrier's OBJECT_NAME in the OEM (default: its one "
                    "object other than the tracked one)")
+    p.add_argument("--target", metavar="NAME", help="the picosatellite's participant name in the TDMs (default: "
+                   "the one object they track)")
     p.add_argument("--maneuvers", nargs="+", metavar="OPM", help="OPM files of the carrier's executed maneuvers: "
                    "measurements before the latest one are not used")
     p.add_argument("--since", type=utc_epoch, help="ISO-8601 UTC: use measurements from this epoch on")

@@ -347,8 +347,8 @@ def _num(x):
 
 @dataclass(frozen=True)
 class Measurement:
-    """A radar measurement read from a TDM: sim time [s], station, pass id, z = [range m, az rad, el rad] and its
-    1-sigma noise [m, rad]."""
+    """A radar measurement read from a TDM: sim time [s], station, pass id, z = [range m, az rad, el rad], its
+    1-sigma noise [m, rad] and the tracked object (the participant the station's signal comes from)."""
 
     t: float
     station: str
@@ -356,6 +356,7 @@ class Measurement:
     z: tuple
     sigma_range: float
     sigma_angle: float
+    target: str | None = None
 
 
 def _comment_value(comments, key):
@@ -408,7 +409,7 @@ def read_tdm(source, epoch_utc, sigma_range=None, sigma_angle=None):
         pass_id = int(tail) if sep and tail.isdigit() and int(tail) < 2**32 else o.segment
         t = (o.receive_epoch - start).total_seconds()
         out.append(Measurement(t, o.participants[-1], pass_id, (o.range_m, o.angle_1, o.angle_2), float(sr),
-                               float(sa)))
+                               float(sa), o.participants[-2]))
     if not out:
         raise NdmError("the TDM holds no RANGE/ANGLE_1/ANGLE_2 measurement")
     out.sort(key=lambda m: (m.t, m.station))

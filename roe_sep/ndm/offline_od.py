@@ -201,17 +201,23 @@ def carrier_at(segments, t):
     return None
 
 
-def tdm_epoch(paths):
-    """ISO UTC string of the earliest time tag of the TDMs (the offline OD's sim time 0) and the tracked object
-    (the path's middle participant, or the other end of a one-way path)."""
-    first, target = None, None
+def tdm_epoch(paths, target=None):
+    """ISO UTC string of the earliest time tag of the TDMs (the offline OD's sim time 0, less a minute) and the
+    tracked object (the participant the station's signal comes from): ``target`` if given (NdmError if no TDM
+    tracks it), else the one object the TDMs track (NdmError naming them if they track several)."""
+    first, tracked = None, set()
     for p in paths:
         for o in read_observations(_read(p)):
             first = o.timetag if first is None else min(first, o.timetag)
-            target = target or next((n for n in o.participants if n != o.participants[-1]), None)
+            tracked.add(o.participants[-2] if o.path[-1] == 1 else o.participants[-1])
     if first is None:
         raise NdmError(f"{paths[0]}: no observation")
-    return (first - timedelta(seconds=60.0)).strftime("%Y-%m-%dT%H:%M:%S.%f"), target
+    if target is None and len(tracked) > 1:
+        raise NdmError(f"the TDMs track {len(tracked)} objects ({', '.join(sorted(tracked))}): give --target NAME "
+                       "(the picosatellite)")
+    if target is not None and target not in tracked:
+        raise NdmError(f"no TDM tracks --target {target} (they track {', '.join(sorted(tracked))})")
+    return (first - timedelta(seconds=60.0)).strftime("%Y-%m-%dT%H:%M:%S.%f"), target or tracked.pop()
 
 
 @dataclass(frozen=True)
@@ -235,9 +241,10 @@ class Settings:
     edit_p: float = EDIT_P
 
 
-def _records(tdms, epoch_utc, carrier, s: Settings):
-    """RadarRecords of every measurement of the TDMs (pass ids negative: external passes), rejections outside the
-    arc, and the passes' names; NdmError for an unknown station or an epoch outside the carrier OEM."""
+def _records(tdms, epoch_utc, carrier, s: Settings, *, target):
+    """RadarRecords of every measurement of ``target`` in the TDMs (pass ids negative: external passes), rejections
+    (another object, outside the arc), and the passes' names; NdmError for an unknown station or an epoch outside
+    the carrier OEM."""
     names = [st.name for st in s.stations]
     start = frames.parse_epoch(epoch_utc)
     lo = -math.inf if s.since is None else (s.since - start).total_seconds()
@@ -245,6 +252,9 @@ def _records(tdms, epoch_utc, carrier, s: Settings):
     records, rejected, pass_names = [], [], {}
     for f, path in enumerate(tdms):
         for m in read_tdm(path, epoch_utc, s.sigma_range, s.sigma_angle):
+            if m.target != target:
+                rejected.append(_rej(epoch_utc, m.t, m.station, -1, f"tracks {m.target}, not {target}"))
+                continue
             if m.station not in names:
                 raise NdmError(f"{path}: station {m.station} is not known (stations: {', '.join(names)}; add it "
                                "with --station NAME,LAT_DEG,LON_DEG,ALT_M)")
@@ -277,15 +287,16 @@ def _batch(recs, sigmas, s: Settings):
                       site_enu=np.array([s.stations[r.station].enu for r in recs]))
 
 
-def solve(tdms, carrier_oem, s: Settings, carrier_name=None) -> OfflineOD:
-    """The offline OD of the TDM files ``tdms`` with the carrier of ``carrier_oem`` (module docstring): the
-    records, the arc after the latest maneuver, the passes that count, the fit with editing. NdmError (or the
-    batch's ValueError) naming what is wrong."""
-    epoch_utc, target = tdm_epoch(tdms)
+def solve(tdms, carrier_oem, s: Settings, carrier_name=None, target=None) -> OfflineOD:
+    """The offline OD of the TDM files ``tdms`` with the carrier of ``carrier_oem`` (OEM object ``carrier_name``,
+    default the one other than the tracked ``target``, :func:`tdm_epoch`) (module docstring): the records, the arc
+    after the latest maneuver, the passes that count, the fit with editing. NdmError (or the batch's ValueError)
+    naming what is wrong."""
+    epoch_utc, target = tdm_epoch(tdms, target)
     carrier = read_carrier_oem(carrier_oem, epoch_utc, target, carrier_name)
     if not carrier:
         raise NdmError(f"{carrier_oem}: no carrier segment")
-    pairs, rejected, pass_names = _records(tdms, epoch_utc, carrier, s)
+    pairs, rejected, pass_names = _records(tdms, epoch_utc, carrier, s, target=target)
     if not pairs:
         raise NdmError("no measurement within --since/--until")
     start = frames.parse_epoch(epoch_utc)

@@ -128,6 +128,24 @@ def test_rejected_measurements_have_reasons(files, capsys):
         1 for line in files["tdm"].read_text().splitlines() if line.startswith("RANGE "))
 
 
+def test_a_tdm_tracking_two_objects_needs_the_target(files, capsys, tmp_path):
+    """Pass 1 relabelled as tracking the carrier: refused without --target; with it, its measurements are rejected
+    as another object's and the arc of passes 2-4 is solved."""
+    text = files["tdm"].read_text()
+    assert text.count("PARTICIPANT_2            = PICOSATELLITE") == 12
+    two = tmp_path / "two.tdm"
+    two.write_text(text.replace("PARTICIPANT_2            = PICOSATELLITE", "PARTICIPANT_2            = CARRIER", 1))
+    argv = ["--tdm", str(two), "--carrier-oem", str(files["oem"]), "--maneuvers", str(files["opm"]), "--until",
+            ARCS[1][0]]
+    code, _, err = run_od(argv, capsys)
+    assert code == 2 and "track 2 objects (CARRIER, PICOSATELLITE): give --target NAME" in err, err
+    code, out, err = run_od([*argv, "--target", "PICOSATELLITE", "--json"], capsys)
+    assert code == 0, err
+    rep = json.loads(out)
+    assert rep["measurements"]["passes"] == 3
+    assert sum(r["reason"] == "tracks CARRIER, not PICOSATELLITE" for r in rep["rejected"]) == 42
+
+
 @pytest.mark.parametrize("name", sorted(p.name for p in EXAMPLES.glob("TDM*")))
 def test_public_example_tdms_read_or_refused_in_one_line(name, files, capsys):
     code, out, err = run_od(["--tdm", str(EXAMPLES / name), "--carrier-oem", str(files["oem"])], capsys)
