@@ -202,12 +202,14 @@ def carrier_at(segments, t):
 
 
 def tdm_epoch(paths, target=None):
-    """ISO UTC string of the earliest time tag of the TDMs (the offline OD's sim time 0, less a minute) and the
+    """ISO UTC string of the earliest time tag of the TDMs (the offline OD's sim time 0, less a minute), the
     tracked object (the participant the station's signal comes from): ``target`` if given (NdmError if no TDM
-    tracks it), else the one object the TDMs track (NdmError naming them if they track several)."""
-    first, tracked = None, set()
+    tracks it), else the one object the TDMs track (NdmError naming them if they track several), and the messages
+    read."""
+    first, tracked, msgs = None, set(), []
     for p in paths:
-        for o in read_observations(_read(p)):
+        msgs.append(_read(p))
+        for o in read_observations(msgs[-1]):
             first = o.timetag if first is None else min(first, o.timetag)
             tracked.add(o.participants[-2] if o.path[-1] == 1 else o.participants[-1])
     if first is None:
@@ -217,7 +219,7 @@ def tdm_epoch(paths, target=None):
                        "(the picosatellite)")
     if target is not None and target not in tracked:
         raise NdmError(f"no TDM tracks --target {target} (they track {', '.join(sorted(tracked))})")
-    return (first - timedelta(seconds=60.0)).strftime("%Y-%m-%dT%H:%M:%S.%f"), target or tracked.pop()
+    return (first - timedelta(seconds=60.0)).strftime("%Y-%m-%dT%H:%M:%S.%f"), target or tracked.pop(), msgs
 
 
 @dataclass(frozen=True)
@@ -241,17 +243,17 @@ class Settings:
     edit_p: float = EDIT_P
 
 
-def _records(tdms, epoch_utc, carrier, s: Settings, *, target):
-    """RadarRecords of every measurement of ``target`` in the TDMs (pass ids negative: external passes), rejections
-    (another object, outside the arc), and the passes' names; NdmError for an unknown station or an epoch outside
-    the carrier OEM."""
+def _records(tdms, epoch_utc, carrier, s: Settings, *, target, msgs):
+    """RadarRecords of every measurement of ``target`` in the TDMs (``msgs``, read from ``tdms``; pass ids
+    negative: external passes), rejections (another object, outside the arc), and the passes' names; NdmError for
+    an unknown station or an epoch outside the carrier OEM."""
     names = [st.name for st in s.stations]
     start = frames.parse_epoch(epoch_utc)
     lo = -math.inf if s.since is None else (s.since - start).total_seconds()
     hi = math.inf if s.until is None else (s.until - start).total_seconds()
     records, rejected, pass_names = [], [], {}
     for f, path in enumerate(tdms):
-        for m in read_tdm(path, epoch_utc, s.sigma_range, s.sigma_angle):
+        for m in read_tdm(msgs[f], epoch_utc, s.sigma_range, s.sigma_angle):
             if m.target != target:
                 rejected.append(_rej(epoch_utc, m.t, m.station, -1, f"tracks {m.target}, not {target}"))
                 continue
@@ -292,11 +294,11 @@ def solve(tdms, carrier_oem, s: Settings, carrier_name=None, target=None) -> Off
     default the one other than the tracked ``target``, :func:`tdm_epoch`) (module docstring): the records, the arc
     after the latest maneuver, the passes that count, the fit with editing. NdmError (or the batch's ValueError)
     naming what is wrong."""
-    epoch_utc, target = tdm_epoch(tdms, target)
+    epoch_utc, target, msgs = tdm_epoch(tdms, target)
     carrier = read_carrier_oem(carrier_oem, epoch_utc, target, carrier_name)
     if not carrier:
         raise NdmError(f"{carrier_oem}: no carrier segment")
-    pairs, rejected, pass_names = _records(tdms, epoch_utc, carrier, s, target=target)
+    pairs, rejected, pass_names = _records(tdms, epoch_utc, carrier, s, target=target, msgs=msgs)
     if not pairs:
         raise NdmError("no measurement within --since/--until")
     start = frames.parse_epoch(epoch_utc)
