@@ -136,7 +136,7 @@ def _write(od, est, args):
                 f"mean a*ROE [m] = {[round(x, 3) for x in est['a_roe_m']]}, a*da_dot = {est['a_da_dot_m_s']!r} m/s"]
     opm = build_opm(name, f"{name}-OD", od.epoch_utc, est["t_est"], est["r_m"], v=est["v_m_s"], burns=[],
                     spacecraft=None, comments=comments, covariance=est["covariance_eme2000"])
-    ext = "" if args.format == "xml" else ".kvn"
+    ext = f".{args.format}"  # as roe-sep export names its files
     paths = [write_message(out / f"od_estimate.opm{ext}", opm, args.format)]
     from ..ndm.offline_od import prediction
 
@@ -176,7 +176,7 @@ def register(subparsers):
                    help="probability of rejecting a consistent measurement (chi-square, 3 dof; default 1e-4)")
     p.add_argument("--predict", type=finite_float(0.0, 720.0, lo_open=True, unit="h"), default=24.0,
                    help="h, span of the OEM prediction (default 24)")
-    p.add_argument("--out", help="directory for od_estimate.opm and od_prediction.oem")
+    p.add_argument("--out", help="directory for od_estimate.opm.xml and od_prediction.oem.xml (.kvn with --format kvn)")
     p.add_argument("--format", choices=("xml", "kvn"), default="xml", help="NDM/XML (default) or KVN")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=cmd_od)
