@@ -8,16 +8,15 @@ mean elements at its epoch; the records after the latest carrier maneuver, in pa
 
 The carrier's orbit comes from its own OEM (its GPS ephemeris, EME2000): each state is turned into the mean
 near-circular elements the measurement model uses as osculating (:func:`chief_elements`, the inverse of
-:func:`roe_sep.ndm.frames.chief_state`: a = |r|, the plane of two neighbouring positions with the J2 nodal turn between
-them, u of r in it) and carried to the measurement
-epoch from the first state at or after it in its segment with the J2 secular rates, as radar_od carries its
-truth samples
-(:func:`~roe_sep.core.relmotion.dynamics.propagate_chief`).
+:func:`roe_sep.ndm.frames.chief_state`: a = |r|, the plane of two neighbouring positions with the J2 nodal turn
+between them, u of r in it) and carried to the measurement epoch from the first state at or after it in its
+segment with the J2 secular rates (:func:`~roe_sep.core.relmotion.dynamics.propagate_chief`), as radar_od carries
+its truth samples.
 
 Editing: after each fit, a measurement whose whitened residual triplet has a chi-square (3 degrees of freedom)
-beyond the ``1 - edit_p`` quantile is rejected and the batch solved again, until none is (Tapley, Schutz, Born 2004,
-Sec. 4.8: residual editing). Consistency of the post-fit residuals: their chi-square over its degrees of freedom
-(3 m - 7) against the chi-square distribution's 95 % band, which a model and sigmas that fit the data meet.
+beyond the ``1 - edit_p`` quantile is rejected and the batch solved again, until none is (at most 20 rounds).
+Consistency of the post-fit residuals: their chi-square over its degrees of freedom (3 m - 7) against the
+chi-square distribution's 95 % band, which a model and sigmas that fit the data meet.
 """
 
 import math

@@ -148,6 +148,24 @@ def test_a_tdm_tracking_two_objects_needs_the_target(files, capsys, tmp_path):
     assert sum(r["reason"] == "tracks CARRIER, not PICOSATELLITE" for r in rep["rejected"]) == 42
 
 
+def test_an_outlier_is_edited_out(files, capsys, tmp_path):
+    """A range 300 m (30 sigma) off in pass 2: rejected by the editing with its chi-square (that one measurement
+    only), the rest of the arc used and consistent."""
+    lines = files["tdm_kvn"].read_text().splitlines()
+    k = [i for i, ln in enumerate(lines) if ln.startswith("RANGE ")][60]  # pass 2 (pass 1 has 42)
+    key, epoch, value = lines[k].split()[0], lines[k].split()[2], float(lines[k].split()[3])
+    lines[k] = f"{key} = {epoch} {value + 0.3!r}"
+    bad = tmp_path / "outlier.tdm"
+    bad.write_text("\n".join(lines) + "\n")
+    code, out, err = run_od(["--tdm", str(bad), "--carrier-oem", str(files["oem"]), "--maneuvers",
+                             str(files["opm"]), "--until", ARCS[1][0], "--json"], capsys)
+    assert code == 0, err
+    rep = json.loads(out)
+    edited = [r for r in rep["rejected"] if r["reason"].startswith("residual chi-square")]
+    assert [r["epoch"][:19] for r in edited] == [epoch[:19]], edited
+    assert rep["measurements"]["used"] == 157 and rep["consistency"]["chi2_per_dof"] < 1.2
+
+
 @pytest.mark.parametrize("name", sorted(p.name for p in EXAMPLES.glob("TDM*")))
 def test_public_example_tdms_read_or_refused_in_one_line(name, files, capsys):
     code, out, err = run_od(["--tdm", str(EXAMPLES / name), "--carrier-oem", str(files["oem"])], capsys)
