@@ -30,8 +30,8 @@ def station(text):
     except ValueError:
         lat = math.nan
     if len(parts) != 4 or not parts[0] or not (-90 <= lat <= 90 and -180 <= lon <= 360 and -500 <= alt <= 9000):
-        raise argparse.ArgumentTypeError(f"expected NAME,LAT_DEG,LON_DEG,ALT_M (latitude in [-90, 90], longitude in [-180, 360], "
-                         f"height in [-500, 9000] m), got {text!r}")
+        raise argparse.ArgumentTypeError("expected NAME,LAT_DEG,LON_DEG,ALT_M (latitude in [-90, 90], longitude in "
+                                         f"[-180, 360], height in [-500, 9000] m), got {text!r}")
     return Station(parts[0], math.radians(lat), math.radians(lon), alt)
 
 
@@ -69,7 +69,8 @@ def cmd_od(args):
         if not Path(path).is_file():
             raise NdmError(f"{path}: no such file")
     if args.carrier_oem is None:
-        raise NdmError("no carrier orbit: give the carrier's ephemeris with --carrier-oem FILE (an OEM, EME2000)")
+        raise NdmError("no carrier orbit: give the carrier's ephemeris with --carrier-oem FILE (an OEM, EME2000; a "
+                       "TDM's tracking of the carrier is not its orbit)")
     if args.since and args.until and args.until <= args.since:
         raise ValueError(f"--until {args.until.isoformat()} is not after --since {args.since.isoformat()}")
     stations = tuple(args.station) if args.station else tuple(
@@ -77,11 +78,12 @@ def cmd_od(args):
             DEFAULTS["stations"], DEFAULTS["station_latitudes_deg"], DEFAULTS["station_longitudes_deg"],
             DEFAULTS["station_altitudes_m"]))
     settings = oo.Settings(stations=stations, sigma_range=args.sigma_range, sigma_angle=math.radians(args.sigma_angle),
-                           min_pass=args.min_pass, min_passes=args.min_passes, maneuvers=maneuver_epochs(args.maneuvers or []),
+                           min_pass=args.min_pass, min_passes=args.min_passes,
+                           maneuvers=maneuver_epochs(args.maneuvers or []),
                            since=args.since, until=args.until, scale_height=DEFAULTS["density_scale_height_m"],
                            ballistic_ratio=DEFAULTS["drag_ballistic_ratio"], drag=DEFAULTS["od_drag_terms"],
                            edit_p=args.edit_p)
-    od = oo.solve(args.tdm, args.carrier_oem, settings, args.carrier)
+    od = oo.solve(args.tdm, args.carrier_oem, settings, args.carrier, args.target)
     est = oo.estimate(od)
     rep = {"tdm": [str(p) for p in args.tdm], "carrier_oem": str(args.carrier_oem),
            "estimate": {k: est[k] for k in ("epoch", "a_roe_m", "a_roe_sigma_m", "a_da_dot_m_s", "a_da_dot_sigma_m_s",
@@ -97,7 +99,7 @@ def cmd_od(args):
         m = r["measurements"]
         print(f"roe-sep od: {m['used']} measurements in {m['passes']} passes ({m['rejected']} rejected), "
               f"{e['iterations']} Gauss-Newton iterations")
-        print(f"estimate at {e['epoch']} UTC (mean ROE of the carrier's RTN, m; 1-sigma):")
+        print(f"estimate at {e['epoch']} UTC: mean a*ROE [m] relative to the carrier, 1-sigma")
         for name, x, s in zip(ROE_NAMES, e["a_roe_m"], e["a_roe_sigma_m"]):
             print(f"  {name:6s} {x:+14.3f} ± {s:.3f}")
         print(f"  a*da_dot {e['a_da_dot_m_s']:+.4e} ± {e['a_da_dot_sigma_m_s']:.1e} m/s")
@@ -134,7 +136,7 @@ def _write(od, est, args):
                 f"mean a*ROE [m] = {[round(x, 3) for x in est['a_roe_m']]}, a*da_dot = {est['a_da_dot_m_s']!r} m/s"]
     opm = build_opm(name, f"{name}-OD", od.epoch_utc, est["t_est"], est["r_m"], v=est["v_m_s"], burns=[],
                     spacecraft=None, comments=comments, covariance=est["covariance_eme2000"])
-    ext = "" if args.format == "xml" else ".kvn"
+    ext = f".{args.format}"  # as roe-sep export names its files
     paths = [write_message(out / f"od_estimate.opm{ext}", opm, args.format)]
     from ..ndm.offline_od import prediction
 
@@ -154,6 +156,8 @@ def register(subparsers):
                    "ephemeris.oem of `roe-sep export`)")
     p.add_argument("--carrier", metavar="NAME", help="the carrier's OBJECT_NAME in the OEM (default: its one "
                    "object other than the tracked one)")
+    p.add_argument("--target", metavar="NAME", help="the picosatellite's participant name in the TDMs (default: "
+                   "the one object they track)")
     p.add_argument("--maneuvers", nargs="+", metavar="OPM", help="OPM files of the carrier's executed maneuvers: "
                    "measurements before the latest one are not used")
     p.add_argument("--since", type=utc_epoch, help="ISO-8601 UTC: use measurements from this epoch on")
@@ -172,7 +176,7 @@ def register(subparsers):
                    help="probability of rejecting a consistent measurement (chi-square, 3 dof; default 1e-4)")
     p.add_argument("--predict", type=finite_float(0.0, 720.0, lo_open=True, unit="h"), default=24.0,
                    help="h, span of the OEM prediction (default 24)")
-    p.add_argument("--out", help="directory for od_estimate.opm and od_prediction.oem")
-    p.add_argument("--format", choices=("xml", "kvn"), default="kvn", help="file format (default KVN)")
+    p.add_argument("--out", help="directory for od_estimate.opm.xml and od_prediction.oem.xml (.kvn with --format kvn)")
+    p.add_argument("--format", choices=("xml", "kvn"), default="xml", help="NDM/XML (default) or KVN")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=cmd_od)

@@ -358,8 +358,8 @@ def _num(x):
 
 @dataclass(frozen=True)
 class Measurement:
-    """A radar measurement read from a TDM: sim time [s], station, pass id, z = [range m, az rad, el rad] and its
-    1-sigma noise [m, rad]."""
+    """A radar measurement read from a TDM: sim time [s], station, pass id, z = [range m, az rad, el rad], its
+    1-sigma noise [m, rad] and the tracked object (the participant the station's signal comes from)."""
 
     t: float
     station: str
@@ -367,6 +367,7 @@ class Measurement:
     z: tuple
     sigma_range: float
     sigma_angle: float
+    target: str | None = None
 
 
 def _comment_value(comments, key):
@@ -383,19 +384,20 @@ the drift-stop, :class:`roe_sep.core.config.MonteCarloConfig`, plus the day befo
 
 
 def read_tdm(source, epoch_utc, sigma_range=None, sigma_angle=None):
-    """Radar measurements of a TDM (file path or text): RANGE with AZEL angles, grouped by time tag, read by
-    :func:`roe_sep.ndm.tdm_reader.read_observations` (units, paths, corrections, time systems; epochs within
-    :data:`TDM_SPAN_S` after ``epoch_utc``).
+    """Radar measurements of a TDM (file path, text or the message :func:`read_message` read): RANGE with AZEL
+    angles, grouped by time tag, read by :func:`roe_sep.ndm.tdm_reader.read_observations` (units, paths,
+    corrections, time systems; epochs within :data:`TDM_SPAN_S` after ``epoch_utc``).
 
     Each measurement: the station is the path's last participant (it receives and points: a two-way path or a
-    downlink), its stamp the receive time there (the radar's stamp), the range the one-way range; the pass id is the
-    number after ``_PASS_`` in TRACK_ID (else the segment's 1-based index). Sigmas from the
+    downlink), its stamp the receive time there (the radar's stamp), the range the one-way range, the target the
+    participant before it; the pass id is the number after ``_PASS_`` in TRACK_ID (else the segment's 1-based
+    index). Sigmas from the
     ``SIGMA_RANGE_M``/``SIGMA_ANGLE_DEG`` metadata comments, else the ``sigma_range`` [m] / ``sigma_angle`` [rad]
     given here. NdmError naming what is wrong: what the reader refuses, RADEC angles, an uplink path, a time tag
     without all three of range, azimuth and elevation, no measurement at all, or no sigma.
     """
     start = frames.parse_epoch(epoch_utc)
-    msg = read_message(source)
+    msg = source if type(source).__name__ in ("Tdm", "TdmType") else read_message(source)
     obs = read_observations(msg, span=(start, start + timedelta(seconds=TDM_SPAN_S)))
     segments = msg.body.segment
     out = []
@@ -419,7 +421,7 @@ def read_tdm(source, epoch_utc, sigma_range=None, sigma_angle=None):
         pass_id = int(tail) if sep and tail.isdigit() and int(tail) < 2**32 else o.segment
         t = (o.receive_epoch - start).total_seconds()
         out.append(Measurement(t, o.participants[-1], pass_id, (o.range_m, o.angle_1, o.angle_2), float(sr),
-                               float(sa)))
+                               float(sa), o.participants[-2]))
     if not out:
         raise NdmError("the TDM holds no RANGE/ANGLE_1/ANGLE_2 measurement")
     out.sort(key=lambda m: (m.t, m.station))

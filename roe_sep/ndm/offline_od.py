@@ -8,15 +8,15 @@ mean elements at its epoch; the records after the latest carrier maneuver, in pa
 
 The carrier's orbit comes from its own OEM (its GPS ephemeris, EME2000): each state is turned into the mean
 near-circular elements the measurement model uses as osculating (:func:`chief_elements`, the inverse of
-:func:`roe_sep.ndm.frames.chief_state`: a = |r|, the plane of r x v, u of r in it) and carried to the measurement
-epoch from the first state at or after it in its segment with the J2 secular rates, as radar_od carries its
-truth samples
-(:func:`~roe_sep.core.relmotion.dynamics.propagate_chief`).
+:func:`roe_sep.ndm.frames.chief_state`: a = |r|, the plane of two neighbouring positions with the J2 nodal turn
+between them, u of r in it) and carried to the measurement epoch from the first state at or after it in its
+segment with the J2 secular rates (:func:`~roe_sep.core.relmotion.dynamics.propagate_chief`), as radar_od carries
+its truth samples.
 
 Editing: after each fit, a measurement whose whitened residual triplet has a chi-square (3 degrees of freedom)
-beyond the ``1 - edit_p`` quantile is rejected and the batch solved again, until none is (Tapley, Schutz, Born 2004,
-Sec. 4.8: residual editing). Consistency of the post-fit residuals: their chi-square over its degrees of freedom
-(3 m - 7) against the chi-square distribution's 95 % band, which a model and sigmas that fit the data meet.
+beyond the ``1 - edit_p`` quantile is rejected and the batch solved again, until none is (at most 20 rounds).
+Consistency of the post-fit residuals: their chi-square over its degrees of freedom (3 m - 7) against the
+chi-square distribution's 95 % band, which a model and sigmas that fit the data meet.
 """
 
 import math
@@ -75,31 +75,39 @@ class OfflineOD:
     pass_names: dict = field(default_factory=dict)
 
 
-def chief_elements(r, v):
-    """Mean near-circular elements ``[a, 0, i, raan, 0, u]`` ``(..., 6)`` whose circular orbit
-    (:func:`roe_sep.core.od.radar.chief_position_velocity`) passes through ``r`` [m] in the plane of ``r x v`` (the
-    simulator's inertial frame), the velocity less the plane's nodal turn d raan/dt z x r that an OEM's velocity (the
-    derivative of its positions, :func:`roe_sep.ndm.frames.chief_state`) carries: 1.8e-4 rad of tilt otherwise.
+def chief_elements(t, r):
+    """Mean near-circular elements ``[a, 0, i, raan, 0, u]`` ``(n, 6)`` of one ephemeris segment's positions: the
+    circular orbits (:func:`roe_sep.core.od.radar.chief_position_velocity`) through each ``r`` [m] whose planes turn
+    about the pole at the J2 nodal rate (:func:`~roe_sep.core.relmotion.dynamics.raan_rate`), as the carrier's mean
+    elements do. The plane at t_k is that of r_k and its neighbour r_j turned back by -raan_dot (t_j - t_k): the
+    positions alone, whatever velocity the file carries (a circular one, or the derivative of the positions with
+    the nodal term, whose r x v leans by up to raan_dot / n = 2e-4 rad).
 
     Parameters
     ----------
-    r, v : array_like, shape (..., 3)
-        Position [m] and velocity [m/s].
+    t, r : array_like, shapes (n,), (n, 3)
+        Times [s] (n >= 2, increasing) and positions [m] in the simulator's inertial frame.
 
     Returns
     -------
-    numpy.ndarray, shape (..., 6)
+    numpy.ndarray, shape (n, 6)
         a [m], e = 0, i, raan, argp = 0, M = u [rad].
     """
-    r, v = np.asarray(r, dtype=float), np.asarray(v, dtype=float)
+    t, r = np.asarray(t, dtype=float), np.asarray(r, dtype=float)
     a = np.linalg.norm(r, axis=-1)
-    w = np.zeros_like(a)
-    for _ in range(2):  # the plane's own turn, d raan/dt z x r (in the velocity of the positions), taken out
-        h = np.cross(r, v - np.stack([-w * r[..., 1], w * r[..., 0], np.zeros_like(w)], axis=-1))
-        h = h / np.linalg.norm(h, axis=-1, keepdims=True)
-        inc = np.arccos(np.clip(h[..., 2], -1.0, 1.0))
-        w = raan_rate(a, inc)
-    raan = np.arctan2(h[..., 0], -h[..., 1])
+    j = np.arange(t.size) + 1
+    j[-1] = t.size - 2
+    sign = np.where(j > np.arange(t.size), 1.0, -1.0)[:, None]
+    h = sign * np.cross(r, r[j])
+    for _ in range(2):  # the nodal rate from the plane's inclination (once without the turn: to 2e-4 rad)
+        inc = np.arccos(np.clip(h[:, 2] / np.linalg.norm(h, axis=-1), -1.0, 1.0))
+        turn = -raan_rate(a, inc) * (t[j] - t)
+        c, s_ = np.cos(turn), np.sin(turn)
+        rj = np.stack([c * r[j, 0] - s_ * r[j, 1], s_ * r[j, 0] + c * r[j, 1], r[j, 2]], axis=-1)
+        h = sign * np.cross(r, rj)
+    h = h / np.linalg.norm(h, axis=-1, keepdims=True)
+    inc = np.arccos(np.clip(h[:, 2], -1.0, 1.0))
+    raan = np.arctan2(h[:, 0], -h[:, 1])
     node = np.stack([np.cos(raan), np.sin(raan), np.zeros_like(raan)], axis=-1)
     u = np.arctan2(np.sum(r * np.cross(h, node), axis=-1), np.sum(r * node, axis=-1))
     zero = np.zeros_like(a)
@@ -168,10 +176,11 @@ def read_carrier_oem(path, epoch_utc, target=None, carrier=None):
         t = np.array([(to_utc(parse_tdm_epoch(s.epoch), ts) - start).total_seconds() for s in sv])
         r = np.array([[_num(s.x), _num(s.y), _num(s.z)] for s in sv]) * 1000.0
         v = np.array([[_num(s.x_dot), _num(s.y_dot), _num(s.z_dot)] for s in sv]) * 1000.0
-        if not (np.all(np.isfinite(r)) and np.all(np.isfinite(v)) and np.all(np.diff(t) > 0.0)):
+        if not (np.all(np.isfinite(r)) and np.all(np.diff(t) > 0.0)):
             raise NdmError(f"{where}: states must be finite, their epochs strictly increasing")
-        rot = _eme2000_to_sim(epoch_utc, t)
-        kep = chief_elements(np.einsum("...ij,...j->...i", rot, r), np.einsum("...ij,...j->...i", rot, v))
+        if not np.all(np.isfinite(v)):
+            raise NdmError(f"{where}: velocities must be finite")
+        kep = chief_elements(t, np.einsum("...ij,...j->...i", _eme2000_to_sim(epoch_utc, t), r))
         if not np.all((kep[:, 0] > R_EARTH + 1e5) & (kep[:, 0] < R_EARTH + 5e6)):
             raise NdmError(f"{where}: the carrier is not in low Earth orbit (|r| from {kep[:, 0].min():.0f} m)")
         out.append(CarrierSegment(t, kep))
@@ -192,17 +201,25 @@ def carrier_at(segments, t):
     return None
 
 
-def tdm_epoch(paths):
-    """ISO UTC string of the earliest time tag of the TDMs (the offline OD's sim time 0) and the tracked object
-    (the path's middle participant, or the other end of a one-way path)."""
-    first, target = None, None
+def tdm_epoch(paths, target=None):
+    """ISO UTC string of the earliest time tag of the TDMs (the offline OD's sim time 0, less a minute), the
+    tracked object (the participant the station's signal comes from): ``target`` if given (NdmError if no TDM
+    tracks it), else the one object the TDMs track (NdmError naming them if they track several), and the messages
+    read."""
+    first, tracked, msgs = None, set(), []
     for p in paths:
-        for o in read_observations(_read(p)):
+        msgs.append(_read(p))
+        for o in read_observations(msgs[-1]):
             first = o.timetag if first is None else min(first, o.timetag)
-            target = target or next((n for n in o.participants if n != o.participants[-1]), None)
+            tracked.add(o.participants[-2] if o.path[-1] == 1 else o.participants[-1])
     if first is None:
         raise NdmError(f"{paths[0]}: no observation")
-    return (first - timedelta(seconds=60.0)).strftime("%Y-%m-%dT%H:%M:%S.%f"), target
+    if target is None and len(tracked) > 1:
+        raise NdmError(f"the TDMs track {len(tracked)} objects ({', '.join(sorted(tracked))}): give --target NAME "
+                       "(the picosatellite)")
+    if target is not None and target not in tracked:
+        raise NdmError(f"no TDM tracks --target {target} (they track {', '.join(sorted(tracked))})")
+    return (first - timedelta(seconds=60.0)).strftime("%Y-%m-%dT%H:%M:%S.%f"), target or tracked.pop(), msgs
 
 
 @dataclass(frozen=True)
@@ -226,16 +243,20 @@ class Settings:
     edit_p: float = EDIT_P
 
 
-def _records(tdms, epoch_utc, carrier, s: Settings):
-    """RadarRecords of every measurement of the TDMs (pass ids negative: external passes), rejections outside the
-    arc, and the passes' names; NdmError for an unknown station or an epoch outside the carrier OEM."""
+def _records(tdms, epoch_utc, carrier, s: Settings, *, target, msgs):
+    """RadarRecords of every measurement of ``target`` in the TDMs (``msgs``, read from ``tdms``; pass ids
+    negative: external passes), rejections (another object, outside the arc), and the passes' names; NdmError for
+    an unknown station or an epoch outside the carrier OEM."""
     names = [st.name for st in s.stations]
     start = frames.parse_epoch(epoch_utc)
     lo = -math.inf if s.since is None else (s.since - start).total_seconds()
     hi = math.inf if s.until is None else (s.until - start).total_seconds()
     records, rejected, pass_names = [], [], {}
     for f, path in enumerate(tdms):
-        for m in read_tdm(path, epoch_utc, s.sigma_range, s.sigma_angle):
+        for m in read_tdm(msgs[f], epoch_utc, s.sigma_range, s.sigma_angle):
+            if m.target != target:
+                rejected.append(_rej(epoch_utc, m.t, m.station, -1, f"tracks {m.target}, not {target}"))
+                continue
             if m.station not in names:
                 raise NdmError(f"{path}: station {m.station} is not known (stations: {', '.join(names)}; add it "
                                "with --station NAME,LAT_DEG,LON_DEG,ALT_M)")
@@ -268,15 +289,16 @@ def _batch(recs, sigmas, s: Settings):
                       site_enu=np.array([s.stations[r.station].enu for r in recs]))
 
 
-def solve(tdms, carrier_oem, s: Settings, carrier_name=None) -> OfflineOD:
-    """The offline OD of the TDM files ``tdms`` with the carrier of ``carrier_oem`` (module docstring): the
-    records, the arc after the latest maneuver, the passes that count, the fit with editing. NdmError (or the
-    batch's ValueError) naming what is wrong."""
-    epoch_utc, target = tdm_epoch(tdms)
+def solve(tdms, carrier_oem, s: Settings, carrier_name=None, target=None) -> OfflineOD:
+    """The offline OD of the TDM files ``tdms`` with the carrier of ``carrier_oem`` (OEM object ``carrier_name``,
+    default the one other than the tracked ``target``, :func:`tdm_epoch`) (module docstring): the records, the arc
+    after the latest maneuver, the passes that count, the fit with editing. NdmError (or the batch's ValueError)
+    naming what is wrong."""
+    epoch_utc, target, msgs = tdm_epoch(tdms, target)
     carrier = read_carrier_oem(carrier_oem, epoch_utc, target, carrier_name)
     if not carrier:
         raise NdmError(f"{carrier_oem}: no carrier segment")
-    pairs, rejected, pass_names = _records(tdms, epoch_utc, carrier, s)
+    pairs, rejected, pass_names = _records(tdms, epoch_utc, carrier, s, target=target, msgs=msgs)
     if not pairs:
         raise NdmError("no measurement within --since/--until")
     start = frames.parse_epoch(epoch_utc)
@@ -292,7 +314,8 @@ def solve(tdms, carrier_oem, s: Settings, carrier_name=None) -> OfflineOD:
                       else f"its pass has fewer than {s.min_pass} measurements")
             rejected.append(_rej(epoch_utc, r.t, s.stations[r.station].name, -r.pass_id - 1, reason))
     if len(passes) < s.min_passes:
-        after = "" if last_burn == -math.inf else f" after the latest maneuver ({frames.utc_string(epoch_utc, last_burn)})"
+        after = ("" if last_burn == -math.inf else
+                 f" after the latest maneuver ({frames.utc_string(epoch_utc, last_burn)})")
         raise NdmError(f"{len(passes)} pass{'' if len(passes) == 1 else 'es'} count{'s' if len(passes) == 1 else ''}"
                        f"{after}, at least {s.min_passes} needed (--min-passes; passes of >= {s.min_pass} "
                        "measurements)")
