@@ -188,11 +188,11 @@ def od_of_orekit_files(out):
     return json.loads(buf.getvalue())
 
 
-def relative_errors(truth, rep):
+def relative_errors(truth, rep, out):
     """The OD's relative state against Orekit's truth at the estimate's epoch (a time tag, where the truth is): the
     position error [m] in the OD's RTN frame (of its carrier model, whose position is Orekit's) and its covariance
-    (the estimate's mean ROE through the linear map of the carrier's elements as the OD takes them from its OEM:
-    :func:`roe_sep.ndm.offline_od.chief_elements`), and the mean-ROE
+    (the estimate's mean ROE through the linear map of the carrier's elements as the OD takes them from its OEM in
+    ``out``: :func:`roe_sep.ndm.offline_od.carrier_at`), and the mean-ROE
     error (truth: Orekit's states through our first-order Brouwer mean elements) with its covariance.
 
     Returns
@@ -203,7 +203,7 @@ def relative_errors(truth, rep):
     from roe_sep.core.od.radar import chief_from_kepler, chief_position_velocity, rtn_matrix
     from roe_sep.core.relmotion.roe import kepler_to_roe
     from roe_sep.core.truth.mean_osc import cartesian_to_mean
-    from roe_sep.ndm.offline_od import chief_elements
+    from roe_sep.ndm.offline_od import carrier_at, read_carrier_oem, tdm_epoch
 
     est = rep["estimate"]
     t_est = frames.sim_time(truth["geometry"]["epoch_utc"], est["epoch"])
@@ -212,12 +212,15 @@ def relative_errors(truth, rep):
     bias = earth_frames.gcrf_to_eme2000()  # Orekit's EME2000 -> the OD's GCRF: r_GCRF = B^T r_EME2000
     rc, vc, rd, vd = (np.array(truth[o][x][k]) @ bias for o in ("carrier", "picosatellite")
                       for x in ("position_m", "velocity_m_s"))
-    chief = chief_elements(rc, vc)
+    epoch_od = tdm_epoch([out / "radar.tdm.kvn"])[0]  # the OD's sim time 0 and carrier, as it takes them
+    chief = carrier_at(read_carrier_oem(out / "carrier.oem.kvn", epoch_od, "PICOSATELLITE"),
+                       frames.sim_time(epoch_od, est["epoch"]))[0]
     a = float(chief[0])
     cov = np.array(est["covariance_a_roe_m2"])[:6, :6]
     jac = frames.roe_to_rtn_jacobian(chief)[:3] / a
     rho = frames.roe_rtn_state(np.array(est["a_roe_m"]) / a, chief)[0]
     rc_model, vc_model = chief_position_velocity(*chief_from_kepler(chief))  # the OD's carrier: rc_model = rc
+    assert np.linalg.norm(rc_model - rc) < 0.01
     err_pos = rho - rtn_matrix(rc_model, vc_model).T @ (rd - rc)  # in the OD's RTN frame
     err_roe = np.array(est["a_roe_m"]) - a * kepler_to_roe(cartesian_to_mean(rc, vc), cartesian_to_mean(rd, vd))
     return err_pos, jac @ cov @ jac.T, err_roe, cov
@@ -241,7 +244,7 @@ def test_roe_sep_od_on_orekit_files_is_consistent_with_orekits_truth(ctx, tmp_pa
         truth = ox.generate(seed, out)
         rep = od_of_orekit_files(out)
         in_band.append(bool(rep["consistency"]["in_band"]))
-        e_pos, p_pos, e_roe, p_roe = relative_errors(truth, rep)
+        e_pos, p_pos, e_roe, p_roe = relative_errors(truth, rep, out)
         nees_pos.append(float(e_pos @ np.linalg.solve(p_pos, e_pos)))
         nees_roe.append(float(e_roe @ np.linalg.solve(p_roe, e_roe)))
         lines.append(f"seed {seed:2d}: RTN error {np.round(e_pos, 2)} m, 1-sigma {np.round(np.sqrt(np.diag(p_pos)), 2)}"
