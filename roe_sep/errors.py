@@ -105,6 +105,10 @@ class DefinitionNotFound(RoeSepError, LookupError):
     """No installed ``.msg`` file for a type."""
 
 
+class EopError(RoeSepError):
+    """An Earth orientation parameter file that cannot be read (the message names the file and the line)."""
+
+
 class NdmError(RoeSepError):
     """A navigation data message that cannot be read or is not what roe_sep expects (the message says why)."""
 

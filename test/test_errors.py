@@ -76,7 +76,7 @@ def test_the_root_and_its_other_kinds():
 @pytest.mark.parametrize("where, name", [
     ("roe_sep.core.config", "ConfigError"), ("roe_sep.nodes.params", "ParameterError"),
     ("roe_sep.bag", "BagError"), ("roe_sep.bag.definitions", "DefinitionNotFound"),
-    ("roe_sep.ndm.messages", "NdmError"), ("roe_sep.validate", "BadMessage"),
+    ("roe_sep.ndm.messages", "NdmError"), ("roe_sep.validate", "BadMessage"), ("roe_sep.core.frames", "EopError"),
     ("roe_sep.core.separation.double_impulse", "InfeasibleDesignError"),
     ("roe_sep.core.acquisition.planner", "AcquisitionInfeasible"),
     ("roe_sep.core.acquisition.planner", "InvalidAcquisitionConfig"),

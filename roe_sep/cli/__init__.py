@@ -3,7 +3,8 @@
 One module per command group, each with a ``register(subparsers)``: :mod:`.design` (``design``, ``mc``), :mod:`.ops`
 (``ops``), :mod:`.run` (``run``, ``replay``, ``bag``), :mod:`.nonlinear` (``propagate``, ``validate``) and
 :mod:`.analysis` (``deploy-sweep``, ``cluster``), :mod:`.collision` (``collision``), :mod:`.export` (``export``:
-CCSDS navigation data messages of a bag), :mod:`.campaign` (``campaign``); :mod:`.common` holds the output and the
+CCSDS navigation data messages of a bag), :mod:`.od` (``od``: the relative OD offline from TDM files),
+:mod:`.campaign` (``campaign``); :mod:`.common` holds the output and the
 option parsers they share.
 ``python -m roe_sep.cli`` is the same as ``roe-sep``.
 """
@@ -14,7 +15,7 @@ import sys
 from ..checks import OneLineParser, one_line
 from ..children import exit_status
 from ..errors import RoeSepError
-from . import analysis, campaign, collision, design, export, nonlinear, ops, run
+from . import analysis, campaign, collision, design, export, nonlinear, od, ops, run
 
 EXIT_BAD_INPUT = 2  # bad option, bad file, infeasible design: the one-line message names it
 EXIT_INTERNAL = 3  # an exception nobody expected: a bug, reported on one line (ROE_SEP_DEBUG=1: the traceback)
@@ -31,6 +32,7 @@ def build_parser():
     run.register_bag(sub)
     collision.register(sub)
     export.register(sub)
+    od.register(sub)
     campaign.register(sub)
     return parser
 

@@ -6,6 +6,7 @@ overrides what it names. Layout::
     separation: {altitude: 515000.0, u1_deg: 88.0, ...}        # SeparationConfig fields
     monte_carlo: {samples: 100000, seed: 0, p_values: [...], carrier: {cd: 2.3, area: 0.48, mass: 140.0}, ...}
     contingency: {name: spl_weak, spl_fraction: [0.0, 0.5]}   # optional: roe_sep.core.truth.contingency
+    earth: {eop_file: finals2000A.all}                     # optional: IERS EOP file (roe_sep.core.frames)
 """
 
 import dataclasses
@@ -17,8 +18,9 @@ from dataclasses import dataclass, field
 from os import PathLike
 
 from ..checks import SEED_MAX, check_number, one_line
-from ..errors import ConfigError, show
+from ..errors import ConfigError, EopError, show
 from .constants import SECONDS_PER_DAY
+from .frames import use_eop_file
 from .montecarlo.sweep import DEFAULT_P_VALUES, MonteCarloConfig, Spacecraft
 from .separation.double_impulse import SeparationConfig
 from .truth.contingency import ContingencyConfig, contingency_from_dict
@@ -53,8 +55,16 @@ RANGES = {
     (Spacecraft, "area"): (0.0, 1e3, True, False, "m^2"),
     (Spacecraft, "mass"): (0.0, 1e6, True, False, "kg"),
 }
-SECTIONS = ("separation", "monte_carlo", "contingency")
+SECTIONS = ("separation", "monte_carlo", "contingency", "earth")
 P_RANGE = (0.0, 1.0)  # m/s, drift-stop reductions |p| (as `roe-sep mc --p`)
+
+
+@dataclass(frozen=True)
+class EarthConfig:
+    """The Earth orientation's data: ``eop_file`` an IERS EOP file in the finals2000A format (None: the one shipped
+    by astropy-iers-data, or ``$ROE_SEP_EOP_FILE``); loading the scenario makes :mod:`roe_sep.core.frames` use it."""
+
+    eop_file: str | None = None
 
 
 @dataclass(frozen=True)
@@ -67,6 +77,8 @@ class Scenario:
     # the run's contingency, None: nominal. Not in the repr: a scenario without one hashes as before
     # (a campaign directory's settings, roe_sep.campaign.settings, add it when set)
     contingency: ContingencyConfig | None = field(default=None, repr=False)
+    # the EOP file; not in the repr either (the default scenario hashes as before)
+    earth: EarthConfig = field(default_factory=EarthConfig, repr=False)
 
 
 def _coerce(path, value, hint):
@@ -134,7 +146,16 @@ def scenario_from_dict(data: dict | None) -> Scenario:
     if any(not P_RANGE[0] <= p <= P_RANGE[1] for p in p_values):
         raise ConfigError(f"monte_carlo.p_values: reductions |p| must be non-negative and at most {P_RANGE[1]:g} m/s, "
                           f"got {list(p_values)}")
+    earth = _build("earth", EarthConfig, data.get("earth"))
+    if earth.eop_file is not None:
+        if not isinstance(earth.eop_file, str) or not earth.eop_file.strip():
+            raise ConfigError(f"earth.eop_file: expected the path of a finals2000A file, got {show(earth.eop_file)}")
+        try:
+            use_eop_file(earth.eop_file)
+        except EopError as exc:
+            raise ConfigError(f"earth.eop_file: {exc}") from None
     return Scenario(
+        earth=earth,
         separation=_build("separation", SeparationConfig, data.get("separation")),
         monte_carlo=_build("monte_carlo", MonteCarloConfig, mc),
         p_values=p_values,
@@ -192,4 +213,5 @@ def load_scenario(path: str | PathLike | None = None) -> Scenario:
     return Scenario() if path is None else load_yaml_config(path, scenario_from_dict)
 
 
-__all__ = ["ConfigError", "Scenario", "load_scenario", "load_yaml_config", "read_yaml", "scenario_from_dict"]
+__all__ = ["ConfigError", "EarthConfig", "Scenario", "load_scenario", "load_yaml_config", "read_yaml",
+           "scenario_from_dict"]

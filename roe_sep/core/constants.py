@@ -19,6 +19,8 @@ J4 = -1.61962159e-6
 
 EARTH_ROTATION = 7.292115e-5
 """Earth rotation rate omega_E [rad/s] (WGS-84 / Vallado)."""
+SPEED_OF_LIGHT = 299792458.0
+"""Speed of light in vacuum [m/s] (exact, SI)."""
 
 ARCSEC = math.pi / (180.0 * 3600.0)
 """One arc second [rad]."""

@@ -132,7 +132,7 @@ def plan_opm(plan, truth: Truth, opts: Options, frame=frames.LOCAL_FRAME, label=
     t0 = time_to_sec(carrier[0].epoch)
     r, v = frames.chief_state(truth.chief_at(t0)[0], opts.epoch_utc, t0)
     comments = [f"roe_sep {label}: strategy {plan.strategy}, computed at sim time {time_to_sec(plan.header.stamp)!r} s",
-                "carrier state: mean near-circular orbit of the simulator (mean of date, precessed IAU 1976)",
+                "carrier state: mean near-circular orbit of the simulator (GCRF, frame bias to EME2000)",
                 f"MAN_DELTA_MASS from the rocket equation, m = {opts.carrier_mass!r} kg, Isp = {opts.carrier_isp!r} s"]
     return build_opm(opts.carrier_name, opts.carrier_name, opts.epoch_utc, t0, r, v=v,
                      burns=_burns(carrier, truth, opts, frame), spacecraft=spacecraft(opts), comments=comments)
@@ -172,29 +172,39 @@ def thin(t, step):
     return np.array(keep, dtype=int)
 
 
-def truth_segments(run: RunMessages, truth: Truth, opts: Options):
-    """OEM segments of the truth: the carrier over the whole run, the picosatellite from the ejection, a new
-    segment at every burn (the simulator publishes a truth sample right at each burn: same epoch, new state)."""
-    if len(truth) < 2:
-        return []
-    keep = np.nonzero(np.concatenate([[True], np.diff(truth.t) > 0.0]))[0]
-    keep = keep[thin(truth.t[keep], opts.oem_step)]
-    r, v = frames.chief_state(truth.chief[keep], opts.epoch_utc, truth.t[keep])
-    segs = [EphemerisSegment(opts.carrier_name, opts.carrier_name, truth.t[keep], r, v,
-                             comments=["truth: the simulator's carrier (chief) orbit"])]
-    t_ej = _ejection_epoch(run, truth)
-    if t_ej is None:
-        return segs
-    burns = sorted({time_to_sec(m.epoch) for m in run[interfaces.EXECUTED_TOPIC]})
-    bounds = [b for b in burns if b >= t_ej] + [math.inf]
+def _burn_segments(truth: Truth, bounds, step):
+    """Index arrays of the truth samples of each [lo, hi) of consecutive ``bounds`` (a sample at lo, repeated at a
+    burn, counts by its last copy: the post-burn state), thinned to ``step``; segments of fewer than 2 left out."""
+    out = []
     for lo, hi in zip(bounds[:-1], bounds[1:]):
-        # the samples of [lo, hi): the last sample at lo is the post-burn state
         idx = np.nonzero((truth.t >= lo) & (truth.t < hi))[0]
         if idx.size and np.sum(truth.t[idx] == lo) > 1:
             idx = idx[np.sum(truth.t[idx] == lo) - 1:]
-        idx = idx[thin(truth.t[idx], opts.oem_step)] if idx.size else idx
-        if idx.size < 2:
-            continue
+        idx = idx[thin(truth.t[idx], step)] if idx.size else idx
+        if idx.size >= 2:
+            out.append(idx)
+    return out
+
+
+def truth_segments(run: RunMessages, truth: Truth, opts: Options):
+    """OEM segments of the truth: the carrier from the start, the picosatellite from the ejection, a new segment
+    at every burn of either (the simulator publishes a truth sample right at each burn: same epoch, new state; the
+    velocity jumps there, so no interpolation may span it)."""
+    if len(truth) < 2:
+        return []
+    executed = run[interfaces.EXECUTED_TOPIC]
+    carrier_burns = sorted({time_to_sec(m.epoch) for m in executed if m.spacecraft == "carrier"})
+    segs = []
+    for idx in _burn_segments(truth, [float(truth.t[0])] + [b for b in carrier_burns if b > truth.t[0]] + [math.inf],
+                              opts.oem_step):
+        r, v = frames.chief_state(truth.chief[idx], opts.epoch_utc, truth.t[idx])
+        segs.append(EphemerisSegment(opts.carrier_name, opts.carrier_name, truth.t[idx], r, v,
+                                     comments=["truth: the simulator's carrier (chief) orbit"]))
+    t_ej = _ejection_epoch(run, truth)
+    if t_ej is None:
+        return segs
+    burns = sorted({time_to_sec(m.epoch) for m in executed})
+    for idx in _burn_segments(truth, [b for b in burns if b >= t_ej] + [math.inf], opts.oem_step):
         rd, vd = frames.deputy_state(truth.roe[idx], truth.chief[idx], opts.epoch_utc, truth.t[idx])
         segs.append(EphemerisSegment(opts.picosat_name, opts.picosat_name, truth.t[idx], rd, vd,
                                      comments=["truth: the simulator's picosatellite"]))

@@ -1,26 +1,22 @@
-"""Frames and time scales of the exported navigation data: sim time -> UTC, the simulator's inertial frame of date
+"""Frames and time scales of the exported navigation data: sim time -> UTC, the simulator's inertial frame (GCRF)
 -> EME2000, carrier RTN <-> inertial states, Delta-v and covariances.
 
-The simulator and the radar model (:mod:`roe_sep.core.od.radar`) work in the *mean equator and equinox of date*
-(MOD): the Earth-fixed frame is MOD rotated by the Greenwich mean sidereal time (IAU 1982), nutation is ignored.
-CCSDS messages state EME2000 (mean equator and equinox of J2000.0), so every inertial vector is precessed with the
-IAU 1976 precession (Lieske et al. 1977; Vallado, *Fundamentals of Astrodynamics*, 4th ed., Eq. 3-88):
-
-    r_MOD = R3(-z) R2(theta) R3(-zeta) r_J2000,
-    zeta  = 2306.2181" T + 0.30188" T^2 + 0.017998" T^3,
-    theta = 2004.3109" T - 0.42665" T^2 - 0.041833" T^3,
-    z     = 2306.2181" T + 1.09468" T^2 + 0.018203" T^3,
-
-T in Julian centuries of TT from J2000.0. The argument is evaluated on UTC (TT - UTC = 68.2 s in 2016 moves the
-precession angles by 1e-10 rad, 0.7 mm at 7000 km). Between 2000 and 2016 the precession rotates positions by
-0.22 deg (27 km at the carrier's radius): without it, an EME2000 reader would misplace both spacecraft.
+The simulator and the radar model (:mod:`roe_sep.core.od.radar`) work in the GCRF, with the Earth oriented by
+:mod:`roe_sep.core.frames` (the one Earth-orientation model: ERFA's IAU 2000B, IERS EOP). CCSDS messages
+state EME2000 (mean equator and equinox of J2000.0), which is the GCRF rotated by the constant frame bias
+(:func:`roe_sep.core.frames.gcrf_to_eme2000`, 23 mas, 0.8 m at the carrier's radius).
 
 Time: sim time t [s] counts SI seconds from the scenario's calendar epoch ``epoch_utc`` (UTC); the epoch of a
 sample is epoch_utc + t. The runs span days, and no leap second is inserted inside one (the next after 2016-07-01
 is 2016-12-31 23:59:60), so the UTC label is exact for the default scenario.
 
 The carrier's state is its mean near-circular orbit used as osculating (radar.chief_position_velocity, the model
-the radar and the OD share). The picosatellite is carrier + relative state, with the rotating-frame kinematics
+the radar and the OD share), with the velocity the time derivative of those positions: the mean elements advance at
+the J2 secular rates (du/dt, d raan/dt of :mod:`roe_sep.core.relmotion.dynamics`), so
+
+    v = (du/dt / n) v_circ + (d raan/dt) z x r     (v_circ = sqrt(mu / a) times the unit along-track vector).
+
+The picosatellite is carrier + relative state, with the rotating-frame kinematics
 
     r_d = r_c + M rho,   v_d = v_c + M (rho_dot + omega x rho),   omega = (0, 0, |r_c x v_c| / |r_c|^2) in RTN,
 
@@ -28,17 +24,16 @@ M = [R T N] the RTN -> inertial rotation (radar.rtn_matrix) and rho, rho_dot the
 measured in the rotating RTN frame (the linear ROE map, seed 002 Eq. 2's basis).
 """
 
-import math
 from datetime import datetime, timedelta, timezone
 
 import numpy as np
 
-from ..core.constants import SECONDS_PER_DAY
-from ..core.od.radar import JD_J2000, chief_from_kepler, chief_position_velocity, julian_date, rtn_matrix
+from ..core.frames import gcrf_to_eme2000
+from ..core.od.radar import chief_from_kepler, chief_position_velocity, rtn_matrix
+from ..core.relmotion.dynamics import arg_latitude_rate, raan_rate
 from ..core.relmotion.orbit import mean_motion
 from ..core.relmotion.roe import roe_to_rtn
 
-ARCSEC = math.pi / (180.0 * 3600.0)
 INERTIAL_FRAME = "EME2000"
 """REF_FRAME of every exported state (CCSDS 502.0-B-2 Annex A spelling)."""
 LOCAL_FRAME = "RTN"
@@ -88,45 +83,33 @@ def sim_time(epoch_utc, ccsds_epoch) -> float:
     return (dt - parse_epoch(epoch_utc)).total_seconds()
 
 
-def precession_matrix(jd):
-    """IAU 1976 precession, EME2000 -> mean of date: P = R3(-z) R2(theta) R3(-zeta) (module docstring),
-    ``(..., 3, 3)``; r_MOD = P r_J2000."""
-    t = (np.asarray(jd, dtype=float) - JD_J2000) / 36525.0
-    zeta = (2306.2181 * t + 0.30188 * t**2 + 0.017998 * t**3) * ARCSEC
-    theta = (2004.3109 * t - 0.42665 * t**2 - 0.041833 * t**3) * ARCSEC
-    z = (2306.2181 * t + 1.09468 * t**2 + 0.018203 * t**3) * ARCSEC
-    return _rot3(-z) @ _rot2(theta) @ _rot3(-zeta)
-
-
-def _rot3(a):
-    c, s = np.cos(a), np.sin(a)
-    o, i = np.zeros_like(c), np.ones_like(c)
-    return np.stack([np.stack([c, s, o], -1), np.stack([-s, c, o], -1), np.stack([o, o, i], -1)], -2)
-
-
-def _rot2(a):
-    c, s = np.cos(a), np.sin(a)
-    o, i = np.zeros_like(c), np.ones_like(c)
-    return np.stack([np.stack([c, o, -s], -1), np.stack([o, i, o], -1), np.stack([s, o, c], -1)], -2)
-
-
-def mod_to_eme2000(epoch_utc, t):
-    """Rotation ``(..., 3, 3)`` from the simulator's mean-of-date frame to EME2000 at sim times ``t``: P^T."""
-    jd = julian_date(parse_epoch(epoch_utc)) + np.asarray(t, dtype=float) / SECONDS_PER_DAY
-    return np.swapaxes(precession_matrix(jd), -1, -2)
-
-
 def _apply(m, v):
     return np.einsum("...ij,...j->...i", m, v)
 
 
-def chief_state(chief_kep, epoch_utc, t):
-    """Carrier position [m] and velocity [m/s] in EME2000 from its mean Keplerian elements ``[a, e, i, raan, argp,
-    M]`` (of date) at sim time ``t``: radar.chief_position_velocity, then :func:`mod_to_eme2000`."""
+def _chief_gcrf(chief_kep):
+    """GCRF position [m], the model's circular velocity [m/s] (its RTN frame) and the velocity consistent with the
+    positions (module docstring), and the frame's rotation rates du/dt, d raan/dt [rad/s] of the mean elements."""
     a, inc, raan, u = chief_from_kepler(chief_kep)
     r, v = chief_position_velocity(a, inc, raan, u)
-    p = mod_to_eme2000(epoch_utc, t)
-    return _apply(p, r), _apply(p, v)
+    u_dot, raan_dot = arg_latitude_rate(a, inc), raan_rate(a, inc)
+    v_true = (u_dot / mean_motion(a))[..., None] * v + _z_cross(raan_dot, r)
+    return r, v, v_true, u_dot, raan_dot
+
+
+def _z_cross(w, r):
+    """(w z) x r of ``(..., 3)`` vectors, z the GCRF pole."""
+    w = np.asarray(w, dtype=float)
+    return np.stack([-w * r[..., 1], w * r[..., 0], np.zeros_like(w * r[..., 0])], axis=-1)
+
+
+def chief_state(chief_kep, epoch_utc, t):
+    """Carrier position [m] and velocity [m/s] in EME2000 from its mean Keplerian elements ``[a, e, i, raan, argp,
+    M]`` (GCRF) at sim time ``t``: radar.chief_position_velocity with the secular-rate velocity of the module
+    docstring, then the frame bias (constant: ``epoch_utc`` and ``t`` are not needed for it)."""
+    r, _, v, _, _ = _chief_gcrf(chief_kep)
+    b = gcrf_to_eme2000()
+    return _apply(b, r), _apply(b, v)
 
 
 def angular_velocity(r, v):
@@ -169,18 +152,27 @@ def dv_inertial_to_rtn(r, v, dv):
 
 def roe_rtn_state(roe, chief_kep):
     """RTN position [m] and rotating-frame velocity [m/s] of dimensionless ``roe`` relative to the chief with mean
-    elements ``chief_kep``: a * roe_to_rtn(roe, u) (seed 002 Eq. 2's linear map), velocity scaled by a n."""
-    a, _, _, u = chief_from_kepler(chief_kep)
+    elements ``chief_kep``: a * roe_to_rtn(roe, u) (seed 002 Eq. 2's linear map), velocity scaled by a du/dt (the
+    map's derivative along u times u's J2 secular rate, as the positions move)."""
+    a, inc, _, u = chief_from_kepler(chief_kep)
     pos, vel = roe_to_rtn(roe, u)
+    rate = arg_latitude_rate(a, inc)[..., None]
     a = np.asarray(a, dtype=float)[..., None]
-    return pos * a, vel * a * mean_motion(a)
+    return pos * a, vel * a * rate
 
 
 def deputy_state(roe, chief_kep, epoch_utc, t):
-    """Picosatellite EME2000 position [m] and velocity [m/s] from its ROE and the chief's mean elements at ``t``."""
-    r_c, v_c = chief_state(chief_kep, epoch_utc, t)
+    """Picosatellite EME2000 position [m] and velocity [m/s] from its ROE and the chief's mean elements at ``t``:
+    r_d = r_c + M rho, v_d = v_c + M rho_dot + Omega x (M rho), with M the RTN frame of the model's chief (the one
+    the radar sees) turning at Omega = (du/dt) N + (d raan/dt) z as the mean elements advance."""
+    r_c, v_model, v_c, u_dot, raan_dot = _chief_gcrf(chief_kep)
     rho, rho_dot = roe_rtn_state(roe, chief_kep)
-    return rtn_to_inertial(r_c, v_c, rho, rho_dot)
+    m = rtn_matrix(r_c, v_model)
+    d = _apply(m, rho)
+    spin = u_dot[..., None] * m[..., :, 2]
+    r_d, v_d = r_c + d, v_c + _apply(m, rho_dot) + np.cross(spin, d) + _z_cross(raan_dot, d)
+    b = gcrf_to_eme2000()
+    return _apply(b, r_d), _apply(b, v_d)
 
 
 def roe_to_rtn_jacobian(chief_kep):

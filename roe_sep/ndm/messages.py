@@ -98,9 +98,11 @@ class SpacecraftParameters:
     solar_rad_coeff: float = 0.0
 
 
-def build_opm(object_name, object_id, epoch_utc, t, r, *, v, burns, spacecraft: SpacecraftParameters, comments=()):
-    """OPM 2.0: the spacecraft's EME2000 state [m, m/s] at sim time ``t``, its parameters and its maneuvers
-    (:class:`Burn`)."""
+def build_opm(object_name, object_id, epoch_utc, t, r, *, v, burns, spacecraft: SpacecraftParameters | None,
+              comments=(), covariance=None):
+    """OPM 2.0: the spacecraft's EME2000 state [m, m/s] at sim time ``t``, its parameters (None: none, allowed
+    without maneuvers) and its maneuvers (:class:`Burn`); ``covariance``: the state's 6x6 [m, m/s] EME2000
+    covariance (the OPM covariance section, km^2...), or None."""
     meta = nd.OpmMetadata(object_name=object_name, object_id=object_id, center_name=frames.CENTER,
                           ref_frame=frames.INERTIAL_FRAME, time_system=frames.TIME_SYSTEM)
     mans = [nd.ManeuverParametersType(
@@ -109,17 +111,20 @@ def build_opm(object_name, object_id, epoch_utc, t, r, *, v, burns, spacecraft: 
         man_delta_mass=nd.DeltamassType(value=_f(b.delta_mass), units=nd.MassUnits.KG), man_ref_frame=b.frame,
         man_dv_1=_kms(b.dv[0]), man_dv_2=_kms(b.dv[1]), man_dv_3=_kms(b.dv[2])) for b in burns]
     sc = spacecraft
-    params = nd.SpacecraftParametersType(
+    if sc is None and burns:
+        raise ValueError("an OPM with maneuvers needs the spacecraft parameters (CCSDS 502.0-B-2 Sec. 3.2.4)")
+    params = None if sc is None else nd.SpacecraftParametersType(
         comment=["solar radiation pressure is not modelled (area and coefficient 0)"] if not sc.solar_rad_coeff
         else [], mass=nd.MassType(value=_f(sc.mass), units=nd.MassUnits.KG),
         solar_rad_area=nd.AreaType(value=_f(sc.solar_rad_area), units=nd.AreaUnits.M_2),
         solar_rad_coeff=_f(sc.solar_rad_coeff), drag_area=nd.AreaType(value=_f(sc.drag_area), units=nd.AreaUnits.M_2),
         drag_coeff=_f(sc.drag_coeff))
+    cov = None if covariance is None else _oem_covariance(None, covariance, frames.INERTIAL_FRAME)
     # The comments go into the state vector block, not before it at the data level: both are schema-valid and give
     # the same KVN, but Orekit's XML parser refuses a COMMENT directly under <data>.
     data = nd.OpmData(state_vector=_state_vector(
         nd.StateVectorType, frames.utc_string(epoch_utc, t), r, v, comment=list(comments)),
-        spacecraft_parameters=params, maneuver_parameters=mans)
+        spacecraft_parameters=params, maneuver_parameters=mans, covariance_matrix=cov)
     return nd.Opm(header=_header(), body=nd.OpmBody(segment=nd.OpmSegment(metadata=meta, data=data)))
 
 
@@ -142,7 +147,8 @@ COV_NAMES = ("x", "y", "z", "x_dot", "y_dot", "z_dot")
 
 
 def _oem_covariance(epoch, cov, frame):
-    """OEM covariance block (lower triangle, km^2, km^2/s, km^2/s^2) of a 6x6 [m, m/s] covariance."""
+    """OEM covariance block (lower triangle, km^2, km^2/s, km^2/s^2) of a 6x6 [m, m/s] covariance; with ``epoch``
+    None the OPM's (no epoch: the state's)."""
     c = np.asarray(cov, dtype=float) / 1e6
     kw = {}
     for i in range(6):
@@ -150,11 +156,21 @@ def _oem_covariance(epoch, cov, frame):
             kind = (nd.PositionCovarianceType if i < 3 else
                     nd.PositionVelocityCovarianceType if j < 3 else nd.VelocityCovarianceType)
             kw[f"c{COV_NAMES[i]}_{COV_NAMES[j]}"] = kind(value=_f(c[i, j]))
+    if epoch is None:
+        return nd.OpmCovarianceMatrixType(cov_ref_frame=frame, **kw)
     return nd.OemCovarianceMatrixType(epoch=epoch, cov_ref_frame=frame, **kw)
 
 
+OEM_HERMITE_DEGREE = 7
+"""INTERPOLATION_DEGREE of the OEM segments (Hermite: 4 states, positions and velocities)."""
+
+
 def build_oem(epoch_utc, segments, comments=()):
-    """OEM 2.0 with one segment per :class:`EphemerisSegment` (Lagrange interpolation, degree 7)."""
+    """OEM 2.0 with one segment per :class:`EphemerisSegment`, declared ``INTERPOLATION = HERMITE`` of degree 7
+    (positions and velocities of 4 neighbouring states; never above the segment's states - 1, as Orekit takes degree
+    + 1 states for its Hermite and refuses a segment with fewer): the velocities are the time
+    derivative of the positions (:func:`roe_sep.ndm.frames.chief_state`), so a reader's Hermite reproduces the
+    trajectory between the states; a Lagrange reader of positions alone loses up to metres at 300 s spacing."""
     out = []
     for s in segments:
         t = np.asarray(s.t, dtype=float)
@@ -163,8 +179,8 @@ def build_oem(epoch_utc, segments, comments=()):
         meta = nd.OemMetadata(comment=list(s.comments), object_name=s.object_name, object_id=s.object_id,
                               center_name=frames.CENTER, ref_frame=frames.INERTIAL_FRAME,
                               time_system=frames.TIME_SYSTEM, start_time=frames.utc_string(epoch_utc, t[0]),
-                              stop_time=frames.utc_string(epoch_utc, t[-1]), interpolation="LAGRANGE",
-                              interpolation_degree=int(min(7, t.size - 1)))
+                              stop_time=frames.utc_string(epoch_utc, t[-1]), interpolation="HERMITE",
+                              interpolation_degree=int(min(OEM_HERMITE_DEGREE, t.size - 1)))
         states = [_state_vector(nd.StateVectorAccType, frames.utc_string(epoch_utc, tk), rk, vk)
                   for tk, rk, vk in zip(t, s.r, s.v)]
         covs = [_oem_covariance(frames.utc_string(epoch_utc, tc), c, s.cov_frame) for tc, c in s.covariances]
@@ -192,7 +208,8 @@ SIGMA_ANGLE_KEY = "SIGMA_ANGLE_DEG"
 
 def build_tdm(epoch_utc, passes, comments=()):
     """TDM 2.0, one segment per :class:`TrackingPass`: AZEL angles [deg], RANGE [km], PARTICIPANT_1 the station,
-    PARTICIPANT_2 the target, two-way path 1,2,1 with the one-way geometric range (no light time) at the time tag.
+    PARTICIPANT_2 the target, two-way path 1,2,1, receive time tag: RANGE is half the round-trip light time times c
+    (:func:`roe_sep.core.od.radar.two_way_look`), the angles those of the received signal.
     The TDM has no keyword for the measurement noise: it goes into metadata comments ``SIGMA_RANGE_M = ...``,
     ``SIGMA_ANGLE_DEG = ...`` (read back by :func:`read_tdm`)."""
     segs = []
@@ -202,7 +219,9 @@ def build_tdm(epoch_utc, passes, comments=()):
         meta = nd.TdmMetadata(
             comment=[f"{SIGMA_RANGE_KEY} = {_f(p.sigma_range)!r}",
                      f"{SIGMA_ANGLE_KEY} = {_f(math.degrees(p.sigma_angle))!r}",
-                     "RANGE is the one-way geometric station-target distance at the time tag (no light time)"],
+                     "RANGE: two-way light-time range c (tau_up + tau_down) / 2 at the receive time tag, "
+                     "no corrections",
+                     "ANGLE_1/2: azimuth/elevation of the received signal (the target at reflection), no refraction"],
             track_id=f"{p.station}_PASS_{int(p.pass_id)}", time_system=nd.TimeSystemType.UTC,
             start_time=frames.utc_string(epoch_utc, t[0]), stop_time=frames.utc_string(epoch_utc, t[-1]),
             participant_1=p.station, participant_2=p.target, mode=nd.ModeType.SEQUENTIAL, path="1,2,1",
@@ -339,8 +358,8 @@ def _num(x):
 
 @dataclass(frozen=True)
 class Measurement:
-    """A radar measurement read from a TDM: sim time [s], station, pass id, z = [range m, az rad, el rad] and its
-    1-sigma noise [m, rad]."""
+    """A radar measurement read from a TDM: sim time [s], station, pass id, z = [range m, az rad, el rad], its
+    1-sigma noise [m, rad] and the tracked object (the participant the station's signal comes from)."""
 
     t: float
     station: str
@@ -348,6 +367,7 @@ class Measurement:
     z: tuple
     sigma_range: float
     sigma_angle: float
+    target: str | None = None
 
 
 def _comment_value(comments, key):
@@ -364,19 +384,20 @@ the drift-stop, :class:`roe_sep.core.config.MonteCarloConfig`, plus the day befo
 
 
 def read_tdm(source, epoch_utc, sigma_range=None, sigma_angle=None):
-    """Radar measurements of a TDM (file path or text): RANGE with AZEL angles, grouped by time tag, read by
-    :func:`roe_sep.ndm.tdm_reader.read_observations` (units, paths, corrections, time systems; epochs within
-    :data:`TDM_SPAN_S` after ``epoch_utc``).
+    """Radar measurements of a TDM (file path, text or the message :func:`read_message` read): RANGE with AZEL
+    angles, grouped by time tag, read by :func:`roe_sep.ndm.tdm_reader.read_observations` (units, paths,
+    corrections, time systems; epochs within :data:`TDM_SPAN_S` after ``epoch_utc``).
 
     Each measurement: the station is the path's last participant (it receives and points: a two-way path or a
-    downlink), its stamp the receive time there (the radar's stamp), the range the one-way range; the pass id is the
-    number after ``_PASS_`` in TRACK_ID (else the segment's 1-based index). Sigmas from the
+    downlink), its stamp the receive time there (the radar's stamp), the range the one-way range, the target the
+    participant before it; the pass id is the number after ``_PASS_`` in TRACK_ID (else the segment's 1-based
+    index). Sigmas from the
     ``SIGMA_RANGE_M``/``SIGMA_ANGLE_DEG`` metadata comments, else the ``sigma_range`` [m] / ``sigma_angle`` [rad]
     given here. NdmError naming what is wrong: what the reader refuses, RADEC angles, an uplink path, a time tag
     without all three of range, azimuth and elevation, no measurement at all, or no sigma.
     """
     start = frames.parse_epoch(epoch_utc)
-    msg = read_message(source)
+    msg = source if type(source).__name__ in ("Tdm", "TdmType") else read_message(source)
     obs = read_observations(msg, span=(start, start + timedelta(seconds=TDM_SPAN_S)))
     segments = msg.body.segment
     out = []
@@ -400,7 +421,7 @@ def read_tdm(source, epoch_utc, sigma_range=None, sigma_angle=None):
         pass_id = int(tail) if sep and tail.isdigit() and int(tail) < 2**32 else o.segment
         t = (o.receive_epoch - start).total_seconds()
         out.append(Measurement(t, o.participants[-1], pass_id, (o.range_m, o.angle_1, o.angle_2), float(sr),
-                               float(sa)))
+                               float(sa), o.participants[-2]))
     if not out:
         raise NdmError("the TDM holds no RANGE/ANGLE_1/ANGLE_2 measurement")
     out.sort(key=lambda m: (m.t, m.station))

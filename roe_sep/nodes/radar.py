@@ -12,7 +12,9 @@ stations' measurements; ``radar_od`` estimates from them (or from a ground segme
   ahead of the truth never has an epoch measured from a stale sample. Where a station sees the picosatellite above
   its mask and the spacecraft are >= ``min_separation`` apart (:func:`~roe_sep.core.od.sensor.trackable`) a noisy
   ``roe_sep_msgs/RadarMeasurement`` is published on ``/radar/measurements`` (STREAM,
-  :func:`~roe_sep.core.od.sensor.noisy_measurement`).
+  :func:`~roe_sep.core.od.sensor.noisy_measurement`): the two-way light-time range at the receive time tag and the
+  angles of the received signal (:func:`~roe_sep.core.od.radar.two_way_look`, the Earth oriented by
+  :func:`~roe_sep.core.frames.gcrs_to_itrs`), as the TDM declares them.
 * A pass is a run of consecutive measurement epochs of one station; when it ends, ``roe_sep_msgs/RadarPass`` on
   ``/radar/passes`` (STREAM) says so, stamped with the tracking's sim time, after its last measurement.
 * ``/sim/executed_maneuvers`` (latched history): no measurement is simulated from a truth sample older than a burn
@@ -35,8 +37,8 @@ from rosgraph_msgs.msg import Clock
 
 from .. import interfaces
 from ..core.config import ConfigError, load_scenario
-from ..core.constants import SECONDS_PER_DAY
-from ..core.od.radar import deputy_earth_fixed, gmst, look_angles, relative_distance, truth_da_rate, visible
+from ..core.frames import gcrs_to_itrs
+from ..core.od.radar import deputy_earth_fixed_state, relative_distance, truth_da_rate, two_way_look, visible
 from ..core.od.sensor import noisy_measurement, pass_lost, trackable
 from ..core.relmotion.dynamics import propagate, propagate_chief
 from ..core.relmotion.roe import rtn_position
@@ -242,12 +244,12 @@ class RadarNode(ManagedNode):
         chief = propagate_chief(kep_tr, epochs - t_tr)
         rate = np.repeat([self.truth_rate(c[1][0], c[1][1]) for c in calls], sizes)
         roe = propagate(roe_tr, epochs - t_tr, kep_tr[:, 0], kep_tr[:, 2], True, da_dot=rate)
-        theta = gmst(self.jd0 + epochs / SECONDS_PER_DAY)
+        earth = gcrs_to_itrs(self.jd0, epochs)
         # the relative position serves the separation and every station's look angles: formed once
         rel = rtn_position(roe, chief[:, 4] + chief[:, 5])
         sep = relative_distance(roe, kep_tr[:, 0], None, rel)
-        r_ef = deputy_earth_fixed(roe, chief, theta, rel)
-        z = [look_angles(r_ef, self.site_ef[s], self.site_enu[s]) for s in range(len(self.stations))]
+        state_ef = deputy_earth_fixed_state(roe, chief, earth, rel)
+        z = [two_way_look(state_ef, self.site_ef[s], self.site_enu[s]) for s in range(len(self.stations))]
         # the pass logic reads the epochs and the visibility one epoch at a time: as Python values (the same
         # floats and truth values), not NumPy scalars
         seen = [visible(zs[:, 2], self.mask).tolist() for zs in z]

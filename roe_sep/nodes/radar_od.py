@@ -42,9 +42,9 @@ from roe_sep_msgs.msg import (
 )
 
 from .. import interfaces
-from ..core.constants import R_EARTH, SECONDS_PER_DAY
+from ..core.constants import R_EARTH
+from ..core.frames import gcrs_to_itrs
 from ..core.od.batch import DragModel, DriftPrior, RadarBatch, batch_least_squares
-from ..core.od.radar import gmst
 from ..core.od.sensor import RadarRecord, counted_passes
 from ..core.relmotion.dynamics import propagate_chief
 from ..core.relmotion.roe import wrap_angle
@@ -147,9 +147,9 @@ class RadarODNode(ManagedNode):
                     self.prior = self.drift_prior(*self.last_solution)
 
     def record(self, msg: RadarMeasurement, pass_id):
-        """The :class:`RadarRecord` of a measurement of pass ``pass_id`` with the chief and the sidereal angle at
-        its epoch; ValueError naming the problem (no truth yet, an unknown station, non-finite values, sigmas
-        other than this node's: the batch weights every record alike)."""
+        """The :class:`RadarRecord` of a measurement of pass ``pass_id`` with the chief and the Earth orientation
+        (GCRS -> ITRS) at its epoch; ValueError naming the problem (no truth yet, an unknown station, non-finite
+        values, sigmas other than this node's: the batch weights every record alike)."""
         t = time_to_sec(msg.header.stamp)
         z = np.array([msg.range, msg.azimuth, msg.elevation], dtype=float)
         problem = ("no truth received yet" if not self.history_t else
@@ -166,9 +166,9 @@ class RadarODNode(ManagedNode):
         k = min(bisect.bisect_left(self.history_t, t), len(self.history_t) - 1)
         t_tr, kep_tr = self.history_t[k], self.history_kep[k]
         chief = propagate_chief(kep_tr, np.array([t - t_tr]))[0]
-        theta = float(gmst(self.jd0 + np.array([t]) / SECONDS_PER_DAY)[0])
+        earth = gcrs_to_itrs(self.jd0, t)
         return RadarRecord(t=t, station=self.names.index(msg.station), pass_id=pass_id, z=z, chief=chief,
-                           theta=theta, truth_t=t_tr)
+                           earth=earth, truth_t=t_tr)
 
     def _rejected(self, what, msg, exc):
         t = time_to_sec(msg.header.stamp)
@@ -247,7 +247,7 @@ class RadarODNode(ManagedNode):
         s_idx = [r.station for r in recs]
         batch = RadarBatch(t=np.array([r.t for r in recs]), z=np.array([r.z for r in recs]),
                            sigma=np.tile(self.sigma, (len(recs), 1)), chief=np.array([r.chief for r in recs]),
-                           theta=np.array([r.theta for r in recs]),
+                           earth=np.array([r.earth for r in recs]),
                            site_ef=np.array([self.site_ef[s] for s in s_idx]),
                            site_enu=np.array([self.site_enu[s] for s in s_idx]))
         prior = (self.prior.carried(float(np.max(batch.t)), self.density_walk)

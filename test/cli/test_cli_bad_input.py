@@ -192,6 +192,23 @@ def cases():
     c += file_cases(["export"], exp, "--config", CONFIG_FILES + ["scenario_nan"])
     c.append(("export --out <a file>", ["export", "{reference_bag}", "--out", "{binary}"], 2, ["{binary}"]))
     c.append(("export --out <under a file>", ["export", "{reference_bag}", "--out", "{binary}/x"], 2, ["{binary}"]))
+    # od (the offline OD; a case accepted by mistake stops at the missing TDM, whose message names no option)
+    od = ["--tdm", "{missing}", "--carrier-oem", "{missing}"]
+    c.append(("od --tdm <missing>", ["od", *od], 2, ["{missing}"]))
+    c.append(("od --tdm <binary>", ["od", "--tdm", "{binary}", "--carrier-oem", "{binary}"], 2, ["{binary}"]))
+    c.append(("od --tdm <a bag>", ["od", "--tdm", "{garbage_bag}", "--carrier-oem", "{binary}"], 2,
+              ["{garbage_bag}"]))
+    c.append(("od without --carrier-oem", ["od", "--tdm", "{bad_yaml}"], 2, ["--carrier-oem"]))
+    c += opt_cases(["od"], od, "--since", ["July", "", "2016-13-01T00:00:00"])
+    c += opt_cases(["od"], od, "--until", ["July", "nan"])
+    c += opt_cases(["od"], od, "--station", ["TIRA", "TIRA,95,0,0", "TIRA,50,nan,0", ",50,7,300"])
+    c += opt_cases(["od"], od, "--sigma-range", N + NEG)
+    c += opt_cases(["od"], od, "--sigma-angle", N + NEG + ["1"])
+    c += opt_cases(["od"], od, "--min-pass", N + NEG + ["2.5"])
+    c += opt_cases(["od"], od, "--min-passes", N + NEG)
+    c += opt_cases(["od"], od, "--edit-p", N + NEG + ["0.6"])
+    c += opt_cases(["od"], od, "--predict", N + NEG + ["1000"])
+    c += opt_cases(["od"], od, "--format", ["json"])
     # campaign (--out holds a campaign of other settings: a case accepted by mistake is refused before any run)
     camp = ["--runs", "2", "--out", "{campaign_other}"]
     c += opt_cases(["campaign"], camp, "--runs", N + NEG + ["2.5", "100001"])

@@ -267,7 +267,6 @@ def test_the_observation_from_the_shared_relative_position_is_observe():
     c, s = np.cos(theta), np.sin(theta)
     z, one = np.zeros_like(theta), np.ones_like(theta)
     rot = np.stack([np.stack([c, s, z], -1), np.stack([-s, c, z], -1), np.stack([z, z, one], -1)], axis=-2)
-    assert same(radar.earth_rotation_matrix(theta), rot)
     dep = rc + np.einsum("...ij,...j->...i", old_rtn_matrix(rc, vc), old_rtn_position(roe, u) * kep[:, :1])
     r_ef = np.einsum("...ij,...j->...i", rot, dep)
     d = r_ef - site.ecef
@@ -275,7 +274,8 @@ def test_the_observation_from_the_shared_relative_position_is_observe():
     old = np.stack([np.sqrt(e * e + nn * nn + up * up), np.mod(np.arctan2(e, nn), 2.0 * np.pi),
                     np.arctan2(up, np.hypot(e, nn))], axis=-1)
     rel = rtn_position(roe, u)
-    assert same(radar.observe(roe, kep, theta, site.ecef, site.enu), old)
-    assert same(radar.look_angles(radar.deputy_earth_fixed(roe, kep, theta, rel), site.ecef, site.enu), old)
+    state = radar.deputy_earth_fixed_state(roe, kep, rot, rel)
+    assert same(radar.look_angles(state[..., 0, :], site.ecef, site.enu), old)
+    assert same(radar.observe(roe, kep, rot, site.ecef, site.enu), radar.two_way_look(state, site.ecef, site.enu))
     assert same(radar.relative_distance(roe, kep[:, 0], None, rel),
                 np.linalg.norm(old_rtn_position(roe, u), axis=-1) * kep[:, 0])

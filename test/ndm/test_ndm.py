@@ -15,9 +15,10 @@ from oracle import kepler_to_cartesian
 from roe_sep import interfaces
 from roe_sep.cli import main
 from roe_sep.cli.export import read_run
-from roe_sep.core.constants import MU_EARTH, R_EARTH, SECONDS_PER_DAY
+from roe_sep.core.constants import MU_EARTH, R_EARTH
+from roe_sep.core.frames import gcrf_to_eme2000, gcrs_to_itrs
 from roe_sep.core.od.batch import DragModel, RadarBatch, batch_least_squares
-from roe_sep.core.od.radar import TIRA, gmst, julian_date
+from roe_sep.core.od.radar import TIRA, julian_date
 from roe_sep.core.relmotion.dynamics import propagate_chief
 from roe_sep.core.relmotion.maneuvers import delta_roe
 from roe_sep.core.relmotion.orbit import mean_motion
@@ -58,25 +59,19 @@ def propagate_two_body(el, dt):
 
 
 # --- frames -------------------------------------------------------------------------------------------------------
-def test_precession_matches_vallado_example_3_15():
-    """IAU 1976 angles of Vallado's Example 3-15 (T_TT = 0.0426236319): zeta 0.0273055, theta 0.0237306,
-    z 0.0273059 deg; the matrix is R3(-z) R2(theta) R3(-zeta)."""
-    jd = frames.JD_J2000 + 0.0426236319 * 36525.0
-    zeta, theta, z = np.radians([0.0273055, 0.0237306, 0.0273059])
+def test_eme2000_is_the_gcrf_turned_by_the_frame_bias():
+    """The export's EME2000 = B r_GCRF with ERFA's frame bias (bp00's rb): a rotation of 23 mas, 0.8 m at the
+    carrier's radius; the carrier's state is rotated by it and by nothing else."""
+    import erfa
 
-    def r3(a):
-        return np.array([[math.cos(a), math.sin(a), 0], [-math.sin(a), math.cos(a), 0], [0, 0, 1]])
-
-    def r2(a):
-        return np.array([[math.cos(a), 0, -math.sin(a)], [0, 1, 0], [math.sin(a), 0, math.cos(a)]])
-
-    expected = r3(-z) @ r2(theta) @ r3(-zeta)
-    p = frames.precession_matrix(jd)
-    assert np.max(np.abs(p - expected)) < 2e-9  # the example's 7-digit angles
-    assert np.allclose(p @ p.T, np.eye(3), atol=1e-15)
-    # 16.5 years of precession at the default epoch: the pole moves by theta = 0.0917 deg
-    pd = frames.mod_to_eme2000(EPOCH, 0.0)
-    assert math.degrees(math.acos(pd[2, 2])) == pytest.approx(0.0917, abs=2e-4)
+    b = gcrf_to_eme2000()
+    np.testing.assert_allclose(b, erfa.bp00(2451545.0, 0.0)[0], atol=0)
+    angle = math.acos((np.trace(b) - 1.0) / 2.0)
+    assert angle / (math.pi / 180 / 3600) * 1e3 == pytest.approx(23.0, abs=1.0)  # mas
+    chief = np.array([A, 0.0, INC, 1.1, 0.0, 0.7])
+    r, _ = frames.chief_state(chief, EPOCH, 1000.0)
+    r0, _ = kepler_to_cartesian(chief)
+    assert 0.5 < np.linalg.norm(r - r0) < 1.0 and np.linalg.norm(r - b @ r0) < 1e-6
 
 
 def test_rtn_velocity_is_the_rotating_frame_derivative_of_two_body_states():
@@ -107,13 +102,14 @@ def test_deputy_state_of_roe_matches_two_body_to_second_order():
     t = 3600.0
     rd, vd = frames.deputy_state(roe, chief, EPOCH, t)
     rd0, vd0 = kepler_to_cartesian(roe_to_kepler(chief, roe))
-    p = frames.mod_to_eme2000(EPOCH, t)
+    p = gcrf_to_eme2000()
     rho = np.linalg.norm(roe) * A
-    assert np.linalg.norm(rd - p @ rd0) < 3.0 * rho**2 / A + 0.1  # 0.4 m for 1.2 km
-    assert np.linalg.norm(vd - p @ vd0) < 3.0 * rho**2 / A * mean_motion(A) + 1e-4
     rc, vc = frames.chief_state(chief, EPOCH, t)
     rc0, vc0 = kepler_to_cartesian(chief)
-    assert np.linalg.norm(rc - p @ rc0) < 1e-6 and np.linalg.norm(vc - p @ vc0) < 1e-9
+    assert np.linalg.norm(rd - p @ rd0) < 3.0 * rho**2 / A + 0.1  # 0.4 m for 1.2 km
+    # the velocities carry the J2 secular rates (du/dt = 1.0013 n): relative velocities agree
+    assert np.linalg.norm((vd - vc) - p @ (vd0 - vc0)) < 3.0 * rho**2 / A * mean_motion(A) + 5e-3
+    assert np.linalg.norm(rc - p @ rc0) < 1e-6 and 5.0 < np.linalg.norm(vc - p @ vc0) < 15.0
 
 
 def test_inertial_dv_changes_the_roe_as_gauss_eq2():
@@ -214,7 +210,9 @@ def test_export_writes_the_set_and_it_reads_back(exported, run):
 
 def test_oem_truth_reproduces_the_relative_orbit(exported, run):
     """Carrier and picosatellite truth states of the OEM, back through inertial_to_rtn, give the bag's truth RTN
-    state of the linear map at the same epoch (1 mm)."""
+    state of the linear map at the same epoch: radial and along-track to 0.1 m, normal to 2e-4 of the distance. The
+    carrier's velocity carries the nodal regression (the derivative of its positions), so the plane of r x v is
+    tilted from the mean orbit's by up to r (d raan/dt) / v = 1.8e-4 rad: a reader's RTN frame is that one."""
     fmt, out = exported
     segs = ndm.read_message(out / f"ephemeris.oem.{fmt}").body.segment
 
@@ -224,17 +222,19 @@ def test_oem_truth_reproduces_the_relative_orbit(exported, run):
                                                                       s.z_dot.value]) * 1e3)
                 for s in seg.data.state_vector}
 
-    carrier = states(segs[0])
-    pico = {}
-    for s in segs[1:]:
-        if s.metadata.object_id == "PICOSATELLITE":
+    carrier, pico = {}, {}
+    for s in segs:
+        if s.metadata.object_id == "CARRIER":
+            carrier.update(states(s))
+        elif s.metadata.object_id == "PICOSATELLITE":
             pico.update(states(s))
     truth = Truth(run[interfaces.TRUTH_ROE_TOPIC])
     k = int(np.searchsorted(truth.t, 100000.0))
     t = round(float(truth.t[k]), 3)
     rho, rho_dot = frames.inertial_to_rtn(*carrier[t], *pico[t])
     exp_rho, exp_dot = frames.roe_rtn_state(truth.roe[k], truth.chief[k])
-    assert np.max(np.abs(rho - exp_rho)) < 1e-3 and np.max(np.abs(rho_dot - exp_dot)) < 1e-6
+    assert np.max(np.abs(rho - exp_rho)[:2]) < 0.1 and abs(rho[2] - exp_rho[2]) < 2e-4 * np.linalg.norm(exp_rho)
+    assert np.max(np.abs(rho_dot - exp_dot)) < 0.01
     # the carrier's state from its mean elements (near-circular, radial distance a): a of that truth sample, which
     # the nonlinear truth's drag lowers over the run
     assert np.linalg.norm(carrier[t][0]) == pytest.approx(truth.chief[k, 0], abs=1e-3)
@@ -337,7 +337,7 @@ def _batch(t, z, sigma, truth: Truth):
     jd0 = julian_date(EPOCH)
     t = np.asarray(t, dtype=float)
     return RadarBatch(t=t, z=np.asarray(z), sigma=np.asarray(sigma), chief=_radar_chief(truth, t),
-                      theta=gmst(jd0 + t / SECONDS_PER_DAY), site_ef=np.tile(TIRA.ecef, (t.size, 1)),
+                      earth=gcrs_to_itrs(jd0, t), site_ef=np.tile(TIRA.ecef, (t.size, 1)),
                       site_enu=np.tile(TIRA.enu, (t.size, 1, 1)))
 
 
@@ -349,7 +349,7 @@ def test_tdm_fed_back_gives_the_runs_od_solution(exported, run):
     t_est = time_to_sec(od.estimate.header.stamp)
     last_burn = max(time_to_sec(m.epoch) for m in run[interfaces.EXECUTED_TOPIC] if time_to_sec(m.epoch) <= t_est)
     meas = [m for m in ndm.read_tdm(out / f"radar.tdm.{fmt}", EPOCH) if last_burn <= m.t <= t_est]
-    assert len(meas) == od.measurements == 118 and len({m.pass_id for m in meas}) == od.passes == 3
+    assert len(meas) == od.measurements == 117 and len({m.pass_id for m in meas}) == od.passes == 3
     truth = Truth(run[interfaces.TRUTH_ROE_TOPIC])
     batch = _batch([m.t for m in meas], [m.z for m in meas],
                    [(m.sigma_range, m.sigma_angle, m.sigma_angle) for m in meas], truth)
@@ -520,7 +520,7 @@ def test_orekit_reads_the_set_as_written_and_refuses_broken_files(exported, run,
     theirs = good[f"ephemeris.oem.{fmt}"]["segments"]
     assert [s["object_id"] for s in theirs] == [s.metadata.object_id for s in ours]
     for o, t in zip(ours, theirs):
-        assert (t["ref_frame"], t["time_system"], t["interpolation"]) == ("EME2000", "UTC", "LAGRANGE")
+        assert (t["ref_frame"], t["time_system"], t["interpolation"]) == ("EME2000", "UTC", "HERMITE")
         assert t["n_states"] == len(o.data.state_vector)
         sv = o.data.state_vector[0]
         assert np.allclose(t["first_state"]["position_m"], np.array([sv.x.value, sv.y.value, sv.z.value]) * 1e3,

@@ -31,7 +31,8 @@ from rosgraph_msgs.msg import Clock  # noqa: E402
 from rosutil import rclpy, spin_until, start_node, stop_node, wait_exit  # noqa: I001  (skips without rclpy)
 
 from roe_sep import interfaces  # noqa: E402
-from roe_sep.core.od.radar import TIRA, gmst, julian_date, observe, raan_from_ltan, relative_distance  # noqa: E402
+from roe_sep.core.frames import gcrs_to_itrs  # noqa: E402
+from roe_sep.core.od.radar import TIRA, julian_date, observe, raan_from_ltan, relative_distance  # noqa: E402
 from roe_sep.core.od.sensor import noisy_measurement, trackable  # noqa: E402
 from roe_sep.core.relmotion.dynamics import propagate_chief, sun_synchronous_inclination  # noqa: E402
 from roe_sep.core.relmotion.orbit import semi_major_axis  # noqa: E402
@@ -173,7 +174,7 @@ def test_tracks_passes_after_separation_and_estimates_consistently(sim, lockstep
     # --- measurements: exactly the visible epochs >= 5 km apart, nothing else ---------------------------------
     grid = np.arange(SAMPLE, SIM_END + SAMPLE / 2, SAMPLE)
     roe, kep = truth(grid)
-    z = observe(roe, kep, gmst(JD0 + grid / 86400.0), TIRA.ecef, TIRA.enu)
+    z = observe(roe, kep, gcrs_to_itrs(JD0, grid), TIRA.ecef, TIRA.enu)
     sep = relative_distance(roe, A, kep[:, 4] + kep[:, 5])
     seen = z[:, 2] > MASK
     expected = grid[seen & (sep >= 5000.0)]
@@ -238,7 +239,7 @@ def test_estimates_from_measurements_without_the_sensor(sim):
     end_pub = sim.create_publisher(RadarPass, interfaces.RADAR_PASS_TOPIC, interfaces.STREAM)
     grid = np.arange(SAMPLE, SIM_END + SAMPLE / 2, SAMPLE)
     roe, kep = truth(grid)
-    z = observe(roe, kep, gmst(JD0 + grid / 86400.0), TIRA.ecef, TIRA.enu)
+    z = observe(roe, kep, gcrs_to_itrs(JD0, grid), TIRA.ecef, TIRA.enu)
     good = trackable(z[:, 2], relative_distance(roe, A, kep[:, 4] + kep[:, 5]), MASK, 5000.0)
     rng = np.random.default_rng(11)
     sigma = np.array([10.0, math.radians(0.01), math.radians(0.01)])

@@ -9,7 +9,7 @@ flight-dynamics team closes the loop on the last information: a final radar OD s
 uplinked with the planning margin, flown before t_F.
 
 Timeline. :func:`radar_passes` predicts the station's passes of the carrier (the chief's secular elements, the
-sidereal angle of the scenario's epoch). The final OD is the solution after the last pass before t_F;
+IERS Earth of roe_sep.core.frames). The final OD is the solution after the last pass before t_F;
 :func:`final_od_arc` gives its radar arc, from the latest pass that spans radar_od's ``min_arc`` with it and leaves
 three passes in the arc (radar_od restarts its batch after every burn, so the plans keep their burns out of that
 arc: ``no_burns`` of :func:`.planner.plan_acquisition`). The trim is the first grid epoch at or after the solution
@@ -33,8 +33,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..constants import SECONDS_PER_DAY
-from ..od.radar import TIRA, Station, chief_elevation, gmst, pass_windows
+from ..frames import gcrs_to_itrs
+from ..od.radar import TIRA, Station, chief_elevation, pass_windows
 from ..relmotion.dynamics import arg_latitude_rate, propagate_chief
 from ..relmotion.orbit import mean_motion
 from ..relmotion.trajectory import Burn, Chief, trajectory
@@ -145,14 +145,15 @@ def trim_threshold(tolerance: float, sigma: float, lattice: float, z: float = TR
 def radar_passes(kep: ArrayLike, t0: float, t_start: float, t_end: float, jd0: float, *, station: Station = TIRA,
                  mask_deg: float = 10.0, min_duration: float = 60.0, j2: bool = True) -> np.ndarray:
     """The carrier's passes above ``mask_deg`` at ``station``: the chief's mean elements propagated secularly, the
-    Earth turned by the sidereal angle (the picosatellite, kilometers away, has the same passes to a few seconds).
+    Earth oriented by :func:`~roe_sep.core.frames.gcrs_to_itrs` from the UTC Julian date ``jd0`` of sim time 0 (the
+    picosatellite, kilometers away, has the same passes to a few seconds).
 
     Parameters
     ----------
     kep : array_like, shape (6,)
         The chief's mean elements ``[a, e, i, raan, argp, M]`` at ``t0`` [s].
     t0, t_start, t_end, jd0 : float
-        Their epoch, the interval [s], and the Julian date of sim time 0.
+        Their epoch, the interval [s], and the UTC Julian date of sim time 0.
     station, mask_deg : Station, float
         The radar and its elevation mask [deg].
     min_duration, j2 : float, bool
@@ -167,7 +168,7 @@ def radar_passes(kep: ArrayLike, t0: float, t_start: float, t_end: float, jd0: f
 
     def elevation(t: ArrayLike) -> np.ndarray:
         t = np.asarray(t, dtype=float)
-        return chief_elevation(propagate_chief(kep, t - t0, j2), gmst(jd0 + t / SECONDS_PER_DAY), site_ef, site_enu)
+        return chief_elevation(propagate_chief(kep, t - t0, j2), gcrs_to_itrs(jd0, t), site_ef, site_enu)
 
     p = pass_windows(elevation, t_start, t_end, math.radians(mask_deg))
     return p[p[:, 1] - p[:, 0] >= min_duration] if len(p) else np.zeros((0, 2))

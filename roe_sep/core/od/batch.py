@@ -5,7 +5,7 @@ differential-drag drift of da [1/s] (:func:`~roe_sep.core.relmotion.dynamics.dra
 known (it carries GPS): its mean elements at each measurement epoch are inputs.
 
 Model (Tapley, Schutz, Born, *Statistical Orbit Determination*, 2004, Ch. 4): z_k = h_k(x) + v_k, v_k ~ N(0, R_k),
-R_k = diag(sigma_range^2, sigma_angle^2, sigma_angle^2), h_k(x) = observe(model_roe(x, t_k), chief_k, theta_k,
+R_k = diag(sigma_range^2, sigma_angle^2, sigma_angle^2), h_k(x) = observe(model_roe(x, t_k), chief_k, earth_k,
 station_k). The mean ROE at t_k (:func:`propagate_state`, :func:`model_roe`): the secular propagation (J2 and the
 drift x[6] of da) plus differential drag's drift of dix through the co-rotating atmosphere
 (:func:`~roe_sep.core.relmotion.dynamics.drag_dix_dot`, King-Hele 1964) and its short-periodic relative e vector
@@ -43,7 +43,7 @@ from ..relmotion.dynamics import (
 )
 from ..relmotion.orbit import mean_motion
 from ..relmotion.roe import roe_to_rtn, wrap_angle
-from .radar import chief_from_kepler, chief_position_velocity, earth_rotation_matrix, look_position, observe, rtn_matrix
+from .radar import chief_from_kepler, chief_position_velocity, observe, rtn_matrix, two_way_position
 
 STATE_SIZE = 7
 MAX_CONDITION = 1e10
@@ -55,15 +55,16 @@ class RadarBatch:
     """Measurements of one OD batch, one row per epoch (any order, any stations).
 
     ``t`` (m,) sim time [s]; ``z`` (m, 3) [range m, az rad, el rad]; ``sigma`` (m, 3) their 1-sigma noise;
-    ``chief`` (m, 6) the carrier's mean Keplerian elements at ``t``; ``theta`` (m,) Greenwich sidereal angle [rad];
-    ``site_ef`` (m, 3) station Earth-fixed position [m]; ``site_enu`` (m, 3, 3) its ENU rotation.
+    ``chief`` (m, 6) the carrier's mean Keplerian elements at ``t``; ``earth`` (m, 3, 3) the GCRS -> ITRS rotation
+    (:func:`roe_sep.core.frames.gcrs_to_itrs`); ``site_ef`` (m, 3) station Earth-fixed position [m]; ``site_enu``
+    (m, 3, 3) its ENU rotation.
     """
 
     t: np.ndarray
     z: np.ndarray
     sigma: np.ndarray
     chief: np.ndarray
-    theta: np.ndarray
+    earth: np.ndarray
     site_ef: np.ndarray
     site_enu: np.ndarray
 
@@ -393,7 +394,7 @@ def predict(x: ArrayLike, batch: RadarBatch, t_est: float, j2: bool = True, drag
         Modeled [range, az, el] [m, rad, rad].
     """
     roe = model_roe(x, batch, t_est, j2, drag, model=model, decay=decay, ecc=ecc)
-    return observe(roe, batch.chief, batch.theta, batch.site_ef, batch.site_enu)
+    return observe(roe, batch.chief, batch.earth, batch.site_ef, batch.site_enu)
 
 
 def state_steps(a: float) -> np.ndarray:
@@ -428,7 +429,8 @@ def jacobian(x: ArrayLike, batch: RadarBatch, t_est: float, j2: bool = True, dra
 def initial_guess(batch: RadarBatch, t_est: float, j2: bool = True, drag: bool = True) -> np.ndarray:
     """Linear starting point: every measurement inverted to a relative RTN position, then unweighted least squares.
 
-    r_rel/a = [R T N]^T (R3(theta)^T look_position(z) - r_chief) / a is linear in x, exactly: the secular
+    r_rel/a = [R T N]^T (W^T two_way_position(z) - r_chief) / a (W: ``earth``; the light time taken out with the
+    chief's velocity) is linear in x, exactly: the secular
     propagation and the ROE -> RTN map are linear, so its design matrix is the model evaluated on the 7 unit states.
 
     Parameters
@@ -443,8 +445,8 @@ def initial_guess(batch: RadarBatch, t_est: float, j2: bool = True, drag: bool =
     """
     a, inc, raan, u = chief_from_kepler(batch.chief)
     rc, vc = chief_position_velocity(a, inc, raan, u)
-    r_eci = np.einsum("...ji,...j->...i", earth_rotation_matrix(batch.theta),
-                      look_position(batch.z, batch.site_ef, batch.site_enu))
+    v_ef = np.einsum("...ij,...j->...i", batch.earth, vc)
+    r_eci = np.einsum("...ji,...j->...i", batch.earth, two_way_position(batch.z, v_ef, batch.site_ef, batch.site_enu))
     rel = np.einsum("...ji,...j->...i", rtn_matrix(rc, vc), r_eci - rc) / a[:, None]
     unit = np.eye(STATE_SIZE)
     roe = model_roe(unit, batch, t_est, j2, drag)
@@ -459,14 +461,15 @@ def _check(batch: RadarBatch):
     m = np.shape(batch.t)[0] if np.ndim(batch.t) == 1 else -1
     if m < 0:
         raise ValueError("measurement epochs must be a 1-D array")
-    shapes = {"z": (m, 3), "sigma": (m, 3), "chief": (m, 6), "theta": (m,), "site_ef": (m, 3), "site_enu": (m, 3, 3)}
+    shapes = {"z": (m, 3), "sigma": (m, 3), "chief": (m, 6), "earth": (m, 3, 3), "site_ef": (m, 3),
+              "site_enu": (m, 3, 3)}
     for name, shape in shapes.items():
         if np.shape(getattr(batch, name)) != shape:
             raise ValueError(f"{name} has shape {np.shape(getattr(batch, name))}, expected {shape}")
     if 3 * m < STATE_SIZE + 1:
         raise ValueError(f"not enough measurements: {m} range/az/el triplets ({3 * m} values) for {STATE_SIZE} "
                          "unknowns and a residual")
-    for name in ("t", "z", "sigma", "chief", "theta", "site_ef", "site_enu"):
+    for name in ("t", "z", "sigma", "chief", "earth", "site_ef", "site_enu"):
         if not np.all(np.isfinite(getattr(batch, name))):
             raise ValueError(f"measurement batch has non-finite values in {name!r}")
     if np.any(np.asarray(batch.sigma) <= 0.0):

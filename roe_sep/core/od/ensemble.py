@@ -26,11 +26,12 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..constants import R_EARTH, SECONDS_PER_DAY
+from ..frames import gcrs_to_itrs
 from ..montecarlo.stats import nees_bounds
 from ..relmotion.dynamics import propagate_chief
 from ..relmotion.orbit import mean_motion
 from .batch import DragModel, DriftPrior, RadarBatch, batch_least_squares, nees
-from .radar import DEFAULT_EPOCH_UTC, TIRA, gmst, julian_date, observe, raan_from_ltan, relative_distance
+from .radar import DEFAULT_EPOCH_UTC, TIRA, julian_date, observe, raan_from_ltan, relative_distance
 
 if TYPE_CHECKING:  # the nonlinear truth and the designs are imported where they are used (the report imports this)
     from ..separation.double_impulse import DoubleImpulseDesign
@@ -258,8 +259,8 @@ def run_ensemble(members: int = 8, draws: int = 4, seed: int = 0, prior: bool = 
     grid = np.arange(math.ceil(T0 / sample_interval), math.floor(DURATION / sample_interval) + 1) * sample_interval
     chief_nominal = mean_elements(states0[:1])[0, 0]
     period = 2.0 * math.pi / float(mean_motion(chief_nominal[0]))
-    theta_g = gmst(jd0 + grid / SECONDS_PER_DAY)
-    el = observe(np.zeros(6), propagate_chief(chief_nominal, grid - T0), theta_g, TIRA.ecef, TIRA.enu)[:, 2]
+    earth_g = gcrs_to_itrs(jd0, grid)
+    el = observe(np.zeros(6), propagate_chief(chief_nominal, grid - T0), earth_g, TIRA.ecef, TIRA.enu)[:, 2]
     near = np.convolve(el > math.radians(mask_deg) - 0.05, np.ones(13), mode="same") > 0
     burn_t = np.array([b[0] for b in BURNS])
     coarse = np.arange(T0, DURATION, 300.0)
@@ -267,14 +268,14 @@ def run_ensemble(members: int = 8, draws: int = 4, seed: int = 0, prior: bool = 
     st = truth_samples(states0, b_c, b_d, dv, atmosphere, times=times)
     kep = mean_elements(st)  # (members, times, 2, 6)
     chief, roe = kep[..., 0, :], mean_roe(st)
-    theta = gmst(jd0 + times / SECONDS_PER_DAY)
+    earth = gcrs_to_itrs(jd0, times)
     meas = np.isin(times, grid[near]) & ~np.isin(times, burn_t)
     uniform = np.isin(times, coarse)
     sigma = np.array([sigma_range, math.radians(sigma_angle_deg), math.radians(sigma_angle_deg)])
     segment_of = np.searchsorted(burn_t, times, side="left")  # a burn-epoch sample belongs to the segment it ends
     out = []
     for m in range(members):
-        z_true = observe(roe[m], chief[m], theta, TIRA.ecef, TIRA.enu)
+        z_true = observe(roe[m], chief[m], earth, TIRA.ecef, TIRA.enu)
         sep = relative_distance(roe[m], chief[m, :, 0], chief[m, :, 4] + chief[m, :, 5])
         seen = meas & (z_true[:, 2] > math.radians(mask_deg)) & (sep >= min_separation)
         # a pass: consecutive measurement epochs (one sample_interval apart) of one segment
@@ -301,7 +302,7 @@ def run_ensemble(members: int = 8, draws: int = 4, seed: int = 0, prior: bool = 
                 if times[rows[-1]] - times[rows[0]] < min_arc:
                     continue
                 batch = RadarBatch(t=times[rows], z=z[rows], sigma=np.tile(sigma, (rows.size, 1)),
-                                   chief=chief[m, rows], theta=theta[rows],
+                                   chief=chief[m, rows], earth=earth[rows],
                                    site_ef=np.tile(TIRA.ecef, (rows.size, 1)),
                                    site_enu=np.tile(TIRA.enu, (rows.size, 1, 1)))
                 t_est = float(times[rows[-1]])

@@ -1,14 +1,11 @@
 """Ground-station radar geometry and measurement model (seed 001 Sec. 5: radar tracking of the picosatellite).
 
-Frames and models of this stub, chosen for a consistent simulation/estimation pair rather than for arc-second
-astrometry:
+Frames and models:
 
-* Time: sim time ``t`` [s] counts from a calendar epoch given as a Julian date ``jd0`` (UTC). UT1 = UTC is assumed
-  (|UT1 - UTC| < 0.9 s, i.e. < 6.6e-5 rad of Earth rotation: up to 270 m of station position along its parallel;
-  simulator and estimator share the convention, so it does not bias this stub's estimates).
-* Earth rotation: the inertial frame is the equator and equinox of date; Earth-fixed = inertial rotated by the
-  Greenwich mean sidereal time (IAU 1982, :func:`gmst`). Nutation (the equation of the equinoxes, < 1.2 s of
-  time) and polar motion (< 0.5 arcsec) are ignored; the chief's RAAN is referred to the same frame.
+* Time: sim time ``t`` [s] counts from a calendar epoch given as a Julian date ``jd0`` (UTC).
+* Earth orientation: the inertial frame is the GCRF; Earth-fixed = ITRF, rotated by the matrix of
+  :func:`roe_sep.core.frames.gcrs_to_itrs` (the one Earth-orientation model: ERFA's IAU 2000B with frame bias,
+  Earth rotation angle of UT1, polar motion, IERS EOP). The chief's RAAN is referred to the GCRF equator and origin.
 * Chief (carrier): its *mean* near-circular elements (a, i, raan, u) are used as if they were osculating
   (:func:`chief_position_velocity`, circular orbit, e neglected). The short-periodic J2 terms (~km) and the
   eccentricity (a e ~ km for a frozen orbit) shift the absolute position of both spacecraft together; the relative
@@ -18,6 +15,12 @@ astrometry:
   model of this stub).
 * Stations: geodetic latitude/longitude/ellipsoidal height on WGS-84 (:func:`geodetic_to_ecef`); look angles in
   the local East-North-Up frame, azimuth from north towards east, no refraction.
+* Measurements (:func:`observe`, :func:`two_way_look`): as a radar measures and the TDM declares them
+  (``PATH = 1,2,1``, ``TIMETAG_REF = RECEIVE``): the two-way light-time range at the receive time tag, half the
+  round trip c (tau_up + tau_down) / 2 of a signal that left the station at t - tau_down - tau_up, was reflected
+  at t - tau_down and came back at t; the azimuth and elevation of the received signal, the direction to the
+  picosatellite where it was at the reflection (no aberration, no refraction). The light time (4-6 ms) moves the
+  picosatellite by 30-45 m along its orbit and the station by 1-3 m.
 """
 
 import math
@@ -28,7 +31,7 @@ from datetime import datetime, timezone
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..constants import MU_EARTH, R_EARTH, SECONDS_PER_DAY
+from ..constants import EARTH_ROTATION, MU_EARTH, R_EARTH, SECONDS_PER_DAY, SPEED_OF_LIGHT
 from ..relmotion.roe import components, rtn_position, stack_last
 
 WGS84_A = R_EARTH
@@ -54,8 +57,8 @@ def julian_date(epoch_utc: datetime | str) -> float:
     """Julian date of a UTC calendar epoch: JD = 2440587.5 + (POSIX seconds) / 86400.
 
     ``epoch_utc`` is a :class:`datetime` or an ISO-8601 string (``2016-07-01T00:00:00``, optional ``Z`` or
-    ``+hh:mm``); a naive value is taken as UTC. POSIX time has no leap seconds, so this is the UTC Julian date (used
-    as UT1, see the module docstring). Raises ValueError for an unparseable string.
+    ``+hh:mm``); a naive value is taken as UTC. POSIX time has no leap seconds, so this is the UTC Julian date
+    (:mod:`roe_sep.core.frames` takes it to TT and UT1). Raises ValueError for an unparseable string.
     """
     if isinstance(epoch_utc, str):
         text = epoch_utc.strip()
@@ -65,17 +68,6 @@ def julian_date(epoch_utc: datetime | str) -> float:
     if epoch_utc.tzinfo is None:
         epoch_utc = epoch_utc.replace(tzinfo=timezone.utc)
     return JD_UNIX_EPOCH + epoch_utc.timestamp() / SECONDS_PER_DAY
-
-
-def gmst(jd_ut1: ArrayLike) -> np.ndarray:
-    """Greenwich mean sidereal time [rad, 0..2pi) from the UT1 Julian date, IAU 1982 (Vallado Eq. 3-47).
-
-    theta = 67310.54841 s + (876600 h + 8640184.812866 s) T + 0.093104 s T^2 - 6.2e-6 s T^3,
-    T = (JD_UT1 - 2451545.0) / 36525 Julian centuries; seconds of time, 86400 s = 2 pi.
-    """
-    t = (np.asarray(jd_ut1, dtype=float) - JD_J2000) / 36525.0
-    seconds = 67310.54841 + (876600.0 * 3600.0 + 8640184.812866) * t + 0.093104 * t**2 - 6.2e-6 * t**3
-    return np.mod(seconds, SECONDS_PER_DAY) * (2.0 * np.pi / SECONDS_PER_DAY)
 
 
 def sun_right_ascension(jd: ArrayLike) -> np.ndarray:
@@ -169,16 +161,6 @@ level (the nearby highest point of Wachtberg is 269 m) and the geoid is about 47
 300 m ellipsoidal height."""
 
 
-def earth_rotation_matrix(theta: ArrayLike) -> np.ndarray:
-    """Inertial (of date) -> Earth-fixed rotation R3(theta) about z by the sidereal angle ``theta`` [rad],
-    ``(..., 3, 3)``: x_ef = cos th x + sin th y, y_ef = -sin th x + cos th y, z_ef = z."""
-    th = np.asarray(theta, dtype=float)
-    c, s = np.cos(th), np.sin(th)
-    m = np.zeros(th.shape + (3, 3))  # the stacked rows (c, s, 0), (-s, c, 0), (0, 0, 1), filled in place
-    m[..., 0, 0], m[..., 0, 1], m[..., 1, 0], m[..., 1, 1], m[..., 2, 2] = c, s, -s, c, 1.0
-    return m
-
-
 def chief_position_velocity(a: ArrayLike, inc: ArrayLike, raan: ArrayLike,
                             u: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Inertial position [m] and velocity [m/s] of a circular orbit at argument of latitude ``u`` [rad].
@@ -245,10 +227,16 @@ def deputy_position(roe: ArrayLike, chief_kep: ArrayLike, rel: ArrayLike | None 
     numpy.ndarray, shape (..., 3)
         The position [m].
     """
+    return _deputy(roe, chief_kep, rel)[0]
+
+
+def _deputy(roe, chief_kep, rel):
+    """:func:`deputy_position` and the chief's velocity (the picosatellite's to the relative velocity, ~ n rho:
+    a few m/s, i.e. centimetres over a light time)."""
     a, inc, raan, u = chief_from_kepler(chief_kep)
     rc, vc = chief_position_velocity(a, inc, raan, u)
     rel = (rtn_position(roe, u) if rel is None else rel) * a[..., None]
-    return rc + np.einsum("...ij,...j->...i", rtn_matrix(rc, vc), rel)
+    return rc + np.einsum("...ij,...j->...i", rtn_matrix(rc, vc), rel), vc
 
 
 def relative_distance(roe: ArrayLike, a: ArrayLike, u: ArrayLike, rel: ArrayLike | None = None) -> np.ndarray:
@@ -315,17 +303,49 @@ def look_position(z: np.ndarray, site_ef: ArrayLike, site_enu: ArrayLike) -> np.
     return np.asarray(site_ef, dtype=float) + np.einsum("...ji,...j->...i", site_enu, enu)
 
 
-def observe(roe: ArrayLike, chief_kep: ArrayLike, theta: ArrayLike, site_ef: ArrayLike,
-            site_enu: ArrayLike) -> np.ndarray:
-    """The measurement function: [range, az, el] of the picosatellite seen from a station.
+def two_way_position(z: ArrayLike, v_ef: ArrayLike, site_ef: ArrayLike, site_enu: ArrayLike) -> np.ndarray:
+    """Inverse of :func:`two_way_look` to first order in v / c: the target's position at the receive tag in the
+    Earth-fixed axes, given its velocity in those axes.
 
-    :func:`deputy_position` -> Earth-fixed with :func:`earth_rotation_matrix` (sidereal angle ``theta``, e.g.
-    :func:`gmst`) -> :func:`look_angles`. Broadcasts over leading axes (epochs, samples).
+    Down-leg length rho_d = range - u . (omega_E z x s) tau (u the line of sight, tau = range / c: the station's
+    motion between transmission and reception), the reflection point :func:`look_position` of [rho_d, az, el], then
+    p = p_B + v rho_d / c.
 
     Parameters
     ----------
-    roe, chief_kep, theta
-        As for :func:`deputy_earth_fixed`.
+    z : array_like, shape (..., 3)
+        [two-way range, az, el] [m, rad, rad].
+    v_ef : array_like, shape (..., 3)
+        The target's inertial velocity [m/s] in the Earth-fixed axes of the tag.
+    site_ef, site_enu : array_like, shapes (3,) and (3, 3)
+        The station's Earth-fixed position [m] and ENU rotation (:attr:`Station.ecef`, :attr:`Station.enu`).
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+        The target's position [m] at the tag.
+    """
+    z = np.asarray(z, dtype=float)
+    s = np.asarray(site_ef, dtype=float)
+    ws = EARTH_ROTATION * np.stack([-s[..., 1], s[..., 0], np.zeros_like(s[..., 0])], axis=-1)
+    unit = look_position(np.concatenate([np.ones_like(z[..., :1]), z[..., 1:]], axis=-1), s, site_enu) - s
+    tau = z[..., 0] / SPEED_OF_LIGHT
+    rho_d = z[..., 0] - np.sum(unit * ws, axis=-1) * tau
+    p_b = look_position(np.concatenate([rho_d[..., None], z[..., 1:]], axis=-1), s, site_enu)
+    return p_b + np.asarray(v_ef, dtype=float) * (rho_d / SPEED_OF_LIGHT)[..., None]
+
+
+def observe(roe: ArrayLike, chief_kep: ArrayLike, earth: ArrayLike, site_ef: ArrayLike,
+            site_enu: ArrayLike) -> np.ndarray:
+    """The measurement function: [two-way range, az, el] of the picosatellite seen from a station at the receive
+    time tag (module docstring).
+
+    :func:`deputy_earth_fixed_state` -> :func:`two_way_look`. Broadcasts over leading axes (epochs, samples).
+
+    Parameters
+    ----------
+    roe, chief_kep, earth
+        As for :func:`deputy_earth_fixed_state`.
     site_ef, site_enu : array_like, shapes (3,) and (3, 3)
         The station's Earth-fixed position [m] and ENU rotation (:attr:`Station.ecef`, :attr:`Station.enu`).
 
@@ -334,35 +354,77 @@ def observe(roe: ArrayLike, chief_kep: ArrayLike, theta: ArrayLike, site_ef: Arr
     numpy.ndarray, shape (..., 3)
         [range, az, el] [m, rad, rad].
     """
-    return look_angles(deputy_earth_fixed(roe, chief_kep, theta), site_ef, site_enu)
+    return two_way_look(deputy_earth_fixed_state(roe, chief_kep, earth), site_ef, site_enu)
 
 
-def deputy_earth_fixed(roe: ArrayLike, chief_kep: ArrayLike, theta: ArrayLike,
-                       rel: ArrayLike | None = None) -> np.ndarray:
-    """The Earth-fixed position of the picosatellite that :func:`observe` looks at: :func:`deputy_position`
-    rotated by :func:`earth_rotation_matrix` (the same for every station: formed once for several).
+def deputy_earth_fixed_state(roe: ArrayLike, chief_kep: ArrayLike, earth: ArrayLike,
+                             rel: ArrayLike | None = None) -> np.ndarray:
+    """The picosatellite's inertial position and velocity expressed in the Earth-fixed axes of the epoch:
+    :func:`deputy_position` and the chief's velocity (the picosatellite's to the relative velocity, ~ n rho: a few
+    m/s, centimetres over a light time) rotated by ``earth`` (the same for every station: formed once for several).
 
     Parameters
     ----------
     roe, chief_kep, rel
         As for :func:`deputy_position`.
-    theta : array_like, shape (...)
-        The sidereal angle [rad].
+    earth : array_like, shape (..., 3, 3)
+        The GCRS -> ITRS rotation of the epochs (:func:`roe_sep.core.frames.gcrs_to_itrs`).
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 2, 3)
+        Position [m] and velocity [m/s].
+    """
+    r, v = _deputy(roe, chief_kep, rel)
+    r, v = np.einsum("...ij,...j->...i", earth, r), np.einsum("...ij,...j->...i", earth, v)
+    return np.stack(np.broadcast_arrays(r, v), axis=-2)
+
+
+def two_way_look(state_ef: ArrayLike, site_ef: ArrayLike, site_enu: ArrayLike, *, iterations: int = 2) -> np.ndarray:
+    """[range, az, el] of a two-way radar measurement with the receive time tag.
+
+    Inertial geometry in the Earth-fixed axes of the tag, linear motion over the light time (its error:
+    a tau^2 / 2 ~ 0.1 mm): down leg c tau_d = |p - v tau_d - s|, reflection point p_B = p - v tau_d; up leg
+    c tau_u = |p_B - s + (omega_E z x s)(tau_d + tau_u)| (the station moves with the Earth's rotation);
+    ``iterations`` fixed-point steps each, each gaining a factor v / c ~ 2.5e-5 from tau = |p - s| / c.
+    Range = c (tau_d + tau_u) / 2; az, el of p_B from the station at the tag (:func:`look_angles`).
+
+    Parameters
+    ----------
+    state_ef : array_like, shape (..., 2, 3)
+        The target's position [m] and velocity [m/s] at the tag in those axes (:func:`deputy_earth_fixed_state`).
+    site_ef, site_enu : array_like, shapes (3,) and (3, 3)
+        The station's Earth-fixed position [m] and ENU rotation (:attr:`Station.ecef`, :attr:`Station.enu`).
+    iterations : int
+        Fixed-point steps of each leg.
 
     Returns
     -------
     numpy.ndarray, shape (..., 3)
-        The position [m].
+        [range, az, el] [m, rad, rad].
     """
-    return np.einsum("...ij,...j->...i", earth_rotation_matrix(theta), deputy_position(roe, chief_kep, rel))
+    state_ef = np.asarray(state_ef, dtype=float)
+    p, v = state_ef[..., 0, :], state_ef[..., 1, :]
+    s = np.asarray(site_ef, dtype=float)
+    ws = EARTH_ROTATION * np.stack([-s[..., 1], s[..., 0], np.zeros_like(s[..., 0])], axis=-1)
+    tau_d = np.linalg.norm(p - s, axis=-1) / SPEED_OF_LIGHT
+    for _ in range(iterations):
+        tau_d = np.linalg.norm(p - v * tau_d[..., None] - s, axis=-1) / SPEED_OF_LIGHT
+    p_b = p - v * tau_d[..., None]
+    tau_u = tau_d
+    for _ in range(iterations):
+        tau_u = np.linalg.norm(p_b - s + ws * (tau_d + tau_u)[..., None], axis=-1) / SPEED_OF_LIGHT
+    z = look_angles(p_b, s, site_enu)
+    z[..., 0] = 0.5 * SPEED_OF_LIGHT * (tau_d + tau_u)
+    return z
 
 
-def chief_elevation(chief_kep: ArrayLike, theta: ArrayLike, site_ef: ArrayLike, site_enu: ArrayLike) -> np.ndarray:
+def chief_elevation(chief_kep: ArrayLike, earth: ArrayLike, site_ef: ArrayLike, site_enu: ArrayLike) -> np.ndarray:
     """Elevation of the chief itself (roe = 0) from a station: the carrier's passes.
 
     Parameters
     ----------
-    chief_kep, theta, site_ef, site_enu
+    chief_kep, earth, site_ef, site_enu
         As for :func:`observe`.
 
     Returns
@@ -370,7 +432,7 @@ def chief_elevation(chief_kep: ArrayLike, theta: ArrayLike, site_ef: ArrayLike, 
     numpy.ndarray, shape (...)
         The elevation [rad].
     """
-    return observe(np.zeros(6), chief_kep, theta, site_ef, site_enu)[..., 2]
+    return observe(np.zeros(6), chief_kep, earth, site_ef, site_enu)[..., 2]
 
 
 def visible(elevation: ArrayLike, mask: float) -> np.ndarray:

@@ -30,8 +30,8 @@ class RadarRecord(NamedTuple):
     """[range [m], azimuth [rad], elevation [rad]]."""
     chief: np.ndarray
     """The chief's mean Keplerian elements ``[a, e, i, raan, argp, M]`` at the epoch."""
-    theta: float
-    """Greenwich sidereal angle [rad] at the epoch."""
+    earth: np.ndarray
+    """The GCRS -> ITRS rotation ``(3, 3)`` at the epoch (:func:`roe_sep.core.frames.gcrs_to_itrs`)."""
     truth_t: float
     """Epoch [s] of the chief sample the chief was propagated from."""
 

@@ -43,10 +43,10 @@ from numpy.typing import ArrayLike
 
 from ...errors import show
 from ..constants import EARTH_ROTATION, J2, J3, J4, MU_EARTH, R_EARTH, SECONDS_PER_DAY
+from ..frames import gcrs_to_itrs
 from ..od.radar import (
     DEFAULT_EPOCH_UTC,
     WGS84_E2,
-    gmst,
     julian_date,
     rtn_matrix,
     sun_right_ascension,
@@ -210,7 +210,7 @@ def ecef_to_geodetic(r_ef: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarra
 def nrlmsis_density(pos: ArrayLike, t: ArrayLike, epoch_utc: str = DEFAULT_EPOCH_UTC, f107: float = 140.0,
                     f107a: float = 140.0, *, ap: float = 15.0) -> np.ndarray:
     """NRLMSIS 2.0 total mass density [kg/m^3] (``pymsis``, version 2.0) at inertial positions ``pos`` ``(N, 3)``
-    [m] and times ``t`` ``(N,)`` [s after ``epoch_utc``]: Earth-fixed by the GMST rotation (the frame of
+    [m] and times ``t`` ``(N,)`` [s after ``epoch_utc``]: Earth-fixed by :func:`roe_sep.core.frames.gcrs_to_itrs` (as
     :mod:`roe_sep.core.od.radar`), WGS-84 geodetic coordinates, the given F10.7 (previous day), its 81-day mean
     and daily Ap (every 3-h ap equal to it).
 
@@ -239,9 +239,7 @@ def nrlmsis_density(pos: ArrayLike, t: ArrayLike, epoch_utc: str = DEFAULT_EPOCH
     pos = np.asarray(pos, dtype=float).reshape(-1, 3)
     t = np.broadcast_to(np.asarray(t, dtype=float), pos.shape[:1])
     jd0 = julian_date(epoch_utc)
-    theta = gmst(jd0 + t / SECONDS_PER_DAY)
-    c, s = np.cos(theta), np.sin(theta)
-    r_ef = np.stack([c * pos[:, 0] + s * pos[:, 1], -s * pos[:, 0] + c * pos[:, 1], pos[:, 2]], axis=-1)
+    r_ef = np.einsum("nij,nj->ni", gcrs_to_itrs(jd0, t), pos)
     lat, lon, h = ecef_to_geodetic(r_ef)
     dates = np.datetime64(epoch_utc.rstrip("Zz"), "ms") + np.round(t * 1e3).astype("timedelta64[ms]")
     n = pos.shape[0]

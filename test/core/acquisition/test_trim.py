@@ -170,7 +170,8 @@ def test_final_od_arc_from_the_passes_before_the_ic_epoch():
 def test_radar_passes_see_the_carrier_above_the_mask():
     """Predicted passes: the carrier is above the 10 deg mask inside each and below it just outside; passes come
     in clusters about half a day apart (a 515 km sun-synchronous orbit over 50.6 deg N)."""
-    from roe_sep.core.od.radar import DEFAULT_EPOCH_UTC, TIRA, chief_elevation, gmst, julian_date
+    from roe_sep.core.frames import gcrs_to_itrs
+    from roe_sep.core.od.radar import DEFAULT_EPOCH_UTC, TIRA, chief_elevation, julian_date
     from roe_sep.core.relmotion.dynamics import propagate_chief
 
     jd0 = julian_date(DEFAULT_EPOCH_UTC)
@@ -179,7 +180,7 @@ def test_radar_passes_see_the_carrier_above_the_mask():
     assert 4 <= len(passes) <= 12 and np.all(passes[:, 1] - passes[:, 0] >= 60.0)
 
     def elevation(t):
-        return np.degrees(chief_elevation(propagate_chief(kep, t), gmst(jd0 + t / 86400.0), TIRA.ecef, TIRA.enu))
+        return np.degrees(chief_elevation(propagate_chief(kep, t), gcrs_to_itrs(jd0, t), TIRA.ecef, TIRA.enu))
 
     for rise, set_ in passes:
         assert elevation(0.5 * (rise + set_)) > 10.0

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
+from roe_sep.core.frames import gcrs_to_itrs
 from roe_sep.core.od.batch import (
     DragModel,
     DriftPrior,
@@ -25,7 +26,6 @@ from roe_sep.core.od.batch import (
 from roe_sep.core.od.radar import (
     TIRA,
     add_noise,
-    gmst,
     julian_date,
     observe,
     raan_from_ltan,
@@ -56,14 +56,14 @@ def scenario():
     kep0 = np.array([A, 0.0, INC, raan_from_ltan(9.5, JD0), 0.0, 0.3])
     t = np.arange(0.0, 26 * 3600.0, 10.0)
     chief = propagate_chief(kep0, t)
-    theta = gmst(JD0 + t / 86400.0)
+    earth = gcrs_to_itrs(JD0, t)
     secular = propagate_state(np.append(ROE0, DA_DOT), t, A, INC)  # the OD's model: secular J2, drag, dix drift
     roe = secular.copy()  # mean ROE: with drag's short-periodic de
     roe[:, 2:4] += drag_short_period_de(DA_DOT, A, chief[:, 4] + chief[:, 5])
-    z = observe(roe, chief, theta, TIRA.ecef, TIRA.enu)
+    z = observe(roe, chief, earth, TIRA.ecef, TIRA.enu)
     ok = visible(z[:, 2], math.radians(10.0)) & (relative_distance(roe, A, chief[:, 4] + chief[:, 5]) >= 5000.0)
     m = int(ok.sum())
-    batch = RadarBatch(t=t[ok], z=z[ok], sigma=np.tile(SIGMA, (m, 1)), chief=chief[ok], theta=theta[ok],
+    batch = RadarBatch(t=t[ok], z=z[ok], sigma=np.tile(SIGMA, (m, 1)), chief=chief[ok], earth=earth[ok],
                        site_ef=np.tile(TIRA.ecef, (m, 1)), site_enu=np.tile(TIRA.enu, (m, 1, 1)))
     x_true = np.append(secular[ok][-1], DA_DOT)
     return batch, x_true
@@ -158,7 +158,7 @@ def test_bad_inputs_raise_clear_errors(scenario):
     with pytest.raises(ValueError, match="non-finite"):
         batch_least_squares(RadarBatch(**{**batch.__dict__, "z": z}))
     with pytest.raises(ValueError, match="shape"):
-        batch_least_squares(RadarBatch(**{**batch.__dict__, "theta": batch.theta[:-1]}))
+        batch_least_squares(RadarBatch(**{**batch.__dict__, "earth": batch.earth[:-1]}))
     with pytest.raises(ValueError, match="sigmas must be positive"):
         batch_least_squares(RadarBatch(**{**batch.__dict__, "sigma": 0 * batch.sigma}))
     # ten looks at one instant determine a position, not a relative orbit and its drift

@@ -3,10 +3,12 @@
 import math
 from datetime import datetime, timedelta, timezone
 
+import erfa
 import numpy as np
 import pytest
 
-from roe_sep.core.constants import MU_EARTH
+from roe_sep.core.constants import EARTH_ROTATION, MU_EARTH
+from roe_sep.core.frames import gcrs_to_itrs
 from roe_sep.core.od.radar import (
     TIRA,
     WGS84_A,
@@ -14,12 +16,11 @@ from roe_sep.core.od.radar import (
     Station,
     add_noise,
     chief_elevation,
+    chief_from_kepler,
     chief_position_velocity,
     deputy_position,
-    earth_rotation_matrix,
     enu_matrix,
     geodetic_to_ecef,
-    gmst,
     julian_date,
     look_angles,
     look_position,
@@ -30,6 +31,8 @@ from roe_sep.core.od.radar import (
     rtn_matrix,
     sun_right_ascension,
     truth_da_rate,
+    two_way_look,
+    two_way_position,
     visible,
 )
 from roe_sep.core.relmotion.dynamics import propagate_chief, sun_synchronous_inclination
@@ -52,23 +55,14 @@ def test_julian_date():
         julian_date("first of July")
 
 
-def test_gmst_iau1982():
-    # J2000.0: 67310.54841 s of time = 18h 41m 50.54841s = 280.46061837 deg
-    assert math.degrees(gmst(2451545.0)) == pytest.approx(280.46061837, abs=1e-8)
-    # Vallado, Fundamentals of Astrodynamics, Example 3-5: 1992 Aug 20 12:14 UT1 -> 152.578787886 deg
-    assert math.degrees(gmst(2448854.5 + (12 + 14 / 60) / 24)) == pytest.approx(152.578787886, abs=1e-6)
-    # one solar day advances GMST by 360.9856 deg; vectorized
-    g = gmst(np.array([JD0, JD0 + 1.0]))
-    assert math.degrees((g[1] - g[0]) % (2 * math.pi)) == pytest.approx(0.98564736, abs=1e-6)
-
-
 def test_sun_right_ascension_and_ltan():
     # March equinox 2016-03-20 04:30 UTC (RA 0), June solstice 2016-06-20 22:34 UTC (RA 6 h)
     assert math.degrees(sun_right_ascension(julian_date("2016-03-20T04:30:00"))) == pytest.approx(0.0, abs=0.02)
     assert math.degrees(sun_right_ascension(julian_date("2016-06-20T22:34:00"))) == pytest.approx(90.0, abs=0.02)
     # the apparent solar noon at TIRA on 2016-07-01 is 12:24 UTC (longitude 28.5 min, equation of time -4 min)
     jd = julian_date("2016-07-01T12:00:00")
-    hour_angle = (gmst(jd) + TIRA.lon - sun_right_ascension(jd) + math.pi) % (2 * math.pi) - math.pi
+    gast = erfa.gst06a(jd, 0.0, jd, 0.0)  # Greenwich apparent sidereal time (UT1 ~ TT ~ UTC: < 2 s of time)
+    hour_angle = (gast + TIRA.lon - sun_right_ascension(jd) + math.pi) % (2 * math.pi) - math.pi
     assert math.degrees(hour_angle) * 4.0 == pytest.approx(24.5, abs=0.5)  # minutes of time
     # LTAN 12:00 puts the node at the Sun, 09:30 2.5 h (37.5 deg) west of it
     assert raan_from_ltan(12.0, jd) == pytest.approx(sun_right_ascension(jd) % (2 * math.pi))
@@ -140,17 +134,24 @@ def test_deputy_position_is_chief_plus_rtn_offset():
     along = deputy_position(np.array([0, 5000.0 / A, 0, 0, 0, 0]), kep) - rc
     np.testing.assert_allclose(along, 5000.0 * vc / np.linalg.norm(vc), atol=1e-6)
     # observe = deputy_position -> Earth-fixed -> look angles, broadcast over samples
-    theta = 1.3
-    z = observe(np.stack([roe, 0 * roe]), kep, theta, TIRA.ecef, TIRA.enu)
-    r_ef = earth_rotation_matrix(theta) @ deputy_position(roe, kep)
-    np.testing.assert_allclose(z[0], look_angles(r_ef, TIRA.ecef, TIRA.enu))
-    assert z[1, 2] == pytest.approx(chief_elevation(kep, theta, TIRA.ecef, TIRA.enu))
-    # the Earth-fixed frame turns eastwards: a fixed inertial point drifts west (R3(theta) = R3(-theta)^T)
-    np.testing.assert_allclose(earth_rotation_matrix(0.5) @ [1.0, 0.0, 0.0], [math.cos(0.5), -math.sin(0.5), 0.0])
+    earth = gcrs_to_itrs(JD0, 4000.0)
+    z = observe(np.stack([roe, 0 * roe]), kep, earth, TIRA.ecef, TIRA.enu)
+    r_ef = earth @ deputy_position(roe, kep)
+    state = np.stack([r_ef, earth @ chief_position_velocity(*chief_from_kepler(kep))[1]])
+    np.testing.assert_allclose(z[0], two_way_look(state, TIRA.ecef, TIRA.enu))
+    assert 0.0 < abs(z[0, 0] - look_angles(r_ef, TIRA.ecef, TIRA.enu)[0]) < 60.0  # the light time's tens of metres
+    # two_way_position inverts it (to the chief's velocity)
+    np.testing.assert_allclose(two_way_position(z[0], state[1], TIRA.ecef, TIRA.enu), r_ef, atol=1e-3, rtol=0)
+    assert z[1, 2] == pytest.approx(chief_elevation(kep, earth, TIRA.ecef, TIRA.enu))
+    # the Earth-fixed frame turns eastwards: a fixed inertial point drifts west by omega_E dt about the pole
+    x = np.linalg.solve(earth, [1.0, 0.0, 0.0])
+    dt = 600.0
+    c, s = math.cos(EARTH_ROTATION * dt), math.sin(EARTH_ROTATION * dt)
+    np.testing.assert_allclose(gcrs_to_itrs(JD0, 4000.0 + dt) @ x, [c, -s, 0.0], atol=1e-7)
 
 
 def _elevation(kep0, station):
-    return lambda t: chief_elevation(propagate_chief(kep0, t), gmst(JD0 + t / 86400.0), station.ecef, station.enu)
+    return lambda t: chief_elevation(propagate_chief(kep0, t), gcrs_to_itrs(JD0, t), station.ecef, station.enu)
 
 
 def test_passes_of_the_515km_sso_over_tira():
@@ -208,3 +209,39 @@ def test_truth_da_rate_is_the_secant_of_da():
     roe1 = roe0 + np.array([-3e-8, 1e-6, 1.0, 1.0, 1.0, 1.0])
     assert truth_da_rate(100.0, roe0, 160.0, roe1) == pytest.approx(-3e-8 / 60.0, rel=1e-12)
     assert truth_da_rate(160.0, roe1, 160.0, roe1) == 0.0  # no span: no rate
+
+
+def test_observe_is_the_two_way_light_time_measurement_at_the_receive_tag():
+    """observe() against the light-time equations solved here to convergence with the model's own motion (the
+    picosatellite's secular orbit at the reflection epoch, the station by the Earth's orientation at the transmit
+    epoch): range to 0.1 m, angles to 0.1 urad over a pass; the instantaneous geometric range differs by tens of
+    metres (the range rate times the light time)."""
+    from roe_sep.core.constants import SPEED_OF_LIGHT
+
+    kep0 = np.array([A, 0.0, INC, raan_from_ltan(9.5, JD0), 0.0, 0.3])
+    roe = np.array([-40.0, 8000.0, 150.0, -400.0, 80.0, 350.0]) / A
+    t_all = np.arange(0.0, 86400.0, 10.0)
+    el = observe(roe, propagate_chief(kep0, t_all), gcrs_to_itrs(JD0, t_all), TIRA.ecef, TIRA.enu)[:, 2]
+    t = t_all[el > MASK][:60]
+    assert t.size == 60
+
+    def pos(tk):
+        return deputy_position(roe, propagate_chief(kep0, tk))
+
+    def station(tk):
+        return np.einsum("...ji,j->...i", gcrs_to_itrs(JD0, tk), TIRA.ecef)
+
+    tau_d = np.zeros_like(t)
+    for _ in range(6):
+        tau_d = np.linalg.norm(pos(t - tau_d) - station(t), axis=-1) / SPEED_OF_LIGHT
+    tau_u = np.zeros_like(t)
+    for _ in range(6):
+        tau_u = np.linalg.norm(pos(t - tau_d) - station(t - tau_d - tau_u), axis=-1) / SPEED_OF_LIGHT
+    r_b = np.einsum("nij,nj->ni", gcrs_to_itrs(JD0, t), pos(t - tau_d))
+    expected = look_angles(r_b, TIRA.ecef, TIRA.enu)
+    expected[:, 0] = 0.5 * SPEED_OF_LIGHT * (tau_d + tau_u)
+    z = observe(roe, propagate_chief(kep0, t), gcrs_to_itrs(JD0, t), TIRA.ecef, TIRA.enu)
+    assert np.max(np.abs(z[:, 0] - expected[:, 0])) < 0.1
+    assert np.max(np.abs(z[:, 1:] - expected[:, 1:])) < 1e-7
+    geometric = look_angles(np.einsum("nij,nj->ni", gcrs_to_itrs(JD0, t), pos(t)), TIRA.ecef, TIRA.enu)
+    assert np.max(np.abs(geometric[:, 0] - z[:, 0])) > 15.0

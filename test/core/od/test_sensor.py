@@ -58,7 +58,7 @@ def test_missed_passes_of_the_contingency_are_lost():
 
 
 def _rec(t, station, pass_id, truth_t=None):
-    return RadarRecord(t=t, station=station, pass_id=pass_id, z=np.zeros(3), chief=np.zeros(6), theta=0.0,
+    return RadarRecord(t=t, station=station, pass_id=pass_id, z=np.zeros(3), chief=np.zeros(6), earth=np.eye(3),
                        truth_t=t if truth_t is None else truth_t)
 
 

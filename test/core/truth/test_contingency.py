@@ -94,7 +94,7 @@ def test_a_bad_block_in_a_file_names_the_file_and_the_key(tmp_path):
     with pytest.raises(ConfigError, match=rf"^configuration {path}: contingency.bias_m\[1\]: expected a finite"):
         load_scenario(path)
     with pytest.raises(ConfigError, match=r"unknown section\(s\) \['contingencies'\]; known: \['separation', "
-                                          r"'monte_carlo', 'contingency'\]"):
+                                          r"'monte_carlo', 'contingency', 'earth'\]"):
         scenario_from_dict({"contingencies": {}})
 
 
