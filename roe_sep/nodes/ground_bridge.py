@@ -20,6 +20,11 @@ alongside its own); the file then moves to ``input_dir/processed/``. A file that
 ``input_dir/rejected/`` with ``<name>.reason`` beside it (the reason, one line) and an ERROR on ``/diagnostics``
 naming the file and the reason: whatever reading it raises, the node (and the recorder of its process) keeps running.
 
+Decisions kept (docs/run.md, "Decisions"): the last decision record of each planner (``/separation/decisions/planner``
+and ``/separation/decisions/ic_planner``, std_msgs/String, latched) latched again from this node's own writer of the
+topic, created with the first record: a latched sample lives only as long as its writer, so a planner killed and
+restarted reads back what it decided from here (:mod:`.decision_record`).
+
 Parameters: :data:`roe_sep.nodes.parameters.GROUND_BRIDGE` (``ground_bridge --help``, docs/parameters.md).
 """
 
@@ -44,6 +49,7 @@ from roe_sep_msgs.msg import (
     SafetyStatus,
 )
 from rosgraph_msgs.msg import Clock
+from std_msgs.msg import String
 
 from .. import interfaces
 from ..core.config import ConfigError, load_scenario
@@ -99,6 +105,17 @@ class GroundBridgeNode(Node):
         self._status(OK, f"writing {self.fmt} files to {self.out}" +
                      (f", watching {self.input} for TDM files" if self.input else ""))
 
+    def keep(self, topic, msg: String):
+        """A planner's decision record: kept, and latched again from this node's writer (its own copy coming back
+        changes nothing)."""
+        if self.kept.get(topic) == msg.data:
+            return
+        self.kept[topic] = msg.data
+        for name in interfaces.DECISIONS_TOPICS:  # (a loop over the constant: the docs' topic table reads it)
+            if name == topic and name not in self.keepers:
+                self.keepers[name] = self.create_publisher(String, name, interfaces.LATCHED)
+        self.keepers[topic].publish(msg)
+
     def _check(self, out, epoch, scenario_file, isp, poll, *, sigma_range, sigma_angle):
         """Check the parameters (ParameterError naming the first bad one); the set's options."""
         try:
@@ -129,6 +146,9 @@ class GroundBridgeNode(Node):
         for cls, topic, qos, urgent in subs:
             self.create_subscription(cls, topic, lambda m, t=topic, u=urgent: self.on_message(t, m, u), qos)
         self.create_subscription(Clock, interfaces.CLOCK_TOPIC, self.on_clock, interfaces.CLOCK_SUB)
+        self.kept, self.keepers = {}, {}  # decisions topic -> the last record, this node's writer of it
+        for topic in interfaces.DECISIONS_TOPICS:
+            self.create_subscription(String, topic, lambda m, t=topic: self.keep(t, m), interfaces.LATCHED)
         # the scenario's end, from the bytes (a run's ~950 statuses, of which only the final ones are decoded)
         self.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, self.on_diagnostics,
                                  interfaces.DIAGNOSTICS, raw=True)

@@ -1,0 +1,92 @@
+"""A planner's decisions outside its process (docs/run.md, "Decisions"): the decision record published on the node's
+latched decisions topic after every decision, and read back when the node (re)starts, before it plans anything.
+
+The node creates the topic's publisher and subscription (``interfaces.<NODE>_DECISIONS_TOPIC``, std_msgs/String
+carrying :func:`roe_sep.core.decisions.common.decision_record`, RELIABLE + TRANSIENT_LOCAL, depth 1) and hands them
+to :class:`DecisionRecord`. A latched sample lives only as long as its writer: the ``ground_bridge`` keeps the last
+record of each planner and latches it again from its own writer (:class:`~roe_sep.nodes.ground_bridge.
+GroundBridgeNode`), so a planner killed and restarted reads back what it decided.
+
+Start-up: the node subscribes its inputs only once the read-back is over, so that the simulator's clock (which
+waits for those subscribers) cannot run ahead of it. Over when a record arrives, when no other writer of the topic
+is in the graph :data:`DISCOVERY_SETTLE` wall seconds after the start (a fresh run: the keeper creates its writer
+with the first record), or ``recover_timeout`` wall seconds after the start (a keeper with nothing to give).
+"""
+
+import time
+
+from rclpy.clock import Clock as RclpyClock
+from rclpy.clock import ClockType
+from std_msgs.msg import String
+
+from ..core.decisions.common import decision_record, read_record
+from .diagnostics import ERROR, publish_status
+
+DISCOVERY_SETTLE = 0.5  # wall s after the start within which an existing writer of the topic is discovered (loopback)
+POLL = 0.05  # wall s between the read-back checks
+
+
+class DecisionRecord:
+    """The decision record of ``node`` (its name is the record's) on ``publisher``, read back from
+    ``subscription``'s topic at start: ``start(state)`` is called once with the recovered state (a ``state_cls``
+    read by ``restored``) or None. ``publish(state, stamp)`` after each event: a record when the persisted state
+    changed."""
+
+    def __init__(self, node, publisher, topic, state_cls, *, timeout, start):
+        self.node, self.publisher, self.topic, self.state_cls = node, publisher, topic, state_cls
+        self.timeout, self.start = float(timeout), start
+        self.version = 0
+        self.kept = None  # the persisted state of the last record
+        self.recovered = None
+        self.done = False
+        self.t0 = time.monotonic()
+        self.subscription = None
+        self.timer = node.create_timer(POLL, self._check, clock=RclpyClock(clock_type=ClockType.STEADY_TIME))
+
+    def on_record(self, msg: String):
+        """A record on the topic (the keeper's latched one, during the read-back): the newest is recovered."""
+        if self.done:
+            return
+        try:
+            version, _, persisted = read_record(msg.data, self.node.get_name())
+            state = self.state_cls.restored(persisted)
+        except ValueError as exc:
+            publish_status(self.node, self.node.diag_pub, ERROR, f"decision record not recovered: {exc}")
+            return
+        if self.recovered is None or version > self.recovered[0]:
+            self.recovered = (version, state, persisted)
+        self._finish()
+
+    def _others(self) -> int:
+        """Writers of the topic other than this node's."""
+        me = (self.node.get_name(), self.node.get_namespace())
+        return sum((p.node_name, p.node_namespace) != me for p in self.node.get_publishers_info_by_topic(self.topic))
+
+    def _check(self):
+        waited = time.monotonic() - self.t0
+        if waited >= self.timeout or (waited >= DISCOVERY_SETTLE and not self._others()):
+            self._finish()
+
+    def _finish(self):
+        if self.done:
+            return
+        self.done = True
+        self.timer.cancel()
+        self.node.destroy_timer(self.timer)
+        if self.subscription is not None:
+            self.node.destroy_subscription(self.subscription)
+        state = None
+        if self.recovered is not None:
+            self.version, state, self.kept = self.recovered
+        self.start(state)
+
+    def publish(self, state, stamp: float) -> bool:
+        """Publish the record of ``state`` at sim time ``stamp`` [s] when its persisted part changed; whether it
+        did."""
+        persisted = state.persisted()
+        if persisted == self.kept:
+            return False
+        self.kept = persisted
+        self.version += 1
+        self.publisher.publish(String(data=decision_record(self.node.get_name(), self.version, stamp, state)))
+        return True
