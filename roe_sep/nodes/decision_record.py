@@ -8,9 +8,9 @@ record of each planner and latches it again from its own writer (:class:`~roe_se
 GroundBridgeNode`), so a planner killed and restarted reads back what it decided.
 
 Start-up: the node subscribes its inputs only once the read-back is over, so that the simulator's clock (which
-waits for those subscribers) cannot run ahead of it. Over when a record arrives, when no other writer of the topic
-is in the graph :data:`DISCOVERY_SETTLE` wall seconds after the start (a fresh run: the keeper creates its writer
-with the first record), or ``recover_timeout`` wall seconds after the start (a keeper with nothing to give).
+waits for those subscribers) cannot run ahead of it. Over when a record arrives, or the keeper's empty string
+(nothing kept: a fresh run), when no other writer of the topic is in the graph :data:`DISCOVERY_SETTLE` wall seconds
+after the start (no keeper), or ``recover_timeout`` wall seconds after the start.
 """
 
 import time
@@ -22,7 +22,7 @@ from std_msgs.msg import String
 from ..core.decisions.common import decision_record, read_record
 from .diagnostics import ERROR, publish_status
 
-DISCOVERY_SETTLE = 0.5  # wall s after the start within which an existing writer of the topic is discovered (loopback)
+DISCOVERY_SETTLE = 2.0  # wall s after the start within which a keeper's writer is discovered (loopback, a loaded host)
 POLL = 0.05  # wall s between the read-back checks
 
 
@@ -46,6 +46,9 @@ class DecisionRecord:
     def on_record(self, msg: String):
         """A record on the topic (the keeper's latched one, during the read-back): the newest is recovered."""
         if self.done:
+            return
+        if msg.data == "":  # the keeper has nothing: a fresh start
+            self._finish()
             return
         try:
             version, _, persisted = read_record(msg.data, self.node.get_name())

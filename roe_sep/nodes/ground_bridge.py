@@ -22,7 +22,7 @@ naming the file and the reason: whatever reading it raises, the node (and the re
 
 Decisions kept (docs/run.md, "Decisions"): the last decision record of each planner (``/separation/decisions/planner``
 and ``/separation/decisions/ic_planner``, std_msgs/String, latched) latched again from this node's own writer of the
-topic, created with the first record: a latched sample lives only as long as its writer, so a planner killed and
+topic: a latched sample lives only as long as its writer, so a planner killed and
 restarted reads back what it decided from here (:mod:`.decision_record`).
 
 Parameters: :data:`roe_sep.nodes.parameters.GROUND_BRIDGE` (``ground_bridge --help``, docs/parameters.md).
@@ -108,12 +108,9 @@ class GroundBridgeNode(Node):
     def keep(self, topic, msg: String):
         """A planner's decision record: kept, and latched again from this node's writer (its own copy coming back
         changes nothing)."""
-        if self.kept.get(topic) == msg.data:
+        if msg.data in (self.kept[topic], ""):
             return
         self.kept[topic] = msg.data
-        for name in interfaces.DECISIONS_TOPICS:  # (a loop over the constant: the docs' topic table reads it)
-            if name == topic and name not in self.keepers:
-                self.keepers[name] = self.create_publisher(String, name, interfaces.LATCHED)
         self.keepers[topic].publish(msg)
 
     def _check(self, out, epoch, scenario_file, isp, poll, *, sigma_range, sigma_angle):
@@ -148,6 +145,9 @@ class GroundBridgeNode(Node):
         self.create_subscription(Clock, interfaces.CLOCK_TOPIC, self.on_clock, interfaces.CLOCK_SUB)
         self.kept, self.keepers = {}, {}  # decisions topic -> the last record, this node's writer of it
         for topic in interfaces.DECISIONS_TOPICS:
+            self.keepers[topic] = self.create_publisher(String, topic, interfaces.LATCHED)
+            self.kept[topic] = ""
+            self.keepers[topic].publish(String(data=""))  # nothing kept yet: a starting planner need not wait
             self.create_subscription(String, topic, lambda m, t=topic: self.keep(t, m), interfaces.LATCHED)
         # the scenario's end, from the bytes (a run's ~950 statuses, of which only the final ones are decoded)
         self.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, self.on_diagnostics,
