@@ -262,3 +262,14 @@ def test_a_bad_decision_record_is_refused():
         rules.PlannerState.restored({**persisted, "surprise": 1})
     with pytest.raises(ValueError, match="malformed"):
         rules.PlannerState.restored({**persisted, "in_force": {"k": 3}})
+
+
+def test_a_run_without_the_keeper_reads_no_decision_record_back():
+    """A run without ground_bridge (a campaign's) has no keeper of the decision records: the planners are told not
+    to wait for one (recover_timeout 0); with it, they keep their default."""
+    from roe_sep import graph
+
+    alone = graph.parameters(None, "bag", {}, graph.graph_nodes(ground_bridge=False))
+    assert alone["planner"]["ros__parameters"] == alone["ic_planner"]["ros__parameters"] == {"recover_timeout": 0.0}
+    kept = graph.parameters(None, "bag", {}, graph.graph_nodes())
+    assert "planner" not in kept and "ic_planner" not in kept
