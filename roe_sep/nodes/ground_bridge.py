@@ -53,6 +53,7 @@ from std_msgs.msg import String
 
 from .. import interfaces
 from ..core.config import ConfigError, load_scenario
+from ..core.decisions.common import read_record
 from ..errors import RoeSepError
 from ..ndm import frames
 from ..ndm.live import LiveSet
@@ -109,6 +110,11 @@ class GroundBridgeNode(Node):
         """A planner's decision record: kept, and latched again from this node's writer (its own copy coming back
         changes nothing)."""
         if msg.data in (self.kept[topic], ""):
+            return
+        try:
+            read_record(msg.data, topic.rsplit("/", 1)[-1])
+        except ValueError as exc:  # never kept: a restarted planner would read it back
+            self._status(ERROR, f"decision record on {topic} rejected: {exc}")
             return
         self.kept[topic] = msg.data
         self.keepers[topic].publish(msg)

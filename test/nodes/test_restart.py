@@ -48,7 +48,7 @@ def ground(ros_context, tmp_path):
                              interfaces.LATCHED)
     node.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, node.diags.append, interfaces.DIAGNOSTICS)
     def on_record(topic, msg):
-        if msg.data:  # "": the keeper has nothing yet
+        if msg.data.startswith("{"):  # "": the keeper has nothing yet; anything else: the test's junk
             node.records[topic] = json.loads(msg.data)
 
     for topic in interfaces.DECISIONS_TOPICS:
@@ -160,6 +160,11 @@ def test_a_planner_killed_after_a_replacement_keeps_the_replacement(ground):
     assert epochs(replacement)[0] > epochs(original)[0]
     assert spin_until(ground, lambda: (record(ground, "planner") or {}).get("state", {}).get("plans") == 2)
     version = record(ground, "planner")["version"]
+    # junk on the topic (latched from the test's own writer too): the keeper keeps its record, the planner skips it
+    junk = ground.create_publisher(String, interfaces.PLANNER_DECISIONS_TOPIC, interfaces.LATCHED)
+    junk.publish(String(data="not a record"))
+    assert spin_until(ground, lambda: any("decision record on /separation/decisions/planner rejected" in s.message
+                                          for d in ground.diags for s in d.status), timeout=10)
 
     kill(ground, "planner")
     ground.plans.clear()
