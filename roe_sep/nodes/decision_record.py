@@ -9,8 +9,8 @@ GroundBridgeNode`), so a planner killed and restarted reads back what it decided
 
 Start-up: the node subscribes its inputs only once the read-back is over, so that the simulator's clock (which
 waits for those subscribers) cannot run ahead of it. Over when a record arrives, or the keeper's empty string
-(nothing kept: a fresh run), when no other writer of the topic is in the graph :data:`DISCOVERY_SETTLE` wall seconds
-after the start (no keeper), or ``recover_timeout`` wall seconds after the start.
+(nothing kept: a fresh run), or ``recover_timeout`` wall seconds after the start (no keeper: a node started alone).
+The graph is not asked whether a keeper exists: on a loaded host a new process took more than 2 s to discover it.
 """
 
 import time
@@ -22,7 +22,6 @@ from std_msgs.msg import String
 from ..core.decisions.common import decision_record, read_record
 from .diagnostics import ERROR, publish_status
 
-DISCOVERY_SETTLE = 2.0  # wall s after the start within which a keeper's writer is discovered (loopback, a loaded host)
 POLL = 0.05  # wall s between the read-back checks
 
 
@@ -48,7 +47,7 @@ class DecisionRecord:
         if self.done:
             return
         if msg.data == "":  # the keeper has nothing: a fresh start
-            self._finish()
+            self._finish("the keeper holds no decision record")
             return
         try:
             version, _, persisted = read_record(msg.data, self.node.get_name())
@@ -58,21 +57,17 @@ class DecisionRecord:
             return
         if self.recovered is None or version > self.recovered[0]:
             self.recovered = (version, state, persisted)
-        self._finish()
-
-    def _others(self) -> int:
-        """Writers of the topic other than this node's."""
-        me = (self.node.get_name(), self.node.get_namespace())
-        return sum((p.node_name, p.node_namespace) != me for p in self.node.get_publishers_info_by_topic(self.topic))
+        self._finish(f"decision record {version} read back")
 
     def _check(self):
         waited = time.monotonic() - self.t0
-        if waited >= self.timeout or (waited >= DISCOVERY_SETTLE and not self._others()):
-            self._finish()
+        if waited >= self.timeout:
+            self._finish(f"no decision record within recover_timeout = {self.timeout:g} s")
 
-    def _finish(self):
+    def _finish(self, why: str):
         if self.done:
             return
+        self.node.get_logger().info(f"start: {why}")
         self.done = True
         self.timer.cancel()
         self.node.destroy_timer(self.timer)

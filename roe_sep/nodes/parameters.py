@@ -172,9 +172,9 @@ AUTOSTART = Param("autostart", "bool", True, "configure and activate in the cons
                   "for a lifecycle manager or `ros2 lifecycle set`)")
 J2 = "secular J2 in the {}"
 RECOVER_TIMEOUT = Param("recover_timeout", "double", 5.0, "wall seconds a (re)started node waits at most for its "
-                        "decision record once another writer of its decisions topic (ground_bridge, which keeps it) "
-                        "is in the graph; without one, once DISCOVERY_SETTLE of nodes/decision_record.py has "
-                        "passed; 0: no read-back (docs/run.md, Decisions)", "s", range=(0.0, 60.0))
+                        "decision record, kept by ground_bridge, before it plans anything (ground_bridge answers at "
+                        "once, with an empty record in a fresh run); a node started without ground_bridge waits it "
+                        "in full; 0: no read-back (docs/run.md, Decisions)", "s", range=(0.0, 60.0))
 
 
 def _contingency(side):

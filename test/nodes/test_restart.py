@@ -79,7 +79,8 @@ def kill(node, name):
     """SIGKILL: no shutdown, no goodbye to DDS (its latched samples die with it)."""
     proc = node.procs.pop(name)
     proc.send_signal(signal.SIGKILL)
-    proc.communicate(timeout=10)
+    out, _ = proc.communicate(timeout=10)
+    print(f"--- {name} (killed):\n{out[-3000:]}")  # shown by pytest when the test fails
 
 
 def record(node, who):
