@@ -120,6 +120,9 @@ def parameters(config, bag_dir, overrides, nodes=NODES):
         "recorder": {"output": str(bag_dir)},
         "ground_bridge": {"output_dir": str(Path(bag_dir).parent / "ccsds")},  # CCSDS files of the run (issue 18)
     }
+    if "ground_bridge" not in nodes:  # no keeper of the decision records (a campaign's run): nothing to read back
+        for node in ("planner", "ic_planner"):
+            per_node[node] = {"recover_timeout": 0.0}
     for node, values in (overrides or {}).items():
         if node not in NODES + OPTIONAL_NODES + ("lifecycle_manager",) and node != "/**":
             raise ValueError(f"--params: unknown node {node!r}; nodes: {list(NODES)}")

@@ -67,6 +67,10 @@ RADAR_PASS_TOPIC = "/radar/passes"  # RadarPass, STREAM, radar -> radar_od: a pa
 EXTERNAL_RADAR_TOPIC = "/ground/radar_measurements"  # RadarMeasurement, BULK, ground_bridge (TDM in) -> radar_od
 OD_TOPIC = "/od/estimate"  # OrbitDetermination, LATCHED, radar_od
 ACQUISITION_PLAN_TOPIC = "/acquisition/plan"  # ManeuverPlan, LATCHED, ic_planner
+# std_msgs/String (a JSON decision record), LATCHED: each planner's decisions, kept again by ground_bridge (restarts)
+PLANNER_DECISIONS_TOPIC = "/separation/decisions/planner"
+IC_PLANNER_DECISIONS_TOPIC = "/separation/decisions/ic_planner"
+DECISIONS_TOPICS = (PLANNER_DECISIONS_TOPIC, IC_PLANNER_DECISIONS_TOPIC)
 SAFETY_TOPIC = "/safety/status"  # SafetyStatus, STREAM, safety_monitor (truth and estimate)
 PLAN_CHECK_TOPIC = "/safety/plan_check"  # SafetyStatus, EXECUTED (keeps the last 50 checks), safety_monitor
 DIAGNOSTICS_TOPIC = "/diagnostics"

@@ -20,6 +20,11 @@ alongside its own); the file then moves to ``input_dir/processed/``. A file that
 ``input_dir/rejected/`` with ``<name>.reason`` beside it (the reason, one line) and an ERROR on ``/diagnostics``
 naming the file and the reason: whatever reading it raises, the node (and the recorder of its process) keeps running.
 
+Decisions kept (docs/run.md, "Decisions"): the last decision record of each planner (``/separation/decisions/planner``
+and ``/separation/decisions/ic_planner``, std_msgs/String, latched) latched again from this node's own writer of the
+topic: a latched sample lives only as long as its writer, so a planner killed and
+restarted reads back what it decided from here (:mod:`.decision_record`).
+
 Parameters: :data:`roe_sep.nodes.parameters.GROUND_BRIDGE` (``ground_bridge --help``, docs/parameters.md).
 """
 
@@ -44,9 +49,11 @@ from roe_sep_msgs.msg import (
     SafetyStatus,
 )
 from rosgraph_msgs.msg import Clock
+from std_msgs.msg import String
 
 from .. import interfaces
 from ..core.config import ConfigError, load_scenario
+from ..core.decisions.common import read_record
 from ..errors import RoeSepError
 from ..ndm import frames
 from ..ndm.live import LiveSet
@@ -99,6 +106,19 @@ class GroundBridgeNode(Node):
         self._status(OK, f"writing {self.fmt} files to {self.out}" +
                      (f", watching {self.input} for TDM files" if self.input else ""))
 
+    def keep(self, topic, msg: String):
+        """A planner's decision record: kept, and latched again from this node's writer (its own copy coming back
+        changes nothing)."""
+        if msg.data in (self.kept[topic], ""):
+            return
+        try:
+            read_record(msg.data, topic.rsplit("/", 1)[-1])
+        except ValueError as exc:  # never kept: a restarted planner would read it back
+            self._status(ERROR, f"decision record on {topic} rejected: {exc}")
+            return
+        self.kept[topic] = msg.data
+        self.keepers[topic].publish(msg)
+
     def _check(self, out, epoch, scenario_file, isp, poll, *, sigma_range, sigma_angle):
         """Check the parameters (ParameterError naming the first bad one); the set's options."""
         try:
@@ -129,6 +149,12 @@ class GroundBridgeNode(Node):
         for cls, topic, qos, urgent in subs:
             self.create_subscription(cls, topic, lambda m, t=topic, u=urgent: self.on_message(t, m, u), qos)
         self.create_subscription(Clock, interfaces.CLOCK_TOPIC, self.on_clock, interfaces.CLOCK_SUB)
+        self.kept, self.keepers = {}, {}  # decisions topic -> the last record, this node's writer of it
+        for topic in interfaces.DECISIONS_TOPICS:
+            self.keepers[topic] = self.create_publisher(String, topic, interfaces.LATCHED)
+            self.kept[topic] = ""
+            self.keepers[topic].publish(String(data=""))  # nothing kept yet: a starting planner need not wait
+            self.create_subscription(String, topic, lambda m, t=topic: self.keep(t, m), interfaces.LATCHED)
         # the scenario's end, from the bytes (a run's ~950 statuses, of which only the final ones are decoded)
         self.create_subscription(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, self.on_diagnostics,
                                  interfaces.DIAGNOSTICS, raw=True)

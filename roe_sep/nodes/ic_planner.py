@@ -15,8 +15,13 @@ once; a departing burn re-plans (or re-trims). A bad estimate or an infeasible a
 /diagnostics; the node keeps running and the plan in force stays published. This node only converts the messages to
 events, calls those functions and carries out their actions.
 
-A restarted ic_planner recovers the IC epoch from its own latched plan and the flown burns from the latched
-executed-maneuver topic, so it continues the acquisition in progress.
+Its decisions are kept outside the process: after each one the decision record (the
+:class:`~roe_sep.core.decisions.ic_planner.IcPlannerState`) on ``/separation/decisions/ic_planner`` (std_msgs/String,
+JSON, latched; ground_bridge keeps it). A (re)started ic_planner reads it back before it subscribes its inputs
+(:mod:`.decision_record`, ``recover_timeout``) and latches the plan in force again as it was published
+(:func:`roe_sep.core.decisions.ic_planner.on_restart`: never one a re-plan or trim replaced); the latched OD and
+executed record then come again and change nothing. Without a record it recovers the IC epoch from its own latched
+plan (while a writer of it lives) and the flown burns from the latched executed-maneuver topic.
 
 Parameters (YAML via ``--ros-args --params-file``): :data:`roe_sep.nodes.parameters.IC_PLANNER` (``ic_planner
 --help``, docs/parameters.md); the rules between them (a_dl_min < a_dl_max, a_dl_target within them, dv_quantum <=
@@ -25,6 +30,7 @@ max_burn_dv, planning_margin < window) are :func:`roe_sep.core.acquisition.plann
 
 from diagnostic_msgs.msg import DiagnosticArray
 from roe_sep_msgs.msg import ImpulsiveManeuver, ManeuverPlan, OrbitDetermination
+from std_msgs.msg import String
 
 from .. import interfaces
 from ..core.acquisition.planner import AcquisitionConfig, InvalidAcquisitionConfig, validate_config
@@ -41,6 +47,7 @@ from .convert import (
     sec_to_time,
     time_to_sec,
 )
+from .decision_record import DecisionRecord
 from .diagnostics import OK, publish_status, report
 from .lockstep import Lockstep
 from .managed import ManagedNode
@@ -66,6 +73,7 @@ class IcPlannerNode(ManagedNode):
                  "fov_half_n_deg", "max_burn_dv", "dv_quantum", "axes", "planning_margin", "window", "grid_per_orbit",
                  "drift_tolerance", "ei_angle_tol_deg", "j2")
         values = {name: declare(self, name) for name in names}
+        self.recover_timeout = declare(self, "recover_timeout")
         jd0 = julian_date(DEFAULT_EPOCH_UTC)  # sim time 0, as the simulator's and radar_od's default
         extra = {name: declare(self, name) for name in ("trim", "burn_sigma", "final_od_arc", "replan_on_burn",
                                                         "ei_margin_sigmas", "ic_drift_tolerance")}
@@ -77,23 +85,46 @@ class IcPlannerNode(ManagedNode):
         self.config = rules.IcPlannerConfig(cfg, **extra, jd0=jd0)
 
     def activate(self):
-        """Publishers, subscriptions, services (the ``activate`` transition)."""
+        """Publishers, then the read-back of the decision record; the subscriptions once it is over (:meth:`start`).
+        The ``activate`` transition."""
         self.state = rules.IcPlannerState()  # everything the decisions know (core.decisions.ic_planner)
-        self.lockstep = ls = Lockstep(self)
-        self.plan_pub = ls.publisher(ManeuverPlan, interfaces.ACQUISITION_PLAN_TOPIC, interfaces.LATCHED)
+        # the decisions' writer first (as the planner's: the recorder finds it no later than the plan's)
+        self.record = DecisionRecord(self, self.create_publisher(String, interfaces.IC_PLANNER_DECISIONS_TOPIC,
+                                                                 interfaces.LATCHED),
+                                     interfaces.IC_PLANNER_DECISIONS_TOPIC, rules.IcPlannerState,
+                                     timeout=self.recover_timeout, start=self.start)
+        self.lockstep = Lockstep(self)
+        self.plan_pub = self.lockstep.publisher(ManeuverPlan, interfaces.ACQUISITION_PLAN_TOPIC, interfaces.LATCHED)
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
-        ls.subscribe(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, self.on_executed, interfaces.EXECUTED,
-                     stamp=lambda m: time_to_sec(m.epoch), what="executed maneuver")
-        # the acquisition starts once the separation plan (drift-stop, or the multi-impulse burns) is flown
-        ls.subscribe(ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, self.on_separation_plan, interfaces.LATCHED)
-        # a restarted ic_planner keeps the IC epoch of the acquisition in progress: its own latched plan
-        ls.subscribe(ManeuverPlan, interfaces.ACQUISITION_PLAN_TOPIC, self.on_own_plan, interfaces.LATCHED)
-        ls.subscribe(OrbitDetermination, interfaces.OD_TOPIC, self.on_estimate, interfaces.LATCHED, what="OD estimate")
-        publish_status(self, self.diag_pub, OK, "waiting for an OD estimate", rules.values(self.state))
+        self.record.subscription = self.create_subscription(String, interfaces.IC_PLANNER_DECISIONS_TOPIC,
+                                                            self.record.on_record, interfaces.LATCHED)
+
+    def start(self, recovered):
+        """The read-back is over (``recovered``: the state of the decision record, or None): subscribe the inputs,
+        then latch the plan in force again."""
+        def subscribe():
+            ls = self.lockstep
+            ls.subscribe(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, self.on_executed, interfaces.EXECUTED,
+                         stamp=lambda m: time_to_sec(m.epoch), what="executed maneuver")
+            # the acquisition starts once the separation plan (drift-stop, or the multi-impulse burns) is flown
+            ls.subscribe(ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, self.on_separation_plan, interfaces.LATCHED)
+            # a restarted ic_planner keeps the IC epoch of the acquisition in progress: its own latched plan
+            ls.subscribe(ManeuverPlan, interfaces.ACQUISITION_PLAN_TOPIC, self.on_own_plan, interfaces.LATCHED)
+            ls.subscribe(OrbitDetermination, interfaces.OD_TOPIC, self.on_estimate, interfaces.LATCHED,
+                         what="OD estimate")
+
+        self.activated_later(subscribe)
+        if recovered is not None:
+            self.apply(rules.on_restart(recovered, self.config))
+        else:
+            publish_status(self, self.diag_pub, OK, "waiting for an OD estimate", rules.values(self.state))
 
     def apply(self, outcome):
         """Take a decision's new state and carry out its actions (publish a plan, log, publish a status)."""
-        self.state, actions = outcome
+        before, (self.state, actions) = self.state, outcome
+        if self.state is not before:
+            ls = self.lockstep
+            self.record.publish(self.state, ls.time if ls.active and ls.time is not None else self.now())
         for action in actions:
             if isinstance(action, rules.PublishPlan):
                 self.plan_pub.publish(self.plan_msg(action))

@@ -116,6 +116,13 @@ class ManagedNode(LifecycleNode):
         self._destroy_activated()
         return TransitionCallbackReturn.SUCCESS
 
+    def activated_later(self, create):
+        """Run ``create`` after ``activate`` (e.g. once a read-back is over) and count what it creates as activated:
+        ``deactivate`` destroys it too."""
+        before = {id(e) for _, e in self._entities()}
+        create()
+        self._activated += [(d, e) for d, e in self._entities() if id(e) not in before]
+
     def _destroy_activated(self):
         for destroy, entity in reversed(self._activated):
             destroy(entity)

@@ -171,6 +171,10 @@ SCENARIO_FILE = Param("scenario_file", "string", "", "scenario YAML ('' = the em
 AUTOSTART = Param("autostart", "bool", True, "configure and activate in the constructor (false: stay unconfigured "
                   "for a lifecycle manager or `ros2 lifecycle set`)")
 J2 = "secular J2 in the {}"
+RECOVER_TIMEOUT = Param("recover_timeout", "double", 5.0, "wall seconds a (re)started node waits at most for its "
+                        "decision record, kept by ground_bridge, before it plans anything (ground_bridge answers at "
+                        "once, with an empty record in a fresh run); a node started without ground_bridge waits it "
+                        "in full; 0: no read-back (docs/run.md, Decisions)", "s", range=(0.0, 60.0))
 
 
 def _contingency(side):
@@ -186,6 +190,7 @@ _ANOM = AnomalyLimits()
 
 PLANNER = (
     AUTOSTART,
+    RECOVER_TIMEOUT,
     Param("k", "int", 3, "half revolutions from the ejection to the drift-stop (odd: the drift-stop is at the "
           "opposite side of the orbit, seed 002 Eq. 18); 99 is more than 2.5 days", range=(1, 99, 2)),
     Param("p_mode", "string", "monte_carlo", "choice of the tangential reduction |p|: 'monte_carlo' (p_best of the "
@@ -356,6 +361,7 @@ RADAR_OD = (
 
 IC_PLANNER = (
     AUTOSTART,
+    RECOVER_TIMEOUT,
     Param("a_dl_min", "double", _ACQ.a_dl_min, "minimum mean along-track separation, at the ICs and throughout the "
           "acquisition (below a_dl_max)", "m", range=(1.0, 1.0e6)),
     Param("a_dl_max", "double", _ACQ.a_dl_max, "maximum mean along-track separation at the ICs", "m",

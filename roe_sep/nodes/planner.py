@@ -19,9 +19,14 @@ ejection. Each finding is a WARN ``roe_sep/planner/contingency`` on ``/diagnosti
 ``drift_stop_replaced``, ``drift_stop_completed`` or ``weak_ejection``, ``epoch_s``). This node only converts the
 messages to events, calls those functions and carries out their actions.
 
-A restarted planner re-publishes the plan of the latched ejection event and recovers what was executed from the
-latched executed-maneuver record before it may find a drift-stop missing
-(:func:`roe_sep.core.decisions.planner.record_recovered`).
+Its decisions are kept outside the process: after each one the decision record (the persisted
+:class:`~roe_sep.core.decisions.planner.PlannerState`) on ``/separation/decisions/planner`` (std_msgs/String, JSON,
+latched; ground_bridge keeps it). A (re)started planner reads it back before it subscribes its inputs
+(:mod:`.decision_record`, ``recover_timeout``), latches the plan in force again as it was published
+(:func:`roe_sep.core.decisions.planner.on_restart`: never a withdrawn one), does not plan the latched ejection
+again, and recovers what was executed from the latched executed-maneuver record before it may find a drift-stop
+missing (:func:`roe_sep.core.decisions.planner.record_recovered`). Without a record (no keeper) it plans the
+latched ejection as a fresh planner.
 """
 
 import dataclasses
@@ -32,6 +37,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Vector3Stamped
 from roe_sep_msgs.msg import EjectionEvent, ImpulsiveManeuver, ManeuverPlan, OrbitalElements
 from roe_sep_msgs.srv import PlanSeparation
+from std_msgs.msg import String
 
 from .. import interfaces
 from ..core.config import ConfigError, load_scenario
@@ -50,6 +56,7 @@ from .convert import (
     time_to_sec,
     vector_to_array,
 )
+from .decision_record import DecisionRecord
 from .diagnostics import OK, publish_status, report
 from .lockstep import Lockstep
 from .managed import ManagedNode
@@ -98,6 +105,7 @@ class PlannerNode(ManagedNode):
     def configure(self):
         """Parameters and start-up work (the managed node's ``configure`` transition)."""
         self.k = declare(self, "k")
+        self.recover_timeout = declare(self, "recover_timeout")
         self.p_mode = declare(self, "p_mode")
         p_fixed = declare(self, "p_reduction")
         scenario_file = declare(self, "scenario_file")
@@ -130,26 +138,49 @@ class PlannerNode(ManagedNode):
                                           **checks)
 
     def activate(self):
-        """Publishers, subscriptions, services (the ``activate`` transition)."""
-        self.lockstep = ls = Lockstep(self, on_step=self.on_step)
-        self.plan_pub = ls.publisher(ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.LATCHED)
+        """Publishers and services, then the read-back of the decision record; the subscriptions once it is over
+        (:meth:`start`). The ``activate`` transition."""
+        # the decisions' writer first: the recorder, which subscribes to each topic it finds with a writer, finds it
+        # no later than the plan's (the simulator's clock waits for the recorder on the plan topic)
+        self.record = DecisionRecord(self, self.create_publisher(String, interfaces.PLANNER_DECISIONS_TOPIC,
+                                                                 interfaces.LATCHED),
+                                     interfaces.PLANNER_DECISIONS_TOPIC, rules.PlannerState,
+                                     timeout=self.recover_timeout, start=self.start)
+        self.lockstep = Lockstep(self, on_step=self.on_step)
+        self.plan_pub = self.lockstep.publisher(ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.LATCHED)
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
-        ls.subscribe(EjectionEvent, interfaces.EJECTION_TOPIC, self.on_ejection, interfaces.LATCHED,
-                     what="ejection event")
-        ls.subscribe(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, self.on_executed, interfaces.EXECUTED,
-                     stamp=lambda m: time_to_sec(m.epoch), what="executed maneuver")
-        ls.subscribe(Vector3Stamped, interfaces.CAMERA_TOPIC, self.on_bearing, interfaces.STREAM,
-                     what="camera bearing")
         self.state = rules.PlannerState()  # everything the decisions know (core.decisions.planner)
-        # without lockstep steps (a free-running clock) the sim-time checks run on a timer
-        self.free_timer = self.create_timer(1.0, self._free_running_step)
         self.create_service(PlanSeparation, interfaces.PLAN_SERVICE, self.on_plan_request)
-        publish_status(self, self.diag_pub, OK, "waiting for the ejection event", rules.values(self.state, self.config))
+        self.record.subscription = self.create_subscription(String, interfaces.PLANNER_DECISIONS_TOPIC,
+                                                            self.record.on_record, interfaces.LATCHED)
+
+    def start(self, recovered):
+        """The read-back is over (``recovered``: the state of the decision record, or None): subscribe the inputs,
+        then latch the plan in force again."""
+        def subscribe():
+            ls = self.lockstep
+            ls.subscribe(EjectionEvent, interfaces.EJECTION_TOPIC, self.on_ejection, interfaces.LATCHED,
+                         what="ejection event")
+            ls.subscribe(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, self.on_executed, interfaces.EXECUTED,
+                         stamp=lambda m: time_to_sec(m.epoch), what="executed maneuver")
+            ls.subscribe(Vector3Stamped, interfaces.CAMERA_TOPIC, self.on_bearing, interfaces.STREAM,
+                         what="camera bearing")
+            # without lockstep steps (a free-running clock) the sim-time checks run on a timer
+            self.free_timer = self.create_timer(1.0, self._free_running_step)
+
+        self.activated_later(subscribe)
+        if recovered is not None:
+            self.apply(rules.on_restart(recovered, self.config))
+        else:
+            publish_status(self, self.diag_pub, OK, "waiting for the ejection event",
+                           rules.values(self.state, self.config))
 
     def apply(self, outcome):
         """Take a decision's new state and carry out its actions (publish a plan, stop the camera, log, publish a
         status)."""
-        self.state, actions = outcome
+        before, (self.state, actions) = self.state, outcome
+        if self.state is not before:
+            self.record.publish(self.state, self.sim_time())
         for action in actions:
             if isinstance(action, rules.PublishPlan):
                 self.plan_pub.publish(plan_msg(action))
@@ -163,6 +194,11 @@ class PlannerNode(ManagedNode):
 
     def now(self):
         return self.get_clock().now().nanoseconds * 1e-9
+
+    def sim_time(self):
+        """s: the lockstep step's sim time, else the clock's."""
+        ls = self.lockstep
+        return ls.time if ls.active and ls.time is not None else self.now()
 
     def _free_running_step(self):
         """The sim-time checks each second of sim time without lockstep steps. Once a step message has come

@@ -2,6 +2,7 @@
 status, a planned burn as its message carries it, and the strict-JSON form of a state."""
 
 import dataclasses
+import json
 import math
 import traceback
 from collections.abc import Callable
@@ -108,10 +109,94 @@ class Stamped:
 
 class State:
     """A decision state: ``to_dict`` gives its strict-JSON primitives (:func:`plain`); each state's ``from_dict``
-    reads them back."""
+    reads them back. ``VOLATILE``: the fields a restart does not keep (:meth:`persisted`, :meth:`restored`): what the
+    latched inputs give again or what means nothing in another process (a wall time)."""
+
+    VOLATILE: tuple = ()
 
     def to_dict(self) -> dict:
         return plain(self)
+
+    def persisted(self) -> dict:
+        """:meth:`to_dict` without the ``VOLATILE`` fields: what the decisions topic keeps."""
+        return {k: v for k, v in self.to_dict().items() if k not in self.VOLATILE}
+
+    @classmethod
+    def restored(cls, d: dict) -> "State":
+        """The state of :meth:`persisted` (each ``VOLATILE`` field at its default); ValueError for a field that is
+        unknown, missing or malformed."""
+        fields = {f.name for f in dataclasses.fields(cls)} - set(cls.VOLATILE)
+        if not isinstance(d, dict) or set(d) != fields:
+            got = sorted(d) if isinstance(d, dict) else type(d).__name__
+            raise ValueError(f"a {cls.__name__} needs the fields {sorted(fields)}, got {got}")
+        try:
+            return cls.from_dict({**cls().to_dict(), **d})
+        except (TypeError, KeyError, AttributeError, IndexError) as exc:
+            raise ValueError(f"a malformed {cls.__name__}: {exc!r}") from exc
+
+
+def _not_finite(name: str):
+    raise ValueError(f"{name} is not strict JSON")
+
+
+RECORD_FORMAT = 1  # the layout of a decision record (:func:`decision_record`)
+
+
+def decision_record(node: str, version: int, stamp: float, state: State) -> str:
+    """The strict-JSON decision record of ``node`` (docs/run.md, "Decisions"): its ``version`` (1, 2, ... each
+    decision of the run), the sim time ``stamp`` [s] of the decision and the :meth:`State.persisted` state.
+
+    Parameters
+    ----------
+    node : str
+        The deciding node's name ("planner", "ic_planner").
+    version : int
+        The record's number in the run, counted on across restarts.
+    stamp : float
+        s, sim time of the decision.
+    state : State
+        The state after the decision.
+
+    Returns
+    -------
+    str
+        One JSON object: ``format``, ``node``, ``version``, ``stamp``, ``state``.
+    """
+    record = {"format": RECORD_FORMAT, "node": node, "version": int(version), "stamp": float(stamp),
+              "state": state.persisted()}
+    return json.dumps(record, allow_nan=False, sort_keys=True, separators=(",", ":"))
+
+
+def read_record(text: str, node: str) -> tuple:
+    """``(version, stamp [s], persisted state dict)`` of a :func:`decision_record` of ``node``; ValueError naming
+    what is wrong (not JSON, another node's or format's record, a field missing).
+
+    Parameters
+    ----------
+    text : str
+        The record as the decisions topic carries it.
+    node : str
+        The node whose record it must be.
+
+    Returns
+    -------
+    tuple
+        ``(version, stamp, state)``: int, float [s], dict (read it with the state's ``restored``).
+    """
+    try:
+        record = json.loads(text, parse_constant=_not_finite)
+    except (ValueError, TypeError) as exc:
+        raise ValueError(f"a decision record is not JSON: {exc}") from exc
+    if not isinstance(record, dict) or record.get("format") != RECORD_FORMAT:
+        raise ValueError(f"not a decision record of format {RECORD_FORMAT}")
+    if record.get("node") != node:
+        raise ValueError(f"a decision record of {record.get('node')!r}, not of {node!r}")
+    version, stamp, state = record.get("version"), record.get("stamp"), record.get("state")
+    if not isinstance(version, int) or not isinstance(stamp, (int, float)) or not isinstance(state, dict):
+        raise ValueError("a decision record needs an integer version, a numeric stamp and a state object")
+    if not math.isfinite(stamp):
+        raise ValueError(f"a decision record's stamp is not finite: {stamp}")
+    return version, float(stamp), state
 
 
 @dataclass(frozen=True)

@@ -104,13 +104,27 @@ class OdSolution:
 
 
 @dataclass(frozen=True)
+class PublishPlan:
+    """Publish the acquisition plan: header ``stamp`` [s], its ``burns`` (:class:`~.common.PlannedBurn`), ``aimed``
+    the predicted ROE (dimensionless) at the IC epoch ``t_final`` [s] with the chief's mean elements ``aimed_kep``
+    there (angles wrapped)."""
+
+    stamp: float
+    burns: tuple
+    aimed_roe: tuple
+    aimed_kep: tuple
+    t_final: float
+
+
+@dataclass(frozen=True)
 class IcPlannerState(State):
     """What the ic_planner knows between events: the separation plan's last burn ``separation_end`` [s] (None: no
     separation plan), the carrier burns ``executed`` (relative impulses), the IC epoch ``t_final`` [s], the newest OD's
     ``last_key`` (solution stamp, epoch), the plan in force (``plan_in_force`` burns, their ``burn_epochs``, the
     1-sigma ``plan_sigma`` [m] of a da at t_F from its OD at ``plan_od_epoch``), whether the final OD decided
     (``final_decided``), the newest OD after the separation ``last_od``, a deferred re-plan ``replan_pending``, the
-    last plan's ``summary`` ((key, value) pairs as the status shows them) and the ``plans`` published."""
+    last plan's ``summary`` ((key, value) pairs as the status shows them), the ``plans`` published and the last one,
+    ``last_plan`` (the plan in force as the topic latches it). A restart keeps it all."""
 
     separation_end: float | None = None
     executed: tuple = ()
@@ -125,6 +139,7 @@ class IcPlannerState(State):
     replan_pending: bool = False
     summary: tuple = ()
     plans: int = 0
+    last_plan: PublishPlan | None = None
 
     @classmethod
     def from_dict(cls, d: dict) -> "IcPlannerState":
@@ -133,20 +148,13 @@ class IcPlannerState(State):
                       "last_key": optional(tuples, d["last_key"]), "burn_epochs": optional(tuples, d["burn_epochs"]),
                       "plan_in_force": optional(lambda p: tuple(planned_from_dict(b) for b in p), d["plan_in_force"]),
                       "last_od": optional(lambda o: OdSolution(**{k: tuples(v) for k, v in o.items()}), d["last_od"]),
-                      "summary": tuples(d["summary"])})
+                      "summary": tuples(d["summary"]), "last_plan": optional(plan_from_dict, d["last_plan"])})
 
 
-@dataclass(frozen=True)
-class PublishPlan:
-    """Publish the acquisition plan: header ``stamp`` [s], its ``burns`` (:class:`~.common.PlannedBurn`), ``aimed``
-    the predicted ROE (dimensionless) at the IC epoch ``t_final`` [s] with the chief's mean elements ``aimed_kep``
-    there (angles wrapped)."""
-
-    stamp: float
-    burns: tuple
-    aimed_roe: tuple
-    aimed_kep: tuple
-    t_final: float
+def plan_from_dict(d: dict) -> PublishPlan:
+    """A :class:`PublishPlan` from its :func:`~.common.plain` form."""
+    return PublishPlan(**{**d, "burns": tuple(planned_from_dict(b) for b in d["burns"]),
+                          "aimed_roe": tuples(d["aimed_roe"]), "aimed_kep": tuples(d["aimed_kep"])})
 
 
 def values(state: IcPlannerState) -> dict:
@@ -202,6 +210,15 @@ def on_own_plan(state: IcPlannerState, burns: Sequence[PlannedBurn], t_final: fl
                                plan_in_force=tuple(burns)), ()
 
 
+def on_restart(state: IcPlannerState, config: IcPlannerConfig) -> tuple:
+    """An ic_planner restarted with the recovered ``state``: the plan in force latched again as it was published
+    (never one a re-plan or trim replaced); the latched OD and record then come again and are not newer or already
+    on record (:func:`on_od`, :func:`on_executed`)."""
+    text = (f"restarted with {state.plans} plan(s) decided: " + ("no plan in force" if state.last_plan is None else
+            f"the plan in force ({len(state.last_plan.burns)} burn(s)) latched again"))
+    return state, (*(() if state.last_plan is None else (state.last_plan,)), status(OK, text, values(state)))
+
+
 def on_od(state: IcPlannerState, od: OdSolution, now: float, config: IcPlannerConfig) -> tuple:
     """A new OD solution: ignored unless newer than the last one and made after the separation plan; else
     :func:`decide`.
@@ -253,6 +270,8 @@ def on_executed(state: IcPlannerState, burn: PlannedBurn, config: IcPlannerConfi
         flown = burn.relative()
     except ValueError as exc:
         return state, (status(ERROR, f"executed maneuver rejected: {exc}", values(state), None),)
+    if any(round(b.epoch, 3) == round(flown.epoch, 3) for b in state.executed):
+        return state, ()  # on record already (the latched record again, after a restart): decided then
     state = dataclasses.replace(state, executed=(*state.executed, flown))
     if not (config.replan_on_burn and burn.purpose == "ic_acquisition"):
         return state, ()
@@ -356,7 +375,8 @@ def decide(state: IcPlannerState, od: OdSolution, now: float, config: IcPlannerC
         return state, actions + (status(OK, text, values(state)),), False
     summary = plan.summary()
     state = dataclasses.replace(
-        state, replan_pending=False, plan_in_force=publish.burns, plan_sigma=drift_sigma(od, plan.t_final, config),
+        state, replan_pending=False, last_plan=publish, plan_in_force=publish.burns,
+        plan_sigma=drift_sigma(od, plan.t_final, config),
         plan_od_epoch=od.epoch, burn_epochs=tuple(float(t) for t in plan.epochs),
         t_final=float(plan.t_final) if state.t_final is None else state.t_final, plans=state.plans + 1,
         summary=tuple((k, _shown(summary[k])) for k in summary if k in SUMMARY_KEYS))
@@ -408,7 +428,7 @@ def final_trim(state: IcPlannerState, od: OdSolution, now: float, config: IcPlan
     burns = (*kept, PlannedBurn.at(decision.epoch, float(wrap_angle(decision.u)), (0.0, decision.dv_t, 0.0),
                                    "carrier", "ic_acquisition"))
     publish = PublishPlan(now, burns, *aimed(od, decision.final_roe, decision.t_final, config), decision.t_final)
-    state = dataclasses.replace(state, plan_in_force=burns, t_final=decision.t_final,
+    state = dataclasses.replace(state, plan_in_force=burns, t_final=decision.t_final, last_plan=publish,
                                 burn_epochs=tuple(b.epoch for b in burns), plans=state.plans + 1)
     text += f"trim of {decision.dv_t:+.3f} m/s at t = {decision.epoch:.1f} s, IC epoch t = {decision.t_final:.1f} s"
     if decision.problems:  # missed anyway: the trim nulls the drift to hold the formation

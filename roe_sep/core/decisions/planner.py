@@ -28,7 +28,20 @@ from ..safety.ejection_check import check_ejection, nominal_fraction
 from ..separation.double_impulse import plan_drift_stop, reduction_bounds
 from ..separation.multi_impulse import multi_config, plan_carrier_burns
 from ..truth.secular import error_references
-from .common import ERROR, OK, WARN, Log, PlannedBurn, Stamped, State, Status, optional, status, tuples
+from .common import (
+    ERROR,
+    OK,
+    WARN,
+    Log,
+    PlannedBurn,
+    Stamped,
+    State,
+    Status,
+    optional,
+    planned_from_dict,
+    status,
+    tuples,
+)
 
 RECORD_SETTLE = 2.0  # wall s a restarted planner (no lockstep) lets the latched executed record arrive in full
 
@@ -116,7 +129,11 @@ class PlannerState(State):
     """What the planner knows between events: the drift-stop ``in_force``, the ``executed_stops`` on record
     ((epoch [s], carrier dv RTN (3,) [m/s])), the release epoch ``released`` [s] and the wall time ``record_since``
     [s] it arrived, the camera's ``bearings`` ((t [s], unit line of sight (3,))) until ``camera_done``, the
-    drift-stop epochs ``retried`` (to the ms) and the ``plans`` published."""
+    drift-stop epochs ``retried`` (to the ms), the ejections ``decided`` ((sec, nanosec) stamps), the ``plans``
+    published and the last one, ``last_plan`` (the plan in force as the topic latches it). A restart keeps all but
+    the ``VOLATILE`` fields: the release, the record's wall time and the bearings come again or are lost."""
+
+    VOLATILE = ("released", "record_since", "bearings")
 
     in_force: InForce | None = None
     executed_stops: tuple = ()
@@ -126,6 +143,8 @@ class PlannerState(State):
     camera_done: bool = False
     retried: tuple = ()
     plans: int = 0
+    decided: tuple = ()
+    last_plan: PublishPlan | None = None
 
     @classmethod
     def from_dict(cls, d: dict) -> "PlannerState":
@@ -134,7 +153,20 @@ class PlannerState(State):
             return InForce(**{**f, "ejection": Ejection(**{k: tuples(v) for k, v in f["ejection"].items()})})
 
         return cls(**{**d, "in_force": optional(in_force, d["in_force"]), "executed_stops": tuples(d["executed_stops"]),
-                      "bearings": tuples(d["bearings"]), "retried": tuples(d["retried"])})
+                      "bearings": tuples(d["bearings"]), "retried": tuples(d["retried"]),
+                      "decided": tuples(d["decided"]), "last_plan": optional(plan_from_dict, d["last_plan"])})
+
+
+def plan_from_dict(d: dict) -> PublishPlan:
+    """A :class:`PublishPlan` from its :func:`~.common.plain` form."""
+    aimed = optional(lambda a: Aimed(**{k: tuples(v) for k, v in a.items()}), d["aimed"])
+    return PublishPlan(**{**d, "ejection_stamp": tuples(d["ejection_stamp"]), "stamp": tuples(d["stamp"]),
+                          "burns": tuple(planned_from_dict(b) for b in d["burns"]), "aimed": aimed})
+
+
+def published(state: PlannerState, plan: PublishPlan) -> PlannerState:
+    """The state once ``plan`` is published: one plan more, and it is the plan in force."""
+    return dataclasses.replace(state, plans=state.plans + 1, last_plan=plan)
 
 
 def values(state: PlannerState, config: PlannerConfig) -> dict:
@@ -144,7 +176,8 @@ def values(state: PlannerState, config: PlannerConfig) -> dict:
 
 
 def on_ejection(state: PlannerState, ejection: Ejection, config: PlannerConfig) -> tuple:
-    """A commanded ejection: its drift-stop (or multi-impulse) plan (:func:`separation_plan`).
+    """A commanded ejection: its drift-stop (or multi-impulse) plan (:func:`separation_plan`); one already decided
+    (a restarted planner's latched event) plans nothing again.
 
     Parameters
     ----------
@@ -158,6 +191,10 @@ def on_ejection(state: PlannerState, ejection: Ejection, config: PlannerConfig) 
     tuple
         ``(new state, actions)``; an ERROR status for a malformed event.
     """
+    stamp = (ejection.sec, ejection.nanosec)
+    if stamp in state.decided:
+        return state, (Log("info", f"ejection at t = {ejection.epoch:.1f} s already decided (plan {state.plans} in "
+                                   "force): not planned again"),)
     try:
         plan = separation_plan(ejection, config)
     except ValueError as exc:
@@ -165,7 +202,7 @@ def on_ejection(state: PlannerState, ejection: Ejection, config: PlannerConfig) 
     burn = plan.burns[0]
     multi = config.strategy == "multi_impulse"
     in_force = state.in_force if multi else InForce(ejection, None, plan.p_reduction, burn.epoch)
-    state = dataclasses.replace(state, plans=state.plans + 1, in_force=in_force)
+    state = dataclasses.replace(published(state, plan), in_force=in_force, decided=(*state.decided, stamp))
     x, y, z = burn.dv_rtn
     log = Log("info", f"drift-stop planned at t = {burn.epoch:.1f} s, carrier dv RTN = ({x:+.6f}, {y:+.6f}, "
                       f"{z:+.6f}) m/s, p = {plan.p_reduction:g} m/s")
@@ -191,6 +228,8 @@ def on_executed(state: PlannerState, burn: PlannedBurn, wall: float, config: Pla
         ``(new state, actions)``.
     """
     if burn.spacecraft == "carrier" and burn.purpose == "drift_stop":
+        if any(round(e, 3) == round(burn.epoch, 3) for e, _ in state.executed_stops):
+            return state, ()  # on record already (the latched record again, after a restart)
         return dataclasses.replace(state, executed_stops=(*state.executed_stops, (burn.epoch, burn.dv_rtn))), ()
     if burn.purpose == "ejection" and state.released is None:
         return dataclasses.replace(state, released=burn.epoch, record_since=wall), ()
@@ -217,6 +256,17 @@ def on_bearing(state: PlannerState, t: float, los: ArrayLike, config: PlannerCon
     if not config.hold or state.camera_done:
         return state, ()
     return dataclasses.replace(state, bearings=(*state.bearings, (t, tuple(float(c) for c in los)))), ()
+
+
+def on_restart(state: PlannerState, config: PlannerConfig) -> tuple:
+    """A planner restarted with the recovered ``state``: the plan in force latched again as it was published
+    (never a withdrawn one: the hold's empty plan stays the plan in force), the camera left alone once decided."""
+    actions = (StopBearings(),) if state.camera_done else ()
+    if state.last_plan is not None:
+        actions += (state.last_plan,)
+    text = (f"restarted with {state.plans} plan(s) decided: " + ("no plan in force" if state.last_plan is None else
+            f"the plan in force ({len(state.last_plan.burns)} burn(s)) latched again"))
+    return state, (*actions, status(OK, text, values(state, config)))
 
 
 def record_recovered(state: PlannerState, wall: float, lockstep: bool) -> bool:
@@ -342,7 +392,7 @@ def camera_decision(state: PlannerState, t: float, config: PlannerConfig) -> tup
     if not check.weak:
         return state, (log,)
     hold = PublishPlan("double_impulse", (ejection.sec, ejection.nanosec), sec_nanosec(t), 0.0)
-    state = dataclasses.replace(state, plans=state.plans + 1, in_force=None)
+    state = dataclasses.replace(published(state, hold), in_force=None)
     return state, (log, hold, finding(
         "weak_ejection", t, f"the camera's bearings fit f1 = {check.f1:.2f} of the commanded ejection at the nominal "
         f"drag (chi-square gain {check.gain:.1f} over the nominal set f1/g >= {bound:.3f}, {check.samples} bearings): "
@@ -411,7 +461,7 @@ def replace_missing(state: PlannerState, t: float, config: PlannerConfig) -> tup
     orbits, _ = orbits_later(f.ejection, t, f.t_stop, config)
     plan = dataclasses.replace(separation_plan(f.ejection, config, k=k + 2 * orbits, p=f.p), stamp=sec_nanosec(t))
     t_new = plan.burns[0].epoch
-    state = dataclasses.replace(state, plans=state.plans + 1, in_force=InForce(f.ejection, k + 2 * orbits, f.p, t_new))
+    state = dataclasses.replace(published(state, plan), in_force=InForce(f.ejection, k + 2 * orbits, f.p, t_new))
     return state, (plan, finding(
         "drift_stop_replaced", t, f"no drift-stop on record {t - f.t_stop:.0f} s after its epoch t = {f.t_stop:.1f} "
         f"s: the same drift-stop {orbits} orbit(s) later, at t = {t_new:.1f} s",
@@ -454,7 +504,7 @@ def check_executed(state: PlannerState, t: float, config: PlannerConfig) -> tupl
     rest = dv_cmd - dv_exec
     out = PublishPlan("double_impulse", (f.ejection.sec, f.ejection.nanosec), sec_nanosec(t), 0.0,
                       (PlannedBurn.at(t_new, burn.u, rest, "carrier", "drift_stop"),), plan.aimed)
-    state = dataclasses.replace(state, plans=state.plans + 1)
+    state = published(state, out)
     norm = float(np.linalg.norm(rest))
     return state, (out, finding(
         "drift_stop_completed", t, f"the drift-stop at t = {t_exec:.1f} s executed {float(np.linalg.norm(dv_exec)):.4f}"

@@ -12,7 +12,7 @@ import pytest
 
 from roe_sep.core.acquisition.planner import AcquisitionConfig
 from roe_sep.core.decisions import ic_planner as rules
-from roe_sep.core.decisions.common import ERROR, OK, WARN, PlannedBurn, Status
+from roe_sep.core.decisions.common import ERROR, OK, WARN, PlannedBurn, Status, decision_record, read_record
 from roe_sep.core.od.radar import DEFAULT_EPOCH_UTC, julian_date
 from roe_sep.core.relmotion.dynamics import drag_da_dot
 from roe_sep.core.separation.double_impulse import design
@@ -134,9 +134,11 @@ def test_a_departing_burn_replans_once_the_committed_burn_is_flown(first):
     plan = actions[1]
     assert plan.stamp == pytest.approx(b2.epoch) and plan.burns[0].epoch >= b2.epoch + MARGIN
     assert replanned.t_final == state.t_final and not replanned.replan_pending and replanned.plans == 2
-    off_plan, actions = rules.on_executed(replanned, burn_as_flown(b1, 0.004), dataclasses.replace(
+    off_plan, actions = rules.on_executed(state, burn_as_flown(b1, 0.004), dataclasses.replace(
         CONFIG, replan_on_burn=False))
-    assert actions == () and len(off_plan.executed) == 3  # without replan_on_burn only the record grows
+    assert actions == () and len(off_plan.executed) == 1  # without replan_on_burn only the record grows
+    # the same record again (a restarted ic_planner's latched history) is on record already: nothing is decided
+    assert rules.on_executed(replanned, burn_as_flown(b1, 0.004), CONFIG) == (replanned, ())
 
 
 def final_state(a_da_at_tf, t_final=250000.0):
@@ -206,3 +208,24 @@ def test_the_state_round_trips_through_strict_json_and_decides_the_same(first):
     with pytest.raises(ValueError, match="not finite"):
         dataclasses.replace(state, t_final=math.inf).to_dict()
 
+
+
+def test_an_ic_planner_restarted_mid_acquisition_keeps_its_plan(first):
+    """Killed after the first burn of its plan: the decision record brings back the plan in force, the latched OD
+    and executed record then come again and change nothing (a fresh ic_planner would re-plan from that OD)."""
+    state, actions = first
+    b1 = state.plan_in_force[0]
+    state, _ = rules.on_executed(state, burn_as_flown(b1), CONFIG)
+    back = rules.IcPlannerState.restored(read_record(decision_record("ic_planner", 2, b1.epoch, state),
+                                                     "ic_planner")[2])
+    assert back == state
+    _, restart = rules.on_restart(back, CONFIG)
+    assert kinds(restart) == ["PublishPlan", "Status"] and restart[0] == actions[0]
+    now = b1.epoch + 60.0
+    again, replies = rules.on_od(back, od(30000.0), now, CONFIG)
+    assert again == back and kinds(replies) == ["Log"]  # not newer
+    assert rules.on_executed(back, burn_as_flown(b1), CONFIG) == (back, ())  # on record already
+    _, fresh = rules.on_od(rules.IcPlannerState(), od(30000.0), now, CONFIG)
+    assert fresh[0].burns != actions[0].burns  # what a restart without the record would have published
+    _, empty = rules.on_restart(rules.IcPlannerState(), CONFIG)
+    assert kinds(empty) == ["Status"]

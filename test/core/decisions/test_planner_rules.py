@@ -1,7 +1,7 @@
 """The planner's decisions without DDS (roe_sep.core.decisions.planner, docs/run.md "Decisions"): the drift-stop of
 a commanded ejection, the hold of a weak one (camera bearings), the replacement of a missing drift-stop, the
-completion of a short one, a malformed event, the record a restarted planner waits for, and the state's strict-JSON
-round trip."""
+completion of a short one, a malformed event, the record a restarted planner waits for, the state's strict-JSON
+round trip, and a planner restarted from its decision record after a hold, a replacement and a completion."""
 
 import dataclasses
 import json
@@ -12,7 +12,7 @@ import pytest
 
 from roe_sep.core.config import load_scenario
 from roe_sep.core.decisions import planner as rules
-from roe_sep.core.decisions.common import ERROR, WARN, PlannedBurn
+from roe_sep.core.decisions.common import ERROR, WARN, PlannedBurn, decision_record, read_record
 from roe_sep.core.relmotion.dynamics import arg_latitude_rate, drag_da_dot
 from roe_sep.core.safety.ejection_check import camera_bearing, predicted_los
 from roe_sep.core.separation.double_impulse import design, plan_drift_stop
@@ -184,3 +184,92 @@ def test_the_state_round_trips_through_strict_json(planned):
     assert restored == state
     t = state.in_force.t_stop - CONFIG.hold_lead
     assert rules.on_step(restored, t, 101.0, True, CONFIG) == rules.on_step(state, t, 101.0, True, CONFIG)
+
+
+def restart(state):
+    """What a restarted planner recovers: its decision record (strict JSON, as the decisions topic carries it) read
+    back."""
+    version, stamp, persisted = read_record(decision_record("planner", 3, 1234.5, state), "planner")
+    assert (version, stamp) == (3, 1234.5) and "bearings" not in persisted and "record_since" not in persisted
+    return rules.PlannerState.restored(persisted)
+
+
+def test_a_planner_restarted_after_a_hold_keeps_the_drift_stop_withdrawn(planned):
+    state = bearings(planned[0], 0.3)
+    t_stop = state.in_force.t_stop
+    t = t_stop - CONFIG.hold_lead
+    held, actions = rules.on_step(state, t, 101.0, True, CONFIG)
+    hold = actions[2]
+    assert hold.burns == () and held.last_plan == hold
+    back = restart(held)
+    assert back == dataclasses.replace(held, released=None, record_since=None)
+    _, actions = rules.on_restart(back, CONFIG)  # the hold latched again as it was, the camera left alone
+    assert kinds(actions) == ["StopBearings", "PublishPlan", "Status"] and actions[1] == hold
+    again, actions = rules.on_ejection(back, EJECTION, CONFIG)  # the latched ejection again: decided already
+    assert again == back and kinds(actions) == ["Log"] and "already decided" in actions[0].text
+    back, _ = rules.on_executed(back, executed(0.0, D.dv1_rtn, "picosatellite", "ejection"), 500.0, CONFIG)
+    for now in (t + 60.0, t_stop, t_stop + 2 * CONFIG.retry_tolerance):  # nothing flies, nothing is replaced
+        back, actions = rules.on_step(back, now, 510.0, False, CONFIG)
+        assert not [a for a in actions if isinstance(a, rules.PublishPlan)]
+    # what a planner without its record does with the latched ejection: the blind drift-stop once more
+    _, actions = rules.on_ejection(rules.PlannerState(), EJECTION, CONFIG)
+    assert actions[0].burns == planned[1][0].burns
+
+
+def test_a_planner_restarted_after_a_replacement_keeps_the_replacement(planned):
+    state = checked(planned[0])
+    t_stop = state.in_force.t_stop
+    t = t_stop + CONFIG.retry_tolerance + 60.0
+    replaced, actions = rules.on_step(state, t, 101.0, True, CONFIG)
+    replacement = actions[0]
+    back = restart(replaced)
+    _, actions = rules.on_restart(back, CONFIG)
+    assert kinds(actions) == ["StopBearings", "PublishPlan", "Status"] and actions[1] == replacement
+    assert kinds(rules.on_ejection(back, EJECTION, CONFIG)[1]) == ["Log"]  # not the withdrawn original again
+    # the latched record again (the ejection, no drift-stop), settled: the original is not replaced a second time
+    back, _ = rules.on_executed(back, executed(0.0, D.dv1_rtn, "picosatellite", "ejection"), 500.0, CONFIG)
+    later, actions = rules.on_step(back, t + 3600.0, 510.0, False, CONFIG)
+    assert actions == () and later.in_force == replaced.in_force
+    # the rule goes on: the replacement missing in turn is replaced, later
+    t_new = replaced.in_force.t_stop
+    _, actions = rules.on_step(back, t_new + CONFIG.retry_tolerance + 60.0, 510.0, False, CONFIG)
+    assert kinds(actions) == ["PublishPlan", "Status"] and actions[0].burns[0].epoch > t_new
+
+
+def test_a_restarted_planner_after_a_completion_keeps_it(planned):
+    state = checked(planned[0])
+    commanded = np.array(planned[1][0].burns[0].dv_rtn)
+    t_exec = state.in_force.t_stop
+    state, _ = rules.on_executed(state, executed(t_exec, 0.8 * commanded), 101.0, CONFIG)
+    completed, actions = rules.on_step(state, t_exec + 600.0, 101.0, True, CONFIG)
+    back = restart(completed)
+    assert rules.on_restart(back, CONFIG)[1][1] == actions[0]
+    back, _ = rules.on_executed(back, executed(t_exec, 0.8 * commanded), 500.0, CONFIG)  # on record already
+    assert back.executed_stops == completed.executed_stops
+    back, _ = rules.on_executed(back, executed(0.0, D.dv1_rtn, "picosatellite", "ejection"), 500.0, CONFIG)
+    assert rules.on_step(back, t_exec + 1200.0, 510.0, False, CONFIG)[1] == ()  # not completed twice
+
+
+def test_a_bad_decision_record_is_refused():
+    good = decision_record("planner", 1, 10.0, rules.PlannerState())
+    with pytest.raises(ValueError, match="of 'planner', not of 'ic_planner'"):
+        read_record(good, "ic_planner")
+    for bad in ("{", "[]", good.replace('"version":1', '"version":"1"'), good.replace("10.0", "NaN")):
+        with pytest.raises(ValueError):
+            read_record(bad, "planner")
+    persisted = read_record(good, "planner")[2]
+    with pytest.raises(ValueError, match="needs the fields"):
+        rules.PlannerState.restored({**persisted, "surprise": 1})
+    with pytest.raises(ValueError, match="malformed"):
+        rules.PlannerState.restored({**persisted, "in_force": {"k": 3}})
+
+
+def test_a_run_without_the_keeper_reads_no_decision_record_back():
+    """A run without ground_bridge (a campaign's) has no keeper of the decision records: the planners are told not
+    to wait for one (recover_timeout 0); with it, they keep their default."""
+    from roe_sep import graph
+
+    alone = graph.parameters(None, "bag", {}, graph.graph_nodes(ground_bridge=False))
+    assert alone["planner"]["ros__parameters"] == alone["ic_planner"]["ros__parameters"] == {"recover_timeout": 0.0}
+    kept = graph.parameters(None, "bag", {}, graph.graph_nodes())
+    assert "planner" not in kept and "ic_planner" not in kept
