@@ -200,6 +200,13 @@ def actual_approach(times: ArrayLike, pos: ArrayLike, vel: ArrayLike, n: float, 
                     (float(t[0]), end), float(err.max()), float(dt.max()), float(step))
 
 
+CARRIER_BOX = (0.6, 0.8, 0.8)
+"""m, the carrier's edges: BIROS "measures 60x80x80 cm" (seed 001 Sec. 1; config/default.yaml's 0.48 m^2 is one
+0.6 x 0.8 face)."""
+PICOSAT_BOX = (0.1, 0.1, 0.1)
+"""m, the picosatellite's edges: BEESAT-4, "10x10x10 cm" (seed 001 Sec. 1; the config's 0.01 m^2 is one face)."""
+
+
 def hard_body_radius(box_a: ArrayLike, box_b: ArrayLike) -> float:
     """Collision radius [m] of two boxes: the sum of the radii of their circumscribed spheres, half their space
     diagonals (a collision is possible only when the centres come closer than this).
@@ -215,3 +222,8 @@ def hard_body_radius(box_a: ArrayLike, box_b: ArrayLike) -> float:
         |box_a| / 2 + |box_b| / 2 [m].
     """
     return 0.5 * (math.sqrt(float(np.sum(np.square(box_a)))) + math.sqrt(float(np.sum(np.square(box_b)))))
+
+
+COLLISION_RADIUS = hard_body_radius(CARRIER_BOX, PICOSAT_BOX)
+"""m, the collision radius of the two bodies: 0.640 m + 0.087 m = 0.727 m (:func:`hard_body_radius` of
+:data:`CARRIER_BOX` and :data:`PICOSAT_BOX`); a closest approach of the centres below it can be a contact."""
