@@ -4,16 +4,16 @@ Keys: ``maneuvers`` (each executed burn: purpose, spacecraft, epoch, u, dv RTN a
 ``dv_by_purpose`` (carrier burns, m/s), ``final_roe`` (truth a*ROE at the end, m), ``min_distance`` (closest
 approach after the initial departure, m, with its epoch), ``dispersions`` (what the simulator drew,
 :func:`dispersions_applied`), ``final_od`` (:func:`final_od_decision`) and ``ic_predicted_a_da``
-(:func:`predicted_ic_drift`), ``time_to_ic`` (ejection to the IC epoch, s, when the
-truth meets the initial conditions there; None when it does not), ``od`` (first solution, :func:`od_solution`:
-epoch, passes, 1-sigma, error against truth, NEES, drift rate against the truth's own; ``last``: the same of the
-last solution), ``ic`` (truth at the IC epoch and each initial condition), ``criteria`` (each pass/fail) and
-``safe`` (the safety criteria only: keep-out, passive safety, evaporation, closest approach, every plan approved by
-the monitor; ``keep_out`` and ``passive_safety`` are passive-safety verdicts: a prediction with no further burns
-from each check, see ``passive_safety``), ``passive_safety`` (:func:`passive_safety_verdicts`), ``actual_approach``
-(what happened, from the truth: :func:`actual_approach`), ``contingency`` (the contingency injected, as applied by the simulator or the radar:
-:func:`contingency_applied`; None without one) and ``contingencies_detected`` (what the safety monitor saw of one:
-:func:`contingencies_detected`).
+(:func:`predicted_ic_drift`), ``time_to_ic`` (ejection to the IC epoch, s, when the truth meets the initial
+conditions there; None when it does not), ``od`` (first solution, :func:`od_solution`: epoch, passes, 1-sigma, error
+against truth, NEES, drift rate against the truth's own; ``last``: the same of the last solution), ``ic`` (truth at
+the IC epoch and each initial condition), ``criteria`` (each pass/fail) and ``safe`` (the safety criteria only:
+keep-out, passive safety, evaporation, closest approach, every plan approved by the monitor; ``keep_out`` and
+``passive_safety`` are passive-safety verdicts: a prediction with no further burns from each check, see
+``passive_safety``), ``passive_safety`` (:func:`passive_safety_verdicts`), ``actual_approach`` (what happened, from
+the truth: :func:`actual_approach`), ``contingency`` (the contingency injected, as applied by the simulator or the
+radar: :func:`contingency_applied`; None without one) and ``contingencies_detected`` (what the safety monitor saw of
+one: :func:`contingencies_detected`).
 """
 
 import contextlib
@@ -416,11 +416,12 @@ def actual_approach(rtn, truth, ejection_epoch, keep_out):
     (:func:`roe_sep.core.safety.approach.actual_approach`: HCW between the samples, the chief's mean motion of the
     truth's first ``a``): ``closest_approach`` (smallest local minimum of the distance after the departure from the
     keep-out sphere, or after the ejection for a pair that never left it: ``distance`` [m], ``epoch`` [s],
-    ``at_end`` (still approaching at the end), ``bound`` [m], the refinement's), ``after_first_orbit`` (the same
-    from one orbit after the ejection), ``departure_epoch``, ``keep_out_time`` [s] and ``keep_out_entries`` after
-    the departure, ``keep_out_violated``, ``keep_out_radius`` [m], ``sampling`` (``truth_step`` the largest sampling
-    interval, ``scan_step`` [s], ``refine_error`` [m]: the largest mismatch of the HCW arcs); None without an
-    ejection or two truth samples after it."""
+    ``at_end`` (still approaching at the end), ``bound`` [m], the refinement's), ``nearest`` (the same over every
+    local minimum after the ejection, before the departure too: the comparand of a collision), ``after_first_orbit``
+    (the closest from one orbit after the ejection), ``departure_epoch``, ``keep_out_time`` [s] and
+    ``keep_out_entries`` after the departure, ``keep_out_violated``, ``keep_out_radius`` [m], ``sampling``
+    (``truth_step`` the largest sampling interval, ``scan_step`` [s], ``refine_error`` [m]: the largest mismatch of
+    the HCW arcs); None without an ejection or two truth samples after it."""
     if ejection_epoch is None or not len(truth):
         return None
     msgs = [m for _, m in rtn]
@@ -438,6 +439,8 @@ def actual_approach(rtn, truth, ejection_epoch, keep_out):
         "closest_approach": None if ap.closest_distance is None else {
             "distance": ap.closest_distance, "epoch": ap.closest_epoch, "at_end": ap.closest_at_end,
             "bound": ap.closest_error_m},
+        "nearest": None if ap.nearest[0] is None else {
+            "distance": ap.nearest[0], "epoch": ap.nearest[1], "bound": ap.nearest[2]},
         "after_first_orbit": None if k is None else {
             "distance": float(later[k, 1]), "epoch": float(later[k, 0]), "bound": float(later[k, 2])},
         "departure_epoch": ap.departure_epoch,

@@ -37,6 +37,7 @@ DISTRIBUTIONS = {  # report key -> (row field, unit, of its absolute value)
     "dv_ic": ("dv_ic_m_s", "m/s", False),
     "time_to_ic": ("time_to_ic_s", "s", False),
     "truth_closest": ("truth_closest_m", "m", False),
+    "truth_nearest": ("truth_nearest_m", "m", False),
     "truth_keep_out_time": ("truth_keep_out_s", "s", False),
 }
 
@@ -54,13 +55,14 @@ def _squares(values):
 
 def truth_outcomes(done, collision_radius=COLLISION_RADIUS):
     """From the truth (rows with its columns; a row recorded before them is left out and counted in ``missing``):
-    ``truth_collision`` (the truth's closest approach below ``collision_radius`` [m]) and ``truth_keep_out_violated``
+    ``truth_collision`` (the truth's nearest approach after the ejection, ``truth_nearest_m``, below
+    ``collision_radius`` [m]) and ``truth_keep_out_violated``
     (never left the keep-out sphere or came back inside), each with its Clopper-Pearson 95 % interval
     (:func:`~roe_sep.core.montecarlo.stats.clopper_pearson`), and ``collision_radius``."""
-    # a run whose pair never departed has no closest approach after the departure: its first local minimum counts
-    # (the report's rule); one without any minimum (receding all run) had no approach: no collision
+    # every local minimum of the distance after the ejection counts, before the departure too (a weak ejection); a
+    # run without any (receding all run, or a stuck picosatellite at rest) had no approach: no collision
     known = [r for r in done if r.get("truth_keep_out_violated") is not None]
-    closest = [r.get("truth_closest_m") for r in known]
+    closest = [r.get("truth_nearest_m") for r in known]
     return {
         "truth_collision": {**clopper_pearson(sum(1 for d in closest if d is not None and d < collision_radius),
                                               len(known)), "missing": len(done) - len(known)},
@@ -112,6 +114,7 @@ def aggregate(rows, collision_radius=COLLISION_RADIUS):
     out["distributions"]["a_da_ic_prediction_error"]["note"] = "|truth - predicted a da| at the IC epoch"
     out["distributions"]["time_to_ic"]["note"] = "ejection to the IC epoch, runs that reached the ICs there"
     out["distributions"]["truth_closest"]["note"] = "the truth's closest approach after the departure (HCW-refined)"
+    out["distributions"]["truth_nearest"]["note"] = "the truth's nearest approach after the ejection (HCW-refined)"
     out["distributions"]["truth_keep_out_time"]["note"] = "truth: time inside the keep-out after the departure"
     return out
 

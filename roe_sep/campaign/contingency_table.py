@@ -10,7 +10,8 @@ approach is the simulator's (after the departure, ``min_distance_m``); ``collisi
 
 Beside the passive-safety verdicts (``keep_out`` and ``passive_safety`` of the monitor on the truth: a prediction with
 no further burns from each check), what happened, from the truth (the rows' ``truth_*`` columns,
-:func:`roe_sep.report.actual_approach`): the closest approach, P(collision) (closest approach below
+:func:`roe_sep.report.actual_approach`): the closest approach after the departure and after the ejection,
+P(collision) (the nearest approach after the ejection below
 ``collision_radius``, default :data:`~roe_sep.core.safety.approach.COLLISION_RADIUS`, derived from the two bodies'
 sizes) and P(keep-out violated), each with its Clopper-Pearson 95 % interval. Rows recorded before those columns
 have none: "n/a".
@@ -80,13 +81,13 @@ def summarize(rows, label=None, collision_radius=COLLISION_RADIUS):
     dv50, dv95 = _percentiles([r["dv_total_m_s"] for r in done], [50, 95])
     known = [r for r in done if r.get("truth_keep_out_violated") is not None]  # rows with the truth's columns
     closest = [r.get("truth_closest_m") for r in known]
-    tp01, = _percentiles(closest, [0.1])
+    nearest = [r.get("truth_nearest_m") for r in known]
     truth = {
         "collision_radius_m": collision_radius,
         "truth_missing": n - len(known),
-        "truth_closest_p0_1_m": tp01,
         "truth_closest_min_m": min((d for d in closest if d is not None), default=None),
-        "truth_collisions": clopper_pearson(sum(1 for d in closest if d is not None and d < collision_radius),
+        "truth_nearest_min_m": min((d for d in nearest if d is not None), default=None),
+        "truth_collisions": clopper_pearson(sum(1 for d in nearest if d is not None and d < collision_radius),
                                             len(known)) if known else None,
         "truth_keep_out_violated": clopper_pearson(sum(bool(r["truth_keep_out_violated"]) for r in known),
                                                    len(known)) if known else None,
@@ -159,7 +160,7 @@ def _truth(s, key):
 def _closest(s):
     if s.get("truth_collisions") is None:
         return "n/a"
-    return f"{_num(s['truth_closest_p0_1_m'], '.0f')} / {_num(s['truth_closest_min_m'], '.0f')}"
+    return f"{_num(s['truth_closest_min_m'], '.0f')} / {_num(s['truth_nearest_min_m'], '.0f')}"
 
 
 def _radius(summaries):
@@ -173,7 +174,7 @@ def markdown(summaries):
     where the rows carry no truth columns. The collision radius in the header is the rows' (one for all)."""
     head = ("| case | runs | P(safe) | passive-safety verdicts failed: keep-out / passive safety (runs) | "
             "closest approach, sim p0.1 / min [m] | collisions, sim (d < 1 m) | "
-            "closest approach, truth p0.1 / min [m] | "
+            "closest approach, truth: min after the departure / after the ejection [m] | "
             f"P(collision), truth (d < {_radius(summaries):.3f} m), Clopper-Pearson 95 % | "
             "P(keep-out violated), truth, Clopper-Pearson 95 % | P(ICs reached) | "
             "time to ICs p50 / p95 [h] | dv p50 / p95 [m/s] | detected | criteria failed (runs) |")

@@ -33,7 +33,8 @@ FIELDS = (
     "contingency", "contingencies_detected", "od_nees7", "od_last_nees7",
 )
 TRUTH_FIELDS = (  # the actual approach, from the truth (report ``actual_approach``) and the passive-safety verdicts
-    "truth_closest_m", "truth_closest_epoch_s", "truth_closest_bound_m", "truth_closest_orbit1_m",
+    "truth_closest_m", "truth_closest_epoch_s", "truth_closest_bound_m", "truth_closest_orbit1_m", "truth_nearest_m",
+    "truth_nearest_epoch_s",
     "truth_departure_epoch_s", "truth_keep_out_s", "truth_keep_out_entries", "truth_keep_out_violated",
     "ps_keep_out_first_s", "ps_passive_safety_first_s",
 )
@@ -41,7 +42,8 @@ TRUTH_FIELDS = (  # the actual approach, from the truth (report ``actual_approac
 # read as rows without them
 LEGACY_HEADERS = (FIELDS[:-4], FIELDS[:-2], FIELDS)
 FIELDS = FIELDS + TRUTH_FIELDS
-BOOL_FIELDS = {"safe", "ic_trim", "truth_keep_out_violated", *(f"crit_{c}" for c in CRITERIA), *(f"ic_{c}" for c in IC_CHECKS)}
+BOOL_FIELDS = {"safe", "ic_trim", "truth_keep_out_violated", *(f"crit_{c}" for c in CRITERIA),
+               *(f"ic_{c}" for c in IC_CHECKS)}
 INT_FIELDS = {"seed", "od_passes", "od_measurements", "od_solutions", "domain_id", "truth_keep_out_entries"}
 STR_FIELDS = {"status", "failure", "reason", "dispersions", "contingency", "contingencies_detected"}
 # dispersions, contingency: the report's, as compact JSON; contingencies_detected: {name: first epoch [s]} as JSON
@@ -126,6 +128,8 @@ def _truth_cells(rep: dict) -> dict:
     out.update(truth_closest_m=closest.get("distance"), truth_closest_epoch_s=closest.get("epoch"),
                truth_closest_bound_m=closest.get("bound"),
                truth_closest_orbit1_m=(ap.get("after_first_orbit") or {}).get("distance"),
+               truth_nearest_m=(ap.get("nearest") or {}).get("distance"),
+               truth_nearest_epoch_s=(ap.get("nearest") or {}).get("epoch"),
                truth_departure_epoch_s=ap.get("departure_epoch"), truth_keep_out_s=ap.get("keep_out_time"),
                truth_keep_out_entries=ap.get("keep_out_entries"), truth_keep_out_violated=ap.get("keep_out_violated"))
     return out

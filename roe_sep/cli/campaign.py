@@ -52,13 +52,6 @@ def print_campaign(rep):
         print(f"  {name:28s}{_p(prop)}")
     print(f"  {'safe (failed = unsafe)':28s}{_p(rep['p_safe_failures_unsafe'])}")
     print("  (keep_out, passive_safety: passive-safety verdicts, a prediction with no further burns from each check)")
-    if rep.get("truth_collision") is not None:
-        print(f"\n  {'actual, from the truth':28s}{'P':>7s}  Clopper-Pearson 95 %")
-        for key, label in (("truth_collision", f"collision (d < {rep['collision_radius']:.3f} m)"),
-                           ("truth_keep_out_violated", "keep-out violated")):
-            prop = rep[key]
-            gone = f"  ({prop['missing']} runs without the truth's columns)" if prop["missing"] else ""
-            print(f"  {label:28s}{_p(prop)}{gone}")
     if rep.get("ic_reached_lower_95") is not None:
         print(f"  {'ic_reached, one-sided 95 % lower bound (Clopper-Pearson)':60s}{rep['ic_reached_lower_95']:.4f}")
     if rep.get("ic_trims", {}).get("n"):
@@ -67,6 +60,13 @@ def print_campaign(rep):
         print("  initial conditions at the IC epoch:")
         for name, prop in rep["ic_checks"].items():
             print(f"    {name:26s}{_p(prop)}")
+    if rep.get("truth_collision") is not None:
+        print(f"\n  {'actual, from the truth':28s}{'P':>7s}  Clopper-Pearson 95 %")
+        for key, label in (("truth_collision", f"collision (d < {rep['collision_radius']:.3f} m)"),
+                           ("truth_keep_out_violated", "keep-out violated")):
+            prop = rep[key]
+            gone = f"  ({prop['missing']} runs without the truth's columns)" if prop["missing"] else ""
+            print(f"  {label:28s}{_p(prop)}{gone}")
     print(f"\n  {'distribution':24s}{'unit':>6s}{'n':>5s}{'min':>11s}{'p5':>11s}{'p50':>11s}{'p95':>11s}{'max':>11s}")
     for name, d in rep["distributions"].items():
         scale, unit = (1 / 3600, "h") if d["unit"] == "s" else (1.0, d["unit"])

@@ -46,8 +46,9 @@ def print_run(rep: dict, out=None):
     ap = rep.get("actual_approach")
     if ap:
         c = ap.get("closest_approach")
+        end = ", still approaching at the end" if c and c["at_end"] else ""
         where = "none" if c is None else (f"{c['distance']:.1f} m at t = {c['epoch']:.0f} s (refined within "
-                                          f"{c['bound']:.2f} m{', still approaching at the end' if c['at_end'] else ''})")
+                                          f"{c['bound']:.2f} m{end})")
         w(f"  actual approach (truth): closest {where}; keep-out "
           + (f"VIOLATED ({ap['keep_out_time']:.0f} s inside after the departure, {ap['keep_out_entries']} entries)"
              if ap["keep_out_violated"] else "held after the departure") + "\n")
@@ -67,7 +68,8 @@ def print_run(rep: dict, out=None):
     for d in rep.get("contingencies_detected") or ():
         w(f"  detected {d['name']} at t = {d['epoch']:.0f} s: {d['text']}\n")
     for name, ok in rep.get("criteria", {}).items():
-        kind = "  (passive-safety verdict: predicted, no further burns)" if name in ("keep_out", "passive_safety") else ""
+        verdict = name in ("keep_out", "passive_safety")
+        kind = "  (passive-safety verdict: predicted, no further burns)" if verdict else ""
         w(f"  {'pass' if ok else 'FAIL'}  {name}{kind}\n")
 
 

@@ -66,6 +66,8 @@ class Approach:
     closest_epoch: float | None
     closest_at_end: bool  # the closest approach is the end of the truth, still approaching there
     closest_error_m: float | None  # the refinement's bound there (its interval's mismatch; 0 at a sample)
+    nearest: tuple  # (distance, epoch, bound) of the smallest local minimum after the start, departed or not
+    # (the end counts while still approaching), the collision's comparand; (None, None, None) without one
     minima: np.ndarray  # (M, 3): every local minimum of |r| after the start (epoch, distance, bound), in time order
     keep_out_s: float  # time inside the keep-out after the departure (never departed: from the start to the end)
     keep_out_entries: int  # re-entries after the departure
@@ -94,7 +96,8 @@ def actual_approach(times: ArrayLike, pos: ArrayLike, vel: ArrayLike, n: float, 
     """The truth's closest approach and time inside the keep-out sphere over ``[start, last sample]``.
 
     The departure is the first exit from the keep-out sphere; the closest approach is the smallest local minimum of
-    |r| at or after it (a pair that never left: after ``start``; the end counts while |r| still decreases there);
+    |r| at or after it (a pair that never left: after ``start``; the end counts while |r| still decreases there),
+    ``nearest`` the same over every minimum after ``start`` (an approach before the departure too: a weak ejection);
     the keep-out time and entries are those after the departure. Sampling, refinement and its bound: the module.
 
     Parameters
@@ -181,11 +184,16 @@ def actual_approach(times: ArrayLike, pos: ArrayLike, vel: ArrayLike, n: float, 
     else:
         exits = ct[~ci]
         departure = float(exits[0]) if exits.size else None
-    after = minima[minima[:, 0] >= (t[0] if departure is None else departure)]
-    candidates = [(float(d), float(e), False, float(b)) for e, d, b in after]
-    if float(r[-1] @ v[-1]) < 0.0:  # still approaching at the end of the truth
-        candidates.append((float(np.linalg.norm(r[-1])), end, True, 0.0))
-    closest = min(candidates, default=(None, None, False, None))
+    approaching = float(r[-1] @ v[-1]) < 0.0  # still approaching at the end of the truth
+
+    def smallest(rows):
+        found = [(float(d), float(e), False, float(b)) for e, d, b in rows]
+        if approaching:
+            found.append((float(np.linalg.norm(r[-1])), end, True, 0.0))
+        return min(found, default=(None, None, False, None))
+
+    closest = smallest(minima[minima[:, 0] >= (t[0] if departure is None else departure)])
+    nearest = smallest(minima)
     if departure is None:
         inside, entries = end - float(t[0]), 0
     else:  # after the departure the crossings alternate: entry, exit, entry, ...
@@ -196,7 +204,8 @@ def actual_approach(times: ArrayLike, pos: ArrayLike, vel: ArrayLike, n: float, 
         inside = float(np.sum(ext[:pairs] - ent[:pairs]))
         if entries > ext.size:  # inside at the end
             inside += end - float(ent[-1])
-    return Approach(departure, closest[0], closest[1], bool(closest[2]), closest[3], minima, inside, entries,
+    return Approach(departure, closest[0], closest[1], bool(closest[2]), closest[3],
+                    (nearest[0], nearest[1], nearest[3]), minima, inside, entries,
                     (float(t[0]), end), float(err.max()), float(dt.max()), float(step))
 
 

@@ -88,6 +88,7 @@ def test_never_departed_and_still_approaching_at_the_end():
     assert ap.departure_epoch is None and ap.keep_out_violated and ap.keep_out_s == pytest.approx(t[-1])
     assert ap.closest_epoch == pytest.approx(math.pi / N, abs=1e-6) and ap.closest_distance == pytest.approx(0.0,
                                                                                                            abs=1e-9)
+    assert ap.nearest == (ap.closest_distance, ap.closest_epoch, ap.closest_error_m)
     # 100 m below, 3 km behind: drifting towards the carrier at 1.5 n 100 m/s (x constant, y = -3000 + 0.165 t)
     t, pos, vel = sampled([-100.0, -3000.0, 0.0], [0.0, 150.0 * N, 0.0], np.arange(0.0, 1201.0, 60.0))
     ap = actual_approach(t, pos, vel, N, 1000.0, start=0.0)
@@ -121,3 +122,20 @@ def test_collision_radius_from_the_bodies_sizes_and_the_exact_interval():
     assert clopper_pearson(0, 0)["p"] is None
     with pytest.raises(ValueError):
         clopper_pearson(3, 2)
+
+
+def test_an_approach_before_the_departure_is_the_nearest():
+    """Released inside the keep-out, the pair first closes in (a minimum at 400 m, before any departure), then a burn
+    sends it out for good: the closest approach after the departure is none, the nearest is the 400-m one."""
+    t1 = np.arange(0.0, 201.0, 20.0)
+    _, p1, w1 = sampled([-300.0, 400.0, 0.0], [3.0, 0.0, 0.0], t1)
+    t2 = 200.0 + np.arange(0.0, 1001.0, 20.0)
+    _, p2, w2 = sampled(p1[-1], w1[-1] + np.array([3.0, 3.0, 0.0]), t2 - 200.0)
+    t = np.concatenate([t1, t2])
+    ap = actual_approach(t, np.concatenate([p1, p2]), np.concatenate([w1, w2]), N, 1000.0, start=0.0)
+    dense = np.linspace(0.0, 200.0, 200001)
+    d = np.linalg.norm(hcw_propagate([-300.0, 400.0, 0.0], [3.0, 0.0, 0.0], dense, N)[0], axis=1)
+    assert ap.departure_epoch is not None and ap.departure_epoch > ap.nearest[1]
+    assert ap.nearest[0] == pytest.approx(float(d.min()), abs=1e-6)  # the 1-ms grid: within 1e-8 m
+    assert ap.nearest[1] == pytest.approx(float(dense[np.argmin(d)]), abs=2e-3)
+    assert ap.closest_distance is None or ap.closest_distance > ap.nearest[0]
