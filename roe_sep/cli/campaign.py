@@ -173,7 +173,7 @@ def register(subparsers):
                    help="remove each completed run's bag once its row is written (about 1.2 MB per run; the row and "
                         "report.json are the same; a failed run keeps its bag)")
     p.add_argument("--no-figures", action="store_true", help="do not write figures/")
-    p.add_argument("--collision-radius", type=finite_float(0.0, 1000.0, lo_open=True, unit="m"),
+    p.add_argument("--collision-radius", type=finite_float(0.0, 1000.0, lo_open=True, unit="m"), metavar="M",
                    default=COLLISION_RADIUS,
                    help="a collision: the truth's closest approach below this [m] (default %(default).3f: the sum of "
                         "the circumscribed spheres of the carrier's 60x80x80 cm and the picosatellite's 10x10x10 cm, "
