@@ -92,7 +92,7 @@ def _bisect(pred, lo, hi, at_lo):
 
 
 def actual_approach(times: ArrayLike, pos: ArrayLike, vel: ArrayLike, n: float, keep_out: float, *,
-                    start: float, step: float = 10.0, chunk: int = 2048) -> Approach | None:
+                    start: float, step: float = 10.0, chunk: int = 1 << 20) -> Approach | None:
     """The truth's closest approach and time inside the keep-out sphere over ``[start, last sample]``.
 
     The departure is the first exit from the keep-out sphere; the closest approach is the smallest local minimum of
@@ -115,7 +115,7 @@ def actual_approach(times: ArrayLike, pos: ArrayLike, vel: ArrayLike, n: float, 
     step : float
         Scan grid [s] inside each sampling interval.
     chunk : int
-        Intervals per vectorized pass (memory: ``chunk * truth_step / step`` grid points).
+        Grid points per vectorized pass (at least one interval's), the memory bound.
 
     Returns
     -------
@@ -133,8 +133,9 @@ def actual_approach(times: ArrayLike, pos: ArrayLike, vel: ArrayLike, n: float, 
     dt = np.diff(t)
     mins_t, mins_d, mins_e, cross_t, cross_in = [], [], [], [], []
     err = np.zeros(dt.size)  # the HCW mismatch at each interval's end [m]
-    for lo in range(0, dt.size, chunk):
-        k = np.arange(lo, min(lo + chunk, dt.size))
+    per = max(1, chunk // (int(np.ceil(dt.max() / step)) + 1))  # intervals per pass
+    for lo in range(0, dt.size, per):
+        k = np.arange(lo, min(lo + per, dt.size))
         m = np.maximum(np.ceil(dt[k] / step).astype(int), 1)
         grid = np.arange(m.max() + 1)[None, :] / m[:, None]  # fractions of each interval, 0..1 (clipped)
         tau = np.minimum(grid, 1.0) * dt[k][:, None]

@@ -139,3 +139,13 @@ def test_an_approach_before_the_departure_is_the_nearest():
     assert ap.nearest[0] == pytest.approx(float(d.min()), abs=1e-6)  # the 1-ms grid: within 1e-8 m
     assert ap.nearest[1] == pytest.approx(float(dense[np.argmin(d)]), abs=2e-3)
     assert ap.closest_distance is None or ap.closest_distance > ap.nearest[0]
+
+
+def test_the_passes_do_not_change_the_result():
+    """Any number of grid points per vectorized pass gives the same minima, crossings and bounds."""
+    t, pos, vel = sampled([0.0, 800.0, 0.0], [0.0, 0.0, 1500.0 * N], np.arange(0.0, 1.5 * T, 60.0))
+    whole = actual_approach(t, pos, vel, N, 1000.0, start=0.0)
+    small = actual_approach(t, pos, vel, N, 1000.0, start=0.0, chunk=20)
+    assert np.array_equal(whole.minima, small.minima) and whole.keep_out_s == small.keep_out_s
+    assert (whole.departure_epoch, whole.keep_out_entries, whole.refine_error_m) == (
+        small.departure_epoch, small.keep_out_entries, small.refine_error_m)
