@@ -4,14 +4,16 @@ Keys: ``maneuvers`` (each executed burn: purpose, spacecraft, epoch, u, dv RTN a
 ``dv_by_purpose`` (carrier burns, m/s), ``final_roe`` (truth a*ROE at the end, m), ``min_distance`` (closest
 approach after the initial departure, m, with its epoch), ``dispersions`` (what the simulator drew,
 :func:`dispersions_applied`), ``final_od`` (:func:`final_od_decision`) and ``ic_predicted_a_da``
-(:func:`predicted_ic_drift`), ``time_to_ic`` (ejection to the IC epoch, s, when the
-truth meets the initial conditions there; None when it does not), ``od`` (first solution, :func:`od_solution`:
-epoch, passes, 1-sigma, error against truth, NEES, drift rate against the truth's own; ``last``: the same of the
-last solution), ``ic`` (truth at the IC epoch and each initial condition), ``criteria`` (each pass/fail) and
-``safe`` (the safety criteria only: keep-out, passive safety, evaporation, closest approach, every plan approved by
-the monitor), ``contingency`` (the contingency injected, as applied by the simulator or the radar:
-:func:`contingency_applied`; None without one) and ``contingencies_detected`` (what the safety monitor saw of one:
-:func:`contingencies_detected`).
+(:func:`predicted_ic_drift`), ``time_to_ic`` (ejection to the IC epoch, s, when the truth meets the initial
+conditions there; None when it does not), ``od`` (first solution, :func:`od_solution`: epoch, passes, 1-sigma, error
+against truth, NEES, drift rate against the truth's own; ``last``: the same of the last solution), ``ic`` (truth at
+the IC epoch and each initial condition), ``criteria`` (each pass/fail) and ``safe`` (the safety criteria only:
+keep-out, passive safety, evaporation, closest approach, every plan approved by the monitor; ``keep_out`` and
+``passive_safety`` are passive-safety verdicts: a prediction with no further burns from each check, see
+``passive_safety``), ``passive_safety`` (:func:`passive_safety_verdicts`), ``actual_approach`` (what happened, from
+the truth: :func:`actual_approach`), ``contingency`` (the contingency injected, as applied by the simulator or the
+radar: :func:`contingency_applied`; None without one) and ``contingencies_detected`` (what the safety monitor saw of
+one: :func:`contingencies_detected`).
 """
 
 import contextlib
@@ -27,6 +29,7 @@ from .core.od.batch import nees
 from .core.od.ensemble import secular_drift
 from .core.relmotion.dynamics import propagate
 from .core.relmotion.orbit import mean_motion
+from .core.safety.approach import actual_approach as _approach
 from .core.safety.metrics import min_rn_distance
 from .core.safety.monitor import ERROR_CRITERIA, MonitorLimits, in_fov
 from .stamps import time_to_sec
@@ -174,6 +177,7 @@ def truth_at(truth, t, truth_da_dot):
 
 
 CHECKS = {interfaces.TRUTH_ROE_TOPIC: validate.truth, interfaces.EXECUTED_TOPIC: validate.executed,
+          interfaces.TRUTH_RTN_TOPIC: validate.truth_rtn,
           interfaces.OD_TOPIC: validate.orbit_determination, interfaces.DRIFT_STOP_PLAN_TOPIC: validate.plan,
           interfaces.ACQUISITION_PLAN_TOPIC: validate.plan, interfaces.PLAN_CHECK_TOPIC: validate.safety_status,
           interfaces.SAFETY_TOPIC: validate.safety_status}
@@ -393,6 +397,61 @@ def predicted_ic_drift(final_od, ic_model_error):
     return ic_model_error["predicted"][0] if ic_model_error else None
 
 
+def passive_safety_verdicts(truth_checks):
+    """The passive-safety verdicts of the safety monitor on the truth (its ``/safety/status`` of source ``truth``,
+    a check every ``check_period``: each a prediction over its horizon with no further burns, so a burn already
+    commanded that prevents an approach does not count): per ERROR criterion ``held`` (no check failed it),
+    ``checks``, ``failed_checks`` and the ``first_failed_epoch`` [s] (None: never failed)."""
+    out = {}
+    for name in ERROR_CRITERIA:
+        failed = [time_to_sec(s.header.stamp) for s in truth_checks if name in s.violations]
+        out[name] = {"held": bool(truth_checks) and not failed, "checks": len(truth_checks),
+                     "failed_checks": len(failed), "first_failed_epoch": min(failed) if failed else None}
+    return out
+
+
+def actual_approach(rtn, truth, ejection_epoch, keep_out):
+    """What happened, from the truth's relative states (``/sim/truth/rtn``, ``[(log_time, msg), ...]``, every
+    ``truth_period`` and right after each burn) from the ejection on
+    (:func:`roe_sep.core.safety.approach.actual_approach`: HCW between the samples, the chief's mean motion of the
+    truth's first ``a``): ``closest_approach`` (smallest local minimum of the distance after the departure from the
+    keep-out sphere, or after the ejection for a pair that never left it: ``distance`` [m], ``epoch`` [s],
+    ``at_end`` (still approaching at the end), ``bound`` [m], the refinement's), ``nearest`` (the same over every
+    local minimum after the ejection, before the departure too: the comparand of a collision), ``after_first_orbit``
+    (the closest from one orbit after the ejection), ``departure_epoch``, ``keep_out_time`` [s] and
+    ``keep_out_entries`` after the departure, ``keep_out_violated``, ``keep_out_radius`` [m], ``sampling``
+    (``truth_step`` the largest sampling interval, ``scan_step`` [s], ``refine_error`` [m]: the largest mismatch of
+    the HCW arcs); None without an ejection or two truth samples after it."""
+    if ejection_epoch is None or not len(truth):
+        return None
+    msgs = [m for _, m in rtn]
+    t = np.array([time_to_sec(m.header.stamp) for m in msgs], dtype=float)
+    pos = np.array([[m.position.x, m.position.y, m.position.z] for m in msgs], dtype=float).reshape(-1, 3)
+    vel = np.array([[m.velocity.x, m.velocity.y, m.velocity.z] for m in msgs], dtype=float).reshape(-1, 3)
+    n = float(mean_motion(truth.a[0]))
+    ap = _approach(t, pos, vel, n, keep_out, start=ejection_epoch)
+    if ap is None:
+        return None
+    orbit = ejection_epoch + 2.0 * math.pi / n
+    later = ap.minima[ap.minima[:, 0] >= max(orbit, ap.departure_epoch or orbit)]
+    k = int(np.argmin(later[:, 1])) if later.size else None
+    return {
+        "closest_approach": None if ap.closest_distance is None else {
+            "distance": ap.closest_distance, "epoch": ap.closest_epoch, "at_end": ap.closest_at_end,
+            "bound": ap.closest_error_m},
+        "nearest": None if ap.nearest[0] is None else {
+            "distance": ap.nearest[0], "epoch": ap.nearest[1], "bound": ap.nearest[2]},
+        "after_first_orbit": None if k is None else {
+            "distance": float(later[k, 1]), "epoch": float(later[k, 0]), "bound": float(later[k, 2])},
+        "departure_epoch": ap.departure_epoch,
+        "keep_out_time": ap.keep_out_s,
+        "keep_out_entries": ap.keep_out_entries,
+        "keep_out_violated": ap.keep_out_violated,
+        "keep_out_radius": float(keep_out),
+        "sampling": {"truth_step": ap.truth_step_s, "scan_step": ap.step, "refine_error": ap.refine_error_m},
+    }
+
+
 @contextlib.contextmanager
 def paused_gc():
     """No cyclic garbage collection inside: building a report makes some 100,000 objects (the decoded messages)
@@ -414,7 +473,8 @@ def build_report(bag_dir, duration=None, limits: MonitorLimits = MonitorLimits()
 
 
 def _build_report(bag_dir, duration, limits):
-    topics = (interfaces.EXECUTED_TOPIC, interfaces.TRUTH_ROE_TOPIC, interfaces.DIAGNOSTICS_TOPIC,
+    topics = (interfaces.EXECUTED_TOPIC, interfaces.TRUTH_ROE_TOPIC, interfaces.TRUTH_RTN_TOPIC,
+              interfaces.DIAGNOSTICS_TOPIC,
               interfaces.SAFETY_TOPIC, interfaces.PLAN_CHECK_TOPIC, interfaces.OD_TOPIC,
               interfaces.ACQUISITION_PLAN_TOPIC, interfaces.DRIFT_STOP_PLAN_TOPIC)
     data = read_topics(bag_dir, topics, raw=(interfaces.TRUTH_ROE_TOPIC,))
@@ -494,6 +554,9 @@ def _build_report(bag_dir, duration, limits):
         "dispersions": dispersions_applied(values.get("dispersions_applied")),
         "contingency": contingency_applied(data[interfaces.DIAGNOSTICS_TOPIC]),
         "contingencies_detected": contingencies_detected(data[interfaces.DIAGNOSTICS_TOPIC]),
+        "passive_safety": passive_safety_verdicts(truth_checks),
+        "actual_approach": actual_approach(data[interfaces.TRUTH_RTN_TOPIC], truth,
+                                           ejection["epoch"] if ejection else None, limits.keep_out),
         "od": od_report,
         "ic": ic,
         "model_error": model_error,  # planners' prediction - truth [m] at the drift-stop and at the IC epoch

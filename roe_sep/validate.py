@@ -165,6 +165,15 @@ def truth(msg):
     roe("", msg)
 
 
+def truth_rtn(msg):
+    """RelativeState of the truth: a stamp, a finite relative position [m] and velocity [m/s]."""
+    time_of("header.stamp", msg.header.stamp)
+    for name in ("position", "velocity"):
+        v = getattr(msg, name)
+        for axis in "xyz":
+            _finite(f"{name}.{axis}", getattr(v, axis))
+
+
 def bearing(msg):
     """Vector3Stamped of the camera: a stamp and a unit line of sight."""
     time_of("header.stamp", msg.header.stamp)

@@ -10,6 +10,10 @@ the others red (for the nominal case: red where a criterion failed).
     python studies/contingency_table.py --case "nominal=/tmp/cont/nominal" \\
         --case "spl_weak, hold=/tmp/cont/spl_weak" ... --md docs/contingency_table.md \\
         --json bench/results/contingency_table.json --figures docs/figures/contingencies
+
+``--from-json FILE`` instead of the cases re-renders the tables from recorded rows (a row recorded before a column
+shows "n/a" there): ``python studies/contingency_table.py --from-json bench/results/contingency_table.json
+--md bench/results/contingency_table.md --compact-md bench/results/contingency_table_compact.md``.
 """
 
 import argparse
@@ -30,6 +34,7 @@ from roe_sep.campaign.contingency_table import (  # noqa: E402
     summarize,
 )
 from roe_sep.campaign.table import Table  # noqa: E402
+from roe_sep.core.safety.approach import COLLISION_RADIUS  # noqa: E402
 from roe_sep.core.safety.monitor import MonitorLimits  # noqa: E402
 from roe_sep.plots.campaign import fig_distance_grid, fig_distance_vs_time  # noqa: E402
 from roe_sep.report import read_topics  # noqa: E402
@@ -63,16 +68,34 @@ def flagged(row, name):
     return not any(k in found for k in EXPECTED_DETECTIONS.get(name, ()))
 
 
+def write_tables(summaries, md, compact_md):
+    """The Markdown table and the README's short one of the rows, where asked."""
+    if md:
+        md.write_text(markdown(summaries), encoding="utf-8")
+    if compact_md:
+        compact_md.write_text(compact_markdown(summaries), encoding="utf-8")
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--case", action="append", required=True, metavar="LABEL=DIR",
+    p.add_argument("--case", action="append", metavar="LABEL=DIR",
                    help="a campaign directory and its label in the table (repeat; in table order)")
     p.add_argument("--md", type=Path, help="write the Markdown table here")
     p.add_argument("--compact-md", type=Path, help="write the README's short table here")
     p.add_argument("--json", type=Path, help="write the rows as strict JSON here")
     p.add_argument("--figures", type=Path, help="write one distance-vs-time figure per case into this directory")
     p.add_argument("--grid", type=Path, help="write the cases' figures as the panels of one figure here")
+    p.add_argument("--from-json", type=Path, help="re-render the tables from these recorded rows (no campaign)")
+    p.add_argument("--collision-radius", type=float, default=COLLISION_RADIUS,
+                   help="m, a collision: the truth's closest approach below it (default: the bodies', %(default).3f)")
     args = p.parse_args(argv)
+    if args.from_json:
+        if args.case:
+            p.error("--from-json or --case, not both")
+        write_tables(json.loads(args.from_json.read_text(encoding="utf-8")), args.md, args.compact_md)
+        return
+    if not args.case:
+        p.error("--case is required (or --from-json)")
     summaries, panels = [], []
     keep_out = MonitorLimits().keep_out
     for case in args.case:
@@ -80,7 +103,7 @@ def main(argv=None):
         rows = Table(Path(directory) / "runs.csv").read()
         if not rows:
             p.error(f"{directory}: no runs.csv rows")
-        s = summarize(rows, label)
+        s = summarize(rows, label, args.collision_radius)
         summaries.append(s)
         if args.figures or args.grid:
             series = []
@@ -104,10 +127,7 @@ def main(argv=None):
         print(f"{label}: {s['completed']} runs", file=sys.stderr)
     if args.grid:
         fig_distance_grid(panels, args.grid, keep_out)
-    if args.md:
-        args.md.write_text(markdown(summaries), encoding="utf-8")
-    if args.compact_md:
-        args.compact_md.write_text(compact_markdown(summaries), encoding="utf-8")
+    write_tables(summaries, args.md, args.compact_md)
     text = json.dumps(summaries, indent=1, allow_nan=False)
     if args.json:
         args.json.write_text(text + "\n", encoding="utf-8")

@@ -55,12 +55,13 @@ def check_settings(out: Path, current: dict):
 
 def run_campaign(runs, seed, out, workers=1, scheduler=None, *, config=None, overrides=None, duration=None,
                  timeout=1800.0, domains=(1, 100), retry_failed=False, progress=False, open_loop_samples=20000,
-                 figures=True, client_factory=None, ccsds=False, bags=True):
+                 figures=True, client_factory=None, ccsds=False, bags=True, collision_radius=None):
     """Run the missing runs of seeds ``seed .. seed + runs - 1`` on Dask, append each row as it finishes, and return
     the aggregate report (also written to ``out/report.json``). ``client_factory(workers, scheduler)`` is the
     context manager giving the Dask client (default :func:`.engine.dask_client`). ``ccsds``: each run also runs
     the ground_bridge (its CCSDS set in ``runs/<seed>/ccsds/``); ``bags`` False: each run's bag is removed once its
-    row is written."""
+    row is written; ``collision_radius`` [m]: of the truth's collision count (default: the bodies',
+    :data:`~roe_sep.core.safety.approach.COLLISION_RADIUS`)."""
     out = Path(out)
     check_settings(out, settings(config, overrides, duration))
     table = Table(out / "runs.csv")
@@ -76,7 +77,8 @@ def run_campaign(runs, seed, out, workers=1, scheduler=None, *, config=None, ove
     rows_by_seed = table.read()
     rows = [rows_by_seed[s] for s in seeds if s in rows_by_seed]
     rep = {"seeds": [seed, seed + runs - 1], "executed_now": executed, "skipped_done": runs - len(todo),
-           "workers": None if scheduler else workers, "scheduler": scheduler, **aggregate(rows),
+           "workers": None if scheduler else workers, "scheduler": scheduler,
+           **aggregate(rows, **({} if collision_radius is None else {"collision_radius": collision_radius})),
            "open_loop": open_loop(config, overrides, samples=open_loop_samples)}
     rep["wall_s_per_run"] = _mean([r.get("wall_s") for r in rows])
     if figures and rows:

@@ -12,13 +12,16 @@ chi-square(1)); ``ic_reached_lower_95`` (its one-sided Clopper-Pearson bound, :f
 ``ic_trims`` (the runs whose final OD flew a drift trim, of those with a final-OD decision; the trims' dv a
 distribution);
 ``dispersions`` (each applied dispersion against its configured distribution, :mod:`.dispersions`);
-``failures`` (count per kind and per reason).
+``failures`` (count per kind and per reason); the actual approach from the truth beside the passive-safety
+verdicts (:func:`truth_outcomes`): ``truth_collision`` and ``truth_keep_out_violated`` (Clopper-Pearson 95 %) and
+the distributions ``truth_closest`` / ``truth_keep_out_time``.
 """
 
 import collections
 import dataclasses
 
-from ..core.montecarlo.stats import distribution, nees_consistency, proportion
+from ..core.montecarlo.stats import clopper_pearson, distribution, nees_consistency, proportion
+from ..core.safety.approach import COLLISION_RADIUS
 from .dispersions import dispersion_checks
 from .table import CRITERIA, IC_CHECKS
 
@@ -33,6 +36,9 @@ DISTRIBUTIONS = {  # report key -> (row field, unit, of its absolute value)
     "dv_drift_stop": ("dv_drift_stop_m_s", "m/s", False),
     "dv_ic": ("dv_ic_m_s", "m/s", False),
     "time_to_ic": ("time_to_ic_s", "s", False),
+    "truth_closest": ("truth_closest_m", "m", False),
+    "truth_nearest": ("truth_nearest_m", "m", False),
+    "truth_keep_out_time": ("truth_keep_out_s", "s", False),
 }
 
 
@@ -47,8 +53,27 @@ def _squares(values):
     return [None if v is None else v * v for v in values]
 
 
-def aggregate(rows):
-    """The statistics of a list of rows (one per seed)."""
+def truth_outcomes(done, collision_radius=COLLISION_RADIUS):
+    """From the truth (rows with its columns; a row recorded before them is left out and counted in ``missing``):
+    ``truth_collision`` (the truth's nearest approach after the ejection, ``truth_nearest_m``, below
+    ``collision_radius`` [m]) and ``truth_keep_out_violated``
+    (never left the keep-out sphere or came back inside), each with its Clopper-Pearson 95 % interval
+    (:func:`~roe_sep.core.montecarlo.stats.clopper_pearson`), and ``collision_radius``."""
+    # every local minimum of the distance after the ejection counts, before the departure too (a weak ejection); a
+    # run without any (receding all run, or a stuck picosatellite at rest) had no approach: no collision
+    known = [r for r in done if r.get("truth_keep_out_violated") is not None]
+    closest = [r.get("truth_nearest_m") for r in known]
+    return {
+        "truth_collision": {**clopper_pearson(sum(1 for d in closest if d is not None and d < collision_radius),
+                                              len(known)), "missing": len(done) - len(known)},
+        "truth_keep_out_violated": {**clopper_pearson(sum(bool(r["truth_keep_out_violated"]) for r in known),
+                                                      len(known)), "missing": len(done) - len(known)},
+        "collision_radius": collision_radius,
+    }
+
+
+def aggregate(rows, collision_radius=COLLISION_RADIUS):
+    """The statistics of a list of rows (one per seed); ``collision_radius`` [m] of :func:`truth_outcomes`."""
     done = [r for r in rows if r["status"] == "ok"]
     failed = [r for r in rows if r["status"] != "ok"]
     n = len(done)
@@ -73,6 +98,7 @@ def aggregate(rows):
         "od_nees7": nees_consistency([r.get("od_nees7") for r in done], dof=7),
         "od_last_nees7": nees_consistency([r.get("od_last_nees7") for r in done], dof=7),
         "dispersions": dispersion_checks(done),
+        **truth_outcomes(done, collision_radius),
         "failures": {"by_kind": dict(collections.Counter(r["failure"] for r in failed)),
                      "by_reason": dict(collections.Counter(r["reason"] for r in failed).most_common())},
     }
@@ -87,6 +113,9 @@ def aggregate(rows):
     out["distributions"]["abs_a_da_ic_predicted"]["note"] = "|a da| the last information predicted at the IC epoch"
     out["distributions"]["a_da_ic_prediction_error"]["note"] = "|truth - predicted a da| at the IC epoch"
     out["distributions"]["time_to_ic"]["note"] = "ejection to the IC epoch, runs that reached the ICs there"
+    out["distributions"]["truth_closest"]["note"] = "the truth's closest approach after the departure (HCW-refined)"
+    out["distributions"]["truth_nearest"]["note"] = "the truth's nearest approach after the ejection (HCW-refined)"
+    out["distributions"]["truth_keep_out_time"]["note"] = "truth: time inside the keep-out after the departure"
     return out
 
 

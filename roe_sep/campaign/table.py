@@ -32,10 +32,19 @@ FIELDS = (
     "od_last_z_a_da_dot", "truth_drag_m_per_day", "dispersions", "wall_s", "domain_id",
     "contingency", "contingencies_detected", "od_nees7", "od_last_nees7",
 )
-# the headers of earlier versions (before the contingencies, before the 7-state NEES): read as rows without them
-LEGACY_HEADERS = (FIELDS[:-4], FIELDS[:-2])
-BOOL_FIELDS = {"safe", "ic_trim", *(f"crit_{c}" for c in CRITERIA), *(f"ic_{c}" for c in IC_CHECKS)}
-INT_FIELDS = {"seed", "od_passes", "od_measurements", "od_solutions", "domain_id"}
+TRUTH_FIELDS = (  # the actual approach, from the truth (report ``actual_approach``) and the passive-safety verdicts
+    "truth_closest_m", "truth_closest_epoch_s", "truth_closest_bound_m", "truth_closest_orbit1_m", "truth_nearest_m",
+    "truth_nearest_epoch_s",
+    "truth_departure_epoch_s", "truth_keep_out_s", "truth_keep_out_entries", "truth_keep_out_violated",
+    "ps_keep_out_first_s", "ps_passive_safety_first_s",
+)
+# the headers of earlier versions (before the contingencies, before the 7-state NEES, before the truth's approach):
+# read as rows without them
+LEGACY_HEADERS = (FIELDS[:-4], FIELDS[:-2], FIELDS)
+FIELDS = FIELDS + TRUTH_FIELDS
+BOOL_FIELDS = {"safe", "ic_trim", "truth_keep_out_violated", *(f"crit_{c}" for c in CRITERIA),
+               *(f"ic_{c}" for c in IC_CHECKS)}
+INT_FIELDS = {"seed", "od_passes", "od_measurements", "od_solutions", "domain_id", "truth_keep_out_entries"}
 STR_FIELDS = {"status", "failure", "reason", "dispersions", "contingency", "contingencies_detected"}
 # dispersions, contingency: the report's, as compact JSON; contingencies_detected: {name: first epoch [s]} as JSON
 RUN_FIELDS = ("wall_s", "domain_id")  # how the run went on this machine, not what it computed
@@ -90,6 +99,7 @@ def row_from_report(seed: int, rep: dict) -> dict:
                dv_ic_m_s=by.get("ic_acquisition"), time_to_ic_s=rep.get("time_to_ic"),
                ejection_epoch_s=rep.get("ejection_epoch"),
                truth_drag_m_per_day=rep.get("truth_drag_a_da_dot_m_per_day"))
+    row.update(_truth_cells(rep))
     od = rep.get("od")
     if od:
         rate_err = od.get("a_da_dot_error")
@@ -103,6 +113,26 @@ def row_from_report(seed: int, rep: dict) -> dict:
         row.update(od_last_epoch_s=last.get("epoch"), od_last_nees=last.get("nees"), od_last_nees7=last.get("nees7"),
                    od_last_z_a_da_dot=last.get("a_da_dot_z"))
     return row
+
+
+def _truth_cells(rep: dict) -> dict:
+    """The :data:`TRUTH_FIELDS` of a report (none of a report without ``actual_approach``: recorded before it)."""
+    out = {}
+    ps = rep.get("passive_safety") or {}
+    out["ps_keep_out_first_s"] = (ps.get("keep_out") or {}).get("first_failed_epoch")
+    out["ps_passive_safety_first_s"] = (ps.get("passive_safety") or {}).get("first_failed_epoch")
+    ap = rep.get("actual_approach")
+    if not ap:
+        return out
+    closest = ap.get("closest_approach") or {}
+    out.update(truth_closest_m=closest.get("distance"), truth_closest_epoch_s=closest.get("epoch"),
+               truth_closest_bound_m=closest.get("bound"),
+               truth_closest_orbit1_m=(ap.get("after_first_orbit") or {}).get("distance"),
+               truth_nearest_m=(ap.get("nearest") or {}).get("distance"),
+               truth_nearest_epoch_s=(ap.get("nearest") or {}).get("epoch"),
+               truth_departure_epoch_s=ap.get("departure_epoch"), truth_keep_out_s=ap.get("keep_out_time"),
+               truth_keep_out_entries=ap.get("keep_out_entries"), truth_keep_out_violated=ap.get("keep_out_violated"))
+    return out
 
 
 def failed_row(seed: int, failure: str, reason: str) -> dict:

@@ -5,6 +5,7 @@ import os
 import sys
 
 from ..children import guarded
+from ..core.safety.approach import COLLISION_RADIUS
 from .common import SEED_MAX, emit, finite_float, integer, seed
 from .run import DAY, add_contingency, check_params_file
 
@@ -31,9 +32,9 @@ def scheduler_address(text):
 
 
 def _p(prop):
-    lo, hi = prop["ci95"]
     if prop["p"] is None:
         return "    n/a   (0 runs)"
+    lo, hi = prop["ci95"]
     return f"{prop['p']:7.3f}  [{lo:.3f}, {hi:.3f}]  ({prop['k']}/{prop['n']})"
 
 
@@ -50,6 +51,7 @@ def print_campaign(rep):
     for name, prop in rep["criteria"].items():
         print(f"  {name:28s}{_p(prop)}")
     print(f"  {'safe (failed = unsafe)':28s}{_p(rep['p_safe_failures_unsafe'])}")
+    print("  (keep_out, passive_safety: passive-safety verdicts, a prediction with no further burns from each check)")
     if rep.get("ic_reached_lower_95") is not None:
         print(f"  {'ic_reached, one-sided 95 % lower bound (Clopper-Pearson)':60s}{rep['ic_reached_lower_95']:.4f}")
     if rep.get("ic_trims", {}).get("n"):
@@ -58,6 +60,13 @@ def print_campaign(rep):
         print("  initial conditions at the IC epoch:")
         for name, prop in rep["ic_checks"].items():
             print(f"    {name:26s}{_p(prop)}")
+    if rep.get("truth_collision") is not None:
+        print(f"\n  {'actual, from the truth':28s}{'P':>7s}  Clopper-Pearson 95 %")
+        for key, label in (("truth_collision", f"collision (d < {rep['collision_radius']:.3f} m)"),
+                           ("truth_keep_out_violated", "keep-out violated")):
+            prop = rep[key]
+            gone = f"  ({prop['missing']} runs without the truth's columns)" if prop["missing"] else ""
+            print(f"  {label:28s}{_p(prop)}{gone}")
     print(f"\n  {'distribution':24s}{'unit':>6s}{'n':>5s}{'min':>11s}{'p5':>11s}{'p50':>11s}{'p95':>11s}{'max':>11s}")
     for name, d in rep["distributions"].items():
         scale, unit = (1 / 3600, "h") if d["unit"] == "s" else (1.0, d["unit"])
@@ -126,7 +135,8 @@ def cmd_campaign(args):
                            config=args.config, overrides=overrides, duration=args.duration, timeout=args.timeout,
                            domains=args.domains, retry_failed=args.retry_failed,
                            progress=not args.json and sys.stderr.isatty(), open_loop_samples=args.open_loop_samples,
-                           figures=not args.no_figures, ccsds=args.ccsds, bags=not args.no_bags)
+                           figures=not args.no_figures, ccsds=args.ccsds, bags=not args.no_bags,
+                           collision_radius=args.collision_radius)
     emit(rep, args.json, print_campaign)
     return 0 if rep["failed"] == 0 else 1
 
@@ -163,5 +173,10 @@ def register(subparsers):
                    help="remove each completed run's bag once its row is written (about 1.2 MB per run; the row and "
                         "report.json are the same; a failed run keeps its bag)")
     p.add_argument("--no-figures", action="store_true", help="do not write figures/")
+    p.add_argument("--collision-radius", type=finite_float(0.0, 1000.0, lo_open=True, unit="m"), metavar="M",
+                   default=COLLISION_RADIUS,
+                   help="a collision: the truth's closest approach below this [m] (default %(default).3f: the sum of "
+                        "the circumscribed spheres of the carrier's 60x80x80 cm and the picosatellite's 10x10x10 cm, "
+                        "seed 001 Sec. 1)")
     p.add_argument("--json", action="store_true", help="print the aggregate report as JSON")
     p.set_defaults(func=cmd_campaign)

@@ -43,6 +43,15 @@ def print_run(rep: dict, out=None):
     if "min_distance" in rep:
         md = rep["min_distance"]
         w(f"  closest approach after departure = {'none' if md is None else f'{md:.1f} m'}\n")
+    ap = rep.get("actual_approach")
+    if ap:
+        c = ap.get("closest_approach")
+        end = ", still approaching at the end" if c and c["at_end"] else ""
+        where = "none" if c is None else (f"{c['distance']:.1f} m at t = {c['epoch']:.0f} s (refined within "
+                                          f"{c['bound']:.2f} m{end})")
+        w(f"  actual approach (truth): closest {where}; keep-out "
+          + (f"VIOLATED ({ap['keep_out_time']:.0f} s inside after the departure, {ap['keep_out_entries']} entries)"
+             if ap["keep_out_violated"] else "held after the departure") + "\n")
     if rep.get("ic"):
         ic = rep["ic"]
         w(f"  truth at the IC epoch t = {ic['epoch']:.0f} s: a*ROE = [" + " ".join(f"{x:.1f}" for x in ic["roe"])
@@ -59,7 +68,9 @@ def print_run(rep: dict, out=None):
     for d in rep.get("contingencies_detected") or ():
         w(f"  detected {d['name']} at t = {d['epoch']:.0f} s: {d['text']}\n")
     for name, ok in rep.get("criteria", {}).items():
-        w(f"  {'pass' if ok else 'FAIL'}  {name}\n")
+        verdict = name in ("keep_out", "passive_safety")
+        kind = "  (passive-safety verdict: predicted, no further burns)" if verdict else ""
+        w(f"  {'pass' if ok else 'FAIL'}  {name}{kind}\n")
 
 
 def add_contingency(p):

@@ -300,6 +300,9 @@ def test_campaign_writes_one_row_and_report_per_run(campaign):
     for s, row in rows.items():
         assert row["status"] == "ok", row["reason"]
         assert 0.5 < row["dv_total_m_s"] < 3.0 and row["min_distance_m"] > 0
+        # what happened, from the truth: its closest approach is the simulator's (10-s grid) to within the bound
+        assert row["truth_keep_out_violated"] is False and row["truth_departure_epoch_s"] > row["ejection_epoch_s"]
+        assert 0.0 <= row["min_distance_m"] - row["truth_closest_m"] <= row["truth_closest_bound_m"] + 0.05
         run_rep = _strict((out / "runs" / str(s) / "report.json").read_text())
         assert _comparable(row) == _comparable(row_from_report(s, run_rep))
         over = yaml.safe_load((out / "runs" / str(s) / "overrides.yaml").read_text())
@@ -313,6 +316,8 @@ def test_campaign_writes_one_row_and_report_per_run(campaign):
     assert rep["p_safe"]["n"] == rep["completed"] and 0 <= rep["p_safe"]["ci95"][0] <= rep["p_safe"]["ci95"][1] <= 1
     assert set(rep["criteria"]) >= {"keep_out", "passive_safety", "evaporation", "ic_reached"}
     assert rep["distributions"]["dv_total"]["n"] == rep["completed"]
+    assert rep["truth_collision"]["n"] == rep["completed"] and rep["truth_collision"]["missing"] == 0
+    assert rep["truth_keep_out_violated"]["k"] == 0 and rep["truth_keep_out_violated"]["method"] == "clopper-pearson"
     assert rep["open_loop"]["p"] is not None and 0 <= rep["open_loop"]["p_approach"] <= 1
     assert all(Path(f).stat().st_size > 0 for f in rep["figures"])
     assert _strict((out / "report.json").read_text())["runs"] == RUNS

@@ -7,7 +7,7 @@ import json
 import pytest
 
 from roe_sep.campaign import settings
-from roe_sep.campaign.table import FIELDS, LEGACY_HEADERS, Table, format_row, row_from_report
+from roe_sep.campaign.table import FIELDS, LEGACY_HEADERS, TRUTH_FIELDS, Table, format_row, row_from_report
 from roe_sep.cli import build_parser
 from roe_sep.graph import run_overrides
 from roe_sep.nodes.parameters import check_overrides
@@ -45,8 +45,10 @@ def report(contingency=None, detected=()):
 
 
 def test_the_columns():
-    assert FIELDS[-4:] == ("contingency", "contingencies_detected", "od_nees7", "od_last_nees7")
-    assert LEGACY_HEADERS == (FIELDS[:-4], FIELDS[:-2])
+    base = FIELDS[:-len(TRUTH_FIELDS)]
+    assert FIELDS[len(base):] == TRUTH_FIELDS and TRUTH_FIELDS[0] == "truth_closest_m"
+    assert base[-4:] == ("contingency", "contingencies_detected", "od_nees7", "od_last_nees7")
+    assert LEGACY_HEADERS == (base[:-4], base[:-2], base)
     row = row_from_report(1, report())
     assert "contingency" not in row and "contingencies_detected" not in row  # empty cells: a nominal row as before
     applied = {"name": "spl_weak", "parameters": {"spl_fraction": 0.2, "residual_dv": 0.0}, "configured": {},
@@ -56,7 +58,7 @@ def test_the_columns():
     assert json.loads(row["contingencies_detected"]) == {"od_inconsistent": 75900.0}
 
 
-@pytest.mark.parametrize("legacy", LEGACY_HEADERS, ids=["before_contingencies", "before_nees7"])
+@pytest.mark.parametrize("legacy", LEGACY_HEADERS, ids=["before_contingencies", "before_nees7", "before_truth"])
 def test_a_table_from_an_earlier_version_is_read_and_continued(tmp_path, legacy):
     import csv
     import io
@@ -71,6 +73,7 @@ def test_a_table_from_an_earlier_version_is_read_and_continued(tmp_path, legacy)
     table = Table(path)
     rows = table.read()
     assert rows[7]["status"] == "ok" and rows[7]["contingency"] == "" and rows[7]["od_nees7"] is None
+    assert all(rows[7][f] is None for f in TRUTH_FIELDS)  # no value: "n/a" in the contingency table
     table.append(row_from_report(8, report({"name": "drift_stop_missed", "parameters": {}, "configured": {},
                                             "events": []})))
     assert path.read_text(encoding="utf-8").splitlines()[0].split(",") == list(FIELDS)

@@ -90,6 +90,14 @@ def test_spl_weak_holds_the_blind_drift_stop_and_stays_safe(tmp_path):
     # the weak ejection's own first orbits come within 738 m (seed 5); with the blind drift-stop flown
     # (weak_ejection_hold: false) the pair came within 367 m later on
     assert rep["min_distance"] > 700.0 and rep["criteria"]["ic_reached"]
+    # what happened, from the truth, beside the passive-safety verdicts: the simulator's closest approach (its 10-s
+    # grid) is the truth's within the refinement's bound, and no approach before the departure was nearer
+    ap = rep["actual_approach"]
+    closest, nearest = ap["closest_approach"], ap["nearest"]
+    assert 0.0 <= rep["min_distance"] - closest["distance"] <= closest["bound"] + 0.05
+    assert nearest["distance"] <= closest["distance"] and nearest["epoch"] > rep["ejection_epoch"]
+    assert ap["keep_out_violated"] == (ap["keep_out_entries"] > 0) and set(rep["passive_safety"]) == {
+        "keep_out", "passive_safety", "evaporation"}
 
 
 @pytest.mark.dds

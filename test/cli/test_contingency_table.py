@@ -47,3 +47,52 @@ def test_the_nominal_row_and_the_markdown(tmp_path):
     assert len(lines) == 3 and lines[0].count("|") == lines[1].count("|") == lines[2].count("|")
     assert "| nominal, seeds 1-2 | 2/2 | 2/2 [" in lines[2] and "| -- | none |" in lines[2]
 
+
+
+def test_the_truth_columns_beside_the_passive_safety_verdicts(tmp_path):
+    """Rows with the truth's columns: P(collision) from the truth's nearest approach below the bodies' radius and
+    P(keep-out violated), with their Clopper-Pearson intervals, beside the runs that failed a passive-safety
+    verdict; rows recorded before the columns show n/a."""
+    from roe_sep.campaign.aggregate import truth_outcomes
+    from roe_sep.core.safety.approach import COLLISION_RADIUS
+
+    def truth(r, closest, violated, inside=0.0):
+        r.update(truth_closest_m=closest, truth_nearest_m=closest, truth_keep_out_violated=violated,
+                 truth_keep_out_s=inside,
+                 truth_keep_out_entries=int(violated))
+        return r
+
+    rows = [truth(row(1, safe=False, fail=("passive_safety",)), 1500.0, False),  # a verdict failed, truth clear
+            truth(row(2, safe=False, fail=("keep_out", "passive_safety")), 0.5, True, 240.0),  # a collision
+            truth(row(3), 0.9, True, 60.0),  # inside, closer than 1 m, yet beyond the bodies' 0.727 m
+            truth(row(4), None, False),  # never came back: no closest approach
+            row(5)]  # recorded before the truth's columns
+    s = summarize(written(tmp_path, rows), "spl_weak, smoke")
+    assert s["collision_radius_m"] == COLLISION_RADIUS and s["truth_missing"] == 1
+    assert s["truth_collisions"]["k"] == 1 and s["truth_collisions"]["n"] == 4
+    assert s["truth_collisions"]["method"] == "clopper-pearson"
+    assert s["truth_keep_out_violated"]["k"] == 2 and s["truth_closest_min_m"] == s["truth_nearest_min_m"] == 0.5
+    assert s["passive_safety_failed"] == {"keep_out": 1, "passive_safety": 2}
+    assert s["truth_keep_out_s_p50_max"] == [30.0, 240.0]  # median of 0, 240, 60, 0
+    out = truth_outcomes(list(written(tmp_path / "again", rows).values()))
+    assert out["truth_collision"]["k"] == 1 and out["truth_collision"]["missing"] == 1
+    assert out["truth_keep_out_violated"]["ci95"] == s["truth_keep_out_violated"]["ci95"]
+    assert summarize(written(tmp_path / "one", rows[2:3]), collision_radius=1.0)["truth_collisions"]["k"] == 1
+    line = markdown([s]).splitlines()[2]
+    assert "| 1 / 2 |" in line and "| 1/4 [" in line and "(1 runs n/a)" in line
+    old = summarize(written(tmp_path / "old", [row(6), row(7)]), "nominal, recorded before")
+    assert old["truth_collisions"] is None
+    assert "| n/a | n/a | n/a |" in markdown([old]).splitlines()[2]
+    json.dumps(s, allow_nan=False)
+
+
+def test_the_recorded_table_renders_with_the_new_columns_as_na():
+    """The recorded rows (bench/results/contingency_table.json, written before the truth's columns) still render:
+    every truth cell n/a, the passive-safety verdicts from the failed criteria."""
+    from pathlib import Path
+
+    rows = json.loads((Path(__file__).resolve().parents[2] / "bench/results/contingency_table.json").read_text())
+    lines = markdown(rows).splitlines()
+    assert len(lines) == len(rows) + 2 and all(line.count("| n/a | n/a | n/a |") == 1 for line in lines[2:])
+    weak = next(line for line in lines if line.startswith("| spl_weak, hold on |"))
+    assert "| 82 / 99 |" in weak

@@ -153,3 +153,41 @@ def test_roe_accepted_is_roe():
         except ValueError:
             want.append(False)
     assert got.tolist() == want and 0 < sum(want) < len(want)
+
+
+def test_the_report_keeps_the_verdicts_and_what_happened():
+    """The golden bag's report: the passive-safety verdicts (named as such, one count per truth check) beside the
+    truth's actual approach, whose closest approach is the simulator's (on its 10-s grid, so at most a few cm above
+    the refined one) within the refinement's bound."""
+    from roe_sep.report import build_report
+
+    rep = build_report(BAG, 280800.0)
+    ps = rep["passive_safety"]
+    assert set(ps) == {"keep_out", "passive_safety", "evaporation"}
+    assert all(v["held"] and v["checks"] > 400 and v["failed_checks"] == 0 for v in ps.values())
+    ap = rep["actual_approach"]
+    closest = ap["closest_approach"]
+    assert closest["distance"] <= rep["min_distance"] <= closest["distance"] + closest["bound"] + 0.05
+    assert abs(closest["epoch"] - rep["min_distance_epoch"]) < 10.0 and not closest["at_end"]
+    assert rep["ejection_epoch"] < ap["departure_epoch"] < closest["epoch"]
+    assert ap["keep_out_time"] == 0.0 and ap["keep_out_entries"] == 0 and not ap["keep_out_violated"]
+    assert ap["sampling"]["truth_step"] == 300.0 and ap["keep_out_radius"] == 1000.0
+    assert ap["after_first_orbit"]["distance"] >= closest["distance"]
+    assert ap["nearest"] == {k: closest[k] for k in ("distance", "epoch", "bound")}  # no approach before departing
+
+
+def test_a_keep_out_above_the_closest_approach_is_violated_in_the_truth():
+    """The golden truth against a keep-out sphere 100 m beyond its closest approach: the pair comes back inside it,
+    and the truth says so (entries, time inside)."""
+    from roe_sep.core.relmotion.orbit import mean_motion
+    from roe_sep.core.safety.approach import actual_approach
+
+    msgs = read_topics(BAG, (interfaces.TRUTH_RTN_TOPIC,))[interfaces.TRUTH_RTN_TOPIC]
+    t = np.array([m.header.stamp.sec + m.header.stamp.nanosec * 1e-9 for _, m in msgs])
+    pos = np.array([[m.position.x, m.position.y, m.position.z] for _, m in msgs])
+    vel = np.array([[m.velocity.x, m.velocity.y, m.velocity.z] for _, m in msgs])
+    n = float(mean_motion(7.0e6))
+    base = actual_approach(t, pos, vel, n, 1000.0, start=602.78547875)
+    closer = actual_approach(t, pos, vel, n, base.closest_distance + 100.0, start=602.78547875)
+    assert not base.keep_out_violated and closer.keep_out_violated and closer.keep_out_entries >= 1
+    assert closer.keep_out_s > 0.0

@@ -41,6 +41,12 @@ def test_default_run_is_safe_and_reaches_the_initial_conditions(scenario):
     ic = rep["ic"]
     assert 5000 <= ic["roe"][1] <= 10000 and abs(ic["roe"][0]) <= 5.0 and ic["min_rn_distance"] >= 150
     assert rep["min_distance"] is None or rep["min_distance"] >= 1000.0
+    # the passive-safety verdicts beside what happened, from the truth (every 60 s and after each burn)
+    assert all(v["held"] and v["checks"] > 0 for v in rep["passive_safety"].values())
+    ap = rep["actual_approach"]
+    assert not ap["keep_out_violated"] and ap["keep_out_time"] == 0.0 and ap["sampling"]["truth_step"] == 60.0
+    closest = ap["closest_approach"]
+    assert closest["distance"] <= rep["min_distance"] <= closest["distance"] + closest["bound"] + 0.05
     od = rep["od"]
     assert od["passes"] >= 2 and 0.5 < od["residual_rms"] < 1.5
     assert od["nees"] < CHI2_6_999

@@ -111,6 +111,38 @@ def proportion(k: int, n: int, z: float = Z95) -> dict:
     return {"k": int(k), "n": int(n), "p": (k / n) if n else None, "ci95": [lo, hi]}
 
 
+def clopper_pearson(k: int, n: int, confidence: float = 0.95) -> dict:
+    """``{"k", "n", "p", "ci95", "method"}`` of a proportion with its exact (Clopper-Pearson) two-sided interval:
+    lo = Beta^-1(alpha/2; k, n - k + 1) (0 for k = 0), hi = Beta^-1(1 - alpha/2; k + 1, n - k) (1 for k = n),
+    alpha = 1 - ``confidence``; p and the interval None for n = 0.
+
+    Parameters
+    ----------
+    k : int
+        Events.
+    n : int
+        Trials.
+    confidence : float
+        Two-sided confidence of the interval (the key stays ``ci95``).
+
+    Returns
+    -------
+    dict
+        ``k``, ``n``, ``p`` = k / n, ``ci95`` = [lo, hi] and ``method`` = "clopper-pearson".
+    """
+    from scipy.stats import beta
+
+    k, n = int(k), int(n)
+    if not 0 <= k <= n:
+        raise ValueError(f"need 0 <= k <= n, got k = {k}, n = {n}")
+    alpha = 1.0 - confidence
+    if not n:
+        return {"k": 0, "n": 0, "p": None, "ci95": [None, None], "method": "clopper-pearson"}
+    lo = 0.0 if k == 0 else float(beta.ppf(0.5 * alpha, k, n - k + 1))
+    hi = 1.0 if k == n else float(beta.ppf(1.0 - 0.5 * alpha, k + 1, n - k))
+    return {"k": k, "n": n, "p": k / n, "ci95": [lo, hi], "method": "clopper-pearson"}
+
+
 def distribution(values: Iterable, percentiles: Iterable[int] = PERCENTILES) -> dict:
     """Summary of a sample: ``n``, ``min``, ``p5``/``p50``/``p95`` (linear interpolation), ``max`` and ``mean``;
     None entries (no value in that run) are left out and counted in ``missing``. Empty: the statistics are None."""
