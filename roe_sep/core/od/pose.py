@@ -28,15 +28,16 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..constants import R_EARTH
-from ..relmotion.dynamics import arg_latitude_rate, propagate
+from ..constants import R_EARTH, SECONDS_PER_DAY
+from ..relmotion.dynamics import arg_latitude_rate, propagate, propagate_chief
 from ..relmotion.maneuvers import control_matrix
 from ..relmotion.orbit import mean_motion
 from ..relmotion.roe import rtn_position
+from .radar import chief_position_velocity, sun_direction
 
 POSE_SIGMA0 = 0.005
 """m, the pose error's floor at zero range (calibration, mounting): seed 001 Sec. 2.3's "sub-centimeter"."""
-POSE_PIXELS = 1280
+POSE_PIXELS = 1280.0
 """pixels of the ejection camera across its normal field of view (an assumption: a 1.3-Mpixel 1280 x 1024 sensor,
 the class of RGB camera a microsatellite flies; no seed gives it)."""
 POSE_CENTROID_PX = 0.1
@@ -47,6 +48,9 @@ POSE_MIN_PIXELS = 10.0
 """pixels the picosatellite must span for a pose (an assumption): the pose range limit."""
 FRAME_PERIOD = 1.0
 """s between frames of the footage that are processed (an assumption: 1 Hz of the video)."""
+FOOTAGE_WINDOW = 270.0
+"""s of footage after the release: half the 9-min ejection contact of seed 001 Sec. 5 (the ejection mid-contact);
+the nominal ejection leaves the pose range after 28 s, f1 = 0.1 after 270 s."""
 FOV_HALF_R_DEG = 6.8
 """deg, the camera's half field of view about the radial-like axis (seed 001 Sec. 2.2, config/default.yaml)."""
 FOV_HALF_N_DEG = 9.15
@@ -206,6 +210,38 @@ def sunlit(r_inertial: ArrayLike, sun: ArrayLike) -> np.ndarray:
     s = np.asarray(sun, dtype=float)
     along = r @ s
     off = np.linalg.norm(r - along[..., None] * s, axis=-1)
+    return (along > 0.0) | (off > R_EARTH)
+
+
+def carrier_lit(chief_kep: ArrayLike, times: ArrayLike, jd0: float, j2: bool = True) -> np.ndarray:
+    """Whether the carrier is lit at ``times`` [s]: its mean elements ``chief_kep`` at sim time 0 propagated
+    secularly (:func:`~roe_sep.core.relmotion.dynamics.propagate_chief`), its circular-orbit position
+    (:func:`~roe_sep.core.od.radar.chief_position_velocity`) tested against the cylindrical shadow (:func:`sunlit`)
+    of the Sun of :func:`~roe_sep.core.od.radar.sun_direction` at the Julian date ``jd0`` + t / 86400. Within the
+    pose range the picosatellite shares the carrier's light.
+
+    Parameters
+    ----------
+    chief_kep : array_like, shape (6,)
+        The carrier's mean elements [a m, e, i rad, raan rad, argp rad, M rad] at sim time 0.
+    times : array_like, shape (m,)
+        Sim times [s].
+    jd0 : float
+        The Julian date (UTC) of sim time 0.
+    j2 : bool
+        With the J2 secular rates.
+
+    Returns
+    -------
+    numpy.ndarray of bool, shape (m,)
+        True where lit.
+    """
+    t = np.asarray(times, dtype=float)
+    kep = propagate_chief(np.asarray(chief_kep, dtype=float), t, j2)
+    r, _ = chief_position_velocity(kep[..., 0], kep[..., 2], kep[..., 3], kep[..., 4] + kep[..., 5])
+    sun = sun_direction(jd0 + t / SECONDS_PER_DAY)
+    along = np.sum(r * sun, axis=-1)
+    off = np.linalg.norm(r - along[..., None] * sun, axis=-1)
     return (along > 0.0) | (off > R_EARTH)
 
 

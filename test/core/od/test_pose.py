@@ -15,6 +15,7 @@ from roe_sep.core.od import pose
 from roe_sep.core.od.radar import julian_date, sun_direction, sun_right_ascension
 from roe_sep.core.separation.double_impulse import design
 from roe_sep.core.truth.nonlinear import apply_impulse, pair_rhs, pair_state, relative_rtn
+from roe_sep.core.truth.simulated import PoseFootage, camera_rng, pose_rng
 
 CAM = pose.PoseCamera()
 T_RELEASE = 1000.37  # s: the release, between two frames (the grid is whole seconds)
@@ -165,3 +166,63 @@ def test_one_estimate_unbatched(ejection):
     est = pose.estimate_ejection(times, pos, cov, times[0] - 1.0, (a, inc, u1, T_RELEASE))
     assert est.dv.shape == (3,) and est.cov.shape == (3, 3) and est.samples == len(times)
     assert est.dv == pytest.approx(dv, abs=2e-5) and float(est.t0) == pytest.approx(T_RELEASE, abs=1e-4)
+
+
+class Receding:
+    """A truth whose relative position is 1.5 m/s (t - 100.4 s) along the radial axis."""
+
+    @staticmethod
+    def rtn_at(t):
+        t = np.asarray(t, dtype=float)
+        return np.stack([1.5 * (t - 100.4), np.zeros_like(t), np.zeros_like(t)], axis=-1), None
+
+
+def test_the_simulators_footage_from_the_release_in_view_and_lit():
+    """PoseFootage: frames on the whole-second grid after the release, until the picosatellite leaves the pose range
+    (40.1 m: 26.7 s at 1.5 m/s), none in the dark, nothing after the window, a stream of its own."""
+    got = []
+
+    def keep(e, p, c):
+        got.append((list(e), p, c))
+
+    foot = PoseFootage(CAM, 270.0, pose_rng(5), lambda t: np.ones(len(t), dtype=bool), keep)
+    foot.observe(Receding, 0.0, 600.0)
+    assert got == []  # nothing before the release
+    foot.release(100.4, [2.0, 0.0, 0.0])
+    foot.release(200.0, [0.0, 1.0, 0.0])  # a second release is ignored
+    foot.observe(Receding, 100.0, 110.0)
+    foot.observe(Receding, 110.0, 600.0)
+    epochs = [e for g in got for e in g[0]]
+    assert epochs == [float(k) for k in range(101, 128)]  # 101 ... 127: 1.5 * 26.6 = 39.9 m < 40.1 m
+    pos = np.concatenate([g[1] for g in got])
+    true = Receding.rtn_at(np.array(epochs))[0]
+    sig = pose.pose_sigma(np.linalg.norm(true, axis=1), CAM)[:, 2]
+    assert np.all(np.abs(pos[:, 0] - true[:, 0]) < 5 * sig)
+    assert np.concatenate([g[2] for g in got]).shape == (27, 3, 3)
+    dark = []
+    night = PoseFootage(CAM, 270.0, pose_rng(5), lambda t: t > 110.5, lambda e, p, c: dark.extend(e))
+    night.release(100.4, [1.0, 0.0, 0.0])
+    night.observe(Receding, 100.0, 600.0)
+    assert dark == [float(k) for k in range(111, 128)]
+    short = []
+    none = PoseFootage(CAM, 5.0, pose_rng(5), lambda t: np.ones(len(t), dtype=bool), lambda e, p, c: short.extend(e))
+    none.release(100.4, [1.0, 0.0, 0.0])
+    none.observe(Receding, 100.0, 600.0)
+    assert short == [101.0, 102.0, 103.0, 104.0, 105.0]  # the window: 5 s
+    off = PoseFootage(CAM, 0.0, pose_rng(5), lambda t: np.ones(len(t), dtype=bool), lambda e, p, c: short.append(e))
+    off.release(100.4, [1.0, 0.0, 0.0])
+    off.observe(Receding, 100.0, 600.0)
+    assert len(short) == 5  # window 0: a contact without footage
+    a, b = pose_rng(5).normal(size=4), pose_rng(5).normal(size=4)
+    assert np.array_equal(a, b) and not np.array_equal(a, camera_rng(5).normal(size=4))
+
+
+def test_the_carrier_is_lit_as_the_sun_says():
+    """Over one orbit of the default scenario (LTAN 09:30, 1 July 2016) a third to two-fifths in shadow, in one
+    interval (the cylinder); at 90 deg of Sun-orbit-normal angle never in shadow."""
+    a, inc = 6893137.0, math.radians(97.45)
+    jd = julian_date("2016-07-01T00:00:00")
+    t = np.arange(0.0, 5700.0, 10.0)
+    lit = pose.carrier_lit([a, 0.0, inc, 1.0986, 0.0, 0.0], t, jd)
+    assert 0.3 < 1.0 - lit.mean() < 0.4
+    assert np.count_nonzero(np.diff(lit.astype(int))) == 2
