@@ -15,7 +15,11 @@ docs/contingencies.md, "What the closed loop does about them"), each behind a pa
 replaces a drift-stop missing from the executed-maneuver record (``/sim/executed_maneuvers``) whole orbits later;
 ``drift_stop_makeup`` completes one that departs from its command; ``weak_ejection_hold`` withdraws the drift-stop
 (an empty plan) when the carrier camera's bearings (``/sim/camera/bearing``, never the truth) exclude every nominal
-ejection. Each finding is a WARN ``roe_sep/planner/contingency`` on ``/diagnostics`` (value ``contingency``:
+ejection; with ``ejection_footage`` the ground filter estimates the executed ejection from the footage's 3D poses
+(``/sim/camera/pose``, :func:`roe_sep.core.od.pose.estimate_ejection`), publishes it latched on
+``/separation/ejection_estimate`` (geometry_msgs/TwistWithCovarianceStamped, dv [m/s] RTN and its covariance) and
+the weak-ejection test uses it (the bearings: the fallback of a contact without footage; docs/run.md, "The
+ejection camera"). Each finding is a WARN ``roe_sep/planner/contingency`` on ``/diagnostics`` (value ``contingency``:
 ``drift_stop_replaced``, ``drift_stop_completed`` or ``weak_ejection``, ``epoch_s``). This node only converts the
 messages to events, calls those functions and carries out their actions.
 
