@@ -191,8 +191,8 @@ def pose(msg):
     d, e, f = block[1][1], block[1][2], block[2][2]
     det2 = a * d - b * b
     det3 = a * (d * f - e * e) - b * (b * f - e * cc) + cc * (b * e - d * cc)
-    symmetric = all(abs(block[i][j] - block[j][i]) <= 1e-12 * (abs(block[i][j]) + 1e-300) for i in range(3)
-                    for j in range(3))
+    scale = max(abs(block[k][k]) for k in range(3))
+    symmetric = all(abs(block[i][j] - block[j][i]) <= 1e-9 * scale for i in range(3) for j in range(3))
     if not (symmetric and a > 0.0 and det2 > 0.0 and det3 > 0.0):
         raise BadMessage("pose.covariance", block, "a symmetric positive-definite position block")
 

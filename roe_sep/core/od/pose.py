@@ -162,7 +162,8 @@ def pose_covariance(pos_rtn: ArrayLike, cam: PoseCamera, axes: np.ndarray) -> np
         The covariances [m^2], RTN.
     """
     s = pose_sigma(np.linalg.norm(np.asarray(pos_rtn, dtype=float), axis=-1), cam)
-    return np.einsum("ik,...k,jk->...ij", axes, s * s, axes)
+    cov = np.einsum("ik,...k,jk->...ij", axes, s * s, axes)
+    return 0.5 * (cov + np.swapaxes(cov, -1, -2))  # symmetric to the bit
 
 
 def in_view(pos_rtn: ArrayLike, cam: PoseCamera, axes: np.ndarray) -> np.ndarray:

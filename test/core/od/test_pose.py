@@ -226,3 +226,35 @@ def test_the_carrier_is_lit_as_the_sun_says():
     lit = pose.carrier_lit([a, 0.0, inc, 1.0986, 0.0, 0.0], t, jd)
     assert 0.3 < 1.0 - lit.mean() < 0.4
     assert np.count_nonzero(np.diff(lit.astype(int))) == 2
+
+
+def test_a_bad_pose_message_is_refused_and_a_good_one_passes():
+    """roe_sep.validate.pose (the planner's lockstep reader drops a refused message with one ERROR line): a stamp, a
+    finite position, a symmetric positive-definite position block; the simulator's covariances pass (symmetric to
+    the bit, as pose_covariance makes them)."""
+    pytest.importorskip("geometry_msgs")
+    from geometry_msgs.msg import PoseWithCovarianceStamped
+
+    from roe_sep.errors import BadMessage
+    from roe_sep.validate import pose as check
+
+    axes = pose.camera_axes([-1.33, -0.16, 0.44])
+    good = pose.pose_covariance(np.array([[1.0, 2.0, 3.0], [-20.0, 3.0, 5.0]]), CAM, axes)
+
+    def msg(cov, position=(1.0, 2.0, 3.0)):
+        m = PoseWithCovarianceStamped()
+        m.pose.pose.position.x, m.pose.pose.position.y, m.pose.pose.position.z = position
+        full = [0.0] * 36
+        for i in range(3):
+            for j in range(3):
+                full[6 * i + j] = float(cov[i][j])
+        m.pose.covariance = full
+        return m
+
+    for c in good:
+        check(msg(c))
+    bad = good[0].copy()
+    bad[0, 1] += 1e-3 * bad[0, 0]
+    for m in (msg(bad), msg(-good[0]), msg(np.zeros((3, 3))), msg(good[0], (math.nan, 0.0, 0.0))):
+        with pytest.raises(BadMessage):
+            check(m)
