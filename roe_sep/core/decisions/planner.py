@@ -217,8 +217,12 @@ def footage_estimate(state: PlannerState, t: float, config: PlannerConfig) -> tu
     if len(times) < 2:
         return dataclasses.replace(state, poses=()), (Log("info", f"footage: {len(times)} pose(s), no estimate"),)
     frame = float(np.min(np.diff(times)))
-    est = estimate_ejection(times, np.array([p[1] for p in poses]), np.array([p[2] for p in poses]).reshape(-1, 3, 3),
-                            times[0] - frame, (ej.kep[0], ej.kep[2], ej.kep[4] + ej.kep[5], ej.epoch), j2=config.j2)
+    try:
+        est = estimate_ejection(times, np.array([p[1] for p in poses]),
+                                np.array([p[2] for p in poses]).reshape(-1, 3, 3), times[0] - frame,
+                                (ej.kep[0], ej.kep[2], ej.kep[4] + ej.kep[5], ej.epoch), j2=config.j2)
+    except (ValueError, np.linalg.LinAlgError) as exc:  # a singular geometry: the bearings decide
+        return dataclasses.replace(state, poses=()), (Log("warning", f"footage: no estimate ({exc})"),)
     dv, cov = tuple(float(c) for c in est.dv), tuple(float(c) for c in est.cov.reshape(-1))
     if not all(math.isfinite(c) for c in dv + cov):
         return dataclasses.replace(state, poses=()), (Log("warning", "footage: the filter did not converge"),)

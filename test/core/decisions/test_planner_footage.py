@@ -101,3 +101,16 @@ def test_the_footage_state_round_trips_through_strict_json():
         assert restored == s
         t = s.in_force.t_stop - FOOTAGE.hold_lead
         assert rules.on_step(restored, t, 101.0, True, FOOTAGE) == rules.on_step(s, t, 101.0, True, FOOTAGE)
+
+
+def test_a_degenerate_footage_gives_no_estimate_and_the_bearings_decide():
+    """Poses that cannot fix the ejection (all at one place: a singular least squares) or a single pose: a log line,
+    no estimate, the footage done; the bearings' test decides later."""
+    state = planned(FOOTAGE)
+    for t in (1.0, 2.0, 3.0):
+        state, _ = rules.on_pose(state, t, (0.0, 0.0, 0.0), (1e-4, 0, 0, 0, 1e-4, 0, 0, 0, 1e-4), FOOTAGE)
+    done, actions = rules.on_step(state, 300.0, 101.0, True, FOOTAGE)
+    assert kinds(actions) == ["Log"] and done.footage_done and done.estimate is None and done.poses == ()
+    one, _ = rules.on_pose(planned(FOOTAGE), 1.0, (1.0, 0.0, 0.0), np.eye(3).reshape(-1) * 1e-4, FOOTAGE)
+    done, actions = rules.on_step(one, 300.0, 101.0, True, FOOTAGE)
+    assert kinds(actions) == ["Log"] and "1 pose(s)" in actions[0].text and done.estimate is None
