@@ -258,7 +258,7 @@ def on_step(state: PlannerState, t: float, wall: float, lockstep: bool, config: 
     try:
         state, actions = footage_estimate(state, t, config)
         if state.in_force is not None and not state.camera_done and t >= state.in_force.t_stop - config.hold_lead:
-            state, actions = dataclasses.replace(state, camera_done=True), (StopBearings(),)
+            state, actions = dataclasses.replace(state, camera_done=True), actions + (StopBearings(),)
             state, more = camera_decision(state, t, config)
             actions += more
         if config.retry and state.in_force is not None and recovered and missing(state, t, config):

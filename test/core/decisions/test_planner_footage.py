@@ -114,3 +114,15 @@ def test_a_degenerate_footage_gives_no_estimate_and_the_bearings_decide():
     one, _ = rules.on_pose(planned(FOOTAGE), 1.0, (1.0, 0.0, 0.0), np.eye(3).reshape(-1) * 1e-4, FOOTAGE)
     done, actions = rules.on_step(one, 300.0, 101.0, True, FOOTAGE)
     assert kinds(actions) == ["Log"] and "1 pose(s)" in actions[0].text and done.estimate is None
+
+
+def test_footage_complete_at_the_decision_step_keeps_both_actions():
+    """A footage window that ends at the hold decision's step: the estimate and the decision on it, in that order."""
+    state = planned(FOOTAGE)
+    t = state.in_force.t_stop - FOOTAGE.hold_lead
+    late = dataclasses.replace(FOOTAGE, footage_window=t - 1.0)
+    state, _, times = footage(state, 0.2, late)
+    assert times[0] == 1.0
+    held, actions = rules.on_step(state, t, 101.0, True, late)
+    assert kinds(actions) == ["PublishEstimate", "Log", "StopBearings", "Log", "PublishPlan", "Status"]
+    assert dict(actions[5].values)["source"] == "footage" and held.in_force is None
