@@ -274,7 +274,9 @@ def measure_poses(pos_rtn: ArrayLike, cam: PoseCamera, axes: np.ndarray, rng: np
 def ejection_response(tau: ArrayLike, a: float, inc: float, u0: ArrayLike, j2: bool = True) -> np.ndarray:
     """Phi ``(..., 3, 3)``: the relative position [m] ``tau`` [s] after a unit impulse [m/s] (columns R, T, N) given
     to the picosatellite at the carrier's mean argument of latitude ``u0`` [rad]: seed 002 Eq. (2) (Gauss control
-    matrix), the secular propagation with J2 and the linear ROE-to-RTN map (:func:`~..relmotion.roe.rtn_position`).
+    matrix), the secular propagation with J2 and the linear ROE-to-RTN map
+    (:func:`~roe_sep.core.relmotion.roe.rtn_position`), times the inverse of its rate at tau = 0, so that the
+    velocity right after the impulse is the impulse (the mean-element model is off by O(J2) there).
 
     Parameters
     ----------
