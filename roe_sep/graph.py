@@ -24,6 +24,7 @@ SUBSCRIBERS = {
     "/sim/truth/roe": ("ejector", "radar", "radar_od", "safety_monitor", "recorder", "ground_bridge"),
     "/sim/truth/rtn": ("recorder",),
     "/sim/camera/bearing": ("planner", "recorder"),
+    "/sim/camera/pose": ("planner", "recorder"),
     "/sim/executed_maneuvers": ("planner", "radar", "radar_od", "ic_planner", "safety_monitor", "recorder",
                                 "ground_bridge"),
     "/separation/ejection": ("ejector", "planner", "safety_monitor", "sim", "recorder", "ground_bridge"),

@@ -61,6 +61,10 @@ TRUTH_ROE_TOPIC = "/sim/truth/roe"  # RelativeOrbitalElements, STREAM, sim
 TRUTH_RTN_TOPIC = "/sim/truth/rtn"  # RelativeState, STREAM, sim
 CAMERA_TOPIC = "/sim/camera/bearing"  # geometry_msgs/Vector3Stamped, STREAM, sim: the carrier camera's measured unit
 # line of sight to the picosatellite in the carrier RTN frame, stamped with its epoch (noise included, no truth)
+POSE_TOPIC = "/sim/camera/pose"  # geometry_msgs/PoseWithCovarianceStamped, STREAM, sim: the ejection footage's 3D pose
+# of the picosatellite (relative position in the carrier RTN frame [m] and its covariance; orientation unused)
+EJECTION_ESTIMATE_TOPIC = "/separation/ejection_estimate"  # geometry_msgs/TwistWithCovarianceStamped, LATCHED,
+# planner: the executed ejection dv [m/s] RTN estimated from the footage, its covariance, stamped at the release
 EXECUTED_TOPIC = "/sim/executed_maneuvers"  # ImpulsiveManeuver, EXECUTED, sim (as executed, with errors)
 RADAR_TOPIC = "/radar/measurements"  # RadarMeasurement, STREAM, radar -> radar_od
 RADAR_PASS_TOPIC = "/radar/passes"  # RadarPass, STREAM, radar -> radar_od: a pass ended (after its measurements)

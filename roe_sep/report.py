@@ -389,6 +389,36 @@ def final_od_decision(diagnostics):
     return None
 
 
+def ejection_estimate(msgs, ejection):
+    """The last ejection estimate of the footage (geometry_msgs/TwistWithCovarianceStamped on
+    ``/separation/ejection_estimate``) against the executed ejection ``ejection`` (the report's maneuver, None
+    without one): dv RTN [m/s], its 1-sigma per axis, |dv| and its sigma, the release epoch [s], the errors of |dv|
+    [m/s] and in its sigmas and the NEES of the vector (chi-square, 3 dof); None without an estimate or with a
+    non-finite one."""
+    if not msgs:
+        return None
+    m = msgs[-1][1]
+    lin = m.twist.twist.linear
+    dv = np.array([lin.x, lin.y, lin.z], dtype=float)
+    cov = np.array([[m.twist.covariance[6 * i + j] for j in range(3)] for i in range(3)], dtype=float)
+    if not (np.all(np.isfinite(dv)) and np.all(np.isfinite(cov))) or not np.linalg.norm(dv) > 0.0:
+        return None
+    mag = float(np.linalg.norm(dv))
+    sigma = math.sqrt(max(float(dv @ cov @ dv), 0.0)) / mag
+    out = {"dv_rtn": dv.tolist(), "sigma_rtn": np.sqrt(np.clip(np.diag(cov), 0.0, None)).tolist(), "dv": mag,
+           "sigma_dv": sigma, "release_epoch": time_to_sec(m.header.stamp), "error_dv": None, "error_sigmas": None,
+           "nees": None}
+    if ejection is not None:
+        err = dv - np.array(ejection["dv_rtn"], dtype=float)
+        out["error_dv"] = mag - ejection["dv"]
+        out["error_sigmas"] = out["error_dv"] / sigma if sigma > 0.0 else None
+        try:
+            out["nees"] = float(err @ np.linalg.solve(cov, err))
+        except np.linalg.LinAlgError:
+            pass
+    return out
+
+
 def predicted_ic_drift(final_od, ic_model_error):
     """a da [m] at the IC epoch as the last information predicted it: the final OD's prediction when it flew no trim
     (the IC epoch unchanged), else the aimed value of the last plan (the trim's); None without either."""
@@ -476,7 +506,7 @@ def _build_report(bag_dir, duration, limits):
     topics = (interfaces.EXECUTED_TOPIC, interfaces.TRUTH_ROE_TOPIC, interfaces.TRUTH_RTN_TOPIC,
               interfaces.DIAGNOSTICS_TOPIC,
               interfaces.SAFETY_TOPIC, interfaces.PLAN_CHECK_TOPIC, interfaces.OD_TOPIC,
-              interfaces.ACQUISITION_PLAN_TOPIC, interfaces.DRIFT_STOP_PLAN_TOPIC)
+              interfaces.ACQUISITION_PLAN_TOPIC, interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.EJECTION_ESTIMATE_TOPIC)
     data = read_topics(bag_dir, topics, raw=(interfaces.TRUTH_ROE_TOPIC,))
     truth = read_truth(data.pop(interfaces.TRUTH_ROE_TOPIC))
     data = valid_only(data)
@@ -558,6 +588,8 @@ def _build_report(bag_dir, duration, limits):
         "actual_approach": actual_approach(data[interfaces.TRUTH_RTN_TOPIC], truth,
                                            ejection["epoch"] if ejection else None, limits.keep_out),
         "od": od_report,
+        # the ground filter's executed ejection from the footage against the executed one (None: no footage)
+        "ejection_estimate": ejection_estimate(data[interfaces.EJECTION_ESTIMATE_TOPIC], ejection),
         "ic": ic,
         "model_error": model_error,  # planners' prediction - truth [m] at the drift-stop and at the IC epoch
         "final_od": final_od,  # the drift-trim decision of the OD just before the IC epoch

@@ -182,13 +182,37 @@ def bearing(msg):
         raise BadMessage("vector", v, "a finite unit vector")
 
 
+def pose(msg):
+    """PoseWithCovarianceStamped of the ejection footage: a stamp, a finite position and a covariance whose position
+    block is finite, symmetric and positive definite."""
+    time_of("header.stamp", msg.header.stamp)
+    p = msg.pose.pose.position
+    for name, v in (("x", p.x), ("y", p.y), ("z", p.z)):
+        _finite(f"pose.pose.position.{name}", v)
+    c = msg.pose.covariance
+    if len(c) != 36:
+        raise BadMessage("pose.covariance", f"{len(c)} values", "36 values")
+    block = [[c[6 * i + j] for j in range(3)] for i in range(3)]
+    for i in range(3):
+        for j in range(3):
+            _finite(f"pose.covariance[{6 * i + j}]", block[i][j])
+    a, b, cc = block[0][0], block[0][1], block[0][2]
+    d, e, f = block[1][1], block[1][2], block[2][2]
+    det2 = a * d - b * b
+    det3 = a * (d * f - e * e) - b * (b * f - e * cc) + cc * (b * e - d * cc)
+    scale = max(abs(block[k][k]) for k in range(3))
+    symmetric = all(abs(block[i][j] - block[j][i]) <= 1e-9 * scale for i in range(3) for j in range(3))
+    if not (symmetric and a > 0.0 and det2 > 0.0 and det3 > 0.0):
+        raise BadMessage("pose.covariance", block, "a symmetric positive-definite position block")
+
+
 def executed(msg):
     maneuver("", msg)
 
 
 def validator_for(msg_type):
     """The validation function of a message type read by our nodes (None: no check)."""
-    from geometry_msgs.msg import Vector3Stamped
+    from geometry_msgs.msg import PoseWithCovarianceStamped, Vector3Stamped
     from roe_sep_msgs.msg import (
         EjectionEvent,
         ImpulsiveManeuver,
@@ -199,4 +223,5 @@ def validator_for(msg_type):
     )
 
     return {RelativeOrbitalElements: truth, EjectionEvent: ejection, ManeuverPlan: plan, ImpulsiveManeuver: executed,
-            OrbitDetermination: orbit_determination, SafetyStatus: safety_status, Vector3Stamped: bearing}.get(msg_type)
+            OrbitDetermination: orbit_determination, SafetyStatus: safety_status, Vector3Stamped: bearing,
+            PoseWithCovarianceStamped: pose}.get(msg_type)

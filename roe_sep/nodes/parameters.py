@@ -23,6 +23,7 @@ from collections.abc import Callable
 from ..checks import SEED_MAX
 from ..core.acquisition.planner import AcquisitionConfig, parse_axes
 from ..core.deployment.sweep import MODELS, USSA76_DENSITY_400KM
+from ..core.od.pose import FOOTAGE_WINDOW, FRAME_PERIOD, POSE_CENTROID_PX, POSE_PIXELS, POSE_SIGMA0
 from ..core.od.radar import DEFAULT_EPOCH_UTC, julian_date
 from ..core.safety.anomaly import AnomalyLimits
 from ..core.safety.ejection_check import CAMERA_SIGMA_DEG
@@ -244,6 +245,13 @@ PLANNER = (
           "the best apparent fraction f1 / g against the best in the nominal set)", range=(1.0e-12, 0.5)),
     Param("hold_lead", "double", 1800.0, "the camera's decision is made this long before the drift-stop (its last "
           "bearing then; the withdrawal's uplink)", "s", range=(0.0, 86400.0)),
+    Param("ejection_footage", "bool", True, "the ground filter (core.od.pose) estimates the executed ejection dv "
+          "from the footage's 3D poses (/sim/camera/pose) and publishes it on /separation/ejection_estimate; the "
+          "weak-ejection test then uses the estimate's fraction f1 of the commanded dv; false, or a contact "
+          "without footage (no pose): the bearings-only test (the fallback)"),
+    Param("footage_window", "double", FOOTAGE_WINDOW, "the footage of the ejection contact is complete this long "
+          "after its first pose: the filter runs then (the simulator's pose_window, the same default)", "s",
+          range=(1.0, 86400.0)),
 )
 
 SIM = (
@@ -266,6 +274,18 @@ SIM = (
           "(centroid and attitude knowledge; an assumption, no seed gives it); the noise is its own stream of the "
           "seed; the planner's camera_sigma_deg assumes the same default", "deg",
           range=(0.0, 5.0)),
+    Param("pose_window", "double", FOOTAGE_WINDOW, "the ejection footage (/sim/camera/pose: 3D poses of the "
+          "picosatellite, core.od.pose) covers this long after the release: half the 9-min ejection contact of "
+          "seed 001 Sec. 5, the ejection mid-contact (0: a contact without footage)", "s", range=(0.0, 3600.0)),
+    Param("pose_frame_period", "double", FRAME_PERIOD, "sim time between the footage's processed frames, on the "
+          "sim-time grid (an assumption: 1 Hz of the video)", "s", range=(0.01, 60.0)),
+    Param("pose_sigma0", "double", POSE_SIGMA0, "the pose error's floor at zero range (calibration, mounting): "
+          "seed 001 Sec. 2.3's sub-centimetre level", "m", range=(0.0, 10.0)),
+    Param("pose_pixels", "double", POSE_PIXELS, "pixels of the ejection camera across its normal field of view "
+          "(2 x 9.15 deg; an assumption: a 1280 x 1024 sensor, no seed gives it)", range=(16.0, 100000.0)),
+    Param("pose_centroid_px", "double", POSE_CENTROID_PX, "1-sigma of the pose fit's silhouette edge (sub-pixel "
+          "model fitting; an assumption): the lateral error c p rho and the depth error c p rho^2 / size", "pixel",
+          range=(0.0, 100.0)),
     Param("camera_duration", "double", 14400.0, "the camera tracks the picosatellite this long after the release "
           "(the blind drift-stop of the default design is 2.4 h after it)", "s", range=(0.0, 1.0e7)),
     Param("u0_deg", "double", 50.0, "carrier mean argument of latitude at sim time 0", "deg",

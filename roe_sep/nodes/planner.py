@@ -15,7 +15,11 @@ docs/contingencies.md, "What the closed loop does about them"), each behind a pa
 replaces a drift-stop missing from the executed-maneuver record (``/sim/executed_maneuvers``) whole orbits later;
 ``drift_stop_makeup`` completes one that departs from its command; ``weak_ejection_hold`` withdraws the drift-stop
 (an empty plan) when the carrier camera's bearings (``/sim/camera/bearing``, never the truth) exclude every nominal
-ejection. Each finding is a WARN ``roe_sep/planner/contingency`` on ``/diagnostics`` (value ``contingency``:
+ejection; with ``ejection_footage`` the ground filter estimates the executed ejection from the footage's 3D poses
+(``/sim/camera/pose``, :func:`roe_sep.core.od.pose.estimate_ejection`), publishes it latched on
+``/separation/ejection_estimate`` (geometry_msgs/TwistWithCovarianceStamped, dv [m/s] RTN and its covariance) and
+the weak-ejection test uses it (the bearings: the fallback of a contact without footage; docs/run.md, "The
+ejection camera"). Each finding is a WARN ``roe_sep/planner/contingency`` on ``/diagnostics`` (value ``contingency``:
 ``drift_stop_replaced``, ``drift_stop_completed`` or ``weak_ejection``, ``epoch_s``). This node only converts the
 messages to events, calls those functions and carries out their actions.
 
@@ -34,7 +38,7 @@ import math
 import time
 
 from diagnostic_msgs.msg import DiagnosticArray
-from geometry_msgs.msg import Vector3Stamped
+from geometry_msgs.msg import PoseWithCovarianceStamped, TwistWithCovarianceStamped, Vector3Stamped
 from roe_sep_msgs.msg import EjectionEvent, ImpulsiveManeuver, ManeuverPlan, OrbitalElements
 from roe_sep_msgs.srv import PlanSeparation
 from std_msgs.msg import String
@@ -43,10 +47,12 @@ from .. import interfaces
 from ..core.config import ConfigError, load_scenario
 from ..core.decisions import planner as rules
 from ..core.montecarlo.sweep import p_best
+from ..core.od.pose import UNKNOWN
 from ..core.relmotion.roe import wrap_angle
 from ..core.separation.double_impulse import design, reduction_bounds
 from ..core.separation.multi_impulse import MultiImpulseConfig
 from .convert import (
+    array_to_vector,
     elements_to_array,
     maneuver,
     maneuver_msg,
@@ -87,6 +93,22 @@ def plan_msg(action: rules.PublishPlan) -> ManeuverPlan:
     return msg
 
 
+def estimate_msg(action: rules.PublishEstimate) -> TwistWithCovarianceStamped:
+    """The TwistWithCovarianceStamped of the footage's ejection estimate: linear = dv [m/s] RTN, its covariance in
+    the linear block; the angular part is not estimated (zero, its variances -1 as sensor_msgs/Imu marks one)."""
+    msg = TwistWithCovarianceStamped()
+    msg.header.stamp.sec, msg.header.stamp.nanosec = action.stamp
+    msg.header.frame_id = interfaces.CARRIER_RTN_FRAME
+    msg.twist.twist.linear = array_to_vector(action.dv)
+    cov = [0.0] * 36
+    for i in range(3):
+        for j in range(3):
+            cov[6 * i + j] = action.cov[3 * i + j]
+        cov[6 * (i + 3) + i + 3] = UNKNOWN
+    msg.twist.covariance = cov
+    return msg
+
+
 def startup_p(scenario, samples, seed):
     """The drift-stop reduction |p| [m/s] of p_mode 'monte_carlo': p_best of a ``samples``-sample sweep with
     ``seed`` (seed 002 Table 3), memoised in the process and stored on disk (:func:`cache_dir`,
@@ -117,7 +139,8 @@ class PlannerNode(ManagedNode):
                  ("retry_margin", "retry_margin"), ("makeup", "drift_stop_makeup"), ("makeup_z", "makeup_z"),
                  ("makeup_pointing", "makeup_pointing_deg"), ("hold", "weak_ejection_hold"),
                  ("camera_sigma", "camera_sigma_deg"), ("camera_floor", "camera_model_floor"),
-                 ("hold_sigmas", "hold_sigmas"), ("hold_alpha", "hold_alpha"), ("hold_lead", "hold_lead"))
+                 ("hold_sigmas", "hold_sigmas"), ("hold_alpha", "hold_alpha"), ("hold_lead", "hold_lead"),
+                 ("footage", "ejection_footage"), ("footage_window", "footage_window"))
         checks = {field: declare(self, name) for field, name in names}  # the contingency checks' parameters
         for field in ("makeup_pointing", "camera_sigma"):
             checks[field] = math.radians(checks[field])
@@ -149,6 +172,8 @@ class PlannerNode(ManagedNode):
         self.lockstep = Lockstep(self, on_step=self.on_step)
         self.plan_pub = self.lockstep.publisher(ManeuverPlan, interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.LATCHED)
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
+        self.estimate_pub = self.lockstep.publisher(TwistWithCovarianceStamped, interfaces.EJECTION_ESTIMATE_TOPIC,
+                                                    interfaces.LATCHED)
         self.state = rules.PlannerState()  # everything the decisions know (core.decisions.planner)
         self.create_service(PlanSeparation, interfaces.PLAN_SERVICE, self.on_plan_request)
         self.record.subscription = self.create_subscription(String, interfaces.PLANNER_DECISIONS_TOPIC,
@@ -165,6 +190,8 @@ class PlannerNode(ManagedNode):
                          stamp=lambda m: time_to_sec(m.epoch), what="executed maneuver")
             ls.subscribe(Vector3Stamped, interfaces.CAMERA_TOPIC, self.on_bearing, interfaces.STREAM,
                          what="camera bearing")
+            ls.subscribe(PoseWithCovarianceStamped, interfaces.POSE_TOPIC, self.on_pose, interfaces.STREAM,
+                         what="footage pose")
             # without lockstep steps (a free-running clock) the sim-time checks run on a timer
             self.free_timer = self.create_timer(1.0, self._free_running_step)
 
@@ -184,6 +211,8 @@ class PlannerNode(ManagedNode):
         for action in actions:
             if isinstance(action, rules.PublishPlan):
                 self.plan_pub.publish(plan_msg(action))
+            elif isinstance(action, rules.PublishEstimate):
+                self.estimate_pub.publish(estimate_msg(action))
             elif isinstance(action, rules.StopBearings):
                 self.lockstep.unsubscribe(interfaces.CAMERA_TOPIC)
             else:
@@ -216,6 +245,12 @@ class PlannerNode(ManagedNode):
         """The carrier camera's measured line of sight (the simulator's sensor, noise included)."""
         self.apply(rules.on_bearing(self.state, time_to_sec(msg.header.stamp), vector_to_array(msg.vector),
                                     self.config))
+
+    def on_pose(self, msg: PoseWithCovarianceStamped):
+        """A 3D pose of the ejection footage (the simulator's sensor, noise included) and its covariance."""
+        p, c = msg.pose.pose.position, msg.pose.covariance
+        self.apply(rules.on_pose(self.state, time_to_sec(msg.header.stamp), (p.x, p.y, p.z),
+                                 [c[6 * i + j] for i in range(3) for j in range(3)], self.config))
 
     def on_step(self, t):
         """Sim-time checks (each lockstep step; a timer without one): :func:`roe_sep.core.decisions.planner.on_step`."""

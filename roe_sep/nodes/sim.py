@@ -12,7 +12,10 @@ seconds, after which the burn is dropped.
 Publishes the truth ROE (``/sim/truth/roe``) and RTN state (``/sim/truth/rtn``) every ``truth_period`` and right after
 each burn, every executed burn on ``/sim/executed_maneuvers`` (as executed, errors included), the carrier camera's
 bearings of the picosatellite (``/sim/camera/bearing``: a sensor, so its noise is the simulator's,
-:class:`roe_sep.core.truth.simulated.Camera`; every ``camera_period`` from the release for ``camera_duration``) and
+:class:`roe_sep.core.truth.simulated.Camera`; every ``camera_period`` from the release for ``camera_duration``), the
+ejection footage's 3D poses (``/sim/camera/pose``, :class:`roe_sep.core.truth.simulated.PoseFootage`,
+:mod:`roe_sep.core.od.pose`: every ``pose_frame_period`` for ``pose_window`` after the release, while the
+picosatellite is in the field of view, within the pose range and lit) and
 ``/diagnostics`` with the running minimum distance.
 
 Parameters: :data:`roe_sep.nodes.parameters.SIM` (``sim --help``, docs/parameters.md). The parts: the truth over
@@ -26,7 +29,7 @@ import math
 import time
 
 from diagnostic_msgs.msg import DiagnosticArray
-from geometry_msgs.msg import Vector3Stamped
+from geometry_msgs.msg import PoseWithCovarianceStamped, Vector3Stamped
 from rclpy.clock import Clock as RclpyClock
 from rclpy.clock import ClockType
 from rclpy.node import Node
@@ -43,11 +46,13 @@ from rosgraph_msgs.msg import Clock
 
 from .. import interfaces
 from ..core.config import ConfigError, load_scenario
+from ..core.od.pose import UNKNOWN, PoseCamera, carrier_lit
 from ..core.od.radar import julian_date, raan_from_ltan
 from ..core.separation.double_impulse import InfeasibleDesignError, design
 from ..core.truth.contingency import resolve as resolve_contingency
 from ..core.truth.execution import BurnExecution
-from ..core.truth.simulated import Camera, SimulatedTruth, camera_rng, dispersed_truth
+from ..core.truth.secular import chief_from_u
+from ..core.truth.simulated import Camera, PoseFootage, SimulatedTruth, camera_rng, dispersed_truth, pose_rng
 from .convert import (
     TruthMessages,
     array_to_vector,
@@ -82,6 +87,9 @@ class SimNode(Node):
         camera_period = declare(self, "camera_period")
         camera_sigma = math.radians(declare(self, "camera_sigma_deg"))
         camera_duration = declare(self, "camera_duration")
+        pose_window = declare(self, "pose_window")
+        cam = PoseCamera(sigma0=declare(self, "pose_sigma0"), pixels=declare(self, "pose_pixels"),
+                         centroid_px=declare(self, "pose_centroid_px"), frame_period=declare(self, "pose_frame_period"))
         u0_deg = declare(self, "u0_deg")
         ltan = declare(self, "ltan_hours")
         epoch = declare(self, "epoch_utc")
@@ -111,6 +119,11 @@ class SimNode(Node):
         # the carrier camera: its own stream of the seed, so a run draws what it drew without it
         self.truth.camera = Camera(camera_period, camera_sigma, camera_duration, camera_rng(self.seed),
                                    self._publish_bearings)
+        # the ejection footage: 3D poses of the picosatellite while in view and lit (its own stream of the seed)
+        chief0, jd0 = chief_from_u(carrier.a, carrier.inc, raan, math.radians(u0_deg)), float(julian_date(epoch))
+        self.truth.footage = PoseFootage(cam, pose_window, pose_rng(self.seed),
+                                         lambda t: carrier_lit(chief0, t, jd0, self.j2), self._publish_poses)
+        self.commanded_dv = None  # the commanded ejection (the camera's boresight)
         self.execution = BurnExecution(self.truth, world.errors, world.ejection_delay, self.require_approval,
                                        lambda level, text: self.status(LEVELS[level], text),
                                        contingency=world.contingency)
@@ -156,6 +169,7 @@ class SimNode(Node):
         self.rtn_pub = ls.publisher(RelativeState, interfaces.TRUTH_RTN_TOPIC, interfaces.STREAM)
         self._truth_messages = TruthMessages()  # the truth's two messages of each sample, serialized
         self.camera_pub = ls.publisher(Vector3Stamped, interfaces.CAMERA_TOPIC, interfaces.STREAM)
+        self.pose_pub = ls.publisher(PoseWithCovarianceStamped, interfaces.POSE_TOPIC, interfaces.STREAM)
         self.exec_pub = ls.publisher(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, interfaces.EXECUTED)
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
         ls.subscribe(EjectionEvent, interfaces.EJECTION_TOPIC, self.on_ejection, interfaces.LATCHED,
@@ -182,6 +196,7 @@ class SimNode(Node):
 
     # ----------------------------------------------------------------- inputs
     def on_ejection(self, ev: EjectionEvent):
+        self.commanded_dv = vector_to_array(ev.ejection.dv_rtn)
         self.execution.eject(time_to_sec(ev.header.stamp), vector_to_array(ev.ejection.dv_rtn),
                              ev.ejection.spacecraft, ev.ejection.purpose)
 
@@ -239,6 +254,8 @@ class SimNode(Node):
         done = self.execution.execute(burn)
         if done.purpose == "ejection":
             self.truth.camera.release(done.epoch)  # the camera tracks the picosatellite from its release on
+            if self.commanded_dv is not None:  # the footage looks along the commanded ejection
+                self.truth.footage.release(done.epoch, self.commanded_dv)
         self.exec_pub.publish(maneuver_msg(done.epoch, done.u, done.dv_rtn, done.spacecraft, done.purpose))
         self.truth.publish([done.epoch])
         dv = done.dv_rtn
@@ -266,6 +283,23 @@ class SimNode(Node):
             msg.header.stamp = sec_to_time(t)
             msg.header.frame_id = interfaces.CARRIER_RTN_FRAME
             self.camera_pub.publish(msg)
+
+    def _publish_poses(self, epochs, positions, covariances):
+        """The footage's poses (carrier RTN [m], noise included) and their covariances [m^2] at ``epochs`` [s]; the
+        orientation is not measured (identity, its variances -1 as sensor_msgs/Imu marks one)."""
+        for t, p, c in zip(epochs, positions, covariances):
+            msg = PoseWithCovarianceStamped()
+            msg.header.stamp = sec_to_time(t)
+            msg.header.frame_id = interfaces.CARRIER_RTN_FRAME
+            msg.pose.pose.position.x, msg.pose.pose.position.y, msg.pose.pose.position.z = (float(x) for x in p)
+            msg.pose.pose.orientation.w = 1.0
+            cov = [0.0] * 36
+            for i in range(3):
+                for j in range(3):
+                    cov[6 * i + j] = float(c[i, j])
+                cov[6 * (i + 3) + i + 3] = UNKNOWN
+            msg.pose.covariance = cov
+            self.pose_pub.publish(msg)
 
     def status(self, level, message):
         model = self.truth.model

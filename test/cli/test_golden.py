@@ -66,6 +66,11 @@ TOLERANCES = (
      r"|sampling/refine_error)", LENGTH, 0.0, "m"),
     # dimensionless statistics of the OD (NEES, z-score, residual RMS in sigmas): 1e-7 relative, 11x the 9e-9 seen
     (r"/od(/last)?/(nees7?|a_da_dot_z|residual_rms)", 0.0, 1e-7, "1"),
+    # the footage's ejection estimate (a 4-parameter least squares of seeded poses): delta-v as above, 1e-6 m/s is
+    # 1e-3 of its 1.2 mm/s sigma; the release epoch to 1 us; its statistics 1e-7 relative
+    (r"/ejection_estimate/(dv|sigma_dv|error_dv|dv_rtn\[\]|sigma_rtn\[\])", 1e-6, 0.0, "m/s"),
+    (r"/ejection_estimate/release_epoch", 1e-6, 0.0, "s"),
+    (r"/ejection_estimate/(error_sigmas|nees)", 1e-9, 1e-7, "1"),
     # drawn dispersions and configured sigmas: seeded draws and inputs, no kernel in between (1e-12 relative)
     (r"/dispersions/.*", 0.0, 1e-12, "1 or as configured"),
 )

@@ -137,6 +137,18 @@ def test_report_has_the_planners_model_error(runs):
     assert ic is None or (ic["epoch"] <= DURATION and abs(ic["error"][0]) < 5.0)
 
 
+def test_report_has_the_footages_ejection_estimate(runs):
+    """The ground filter's executed ejection (docs/run.md, "The ejection camera") against the executed one, in two
+    seeds: within 0.2 % (1 sigma, seed 001 Sec. 2.3), its error within 4 sigmas, the NEES below the chi-square(3)
+    quantile 0.999 and the release epoch within 50 ms."""
+    for name in ("fast", "other_seed"):
+        rep = runs[name]
+        est, ejection = rep["ejection_estimate"], rep["maneuvers"][0]
+        assert ejection["purpose"] == "ejection" and est is not None
+        assert est["sigma_dv"] < 0.002 * est["dv"] and abs(est["error_sigmas"]) < 4.0 and est["nees"] < 16.27
+        assert est["release_epoch"] == pytest.approx(ejection["epoch"], abs=0.05)
+
+
 def test_bag_log_times_tell_the_truth(runs):
     data = read_in_file_order(mcap_file(runs["dir"] / "fast" / "bag"))
     for topic, msgs in data.items():

@@ -20,6 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ...stamps import sec_nanosec
+from ..od.pose import estimate_ejection
 from ..relmotion.dynamics import arg_latitude_rate, drag_da_dot, propagate_chief, raan_rate
 from ..relmotion.orbit import angle_between
 from ..relmotion.roe import wrap_angle
@@ -71,6 +72,8 @@ class PlannerConfig:
     hold_sigmas: float = 0.0
     hold_alpha: float = 0.0
     hold_lead: float = 0.0
+    footage: bool = False
+    footage_window: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -120,6 +123,17 @@ class PublishPlan:
 
 
 @dataclass(frozen=True)
+class PublishEstimate:
+    """Publish the executed ejection estimated from the footage (:func:`~roe_sep.core.od.pose.estimate_ejection`):
+    the release epoch ``stamp`` ((sec, nanosec)), ``dv`` (3,) [m/s] RTN and its covariance ``cov`` (9,) [m^2/s^2],
+    row-major."""
+
+    stamp: tuple
+    dv: tuple
+    cov: tuple
+
+
+@dataclass(frozen=True)
 class StopBearings:
     """The camera's decision is made: its bearings are no longer needed."""
 
@@ -145,6 +159,10 @@ class PlannerState(State):
     plans: int = 0
     decided: tuple = ()
     last_plan: PublishPlan | None = None
+    commanded: Ejection | None = None  # the commanded ejection (the footage filter's chief and first guess)
+    poses: tuple = ()  # the footage's (t [s], position (3,) [m], covariance (9,) [m^2]) until the estimate
+    estimate: tuple | None = None  # the footage's (dv (3,) [m/s], covariance (9,) [m^2/s^2], poses used)
+    footage_done: bool = False
 
     @classmethod
     def from_dict(cls, d: dict) -> "PlannerState":
@@ -154,7 +172,10 @@ class PlannerState(State):
 
         return cls(**{**d, "in_force": optional(in_force, d["in_force"]), "executed_stops": tuples(d["executed_stops"]),
                       "bearings": tuples(d["bearings"]), "retried": tuples(d["retried"]),
-                      "decided": tuples(d["decided"]), "last_plan": optional(plan_from_dict, d["last_plan"])})
+                      "decided": tuples(d["decided"]), "last_plan": optional(plan_from_dict, d["last_plan"]),
+                      "commanded": optional(lambda e: Ejection(**{k: tuples(v) for k, v in e.items()}),
+                                            d.get("commanded")),
+                      "poses": tuples(d.get("poses", ())), "estimate": optional(tuples, d.get("estimate"))})
 
 
 def plan_from_dict(d: dict) -> PublishPlan:
@@ -202,7 +223,8 @@ def on_ejection(state: PlannerState, ejection: Ejection, config: PlannerConfig) 
     burn = plan.burns[0]
     multi = config.strategy == "multi_impulse"
     in_force = state.in_force if multi else InForce(ejection, None, plan.p_reduction, burn.epoch)
-    state = dataclasses.replace(published(state, plan), in_force=in_force, decided=(*state.decided, stamp))
+    state = dataclasses.replace(published(state, plan), in_force=in_force, decided=(*state.decided, stamp),
+                                commanded=ejection)
     x, y, z = burn.dv_rtn
     log = Log("info", f"drift-stop planned at t = {burn.epoch:.1f} s, carrier dv RTN = ({x:+.6f}, {y:+.6f}, "
                       f"{z:+.6f}) m/s, p = {plan.p_reduction:g} m/s")
@@ -269,6 +291,49 @@ def on_restart(state: PlannerState, config: PlannerConfig) -> tuple:
     return state, (*actions, status(OK, text, values(state, config)))
 
 
+def on_pose(state: PlannerState, t: float, pos, cov, config: PlannerConfig) -> tuple:
+    """A pose of the footage at ``t`` [s]: the relative position ``pos`` (3,) [m] RTN and its covariance ``cov`` (9,)
+    [m^2], kept until the estimate."""
+    if not config.footage or state.footage_done:
+        return state, ()
+    pose = (float(t), tuple(float(c) for c in pos), tuple(float(c) for c in cov))
+    return dataclasses.replace(state, poses=(*state.poses, pose)), ()
+
+
+def footage_estimate(state: PlannerState, t: float, config: PlannerConfig) -> tuple:
+    """The executed ejection from the footage once it is complete (``footage_window`` after its first pose, at
+    ``t`` [s]): :func:`~roe_sep.core.od.pose.estimate_ejection` from the commanded ejection's chief, the release
+    guessed one frame before the first pose; a :class:`PublishEstimate`. Fewer than 2 poses: no estimate (the
+    bearings decide)."""
+    if not config.footage or state.footage_done or not state.poses or state.commanded is None \
+            or t < state.poses[0][0] + config.footage_window:
+        return state, ()
+    state = dataclasses.replace(state, footage_done=True)
+    poses, ej = state.poses, state.commanded
+    times = np.array([p[0] for p in poses])
+    if len(times) < 2:
+        return dataclasses.replace(state, poses=()), (Log("info", f"footage: {len(times)} pose(s), no estimate"),)
+    frame = float(np.min(np.diff(times)))
+    try:
+        est = estimate_ejection(times, np.array([p[1] for p in poses]),
+                                np.array([p[2] for p in poses]).reshape(-1, 3, 3), times[0] - frame,
+                                (ej.kep[0], ej.kep[2], ej.kep[4] + ej.kep[5], ej.epoch), j2=config.j2)
+    except (ValueError, np.linalg.LinAlgError) as exc:  # a singular geometry: the bearings decide
+        return dataclasses.replace(state, poses=()), (Log("warning", f"footage: no estimate ({exc})"),)
+    dv, cov = tuple(float(c) for c in est.dv), tuple(float(c) for c in est.cov.reshape(-1))
+    if not all(math.isfinite(c) for c in dv + cov):
+        return dataclasses.replace(state, poses=()), (Log("warning", "footage: the filter did not converge"),)
+    state = dataclasses.replace(state, poses=(), estimate=(dv, cov, len(times)))
+    mag = float(np.linalg.norm(est.dv))
+    sig = math.sqrt(float(est.dv @ est.cov @ est.dv)) / mag
+    cmd = float(np.linalg.norm(ej.dv_rtn))
+    log = Log("info", f"footage: {len(times)} poses, executed ejection |dv| = {mag:.5f} +- {sig:.5f} m/s "
+                      f"({100 * sig / mag:.3f} %, {mag / cmd:.4f} of the commanded), release at "
+                      f"t = {float(est.t0):.3f} +- {float(est.sigma_t0):.3f} s, chi-square {float(est.chi2):.1f} for "
+                      f"{3 * len(times) - 4} dof")
+    return state, (PublishEstimate(sec_nanosec(float(est.t0)), dv, cov), log)
+
+
 def record_recovered(state: PlannerState, wall: float, lockstep: bool) -> bool:
     """Whether the executed-maneuver record is complete enough to say a drift-stop is missing: the executed ejection
     is on it and, without ``lockstep`` (where every round holds every message), ``RECORD_SETTLE`` wall seconds have
@@ -312,13 +377,14 @@ def on_step(state: PlannerState, t: float, wall: float, lockstep: bool, config: 
     tuple
         ``(new state, actions)``; a failed check adds an ERROR status.
     """
-    if state.in_force is None:
+    if state.in_force is None and (state.footage_done or state.commanded is None):
         return state, ()
     actions = ()
     recovered = record_recovered(state, wall, lockstep)
     try:
-        if not state.camera_done and t >= state.in_force.t_stop - config.hold_lead:
-            state, actions = dataclasses.replace(state, camera_done=True), (StopBearings(),)
+        state, actions = footage_estimate(state, t, config)
+        if state.in_force is not None and not state.camera_done and t >= state.in_force.t_stop - config.hold_lead:
+            state, actions = dataclasses.replace(state, camera_done=True), actions + (StopBearings(),)
             state, more = camera_decision(state, t, config)
             actions += more
         if config.retry and state.in_force is not None and recovered and missing(state, t, config):
@@ -373,6 +439,8 @@ def camera_decision(state: PlannerState, t: float, config: PlannerConfig) -> tup
         ``(new state, actions)``.
     """
     f = state.in_force
+    if config.hold and state.estimate is not None and t < f.t_stop:
+        return footage_decision(state, t, config)
     if not config.hold or state.released is None or t >= f.t_stop or not state.bearings:
         return state, ()
     ejection = f.ejection
@@ -398,6 +466,36 @@ def camera_decision(state: PlannerState, t: float, config: PlannerConfig) -> tup
         f"drag (chi-square gain {check.gain:.1f} over the nominal set f1/g >= {bound:.3f}, {check.samples} bearings): "
         f"drift-stop at t = {f.t_stop:.0f} s withdrawn, the acquisition starts from the first OD",
         {"f1": f"{check.f1:.3f}", "gain": f"{check.gain:.2f}", "samples": check.samples}))
+
+
+def footage_decision(state: PlannerState, t: float, config: PlannerConfig) -> tuple:
+    """The weak-ejection test on the footage's estimate: the fraction f1 of the commanded ejection (the estimate
+    projected on it) against the nominal set's bound of the bearings test (the same rule, so nominal runs decide as
+    before), weak when below it by more than the normal quantile 1 - ``hold_alpha`` of its sigma; withdraw the
+    drift-stop of a weak one (an empty plan)."""
+    f = state.in_force
+    cmd = np.array(f.ejection.dv_rtn, dtype=float)
+    dv, cov = np.array(state.estimate[0]), np.array(state.estimate[1]).reshape(3, 3)
+    frac = float(dv @ cmd) / float(cmd @ cmd)
+    sigma = math.sqrt(float(cmd @ cov @ cmd)) / float(cmd @ cmd)
+    mc = config.scenario.monte_carlo
+    bound = nominal_fraction(config.scenario.separation.spl_sigma, mc.ballistic_sigma, config.hold_sigmas)
+    from scipy.special import ndtri  # here, not at import (as check_ejection's chdtri)
+
+    z = (bound - frac) / sigma if sigma > 0.0 else math.inf
+    weak = bool(frac < bound and z > float(ndtri(1.0 - config.hold_alpha)))
+    state = dataclasses.replace(state, bearings=())
+    log = Log("info", f"footage check of the ejection: f1 = {frac:.4f} +- {sigma:.4f} (nominal >= {bound:.3f}): "
+                      f"{'drift-stop held' if weak else 'drift-stop flies'}")
+    if not weak:
+        return state, (log,)
+    hold = PublishPlan("double_impulse", (f.ejection.sec, f.ejection.nanosec), sec_nanosec(t), 0.0)
+    state = dataclasses.replace(published(state, hold), in_force=None)
+    return state, (log, hold, finding(
+        "weak_ejection", t, f"the footage measured f1 = {frac:.4f} +- {sigma:.4f} of the commanded ejection "
+        f"({z:.1f} sigma below the nominal set f1 >= {bound:.3f}): drift-stop at t = {f.t_stop:.0f} s withdrawn, "
+        "the acquisition starts from the first OD",
+        {"f1": f"{frac:.3f}", "gain": f"{z * z:.2f}", "samples": state.estimate[2], "source": "footage"}))
 
 
 def orbits_later(ejection: Ejection, t: float, t_burn: float, config: PlannerConfig) -> tuple:

@@ -85,6 +85,29 @@ def sun_right_ascension(jd: ArrayLike) -> np.ndarray:
     return np.arctan2(np.cos(eps) * np.sin(lam), np.cos(lam))
 
 
+def sun_direction(jd: ArrayLike) -> np.ndarray:
+    """The unit vector ``(..., 3)`` to the Sun in the equator and equinox of date: the ecliptic longitude lambda and
+    obliquity eps of :func:`sun_right_ascension` (the same low-precision formulas), (cos lambda, cos eps sin lambda,
+    sin eps sin lambda).
+
+    Parameters
+    ----------
+    jd : array_like, shape (...)
+        The Julian date (UTC).
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+        The unit Sun direction, inertial.
+    """
+    n = np.asarray(jd, dtype=float) - JD_J2000
+    mean_lon = np.radians(280.460 + 0.9856474 * n)
+    g = np.radians(357.528 + 0.9856003 * n)
+    lam = mean_lon + np.radians(1.915) * np.sin(g) + np.radians(0.020) * np.sin(2.0 * g)
+    eps = np.radians(23.439 - 0.0000004 * n)
+    return stack_last([np.cos(lam), np.cos(eps) * np.sin(lam), np.sin(eps) * np.sin(lam)])
+
+
 def raan_from_sun(sun_ra: ArrayLike, ltan_hours: float) -> np.ndarray:
     """RAAN [rad, 0..2pi) of an orbit whose ascending node is at local time ``ltan_hours`` when the Sun is at right
     ascension ``sun_ra``: raan = alpha_sun + (LTAN - 12 h) * 15 deg/h (the node is LTAN - 12 h of hour angle east

@@ -151,6 +151,32 @@ def predicted_los(fractions: ArrayLike, dv_commanded: ArrayLike, t_ejection: flo
         return pos / np.linalg.norm(pos, axis=-1, keepdims=True)
 
 
+def predicted_positions(fractions: ArrayLike, dv_commanded: ArrayLike, t_ejection: float, chief_mean: ArrayLike,
+                        da_dot: float, *, times: ArrayLike, j2: bool = True) -> np.ndarray:
+    """The osculating relative positions ``(F, m, 3)`` [m] (carrier osculating RTN) whose directions
+    :func:`predicted_los` gives: the same parameters (see there), the same model.
+
+    Parameters
+    ----------
+    fractions, dv_commanded : array_like, shapes (F,) and (3,)
+        The fractions of the commanded impulse [m/s, RTN] delivered.
+    t_ejection, chief_mean : float, array_like of shape (6,)
+        The ejection epoch [s]; the carrier's mean elements there.
+    da_dot : float
+        The differential-drag rate of da [1/s].
+    times : array_like, shape (m,)
+        The epochs [s], after ``t_ejection``.
+    j2 : bool
+        With the J2 secular rates.
+
+    Returns
+    -------
+    numpy.ndarray, shape (F, m, 3)
+        The relative positions [m].
+    """
+    return _positions(fractions, dv_commanded, t_ejection, chief_mean, da_dot, times=times, j2=j2)
+
+
 def _positions(fractions, dv_commanded, t_ejection, chief_mean, da_dot, *, times, j2):
     """The relative positions ``(F, m, 3)`` [m] of :func:`predicted_los`."""
     f = np.atleast_1d(np.asarray(fractions, dtype=float))

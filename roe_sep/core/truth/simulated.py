@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..constants import ARCSEC
+from ..od.pose import PoseCamera, camera_axes, in_view, measure_poses, pose_covariance
 from ..relmotion.dynamics import arg_latitude_rate, drag_da_dot
 from ..safety.ejection_check import camera_bearing
 from .contingency import SIM_SIDE, ContingencyConfig, TruthContingency
@@ -24,6 +25,7 @@ if TYPE_CHECKING:  # for the annotations only
 
 EJECTION_TIMING_STREAM = 2  # the ejection delay's stream of a run seed (graph.RADAR_STREAM = 1: the radar noise)
 CAMERA_STREAM = 4  # the carrier camera's bearing noise (3: the contingency draws)
+POSE_STREAM = 5  # the ejection footage's pose noise
 STATUS_PERIOD = 3600.0  # s of sim time between the simulator's routine reports
 
 
@@ -31,6 +33,12 @@ def camera_rng(seed: int) -> np.random.Generator:
     """The carrier camera's noise generator of a run ``seed``: ``SeedSequence([seed, CAMERA_STREAM])``, a stream of
     its own, so the camera changes no other draw of the run (:func:`dispersed_truth`)."""
     return np.random.default_rng(np.random.SeedSequence([int(seed), CAMERA_STREAM]))
+
+
+def pose_rng(seed: int) -> np.random.Generator:
+    """The ejection footage's noise generator of a run ``seed``: ``SeedSequence([seed, POSE_STREAM])``, a stream
+    of its own like :func:`camera_rng`."""
+    return np.random.default_rng(np.random.SeedSequence([int(seed), POSE_STREAM]))
 
 
 @dataclass
@@ -192,6 +200,61 @@ class Camera:
             self.on_bearings(epochs, camera_bearing(pos, self.sigma, self.rng))
 
 
+class PoseFootage:
+    """The ejection footage (the simulator's sensor, seed 001 Sec. 2.1 req. 3 and 2.3): from the release
+    (:meth:`release`, with the commanded ejection's direction as the boresight) for ``window`` [s] (the ejection
+    contact's footage), a pose every ``cam.frame_period`` on the sim-time grid while the picosatellite is in view
+    and lit (:func:`~roe_sep.core.od.pose.in_view`; ``lit(epochs)``: the carrier's shadow test), the truth's
+    relative position with the pose noise (:func:`~roe_sep.core.od.pose.measure_poses`, generator ``rng``,
+    :func:`pose_rng`) and its covariance handed to ``on_poses(epochs, positions, covariances)``."""
+
+    def __init__(self, cam: "PoseCamera", window: float, rng: np.random.Generator,
+                 lit: Callable[[np.ndarray], np.ndarray], on_poses: Callable) -> None:
+        self.cam, self.window, self.rng, self.lit, self.on_poses = cam, window, rng, lit, on_poses
+        self.start = None  # s, the release
+        self.axes = None
+        self.next = math.inf
+
+    def release(self, t: float, boresight_rtn: Sequence[float]) -> None:
+        """The picosatellite left at ``t`` [s], the camera looking along ``boresight_rtn`` (a second release, a
+        zero window or a zero boresight: ignored)."""
+        if self.start is None and self.window > 0.0 and np.linalg.norm(boresight_rtn) > 0.0:
+            self.start = float(t)
+            self.axes = camera_axes(boresight_rtn)
+            self.next = math.floor(self.start / self.cam.frame_period + 1.0) * self.cam.frame_period
+
+    def observe(self, model: "TruthModel | NonlinearTruth", t_from: float, t_to: float) -> None:
+        """The poses due in (``t_from``, ``t_to``] of ``model``'s truth, handed to ``on_poses``.
+
+        Parameters
+        ----------
+        model : TruthModel or NonlinearTruth
+            The truth (its ``rtn_at``: the relative position [m] in the carrier's RTN frame).
+        t_from, t_to : float
+            The window [s] of sim time.
+
+        Returns
+        -------
+        None
+        """
+        if self.start is None:
+            return
+        end = min(float(t_to), self.start + self.window)
+        epochs = []
+        while self.next <= end + 1e-9:
+            if self.next > t_from:
+                epochs.append(self.next)
+            self.next += self.cam.frame_period
+        if not epochs:
+            return
+        t = np.asarray(epochs, dtype=float)
+        pos = model.rtn_at(t)[0]
+        keep = in_view(pos, self.cam, self.axes) & self.lit(t)
+        if np.any(keep):
+            measured = measure_poses(pos[keep], self.cam, self.axes, self.rng)
+            self.on_poses(t[keep].tolist(), measured, pose_covariance(pos[keep], self.cam, self.axes))
+
+
 class SimulatedTruth:
     """The truth's timeline: :meth:`advance` moves ``model`` to a sim time, hands the truth samples of every
     ``truth_period`` epoch on the way to ``on_samples(epochs, (kep, roe, (pos, vel)))``, tracks the closest approach
@@ -213,6 +276,7 @@ class SimulatedTruth:
         self.next_truth = 0.0
         self.next_status = STATUS_PERIOD
         self.camera = None  # a Camera observing on the way (the simulator's)
+        self.footage = None  # a PoseFootage observing on the way (the simulator's)
         self._ahead = None  # (model revision, epochs, their samples, index of the next step's first epoch)
 
     def advance(self, t_to: float) -> None:
@@ -236,6 +300,8 @@ class SimulatedTruth:
             self.on_samples(epochs, self._step_samples(epochs))
         if self.camera is not None:
             self.camera.observe(self.model, self.t, t_to)
+        if self.footage is not None:
+            self.footage.observe(self.model, self.t, t_to)
         self.t = t_to
 
     def publish(self, epochs: Sequence[float]) -> None:
