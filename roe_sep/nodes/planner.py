@@ -23,14 +23,9 @@ ejection camera"). Each finding is a WARN ``roe_sep/planner/contingency`` on ``/
 ``drift_stop_replaced``, ``drift_stop_completed`` or ``weak_ejection``, ``epoch_s``). This node only converts the
 messages to events, calls those functions and carries out their actions.
 
-Its decisions are kept outside the process: after each one the decision record (the persisted
-:class:`~roe_sep.core.decisions.planner.PlannerState`) on ``/separation/decisions/planner`` (std_msgs/String, JSON,
-latched; ground_bridge keeps it). A (re)started planner reads it back before it subscribes its inputs
-(:mod:`.decision_record`, ``recover_timeout``), latches the plan in force again as it was published
-(:func:`roe_sep.core.decisions.planner.on_restart`: never a withdrawn one), does not plan the latched ejection
-again, and recovers what was executed from the latched executed-maneuver record before it may find a drift-stop
-missing (:func:`roe_sep.core.decisions.planner.record_recovered`). Without a record (no keeper) it plans the
-latched ejection as a fresh planner.
+Its decisions are kept outside the process (the decision record on ``/separation/decisions/planner``, read back by
+a restarted planner: :mod:`.decision_record`, :func:`roe_sep.core.decisions.planner.on_restart`; docs/run.md,
+"Decisions survive a restart").
 """
 
 import dataclasses

@@ -16,9 +16,9 @@ import time
 
 import pytest
 from rosutil import ROOT, descendants, ros_env, wait_gone
+from test_ros2_cli import SCRIPT, sources
 
 from roe_sep.graph import graph_nodes
-from test_ros2_cli import SCRIPT, sources
 
 pytestmark = [pytest.mark.ros2cli, pytest.mark.dds]
 

@@ -291,9 +291,23 @@ def on_restart(state: PlannerState, config: PlannerConfig) -> tuple:
     return state, (*actions, status(OK, text, values(state, config)))
 
 
-def on_pose(state: PlannerState, t: float, pos, cov, config: PlannerConfig) -> tuple:
-    """A pose of the footage at ``t`` [s]: the relative position ``pos`` (3,) [m] RTN and its covariance ``cov`` (9,)
-    [m^2], kept until the estimate."""
+def on_pose(state: PlannerState, t: float, pos: ArrayLike, cov: ArrayLike, config: PlannerConfig) -> tuple:
+    """A pose of the footage at ``t`` [s], kept until the estimate.
+
+    Parameters
+    ----------
+    state, t, config
+        As every rule takes them (module docstring).
+    pos : array_like, shape (3,)
+        The relative position [m] RTN.
+    cov : array_like, shape (9,)
+        Its covariance [m^2], row-major.
+
+    Returns
+    -------
+    tuple
+        ``(new state, actions)``.
+    """
     if not config.footage or state.footage_done:
         return state, ()
     pose = (float(t), tuple(float(c) for c in pos), tuple(float(c) for c in cov))
@@ -304,7 +318,18 @@ def footage_estimate(state: PlannerState, t: float, config: PlannerConfig) -> tu
     """The executed ejection from the footage once it is complete (``footage_window`` after its first pose, at
     ``t`` [s]): :func:`~roe_sep.core.od.pose.estimate_ejection` from the commanded ejection's chief, the release
     guessed one frame before the first pose; a :class:`PublishEstimate`. Fewer than 2 poses: no estimate (the
-    bearings decide)."""
+    bearings decide).
+
+    Parameters
+    ----------
+    state, t, config
+        As every rule takes them (module docstring).
+
+    Returns
+    -------
+    tuple
+        ``(new state, actions)``.
+    """
     if not config.footage or state.footage_done or not state.poses or state.commanded is None \
             or t < state.poses[0][0] + config.footage_window:
         return state, ()
@@ -472,7 +497,18 @@ def footage_decision(state: PlannerState, t: float, config: PlannerConfig) -> tu
     """The weak-ejection test on the footage's estimate: the fraction f1 of the commanded ejection (the estimate
     projected on it) against the nominal set's bound of the bearings test (the same rule, so nominal runs decide as
     before), weak when below it by more than the normal quantile 1 - ``hold_alpha`` of its sigma; withdraw the
-    drift-stop of a weak one (an empty plan)."""
+    drift-stop of a weak one (an empty plan).
+
+    Parameters
+    ----------
+    state, t, config
+        As every rule takes them (module docstring).
+
+    Returns
+    -------
+    tuple
+        ``(new state, actions)``.
+    """
     f = state.in_force
     cmd = np.array(f.ejection.dv_rtn, dtype=float)
     dv, cov = np.array(state.estimate[0]), np.array(state.estimate[1]).reshape(3, 3)
