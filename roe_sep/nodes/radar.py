@@ -4,9 +4,10 @@ Seed 001: TIRA can distinguish the two spacecraft only once they are at least 5 
 stations' measurements; ``radar_od`` estimates from them (or from a ground segment's TDM files, without this node):
 
 * Every measurement epoch k * ``sample_interval`` is simulated from the first ``/sim/truth/roe`` sample at or
-  after it, propagated back to the epoch (:func:`~roe_sep.core.relmotion.dynamics.propagate` with J2 and the
-  truth's own drift of da between that sample and the one before, :func:`~roe_sep.core.od.radar.truth_da_rate`;
-  :func:`~roe_sep.core.relmotion.dynamics.propagate_chief`), once that sample has arrived: under lockstep each
+  after it and the sample before it, each carried to the epoch (J2 secular rates and the truth's own drift of da
+  between the two, :func:`~roe_sep.core.od.radar.truth_da_rate`) and blended linearly in time
+  (:func:`~roe_sep.core.od.sensor.truth_between`; the later sample alone across a burn,
+  :func:`~roe_sep.core.od.sensor.sample_pair`), once the later sample has arrived: under lockstep each
   truth sample advances the tracking to its stamp; run alone, the tracking advances to the earlier of ``/clock``
   (rosgraph_msgs/Clock, the node runs with ``use_sim_time``) and the latest truth sample, so a clock that runs
   ahead of the truth never has an epoch measured from a stale sample. Where a station sees the picosatellite above
@@ -39,8 +40,14 @@ from .. import interfaces
 from ..core.config import ConfigError, load_scenario
 from ..core.frames import gcrs_to_itrs
 from ..core.od.radar import deputy_earth_fixed_state, relative_distance, truth_da_rate, two_way_look, visible
-from ..core.od.sensor import noisy_measurement, pass_lost, trackable
-from ..core.relmotion.dynamics import propagate, propagate_chief
+from ..core.od.sensor import (
+    TruthSamples,
+    noisy_measurement,
+    pass_lost,
+    sample_pair,
+    trackable,
+    truth_between,
+)
 from ..core.relmotion.roe import rtn_position
 from ..core.truth.contingency import RADAR_SIDE, RadarContingency
 from ..core.truth.contingency import resolve as resolve_contingency
@@ -211,7 +218,8 @@ class RadarNode(ManagedNode):
         """Measurements at ``epochs`` [s] from ``truth`` (default: the truth in force) and the burns known now.
         Inside a lockstep round the work waits for the end of the round (:meth:`flush_tracks`), whatever else the
         round holds: the measurements and passes are those of tracking at once, in the same order."""
-        self.deferred.append((epochs, self.truth if truth is None else truth, self.last_burn, self.t_last))
+        truth = self.truth if truth is None else truth
+        self.deferred.append((epochs, truth, self.last_burn, self.t_last, self.sample_before(truth[0])))
         if not self.lockstep.in_batch:
             self.flush_tracks()
 
@@ -229,21 +237,22 @@ class RadarNode(ManagedNode):
 
     def _track_all(self, deferred):
         calls = []
-        for epochs, truth, last_burn, now in deferred:
+        for epochs, truth, last_burn, now, before in deferred:
             if last_burn > truth[0]:  # burn executed, post-burn truth not in yet: no valid truth after the burn
                 epochs = epochs[epochs < last_burn]
             if epochs.size:
-                calls.append((epochs, truth, now))
+                calls.append((epochs, truth, now, truth if before is None else before))
         if not calls:
             return
         sizes = [c[0].size for c in calls]
         epochs = np.concatenate([c[0] for c in calls])
-        t_tr = np.repeat([c[1][0] for c in calls], sizes)
-        roe_tr = np.repeat(np.array([c[1][1] for c in calls]), sizes, axis=0)
-        kep_tr = np.repeat(np.array([c[1][2] for c in calls]), sizes, axis=0)
-        chief = propagate_chief(kep_tr, epochs - t_tr)
-        rate = np.repeat([self.truth_rate(c[1][0], c[1][1]) for c in calls], sizes)
-        roe = propagate(roe_tr, epochs - t_tr, kep_tr[:, 0], kep_tr[:, 2], True, da_dot=rate)
+
+        def samples(j):  # the calls' j-th sample (truth, or the one before it) repeated over their epochs
+            return TruthSamples(*(np.repeat(np.array([c[j][x] for c in calls]), sizes, axis=0) for x in range(3)))
+
+        rate = np.repeat([truth_da_rate(c[3][0], c[3][1], c[1][0], c[1][1]) for c in calls], sizes)
+        roe, chief = truth_between(epochs, samples(1), samples(3), rate)
+        kep_tr = samples(1).kep
         earth = gcrs_to_itrs(self.jd0, epochs)
         # the relative position serves the separation and every station's look angles: formed once
         rel = rtn_position(roe, chief[:, 4] + chief[:, 5])
@@ -256,23 +265,18 @@ class RadarNode(ManagedNode):
         good = [trackable(zs[:, 2], sep, self.mask, self.min_sep).tolist() for zs in z]
         epochs = epochs.tolist()
         start = 0
-        for (_, _, now), n in zip(calls, sizes):
+        for (_, _, now, _), n in zip(calls, sizes):
             rows = slice(start, start + n)
             start += n
             self._passes(epochs[rows], now, [zs[rows] for zs in z], [vs[rows] for vs in seen],
                          [gs[rows] for gs in good])
 
-    def truth_rate(self, t, roe):
-        """The truth's drift of da [1/s] into its sample (``t``, ``roe``) from the sample before it
-        (:func:`~roe_sep.core.od.radar.truth_da_rate`); 0 for the first sample or across a burn (one in
-        (t_before, t]: the first burn epoch after t_before, in the sorted epochs, is <= t)."""
-        k = bisect.bisect_left(self.history_t, t)
-        if k == 0:
-            return 0.0
-        b = bisect.bisect_right(self.burns_sorted, self.history_t[k - 1])
-        if b < len(self.burns_sorted) and self.burns_sorted[b] <= t:
-            return 0.0
-        return truth_da_rate(self.history_t[k - 1], self.history_roe[k - 1], t, roe)
+    def sample_before(self, t):
+        """The truth sample ``(t, roe, kep)`` before the one at ``t`` that the measurements between them are blended
+        from (:func:`~roe_sep.core.od.sensor.sample_pair`, :func:`~roe_sep.core.od.sensor.truth_between`); None for
+        the first sample or across a burn."""
+        k, j = sample_pair(self.history_t, self.burns_sorted, t)
+        return None if j == k else (self.history_t[j], self.history_roe[j], self.history_kep[j])
 
     def _passes(self, epochs, now, z, seen, good):
         """Open and close passes and measure: one :meth:`track` call's epochs, station by station (``epochs``, and

@@ -45,8 +45,7 @@ from .. import interfaces
 from ..core.constants import R_EARTH
 from ..core.frames import gcrs_to_itrs
 from ..core.od.batch import DragModel, DriftPrior, RadarBatch, batch_least_squares
-from ..core.od.sensor import RadarRecord, counted_passes
-from ..core.relmotion.dynamics import propagate_chief
+from ..core.od.sensor import RadarRecord, TruthSamples, chief_between, counted_passes, sample_pair
 from ..core.relmotion.roe import wrap_angle
 from ..core.truth.nonlinear import vallado_band
 from .convert import array_to_elements, roe_to_msg, sec_to_time, time_to_sec
@@ -82,6 +81,7 @@ class RadarODNode(ManagedNode):
         """No truth, no records: the state of a run not started."""
         self.history_t, self.history_kep = [], []  # every truth sample's t [s] and chief elements, sorted by t
         self.burns = []  # executed burns' epochs [s] not applied yet, sorted
+        self.burn_epochs = []  # every executed burn's epoch [s], sorted
         self.last_burn = -math.inf  # the latest applied burn (one at or before the latest estimate's time)
         self.records = []  # RadarRecord, in arrival order
         self.closed = set()  # (station index, pass_id) of the sensor's passes whose end has arrived
@@ -133,6 +133,7 @@ class RadarODNode(ManagedNode):
         """A burn: applied to the estimates from its epoch on (:meth:`apply_burns`), whenever it arrives."""
         t = time_to_sec(msg.epoch)
         bisect.insort(self.burns, t)
+        bisect.insort(self.burn_epochs, t)
         self.get_logger().info(f"{msg.spacecraft} {msg.purpose} burn at t = {t:.1f} s: earlier measurements "
                                "are no longer used")
 
@@ -161,11 +162,12 @@ class RadarODNode(ManagedNode):
                    else None)
         if problem:
             raise ValueError(problem)
-        # the chief from the first truth sample at or after the epoch (the latest if none): the sample from which
-        # the sensor simulated a measurement at that epoch
-        k = min(bisect.bisect_left(self.history_t, t), len(self.history_t) - 1)
-        t_tr, kep_tr = self.history_t[k], self.history_kep[k]
-        chief = propagate_chief(kep_tr, np.array([t - t_tr]))[0]
+        # the chief as the sensor simulated a measurement at that epoch: from the first truth sample at or after it
+        # (the latest if none), blended with the one before (sample_pair, chief_between)
+        k, j = sample_pair(self.history_t, self.burn_epochs, t)
+        t_tr = self.history_t[k]
+        chief = chief_between([t], *(TruthSamples(np.array([self.history_t[i]]), None,
+                                                  np.array([self.history_kep[i]])) for i in (k, j)))[0]
         earth = gcrs_to_itrs(self.jd0, t)
         return RadarRecord(t=t, station=self.names.index(msg.station), pass_id=pass_id, z=z, chief=chief,
                            earth=earth, truth_t=t_tr)

@@ -19,7 +19,7 @@ from roe_sep.core.constants import MU_EARTH, R_EARTH
 from roe_sep.core.frames import gcrf_to_eme2000, gcrs_to_itrs
 from roe_sep.core.od.batch import DragModel, RadarBatch, batch_least_squares
 from roe_sep.core.od.radar import TIRA, julian_date
-from roe_sep.core.relmotion.dynamics import propagate_chief
+from roe_sep.core.od.sensor import TruthSamples, chief_between, sample_pair
 from roe_sep.core.relmotion.maneuvers import delta_roe
 from roe_sep.core.relmotion.orbit import mean_motion
 from roe_sep.core.relmotion.roe import kepler_to_roe, roe_to_kepler
@@ -324,19 +324,25 @@ def _radar_rows(run, t_from, t_to):
                   key=lambda m: time_to_sec(m.header.stamp))
 
 
-def _radar_chief(truth: Truth, t):
+def _radar_chief(truth: Truth, t, burns):
     """The chief radar_od used at each epoch: under lockstep the truth stream is its clock, so a measurement at t
-    was simulated from the first truth sample at or after t (of two at one epoch, the post-burn one), propagated
-    back with its secular model."""
-    k = np.minimum(np.searchsorted(truth.t, t, side="left"), truth.t.size - 1)
-    k = np.searchsorted(truth.t, truth.t[k], side="right") - 1
-    return propagate_chief(truth.chief[k], t - truth.t[k])
+    was simulated from the first truth sample at or after t (of two at one epoch, the post-burn one) and the sample
+    before it, each propagated to t with its secular model and blended in time (sample_pair, chief_between; the
+    later sample alone across a burn of ``burns``, the executed epochs)."""
+    last = np.searchsorted(truth.t, np.unique(truth.t), side="right") - 1  # the post-burn sample of an epoch
+    hist_t, hist_kep = truth.t[last].tolist(), truth.chief[last]
+    out = []
+    for tk in np.atleast_1d(t):
+        k, j = sample_pair(hist_t, sorted(burns), float(tk))
+        pair = (TruthSamples(np.array([hist_t[i]]), None, hist_kep[i:i + 1]) for i in (k, j))
+        out.append(chief_between(np.array([tk]), *pair)[0])
+    return np.array(out)
 
 
-def _batch(t, z, sigma, truth: Truth):
+def _batch(t, z, sigma, truth: Truth, burns):
     jd0 = julian_date(EPOCH)
     t = np.asarray(t, dtype=float)
-    return RadarBatch(t=t, z=np.asarray(z), sigma=np.asarray(sigma), chief=_radar_chief(truth, t),
+    return RadarBatch(t=t, z=np.asarray(z), sigma=np.asarray(sigma), chief=_radar_chief(truth, t, burns),
                       earth=gcrs_to_itrs(jd0, t), site_ef=np.tile(TIRA.ecef, (t.size, 1)),
                       site_enu=np.tile(TIRA.enu, (t.size, 1, 1)))
 
@@ -352,7 +358,8 @@ def test_tdm_fed_back_gives_the_runs_od_solution(exported, run):
     assert len(meas) == od.measurements == 117 and len({m.pass_id for m in meas}) == od.passes == 3
     truth = Truth(run[interfaces.TRUTH_ROE_TOPIC])
     batch = _batch([m.t for m in meas], [m.z for m in meas],
-                   [(m.sigma_range, m.sigma_angle, m.sigma_angle) for m in meas], truth)
+                   [(m.sigma_range, m.sigma_angle, m.sigma_angle) for m in meas], truth,
+                   [time_to_sec(m.epoch) for m in run[interfaces.EXECUTED_TOPIC]])
     # radar_od's drag model: Vallado's scale height at the carrier's altitude and the configured ballistic ratio
     ratio = table("radar_od")["drag_ballistic_ratio"].default
     model = DragModel(vallado_band(batch.chief[-1, 0] - R_EARTH)[2], ratio)

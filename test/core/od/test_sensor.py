@@ -8,7 +8,20 @@ import pytest
 
 from roe_sep.core.config import load_scenario
 from roe_sep.core.od.radar import add_noise
-from roe_sep.core.od.sensor import RadarRecord, counted_passes, noisy_measurement, pass_lost, trackable
+from roe_sep.core.od.radar import chief_from_kepler, chief_position_velocity, deputy_position
+from roe_sep.core.od.sensor import (
+    RadarRecord,
+    TruthSamples,
+    chief_between,
+    counted_passes,
+    noisy_measurement,
+    pass_lost,
+    sample_pair,
+    trackable,
+    truth_between,
+)
+from roe_sep.core.relmotion.dynamics import propagate, propagate_chief
+from roe_sep.core.relmotion.roe import wrap_angle
 from roe_sep.core.truth.contingency import RadarContingency, resolve
 
 MASK = math.radians(10.0)
@@ -77,3 +90,68 @@ def test_counted_passes_are_closed_complete_and_after_the_burn():
     # a measurement simulated from a truth sample older than the burn is not used
     stale = records + [_rec(1200.0, 1, 9, truth_t=900.0)] * 5
     assert (1, 9) not in counted_passes(stale, 1000.0, closed | {(1, 9)}, 5)[1]
+
+
+# --- the truth between two samples (truth_between, chief_between, sample_pair) ------------------------------------
+KEP0 = np.array([6.878e6, 1e-3, math.radians(97.4), 1.0, 0.3, 2.0 * math.pi - 0.01])  # u wraps past 2 pi below
+ROE0 = np.array([1e-6, 8e-4, 5e-5, -3e-5, 2e-5, 6e-5])
+RATE = -2e-11  # the truth's drift of da [1/s]
+
+
+def two_samples(jump_m=40.0):
+    """A sample at 0 s and one at 300 s that is off the first's secular arc: the chief 40 m ahead along its orbit
+    (and a past 2 pi in u), the ROE off by 1 m of a*dl."""
+    kep1 = propagate_chief(KEP0, np.array([300.0]))[0]
+    kep1[5] = np.mod(kep1[5] + jump_m / KEP0[0], 2.0 * math.pi)  # u of the two samples 2 pi apart
+    roe1 = propagate(ROE0, 300.0, KEP0[0], KEP0[2], True, da_dot=RATE)
+    roe1[1] += 1.0 / KEP0[0]
+    return (TruthSamples(np.array([0.0]), ROE0[None], KEP0[None]),
+            TruthSamples(np.array([300.0]), roe1[None], kep1[None]))
+
+
+def at(samples, n):
+    return TruthSamples(*(np.repeat(x, n, axis=0) for x in samples))
+
+
+def deputy(roe, kep):
+    return deputy_position(roe, kep)
+
+
+def test_the_truth_between_two_samples_is_exact_at_both_and_continuous():
+    before, after = two_samples()
+    t = np.array([0.0, 1e-6, 150.0, 300.0 - 1e-6, 300.0])
+    roe, kep = truth_between(t, at(after, 5), at(before, 5), np.full(5, RATE))
+    np.testing.assert_allclose(roe[0], ROE0, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(roe[-1], after.roe[0], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(kep[0, :3], KEP0[:3], rtol=1e-15)
+    assert abs(wrap_angle((kep[0, 4] + kep[0, 5]) - (KEP0[4] + KEP0[5]))) < 1e-12
+    pos = np.array([deputy(r, k) for r, k in zip(roe, kep)])
+    # continuous at both ends: a micro-second moves the deputy by its speed times 1e-6 s, not by the 40 m jump
+    assert np.linalg.norm(pos[1] - pos[0]) < 0.05 and np.linalg.norm(pos[-1] - pos[-2]) < 0.05
+    # half-way, the mean of the two carried states: 20 m from each arc (u wraps past 2 pi in between)
+    kep_a = propagate_chief(after.kep[0], np.array([-150.0]))[0]
+    c_mid = chief_position_velocity(*chief_from_kepler(kep[2]))[0]
+    c_a = chief_position_velocity(*chief_from_kepler(kep_a))[0]
+    assert np.linalg.norm(c_mid - c_a) == pytest.approx(20.0, rel=1e-3)
+
+
+def test_without_an_earlier_sample_the_truth_is_the_later_one_carried_back():
+    before, after = two_samples()
+    t = np.array([10.0, 150.0, 299.0])
+    roe, kep = truth_between(t, at(after, 3), at(after, 3), np.full(3, RATE))
+    np.testing.assert_array_equal(roe, propagate(after.roe[0], t - 300.0, KEP0[0], KEP0[2], True, da_dot=RATE))
+    np.testing.assert_array_equal(kep, propagate_chief(after.kep[0], t - 300.0))
+    np.testing.assert_array_equal(chief_between(t, at(after, 3), at(after, 3)), kep)
+
+
+def test_the_sample_pair_is_the_later_sample_and_the_one_before_unless_a_burn_parts_them():
+    history = [0.0, 300.0, 450.0, 600.0]
+    assert sample_pair(history, [], -5.0) == (0, 0)  # no earlier sample
+    assert sample_pair(history, [], 0.0) == (0, 0)
+    assert sample_pair(history, [], 10.0) == (1, 0)
+    assert sample_pair(history, [], 300.0) == (1, 0)
+    assert sample_pair(history, [], 301.0) == (2, 1)
+    assert sample_pair(history, [], 900.0) == (3, 2)  # after the last: the last, carried
+    assert sample_pair(history, [450.0], 400.0) == (2, 2)  # the burn at 450 s: its post-burn sample alone
+    assert sample_pair(history, [450.0], 500.0) == (3, 2)  # after it: blended from the post-burn sample on
+    assert sample_pair(history, [100.0, 450.0], 200.0) == (1, 1)
