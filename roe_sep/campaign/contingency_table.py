@@ -36,6 +36,10 @@ EXPECTED_DETECTIONS = {
     "burn_underperformance": ("burn_magnitude", "burn_pointing"),
     "radar_pass_missed": ("radar_pass_missed",),
     "radar_bias": ("od_residuals",),
+    "ejection_pointing": ("weak_ejection", "od_inconsistent"),
+    "carrier_safe_mode": ("burn_missing",),
+    "drift_stop_overperformance": ("burn_magnitude",),
+    "density_storm": ("od_inconsistent",),
 }
 """Per contingency, the named findings (safety monitor, planner, radar station) that mean the ground saw it
 (docs/contingencies.md, "Detection")."""

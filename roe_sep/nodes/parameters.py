@@ -260,8 +260,9 @@ SIM = (
     Param("disperse", "bool", True, "apply the execution errors, the drag uncertainty and the ejection delay"),
     Param("ejection_delay_max", "double", 10.0, "the release mechanism fires uniformly within this delay after the "
           "commanded ejection epoch (an assumption: no seed gives a value; 0: on time)", "s", range=(0.0, 600.0)),
-    _contingency("simulator (spl_weak, drift_stop_delayed, drift_stop_missed, burn_underperformance; the others: "
-                 "none here)"),
+    _contingency("simulator (spl_weak, drift_stop_delayed, drift_stop_missed, burn_underperformance, "
+                 "ejection_pointing, carrier_safe_mode, drift_stop_overperformance, density_storm; the others: none "
+                 "here)"),
     Param("duration", "double", DEFAULT_DURATION, "sim time at which the run ends (default 3.25 days: OD, the "
           "initial-condition acquisition and half a day on)", "s", range=(1.0, 1.0e9)),
     Param("time_step", "double", 600.0, "sim time per clock tick (lockstep: per step)", "s", range=(1.0e-3, 86400.0)),

@@ -80,3 +80,16 @@ def test_a_table_from_an_earlier_version_is_read_and_continued(tmp_path, legacy)
     rows = table.read()
     assert set(rows) == {7, 8} and json.loads(rows[8]["contingency"])["name"] == "drift_stop_missed"
     assert rows[7] == {**rows[7], "contingency": "", "contingencies_detected": "", "od_nees7": None}
+
+
+@pytest.mark.parametrize("name", ["ejection_pointing", "carrier_safe_mode", "drift_stop_overperformance",
+                                  "density_storm"])
+def test_the_flight_contingencies_are_run_and_campaign_flags(name):
+    """Issue 41 part 6: each is a ``--contingency`` of ``roe-sep run`` and ``campaign``, a parameter of both nodes
+    (the radar ignores them: the simulator's side)."""
+    parser = build_parser()
+    assert parser.parse_args(["run", "--contingency", name]).contingency == name
+    assert parser.parse_args(["campaign", "--runs", "2", "--contingency", name]).contingency == name
+    over = run_overrides(seed=3, contingency=name)
+    check_overrides(over)
+    assert over["sim"]["contingency"] == name

@@ -96,3 +96,16 @@ def test_the_recorded_table_renders_with_the_new_columns_as_na():
     assert len(lines) == len(rows) + 2 and all(line.count("| n/a | n/a | n/a |") == 1 for line in lines[2:])
     weak = next(line for line in lines if line.startswith("| spl_weak, hold on |"))
     assert "| 82 / 99 |" in weak
+
+
+@pytest.mark.parametrize("name, finding", [("carrier_safe_mode", "burn_missing"),
+                                           ("drift_stop_overperformance", "burn_magnitude"),
+                                           ("ejection_pointing", "od_inconsistent"),
+                                           ("ejection_pointing", "weak_ejection"),
+                                           ("density_storm", "od_inconsistent")])
+def test_the_findings_that_mean_the_ground_saw_the_flight_contingencies(tmp_path, name, finding):
+    """Issue 41 part 6's contingencies in a row: the runs with a finding the ground can raise for them."""
+    rows = [row(1, name=name, detected={finding: 75600.0}), row(2, name=name), row(3, name=name,
+                                                                                  detected={"od_residuals": 1.0})]
+    s = summarize(written(tmp_path, rows))
+    assert s["label"] == name and finding in s["detections"] and s["p_detected"]["k"] == 1

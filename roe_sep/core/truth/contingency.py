@@ -9,24 +9,23 @@ The draws come from their own stream of the seed (:data:`CONTINGENCY_STREAM`, as
 a run without a contingency draws exactly what it drew before, and a run with one keeps every other dispersion of its
 seed (the same SPL, thruster and drag draws): the run differs from the nominal one by the contingency alone.
 
-The contingencies (docs/contingencies.md):
+The contingencies (docs/contingencies.md; :data:`SPECS`: parameters and defaults):
 
-* ``spl_weak``: the SPL delivers a fraction f1 (``spl_fraction``, default U(0, 0.5)) of its executed impulse, at
-  least ``residual_dv`` [m/s] along it (the deployer's residual speed; 0: with f1 = 0 the picosatellite stays with
-  the carrier). The design's Monte Carlo takes f1 ~ N(1, 0.1) (seed 002 Eq. 22); this is the tail it does not cover.
-* ``drift_stop_delayed``: the drift-stop executes ``delay_orbits`` k (default 1-3) orbits late (seed 002 Table 1,
-  safety #4: no collision before passive safety; the along-track drift keeps growing at its post-ejection rate,
-  Eq. 13, for k more orbits). Whole orbits: the burn stays at its argument of latitude.
-* ``drift_stop_missed``: the drift-stop never executes (seed 000 Sec. IV). Both act on the first drift-stop
-  commanded (re-published for the same epoch too); a replacement commanded for another epoch flies.
-* ``burn_underperformance``: the ``burn``-th executed carrier burn (default 1, the drift-stop) executes at a
-  ``magnitude`` fraction (default U(0.5, 0.8)) of its executed magnitude, or (``mode: pointing``) turned by
-  ``pointing_deg`` (default U(5, 15) deg) about an axis normal to it at a uniform azimuth.
-* ``radar_pass_missed``: the first ``passes`` (default 1-2) radar passes produce nothing (seed 001 Sec. 5: no backup
-  for 10 h); with ``outage`` > 0 [s] instead: no measurement from the start of the first pass for that long (24 h:
-  86400).
-* ``radar_bias``: a range bias ``bias_m`` (default U(10, 50) m) on every measurement of one station (``station``,
-  '' = the first).
+* ``spl_weak``: the SPL delivers a fraction f1 (``spl_fraction``) of its executed impulse, at least ``residual_dv``
+  (the tail the design's Monte Carlo, f1 ~ N(1, 0.1), seed 002 Eq. 22, does not cover).
+* ``drift_stop_delayed`` / ``drift_stop_missed``: the first drift-stop commanded (re-published for the same epoch
+  too) executes ``delay_orbits`` whole orbits late (seed 002 Table 1 safety #4) / never (seed 000 Sec. IV); a
+  replacement commanded for another epoch flies.
+* ``burn_underperformance``: the ``burn``-th executed carrier burn at a ``magnitude`` fraction, or (``mode:
+  pointing``) turned by ``pointing_deg`` about an axis normal to it at a uniform azimuth.
+* ``radar_pass_missed``: the first ``passes`` radar passes lost (seed 001 Sec. 5), or an ``outage`` [s] from the
+  first pass; ``radar_bias``: a range bias ``bias_m`` at one ``station``.
+* ``ejection_pointing``: the SPL's impulse turned by ``angle_deg`` about the orbit normal (:func:`rotate_about_normal`).
+* ``carrier_safe_mode``: no carrier burn for ``hours`` from ``start_h`` after the executed ejection: a burn due then
+  is lost (:meth:`TruthContingency.dropped`); ``drift_stop_overperformance``: the first executed drift-stop at a
+  ``magnitude`` > 1 of its magnitude.
+* ``density_storm``: the truth's density times ``factor`` for ``hours`` from ``start_h`` after the executed ejection,
+  for both spacecraft (:class:`DensityStorm`, applied by the truth models).
 """
 
 import math
@@ -68,10 +67,18 @@ SPECS = {
                           "outage": Spec("number", 0.0, 0.0, 30 * 86400.0, "s")},
     "radar_bias": {"bias_m": Spec("range", (10.0, 50.0), -10000.0, 10000.0, "m"),
                    "station": Spec("string", "")},
+    "ejection_pointing": {"angle_deg": Spec("range", (-10.0, 10.0), -180.0, 180.0, "deg")},
+    "carrier_safe_mode": {"start_h": Spec("range", (0.0, 12.0), 0.0, 720.0, "h"),
+                          "hours": Spec("range", (6.0, 24.0), 0.0, 720.0, "h")},
+    "drift_stop_overperformance": {"magnitude": Spec("range", (1.1, 1.5), 1.0, 3.0, "(fraction of the burn)")},
+    "density_storm": {"factor": Spec("range", (2.0, 5.0), 0.0, 100.0, "(density multiplier)"),
+                      "start_h": Spec("range", (6.0, 30.0), 0.0, 720.0, "h"),
+                      "hours": Spec("range", (6.0, 24.0), 0.0, 720.0, "h")},
 }
 """{contingency: {parameter: Spec}}: the contingencies and their parameters with their defaults."""
 NAMES = tuple(SPECS)
-SIM_SIDE = ("spl_weak", "drift_stop_delayed", "drift_stop_missed", "burn_underperformance")
+SIM_SIDE = ("spl_weak", "drift_stop_delayed", "drift_stop_missed", "burn_underperformance", "ejection_pointing",
+            "carrier_safe_mode", "drift_stop_overperformance", "density_storm")
 RADAR_SIDE = ("radar_pass_missed", "radar_bias")
 
 
@@ -222,6 +229,54 @@ def rotate_normal(dv: ArrayLike, angle: float, azimuth: float) -> np.ndarray:
     return v * math.cos(angle) + np.cross(axis, v) * math.sin(angle)
 
 
+def rotate_about_normal(dv: ArrayLike, angle: float) -> np.ndarray:
+    """``dv`` ``(3,)`` in RTN turned by ``angle`` [rad] about the N axis, right-handed (R towards T): the N
+    component and the magnitude are kept.
+
+    Parameters
+    ----------
+    dv : array_like, shape (3,)
+        The impulse [m/s] in RTN.
+    angle : float
+        The angle [rad]; positive turns R towards T.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,)
+        The turned impulse [m/s] in RTN.
+    """
+    v = np.asarray(dv, dtype=float)
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1], v[2]])
+
+
+HOUR = 3600.0  # s
+
+
+@dataclass(frozen=True)
+class DensityStorm:
+    """A geomagnetic storm of ``density_storm``: the density the truth's drag sees times ``factor`` from ``start``
+    [s] after the executed ejection for ``duration`` [s] (the window half-open, [t0, t1))."""
+
+    factor: float
+    start: float  # s after the ejection
+    duration: float  # s
+
+    def window(self, ejection: float) -> tuple[float, float]:
+        """The storm's window [s] of sim time for the ejection executed at ``ejection`` [s]."""
+        t0 = float(ejection) + self.start
+        return t0, t0 + self.duration
+
+    def factor_at(self, t: ArrayLike, ejection: float | None) -> np.ndarray:
+        """The density factor at ``t`` [s] (any shape): ``factor`` inside the window, 1 outside and before the
+        ejection (``ejection`` None)."""
+        t = np.asarray(t, dtype=float)
+        if ejection is None:
+            return np.ones_like(t)
+        t0, t1 = self.window(ejection)
+        return np.where((t >= t0) & (t < t1), self.factor, 1.0)
+
+
 @dataclass
 class Contingency:
     """A drawn contingency of one run (:func:`draw`) and what it did (``events``), for the record of the run."""
@@ -241,16 +296,60 @@ class Contingency:
 
 
 class TruthContingency(Contingency):
-    """The simulator's side (:data:`SIM_SIDE`): which burns it moves or drops (:meth:`reschedule`) and how it
-    changes an executed burn (:meth:`executed`). ``period`` [s]: the carrier's orbit in mean argument of latitude
-    (the drift-stop's delay is whole orbits)."""
+    """The simulator's side (:data:`SIM_SIDE`): which burns it moves or drops when commanded (:meth:`reschedule`) or
+    when due (:meth:`dropped`), how it changes an executed burn (:meth:`executed`) and the truth's density storm
+    (:attr:`storm`). ``period`` [s]: the carrier's orbit in mean argument of latitude (the drift-stop's delay is
+    whole orbits)."""
 
     def __init__(self, config: ContingencyConfig, seed: int, period: float):
         super().__init__(config, draw(config, seed))
         self.period = float(period)
         self.carrier_burns = 0
+        self.drift_stops = 0  # executed carrier drift-stops
         self.drift_stop_epoch = None  # s (to the ms), the first drift-stop commanded: the one that fails
+        self.ejection_epoch = None  # s, the executed ejection (the safe mode's and the storm's windows start there)
         self._seen = set()
+
+    @property
+    def storm(self) -> DensityStorm | None:
+        """The density storm the truth applies (``density_storm``), None for every other contingency."""
+        if self.name != "density_storm":
+            return None
+        v = self.values
+        return DensityStorm(v["factor"], v["start_h"] * HOUR, v["hours"] * HOUR)
+
+    def safe_mode_window(self) -> tuple[float, float] | None:
+        """The carrier's safe mode [s] of sim time, [t0, t1), for ``carrier_safe_mode`` once the ejection executed;
+        None else."""
+        if self.name != "carrier_safe_mode" or self.ejection_epoch is None:
+            return None
+        t0 = self.ejection_epoch + self.values["start_h"] * HOUR
+        return t0, t0 + self.values["hours"] * HOUR
+
+    def dropped(self, epoch: float, purpose: str, spacecraft: str) -> bool:
+        """Whether a burn due at ``epoch`` is lost when it comes due: a carrier burn commanded into the safe mode's
+        window (``carrier_safe_mode``: the carrier executes no time-tagged command then); an event records it.
+
+        Parameters
+        ----------
+        epoch : float
+            The burn's epoch [s] of sim time.
+        purpose : str
+            The burn's purpose (for the record).
+        spacecraft : str
+            Who burns (only the ``carrier``'s burns are lost).
+
+        Returns
+        -------
+        bool
+            True when the burn never executes.
+        """
+        window = self.safe_mode_window()
+        if window is None or spacecraft != "carrier" or not window[0] <= epoch < window[1]:
+            return False
+        self._event(("safe_mode", purpose, round(epoch, 3)), f"{purpose} commanded at t = {epoch:.1f} s: not "
+                    f"executed (carrier safe mode from t = {window[0]:.1f} s to t = {window[1]:.1f} s)")
+        return True
 
     def _event(self, key, text):
         if key not in self._seen:
@@ -315,6 +414,20 @@ class TruthContingency(Contingency):
         dv = np.asarray(dv_executed, dtype=float)
         if spacecraft == "carrier":
             self.carrier_burns += 1
+        if purpose == "ejection" and self.ejection_epoch is None:
+            self.ejection_epoch = float(epoch)
+            self._windows(epoch)
+        if self.name == "ejection_pointing" and purpose == "ejection":
+            out = rotate_about_normal(dv, math.radians(self.values["angle_deg"]))
+            self.events.append(f"ejection at t = {epoch:.1f} s: turned by {self.values['angle_deg']:+.2f} deg about "
+                               f"N, dv RTN ({out[0]:+.4f}, {out[1]:+.4f}, {out[2]:+.4f}) m/s")
+            return out
+        if self.name == "drift_stop_overperformance" and spacecraft == "carrier" and purpose == "drift_stop":
+            self.drift_stops += 1
+            if self.drift_stops == 1:
+                self.events.append(f"drift_stop at t = {epoch:.1f} s: {self.values['magnitude']:.3f} of its "
+                                   "magnitude")
+                return self.values["magnitude"] * dv
         if self.name == "spl_weak" and purpose == "ejection":
             f1 = self.values["spl_fraction"]
             out = f1 * dv
@@ -337,6 +450,16 @@ class TruthContingency(Contingency):
                                f"{self.values['magnitude']:.3f} of its magnitude")
             return out
         return dv
+
+
+    def _windows(self, ejection):
+        """Record the safe mode's or the storm's window, now that the ejection executed at ``ejection`` [s]."""
+        if self.name == "carrier_safe_mode":
+            t0, t1 = self.safe_mode_window()
+            self.events.append(f"carrier safe mode from t = {t0:.1f} s to t = {t1:.1f} s: no carrier burn")
+        elif self.name == "density_storm":
+            t0, t1 = self.storm.window(ejection)
+            self.events.append(f"density storm x{self.values['factor']:.3f} from t = {t0:.1f} s to t = {t1:.1f} s")
 
 
 class RadarContingency(Contingency):

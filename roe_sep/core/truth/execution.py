@@ -167,7 +167,12 @@ class BurnExecution:
 
     # ------------------------------------------------------------------ execution
     def due(self, t: float) -> list[PendingBurn]:
-        """The pending burns with an epoch up to ``t`` [s], in epoch order."""
+        """The pending burns with an epoch up to ``t`` [s], in epoch order; those the contingency loses when they
+        come due (a carrier in safe mode: :meth:`~.contingency.TruthContingency.dropped`) are taken off, unflown."""
+        if self.contingency is not None:
+            for b in [b for b in self.pending if b.epoch <= t]:
+                if self.contingency.dropped(b.epoch, b.purpose, b.spacecraft):
+                    self.pending.remove(b)
         return sorted((b for b in self.pending if b.epoch <= t), key=lambda b: b.epoch)
 
     def needs_check(self, burn: PendingBurn) -> bool:

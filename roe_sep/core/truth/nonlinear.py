@@ -932,8 +932,12 @@ class NonlinearTruth:
     velocity changes in the executing spacecraft's RTN frame (:func:`apply_impulse`). ROE are the *mean* ROE of
     the numerical states (:func:`mean_roe`), RTN the true relative state (:func:`relative_rtn`). Queries must not
     go back before the earliest time of the previous query (dense output of the steps since then is kept).
-    ``da_dot`` is the secular model's value, reported in diagnostics only.
+    ``da_dot`` is the secular model's value, reported in diagnostics only. ``storm`` (a contingency's
+    :class:`~.contingency.DensityStorm`, None: none) multiplies both ballistic coefficients -- the density both
+    spacecraft see -- by its factor in its window after the ejection; the window's edges end integration segments.
     """
+
+    storm = None
 
     def __init__(self, chief0: ArrayLike, t0: float, b_chief: float, b_deputy: float, atmosphere: Atmosphere,
                  *, zonals: int = 4, da_dot: float = 0.0):
@@ -941,7 +945,9 @@ class NonlinearTruth:
         self.t0 = float(t0)
         self.da_dot = float(da_dot)
         self.b_deputy = float(b_deputy)
+        self.b_chief = float(b_chief)
         self.separated = False
+        self.ejected_at = None  # s, the separation (the storm's window starts from it)
         self._ta = copy.deepcopy(pair_integrator(zonals, None, DEFAULT_TOL, atmosphere.kind))
         self._ta.time = self.t0
         self._ta.state[:] = pair_state(self.chief0, self.chief0)
@@ -974,9 +980,20 @@ class NonlinearTruth:
         while t > self._ta.time:
             t_from = self._ta.time
             t_to = self.t0 + (math.floor((t_from - self.t0) / SEGMENT + 1e-9) + 1) * SEGMENT
+            if self.storm is not None and self.ejected_at is not None:
+                t_to = self._storm_segment(t_from, t_to)
             res = self._ta.propagate_until(t_to, c_output=True)
             _check(res[0])
             self._segments.append((t_from, t_to, res[4]))
+
+    def _storm_segment(self, t_from, t_to):
+        """The storm: the segment from ``t_from`` ends at the window's next edge before ``t_to``; both ballistic
+        coefficients times the density factor over it (constant between edges). The segment's end [s]."""
+        t_to = min([t_to, *(e for e in self.storm.window(self.ejected_at) if t_from < e)])
+        f = float(self.storm.factor_at(t_from, self.ejected_at))
+        self._ta.pars[0] = self.b_chief * f
+        self._ta.pars[1] = (self.b_deputy if self.separated else self.b_chief) * f
+        return t_to
 
     def states(self, times: ArrayLike) -> np.ndarray:
         """Pair states ``(..., 12)`` at ``times`` [s] (scalar or array, each >= the previous query's earliest)."""
@@ -1089,6 +1106,7 @@ class NonlinearTruth:
         self._ta.state[:] = apply_impulse(state, dv, deputy)
         if deputy and not self.separated:
             self._ta.pars[1] = self.b_deputy
+            self.ejected_at = t
         self.separated = True
         self._segments = []
         self.revision += 1

@@ -6,6 +6,7 @@ and the *true* differential drag ``da_dot``) and each executed burn adds seed 00
 latitude of that instant.
 """
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -30,6 +31,8 @@ class TruthModel:
     roe: np.ndarray = field(default_factory=lambda: np.zeros(6))
     t_state: float = 0.0
     separated: bool = False
+    storm: object = None  # a contingency's DensityStorm: da_dot times its factor in its window after the ejection
+    ejected_at: float | None = None  # s, the separation (the storm's window starts from it)
 
     def __post_init__(self):
         self.chief0 = np.asarray(self.chief0, dtype=float)
@@ -62,8 +65,28 @@ class TruthModel:
         dt = np.asarray(t, dtype=float) - self.t_state
         if not self.separated:
             return np.zeros(np.shape(dt) + (6,))
+        if self.storm is not None:
+            return self._roe_in_storm(np.asarray(t, dtype=float))
         return propagate(self.roe if np.ndim(dt) == 0 else self.roe[None, :], dt, self.a, self.inc, self.j2,
                          da_dot=self.da_dot)
+
+    def _roe_in_storm(self, t: np.ndarray) -> np.ndarray:
+        """:meth:`roe_at` with the storm: the differential drag ``da_dot`` times the density factor, constant between
+        the window's edges, propagated piecewise from the last event across them."""
+        flat = t.reshape(-1)
+        out = np.empty((flat.size, 6))
+        anchor, t_a = self.roe, self.t_state
+        edges = [e for e in self.storm.window(self.ejected_at) if e > t_a] + [math.inf]
+        done = np.zeros(flat.size, bool)
+        for edge in edges:
+            da_dot = self.da_dot * float(self.storm.factor_at(t_a, self.ejected_at))
+            sel = ~done & (flat <= edge)
+            if np.any(sel):
+                out[sel] = propagate(anchor[None, :], flat[sel] - t_a, self.a, self.inc, self.j2, da_dot=da_dot)
+                done |= sel
+            if edge < math.inf:
+                anchor, t_a = propagate(anchor, edge - t_a, self.a, self.inc, self.j2, da_dot=da_dot), edge
+        return out.reshape(t.shape + (6,))
 
     def samples(self, t: ArrayLike) -> tuple:
         """Carrier mean elements ``(T, 6)``, ROE ``(T, 6)`` and the RTN state (position [m], velocity [m/s], each
@@ -113,6 +136,8 @@ class TruthModel:
         None
         """
         state = self.roe_at(t)
+        if not self.separated:
+            self.ejected_at = float(t)
         self.roe = state + delta_roe(np.asarray(dv_rel, dtype=float), self.u_at(t), self.a, mean_motion(self.a))
         self.t_state = float(t)
         self.separated = True

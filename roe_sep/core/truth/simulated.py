@@ -86,7 +86,7 @@ def dispersed_truth(scenario: "Scenario", carrier: "DoubleImpulseDesign | MultiI
         The upper end [s] of the uniform delay of the release mechanism after the commanded ejection epoch.
     contingency : ContingencyConfig, optional
         The run's contingency (:func:`~.contingency.resolve`); only the simulator's (:data:`~.contingency.SIM_SIDE`)
-        act here, the radar's are ignored. Applied whether or not ``disperse``.
+        act here (a storm via the model's ``storm``), the radar's are ignored. Applied whether or not ``disperse``.
 
     Returns
     -------
@@ -118,6 +118,7 @@ def dispersed_truth(scenario: "Scenario", carrier: "DoubleImpulseDesign | MultiI
     drawn = None
     if contingency is not None and contingency.name in SIM_SIDE:
         drawn = TruthContingency(contingency, seed, 2.0 * math.pi / float(arg_latitude_rate(a, inc, True)))
+        model.storm = drawn.storm  # density_storm: the truth's drag (both spacecraft) in its window; else None
     return Dispersed(model, errors, ejection_delay, da_dot, configured, float(db_factor), drawn)
 
 

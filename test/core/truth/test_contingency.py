@@ -37,9 +37,10 @@ PERIOD = 2 * math.pi / float(arg_latitude_rate(D.a, D.inc, True))
 
 
 # ---------------------------------------------------------------------------------------------------- configuration
-def test_the_six_contingencies_of_the_issue():
+def test_the_ten_contingencies_of_the_issue():
     assert set(NAMES) == {"spl_weak", "drift_stop_delayed", "drift_stop_missed", "radar_pass_missed",
-                          "burn_underperformance", "radar_bias"}
+                          "burn_underperformance", "radar_bias", "ejection_pointing", "carrier_safe_mode",
+                          "drift_stop_overperformance", "density_storm"}
     c = default_config("spl_weak")
     assert c.get("spl_fraction") == (0.0, 0.5) and c.get("residual_dv") == 0.0
     assert default_config("drift_stop_delayed").get("delay_orbits") == (1, 3)
