@@ -43,7 +43,8 @@ from ..relmotion.dynamics import (
 )
 from ..relmotion.orbit import mean_motion
 from ..relmotion.roe import roe_to_rtn, wrap_angle
-from .radar import chief_from_kepler, chief_position_velocity, observe, rtn_matrix, two_way_position
+from .osculating import deputy_state
+from .radar import chief_from_kepler, chief_position_velocity, observe, rtn_matrix, two_way_look, two_way_position
 
 STATE_SIZE = 7
 MAX_CONDITION = 1e10
@@ -67,6 +68,19 @@ class RadarBatch:
     earth: np.ndarray
     site_ef: np.ndarray
     site_enu: np.ndarray
+
+
+@dataclass(frozen=True)
+class OsculatingBatch(RadarBatch):
+    """A :class:`RadarBatch` whose carrier is known by its own ephemeris: ``carrier`` (m, 2, 3) its inertial
+    position [m] and velocity [m/s] at ``t``, ``chief`` its first-order Brouwer mean elements there (eccentricity
+    kept). :func:`predict` then places the picosatellite with the osculating model of
+    :mod:`roe_sep.core.od.osculating` (the carrier's state plus the osculating difference of the two spacecraft's
+    mean elements) instead of the circular carrier and the linear ROE map; the mean ROE propagation
+    (:func:`model_roe`) is the same. The offline OD of files from a numerical propagator uses it
+    (:mod:`roe_sep.ndm.offline_od`, ``--model osculating``); radar_od's plain :class:`RadarBatch` is unchanged."""
+
+    carrier: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -381,7 +395,9 @@ def model_roe(x: ArrayLike, batch: RadarBatch, t_est: float, j2: bool = True, dr
 
 def predict(x: ArrayLike, batch: RadarBatch, t_est: float, j2: bool = True, drag: bool = True, *,
             model: DragModel | None = None, decay: float | None = None, ecc: tuple | None = None) -> np.ndarray:
-    """h(x): the mean ROE of :func:`model_roe` observed with :func:`observe`.
+    """h(x): the mean ROE of :func:`model_roe` observed with :func:`observe`; of an :class:`OsculatingBatch`, the
+    picosatellite's state of :func:`roe_sep.core.od.osculating.deputy_state` (rotated by ``earth``) observed with
+    :func:`~roe_sep.core.od.radar.two_way_look`.
 
     Parameters
     ----------
@@ -394,6 +410,9 @@ def predict(x: ArrayLike, batch: RadarBatch, t_est: float, j2: bool = True, drag
         Modeled [range, az, el] [m, rad, rad].
     """
     roe = model_roe(x, batch, t_est, j2, drag, model=model, decay=decay, ecc=ecc)
+    if isinstance(batch, OsculatingBatch):  # the carrier's ephemeris and the osculating map (its docstring)
+        state = np.einsum("...ij,...kj->...ki", batch.earth, deputy_state(roe, batch.chief, batch.carrier))
+        return two_way_look(state, batch.site_ef, batch.site_enu)
     return observe(roe, batch.chief, batch.earth, batch.site_ef, batch.site_enu)
 
 
@@ -432,6 +451,7 @@ def initial_guess(batch: RadarBatch, t_est: float, j2: bool = True, drag: bool =
     r_rel/a = [R T N]^T (W^T two_way_position(z) - r_chief) / a (W: ``earth``; the light time taken out with the
     chief's velocity) is linear in x, exactly: the secular
     propagation and the ROE -> RTN map are linear, so its design matrix is the model evaluated on the 7 unit states.
+    (An :class:`OsculatingBatch`: r_chief, v_chief its carrier's states, the linear map a start for Gauss-Newton.)
 
     Parameters
     ----------
@@ -444,7 +464,10 @@ def initial_guess(batch: RadarBatch, t_est: float, j2: bool = True, drag: bool =
         The state.
     """
     a, inc, raan, u = chief_from_kepler(batch.chief)
-    rc, vc = chief_position_velocity(a, inc, raan, u)
+    if isinstance(batch, OsculatingBatch):  # the carrier's own states
+        rc, vc = batch.carrier[:, 0], batch.carrier[:, 1]
+    else:
+        rc, vc = chief_position_velocity(a, inc, raan, u)
     v_ef = np.einsum("...ij,...j->...i", batch.earth, vc)
     r_eci = np.einsum("...ji,...j->...i", batch.earth, two_way_position(batch.z, v_ef, batch.site_ef, batch.site_enu))
     rel = np.einsum("...ji,...j->...i", rtn_matrix(rc, vc), r_eci - rc) / a[:, None]
@@ -469,7 +492,12 @@ def _check(batch: RadarBatch):
     if 3 * m < STATE_SIZE + 1:
         raise ValueError(f"not enough measurements: {m} range/az/el triplets ({3 * m} values) for {STATE_SIZE} "
                          "unknowns and a residual")
-    for name in ("t", "z", "sigma", "chief", "earth", "site_ef", "site_enu"):
+    names = ("t", "z", "sigma", "chief", "earth", "site_ef", "site_enu")
+    if isinstance(batch, OsculatingBatch):
+        names += ("carrier",)
+        if np.shape(batch.carrier) != (m, 2, 3):
+            raise ValueError(f"carrier has shape {np.shape(batch.carrier)}, expected {(m, 2, 3)}")
+    for name in names:
         if not np.all(np.isfinite(getattr(batch, name))):
             raise ValueError(f"measurement batch has non-finite values in {name!r}")
     if np.any(np.asarray(batch.sigma) <= 0.0):
