@@ -19,7 +19,7 @@ from .common import emit, finite_float, positive_int
 
 DEFAULTS = {p.name: p.default for p in RADAR_OD}
 ROE_NAMES = ("a*da", "a*dl", "a*dex", "a*dey", "a*dix", "a*diy")
-MODELS = ("circular", "osculating")  # roe_sep.ndm.offline_od.MODELS (not imported to build the parser)
+MODELS = ("auto", "circular", "osculating")  # auto and roe_sep.ndm.offline_od.MODELS (not imported to build the parser)
 PREDICT_STEP_S = 300.0  # s: the run's OD segments' step (ndm.options.Options.od_step)
 
 
@@ -83,10 +83,11 @@ def cmd_od(args):
                            maneuvers=maneuver_epochs(args.maneuvers or []),
                            since=args.since, until=args.until, scale_height=DEFAULTS["density_scale_height_m"],
                            ballistic_ratio=DEFAULTS["drag_ballistic_ratio"], drag=DEFAULTS["od_drag_terms"],
-                           edit_p=args.edit_p, model=args.model)
+                           edit_p=args.edit_p,
+                           model=oo.auto_model(args.carrier_oem) if args.model == "auto" else args.model)
     od = oo.solve(args.tdm, args.carrier_oem, settings, args.carrier, args.target)
     est = oo.estimate(od)
-    rep = {"tdm": [str(p) for p in args.tdm], "carrier_oem": str(args.carrier_oem), "model": args.model,
+    rep = {"tdm": [str(p) for p in args.tdm], "carrier_oem": str(args.carrier_oem), "model": settings.model,
            "estimate": {k: est[k] for k in ("epoch", "a_roe_m", "a_roe_sigma_m", "a_da_dot_m_s", "a_da_dot_sigma_m_s",
                                             "covariance_a_roe_m2", "r_m", "v_m_s", "iterations")}
            | {"covariance_eme2000": est["covariance_eme2000"].tolist()},
@@ -176,11 +177,12 @@ def register(subparsers):
                    help="counted passes the OD needs (default 2, radar_od's passes_required)")
     p.add_argument("--edit-p", type=finite_float(0.0, 0.5, lo_open=True), default=1e-4,
                    help="probability of rejecting a consistent measurement (chi-square, 3 dof; default 1e-4)")
-    p.add_argument("--model", choices=MODELS, default="circular",
-                   help="measurement model: circular (default, radar_od's: the carrier's mean near-circular elements "
-                   "as osculating and the linear ROE map; a closed-loop run's files) or osculating (the carrier's OEM "
+    p.add_argument("--model", choices=MODELS, default="auto",
+                   help="measurement model: circular (radar_od's: the carrier's mean near-circular elements as "
+                   "osculating and the linear ROE map; a closed-loop run's files), osculating (the carrier's OEM "
                    "states and Brouwer mean elements, the osculating difference of the two spacecraft's mean "
-                   "elements; files of a numerical propagator)")
+                   "elements; real tracking, files of a numerical propagator) or auto (default: circular for a "
+                   "carrier OEM of roe_sep, ORIGINATOR ROE_SEP; osculating for any other)")
     p.add_argument("--predict", type=finite_float(0.0, 720.0, lo_open=True, unit="h"), default=24.0,
                    help="h, span of the OEM prediction (default 24)")
     p.add_argument("--out", help="directory for od_estimate.opm.xml and od_prediction.oem.xml (.kvn with --format kvn)")

@@ -10,8 +10,8 @@ The carrier's orbit comes from its own OEM (its GPS ephemeris, EME2000): each st
 near-circular elements the measurement model uses as osculating (:func:`chief_elements`, the inverse of
 :func:`roe_sep.ndm.frames.chief_state`: a = |r|, the plane of two neighbouring positions with the J2 nodal turn
 between them, u of r in it) and carried to the measurement epoch from the first state at or after it in its
-segment with the J2 secular rates (:func:`~roe_sep.core.relmotion.dynamics.propagate_chief`), as radar_od carries
-its truth samples.
+segment and from the state before it with the J2 secular rates, blended linearly in time
+(:func:`carrier_at`, :func:`~roe_sep.core.od.sensor.chief_between`), as radar_od carries its truth samples.
 That is radar_od's measurement model (``model="circular"``, the default), the one a closed-loop run's files were
 made with. ``model="osculating"`` (files of a numerical propagator, e.g. Orekit's): each state (position and
 velocity) gives the carrier's first-order Brouwer mean elements with their eccentricity
@@ -48,7 +48,7 @@ from ..core.od.batch import (
     predict,
 )
 from ..core.od.radar import julian_date
-from ..core.od.sensor import RadarRecord, counted_passes
+from ..core.od.sensor import RadarRecord, TruthSamples, chief_between, counted_passes
 from ..core.relmotion.dynamics import propagate, propagate_chief, raan_rate
 from ..core.truth.mean_osc import cartesian_to_mean
 from ..core.truth.nonlinear import vallado_band
@@ -206,17 +206,28 @@ def read_carrier_oem(path, epoch_utc, target=None, carrier=None, model="circular
     return out
 
 
+def auto_model(path) -> str:
+    """The measurement model for a carrier OEM (``roe-sep od --model auto``): ``circular`` for one of roe_sep's own
+    runs (``ORIGINATOR`` ROE_SEP: its radar simulated the measurements with that model), ``osculating`` for any
+    other (a ground segment's GPS ephemeris, a numerical propagator's), whose carrier moves as a real orbit does."""
+    originator = str(getattr(_read(path).header, "originator", "") or "").strip().upper()
+    return "circular" if originator == "ROE_SEP" else "osculating"
+
+
 def carrier_at(segments, t):
     """The carrier's mean elements at sim time ``t`` [s] from the first state at or after ``t`` of the segment that
-    holds it (a segment ends at a maneuver: none is crossed), as radar_od carries its truth samples (the sensor
-    simulated its measurements from that sample, so a closed-loop run's files are read as they were made), and that
-    state's time; None outside every segment."""
+    holds it and the state before it, each carried to ``t`` and blended linearly in time
+    (:func:`~roe_sep.core.od.sensor.chief_between`; a segment ends at a maneuver: none is crossed), as radar_od
+    carries its truth samples (the sensor simulated its measurements from them, so a closed-loop run's files are read
+    as they were made), and the later state's time; None outside every segment."""
     for seg in segments:
         if seg.t[0] <= t <= seg.t[-1]:
             k = int(np.searchsorted(seg.t, t))
             if abs(seg.t[k] - t) > CARRIER_GAP_S:
                 return None
-            return propagate_chief(seg.kep[k], np.array([t - seg.t[k]]))[0], float(seg.t[k])
+            j = max(k - 1, 0)
+            pair = (TruthSamples(seg.t[i:i + 1], None, seg.kep[i:i + 1]) for i in (k, j))
+            return chief_between(np.array([t]), *pair)[0], float(seg.t[k])
     return None
 
 

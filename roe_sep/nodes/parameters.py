@@ -378,6 +378,9 @@ RADAR_OD = (
           "1/sqrt(day)", range=(0.0, 10.0)),
     Param("od_drag_terms", "bool", True, "the OD model's drag terms: the drift rate's growth within a batch, the "
           "drag-driven dix drift and short-periodic de (core.od.batch); false: the secular drift model alone"),
+    Param("range_bias_sigma", "double", 0.0, "a priori 1-sigma of a constant range bias per station, estimated with "
+          "the relative orbit (core.od.batch.RangeBiasPrior; the estimate on /diagnostics as range_bias_m); 0: no "
+          "bias estimated", "m", range=(0.0, 1.0e4)),
 )
 
 IC_PLANNER = (

@@ -27,6 +27,7 @@ Parameters: :data:`roe_sep.nodes.parameters.RADAR_OD` (``radar_od --help``, docs
 
 import bisect
 import collections
+import json
 import math
 
 import numpy as np
@@ -44,7 +45,7 @@ from roe_sep_msgs.msg import (
 from .. import interfaces
 from ..core.constants import R_EARTH
 from ..core.frames import gcrs_to_itrs
-from ..core.od.batch import DragModel, DriftPrior, RadarBatch, batch_least_squares
+from ..core.od.batch import DragModel, DriftPrior, RadarBatch, RangeBiasPrior, batch_least_squares, station_index
 from ..core.od.sensor import RadarRecord, TruthSamples, chief_between, counted_passes, sample_pair
 from ..core.relmotion.roe import wrap_angle
 from ..core.truth.nonlinear import vallado_band
@@ -72,6 +73,7 @@ class RadarODNode(ManagedNode):
         ratio = declare(self, "drag_ballistic_ratio")
         self.density_walk = declare(self, "density_walk")
         self.drag_terms = declare(self, "od_drag_terms")
+        self.bias_sigma = declare(self, "range_bias_sigma")
         self.drag = (scale_height, ratio)
         self.estimates = 0
         self.received = 0
@@ -89,6 +91,7 @@ class RadarODNode(ManagedNode):
         self.ends = {}  # (station index, pass_id) -> (measurements, t [s]) of a pass end waiting for them
         self.last_solution = None  # (ODResult, carrier a [m]) of the latest estimate
         self.prior = None  # DriftPrior from the last solution before the latest burn
+        self.range_bias = {}  # station name -> (bias [m], 1-sigma [m]) of the latest estimate (range_bias_sigma > 0)
 
     def activate(self):
         """Publishers, subscriptions (the ``activate`` transition)."""
@@ -109,9 +112,12 @@ class RadarODNode(ManagedNode):
         publish_status(self, self.diag_pub, OK, "waiting for measurements", self._values())
 
     def _values(self):
-        return {"measurements": self.received, "passes": len(self.closed),
-                "passes_since_burn": len(self.usable()[1]), "estimates": self.estimates,
-                "last_burn_s": self.last_burn}
+        values = {"measurements": self.received, "passes": len(self.closed),
+                  "passes_since_burn": len(self.usable()[1]), "estimates": self.estimates,
+                  "last_burn_s": self.last_burn}
+        if self.range_bias:  # absent unless estimated: a nominal status as before
+            values["range_bias_m"] = json.dumps({k: {"bias": b, "sigma": sb} for k, (b, sb) in self.range_bias.items()})
+        return values
 
     # --- inputs ---------------------------------------------------------------------------------------------
     def on_truth(self, msg: RelativeOrbitalElements):
@@ -256,20 +262,28 @@ class RadarODNode(ManagedNode):
                  if self.prior is not None and self.use_prior else None)
         try:
             result = batch_least_squares(batch, prior=prior, drag=self.drag_terms,
-                                         model=self.drag_model(batch.chief[-1, 0]))
+                                         model=self.drag_model(batch.chief[-1, 0]),
+                                         bias=RangeBiasPrior(self.bias_sigma) if self.bias_sigma > 0.0 else None)
         except ValueError as exc:
             self.get_logger().error(f"orbit determination failed: {exc}")
             publish_status(self, self.diag_pub, ERROR, f"orbit determination failed: {exc}", self._values())
             return
         self.od_pub.publish(self.od_msg(result, batch.chief[-1], len(passes), now))
         self.estimates += 1
+        if result.range_bias:
+            index, n = station_index(batch)
+            first = [int(np.argmax(index == k)) for k in range(n)]
+            sig = np.sqrt(np.diag(np.reshape(result.range_bias_cov, (n, n))))
+            self.range_bias = {self.names[s_idx[j]]: (result.range_bias[k], float(sig[k]))
+                               for k, j in enumerate(first)}
         a = batch.chief[-1, 0]
         self.last_solution = (result, a)
         self.get_logger().info(
             f"OD #{self.estimates} at t = {result.t_est:.0f} s from {len(passes)} passes / {result.measurements} "
             f"measurements: a*ROE = {np.array2string(result.x[:6] * a, precision=1)} m, a*da_dot = "
             f"{result.x[6] * a:.3e} m/s, residual RMS {result.residual_rms:.2f}"
-            + ("" if prior is None else f", drift prior from t = {self.prior.t:.0f} s"))
+            + ("" if prior is None else f", drift prior from t = {self.prior.t:.0f} s")
+            + "".join(f", {name} range bias {b:+.2f} +- {sb:.2f} m" for name, (b, sb) in self.range_bias.items()))
         publish_status(self, self.diag_pub, OK, f"estimate {self.estimates} published", self._values())
 
     def drag_model(self, a_chief):

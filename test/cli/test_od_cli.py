@@ -96,6 +96,7 @@ def test_same_passes_as_the_run_give_the_runs_estimate(files, capsys):
     of a*dix here)."""
     run = json.loads((ROOT / "bags" / "default_run.report.json").read_text())["od"]
     rep = solve(files, ARCS[0][0], capsys)
+    assert rep["model"] == "circular"  # --model auto: our own run's OEM (ORIGINATOR ROE_SEP), its radar's model
     est = rep["estimate"]
     assert frames.sim_time(EPOCH, est["epoch"]) == pytest.approx(run["epoch"], abs=1e-3)
     assert rep["measurements"]["used"] == run["measurements"]

@@ -99,6 +99,11 @@ class ODResult:
     a_est: float = 0.0
     u_est: float = 0.0
     drag: bool = True
+    range_bias: tuple = ()
+    """Estimated range bias [m] of each station (:class:`RangeBiasPrior`, in :func:`station_index` order); empty when
+    not estimated."""
+    range_bias_cov: tuple = ()
+    """Their covariance [m^2], row-major; ``cov`` is the state's marginal (the biases' uncertainty included)."""
 
     def mean_state(self) -> tuple[np.ndarray, np.ndarray]:
         """(state, covariance) of the mean ROE at ``t_est`` as the project defines them (first-order J2 mean
@@ -192,6 +197,42 @@ class DriftPrior:
         row[6] = 1.0 / g
         row[0] = -x[6] * dg_dda / g**2
         return (self.beta - x[6] / g) / sigma, row / sigma
+
+
+@dataclass(frozen=True)
+class RangeBiasPrior:
+    """A constant range bias per station, estimated with the state (issue 41 part 4): each station's bias b_s [m]
+    enters its ranges as z = h(x) + b_s + noise, with the a priori information b_s ~ N(0, ``sigma``^2) (a
+    pseudo-measurement row b_s / sigma). A bias the state would otherwise absorb (a +30 m bias shifts a 3-pass OD by
+    7-18 formal sigma) is told apart by the passes' different geometries (the range's direction in the RTN frame
+    turns from pass to pass while a bias does not); ``sigma`` [m] > 0."""
+
+    sigma: float
+
+
+def station_index(batch: RadarBatch) -> tuple[np.ndarray, int]:
+    """Each measurement's station (its Earth-fixed site to the millimetre, in order of first appearance after
+    sorting) and the number of stations.
+
+    Parameters
+    ----------
+    batch : RadarBatch
+        The measurements.
+
+    Returns
+    -------
+    tuple
+        (index (m,) int, number of stations).
+    """
+    sites, index = np.unique(np.round(np.asarray(batch.site_ef, dtype=float), 3), axis=0, return_inverse=True)
+    return np.asarray(index).reshape(-1), int(sites.shape[0])
+
+
+def _bias_columns(index: np.ndarray, n_bias: int, w: np.ndarray) -> np.ndarray:
+    """dh/db of the whitened measurements ``(3 m, n_bias)``: w on the range rows of each station, 0 elsewhere."""
+    cols = np.zeros((index.size, 3, n_bias))
+    cols[np.arange(index.size), 0, index] = 1.0
+    return cols.reshape(-1, n_bias) * w[:, None]
 
 
 def measurement_residual(z: ArrayLike, z_model: ArrayLike) -> np.ndarray:
@@ -506,7 +547,8 @@ def _check(batch: RadarBatch):
 
 def batch_least_squares(batch: RadarBatch, t_est: float | None = None, x0: ArrayLike | None = None, j2: bool = True,
                         max_iterations: int = 20, *, tol: float = 1e-6, prior: DriftPrior | None = None,
-                        drag: bool = True, model: DragModel | None = None) -> ODResult:
+                        drag: bool = True, model: DragModel | None = None,
+                        bias: RangeBiasPrior | None = None) -> ODResult:
     """Gauss-Newton weighted least squares of x = [ROE at t_est (6), da_dot] (module docstring); converged when the
     step's Mahalanobis length sqrt(dx^T H^T W H dx) is below ``tol`` (a fraction of one sigma).
 
@@ -522,6 +564,8 @@ def batch_least_squares(batch: RadarBatch, t_est: float | None = None, x0: Array
         The Gauss-Newton limits.
     prior, model : DriftPrior, DragModel, optional
         The a priori row (already carried to ``t_est``); the drift rate's growth (:func:`drift_growth`).
+    bias : RangeBiasPrior, optional
+        Estimate a range bias per station with its a priori information (the result's ``range_bias``).
 
     Returns
     -------
@@ -536,20 +580,34 @@ def batch_least_squares(batch: RadarBatch, t_est: float | None = None, x0: Array
     a_chief = _chief_a_inc(batch)[0]
     decay = chief_decay(batch)
     ecc = chief_eccentricity(batch, t_est) if drag and model is not None else None  # constants of the batch
+    index, n_bias = station_index(batch) if bias is not None else (None, 0)
+    b = np.zeros(n_bias)  # the stations' range biases [m]
 
-    def whitened(x: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
-        r = measurement_residual(batch.z, predict(x, batch, t_est, j2, drag, model=model, decay=decay,
-                                                  ecc=ecc)).reshape(-1) * w
+    def unbiased(b: np.ndarray) -> np.ndarray:
+        if not n_bias:
+            return batch.z
+        z = np.array(batch.z, dtype=float)
+        z[:, 0] -= b[index]
+        return z
+
+    def whitened(x: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+        r = measurement_residual(unbiased(b), predict(x, batch, t_est, j2, drag, model=model, decay=decay,
+                                                      ecc=ecc)).reshape(-1) * w
         if prior is None:
             return r, None
         r_p, h_p = prior.residual_row(x, a_chief)
-        return np.append(r, r_p), h_p
+        return np.append(r, r_p), np.append(h_p, np.zeros(n_bias))
 
     for iteration in range(1, max_iterations + 1):
-        r, h_p = whitened(x)
+        r, h_p = whitened(x, b)
         h = jacobian(x, batch, t_est, j2, drag, model=model, decay=decay, ecc=ecc).reshape(-1, STATE_SIZE) * w[:, None]
+        if n_bias:
+            h = np.hstack([h, _bias_columns(index, n_bias, w)])
         if h_p is not None:
             h = np.vstack([h, h_p])
+        if n_bias:  # the biases' a priori rows
+            r = np.append(r, -b / bias.sigma)
+            h = np.vstack([h, np.hstack([np.zeros((n_bias, STATE_SIZE)), np.eye(n_bias) / bias.sigma])])
         scale = np.linalg.norm(h, axis=0)
         if not np.all(scale > 0.0):
             raise ValueError(f"singular normal matrix: state component(s) {np.nonzero(~(scale > 0.0))[0].tolist()}"
@@ -560,19 +618,25 @@ def batch_least_squares(batch: RadarBatch, t_est: float | None = None, x0: Array
             raise ValueError(f"singular normal matrix (condition number {cond:.3g} of the scaled design matrix): "
                              "the measurements do not determine the relative orbit and da_dot")
         dy = vt.T @ ((u_.T @ r) / sv)
-        x = x + dy / scale
+        step = dy / scale
+        x = x + step[:STATE_SIZE]
+        b = b + step[STATE_SIZE:]
         if np.linalg.norm(sv * (vt @ dy)) < tol:
             break
     else:
         raise ValueError(f"Gauss-Newton did not converge in {max_iterations} iterations")
-    r = measurement_residual(batch.z, predict(x, batch, t_est, j2, drag, model=model, decay=decay,
-                                              ecc=ecc)).reshape(-1) * w
-    cov = (vt.T / sv**2) @ vt / np.outer(scale, scale)  # at the last step's Jacobian (a priori row included)
+    r = measurement_residual(unbiased(b), predict(x, batch, t_est, j2, drag, model=model, decay=decay,
+                                                  ecc=ecc)).reshape(-1) * w
+    full = (vt.T / sv**2) @ vt / np.outer(scale, scale)  # at the last step's Jacobian (a priori rows included)
+    full = 0.5 * (full + full.T)
     k = np.argmax(batch.t)
     chief_est = propagate_chief(batch.chief[k], t_est - batch.t[k])
-    return ODResult(x=x, cov=0.5 * (cov + cov.T), t_est=t_est, residual_rms=float(np.sqrt(np.mean(r * r))),
-                    iterations=iteration, measurements=int(np.shape(batch.t)[0]), a_est=float(chief_est[0]),
-                    u_est=float(chief_est[4] + chief_est[5]), drag=drag)
+    return ODResult(x=x, cov=full[:STATE_SIZE, :STATE_SIZE], t_est=t_est,
+                    residual_rms=float(np.sqrt(np.mean(r * r))), iterations=iteration,
+                    measurements=int(np.shape(batch.t)[0]), a_est=float(chief_est[0]),
+                    u_est=float(chief_est[4] + chief_est[5]), drag=drag,
+                    range_bias=tuple(float(v) for v in b),
+                    range_bias_cov=tuple(float(v) for v in full[STATE_SIZE:, STATE_SIZE:].reshape(-1)))
 
 
 def nees(x_est: ArrayLike, x_true: ArrayLike, cov: ArrayLike) -> float:

@@ -7,8 +7,7 @@ import numpy as np
 import pytest
 
 from roe_sep.core.config import load_scenario
-from roe_sep.core.od.radar import add_noise
-from roe_sep.core.od.radar import chief_from_kepler, chief_position_velocity, deputy_position
+from roe_sep.core.od.radar import add_noise, chief_from_kepler, chief_position_velocity, deputy_position
 from roe_sep.core.od.sensor import (
     RadarRecord,
     TruthSamples,
