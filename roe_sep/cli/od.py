@@ -84,10 +84,10 @@ def cmd_od(args):
                            since=args.since, until=args.until, scale_height=DEFAULTS["density_scale_height_m"],
                            ballistic_ratio=DEFAULTS["drag_ballistic_ratio"], drag=DEFAULTS["od_drag_terms"],
                            edit_p=args.edit_p,
-                           model=oo.auto_model(args.carrier_oem) if args.model == "auto" else args.model)
+                           model=args.model)
     od = oo.solve(args.tdm, args.carrier_oem, settings, args.carrier, args.target)
     est = oo.estimate(od)
-    rep = {"tdm": [str(p) for p in args.tdm], "carrier_oem": str(args.carrier_oem), "model": settings.model,
+    rep = {"tdm": [str(p) for p in args.tdm], "carrier_oem": str(args.carrier_oem), "model": oo.model_of(od),
            "estimate": {k: est[k] for k in ("epoch", "a_roe_m", "a_roe_sigma_m", "a_da_dot_m_s", "a_da_dot_sigma_m_s",
                                             "covariance_a_roe_m2", "r_m", "v_m_s", "iterations")}
            | {"covariance_eme2000": est["covariance_eme2000"].tolist()},

@@ -28,7 +28,7 @@ chi-square distribution's 95 % band, which a model and sigmas that fit the data 
 """
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from datetime import timedelta
 
 import numpy as np
@@ -214,6 +214,11 @@ def auto_model(path) -> str:
     return "circular" if originator == "ROE_SEP" else "osculating"
 
 
+def model_of(od: OfflineOD) -> str:
+    """The measurement model a solution was fitted with (:data:`MODELS`)."""
+    return "osculating" if isinstance(od.batch, OsculatingBatch) else "circular"
+
+
 def carrier_at(segments, t):
     """The carrier's mean elements at sim time ``t`` [s] from the first state at or after ``t`` of the segment that
     holds it and the state before it, each carried to ``t`` and blended linearly in time
@@ -275,7 +280,7 @@ class Settings:
     """What the offline OD is told: stations (:class:`~roe_sep.core.od.radar.Station`), default sigmas [m, rad]
     for TDMs without them, measurements a pass needs, passes the OD needs, maneuver epochs (UTC datetimes), the
     arc's limits (UTC or None), the drag model's scale height (0: Vallado's) and ballistic ratio, the drag terms,
-    the editing probability, the measurement model (:data:`MODELS`)."""
+    the editing probability, the measurement model (:data:`MODELS`, or ``auto``: :func:`auto_model`)."""
 
     stations: tuple
     sigma_range: float
@@ -349,6 +354,8 @@ def solve(tdms, carrier_oem, s: Settings, carrier_name=None, target=None) -> Off
     after the latest maneuver, the passes that count, the fit with editing. NdmError (or the batch's ValueError)
     naming what is wrong."""
     epoch_utc, target, msgs = tdm_epoch(tdms, target)
+    if s.model == "auto":  # after the TDMs: a bad TDM is named before the carrier's file is read
+        s = replace(s, model=auto_model(carrier_oem))
     if s.model not in MODELS:
         raise NdmError(f"measurement model {s.model!r} is not one of {', '.join(MODELS)}")
     carrier = read_carrier_oem(carrier_oem, epoch_utc, target, carrier_name, s.model)
