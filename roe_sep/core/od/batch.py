@@ -202,10 +202,10 @@ class DriftPrior:
 @dataclass(frozen=True)
 class RangeBiasPrior:
     """A constant range bias per station, estimated with the state (issue 41 part 4): each station's bias b_s [m]
-    enters its ranges as z = h(x) + b_s + noise, with the a priori information b_s ~ N(0, ``sigma``^2) (a
-    pseudo-measurement row b_s / sigma). A bias the state would otherwise absorb (a +30 m bias shifts a 3-pass OD by
-    7-18 formal sigma) is told apart by the passes' different geometries (the range's direction in the RTN frame
-    turns from pass to pass while a bias does not); ``sigma`` [m] > 0."""
+    enters its ranges as z = h(x) + b_s + noise, with the a priori information b_s ~ N(0, sigma squared), sigma =
+    ``sigma`` (a pseudo-measurement row b_s / sigma). A bias the state would otherwise absorb (a +30 m bias shifts
+    a 3-pass OD by 7-18 formal sigma) is told apart by the passes' different geometries (the range's direction in
+    the RTN frame turns from pass to pass while a bias does not); ``sigma`` [m] > 0."""
 
     sigma: float
 
