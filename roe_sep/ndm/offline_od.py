@@ -48,7 +48,7 @@ from ..core.od.batch import (
     predict,
 )
 from ..core.od.radar import julian_date
-from ..core.od.sensor import RadarRecord, TruthSamples, chief_between, counted_passes
+from ..core.od.sensor import RadarRecord, chief_from_samples, counted_passes
 from ..core.relmotion.dynamics import propagate, propagate_chief, raan_rate
 from ..core.truth.mean_osc import cartesian_to_mean
 from ..core.truth.nonlinear import vallado_band
@@ -219,21 +219,27 @@ def model_of(od: OfflineOD) -> str:
     return "osculating" if isinstance(od.batch, OsculatingBatch) else "circular"
 
 
-def carrier_at(segments, t):
-    """The carrier's mean elements at sim time ``t`` [s] from the first state at or after ``t`` of the segment that
-    holds it and the state before it, each carried to ``t`` and blended linearly in time
-    (:func:`~roe_sep.core.od.sensor.chief_between`; a segment ends at a maneuver: none is crossed), as radar_od
-    carries its truth samples (the sensor simulated its measurements from them, so a closed-loop run's files are read
-    as they were made), and the later state's time; None outside every segment."""
+def _bracket(segments, t):
+    """(segment, k) of the carrier's first OEM state at or after sim time ``t`` [s] in the segment that holds ``t``;
+    None outside every segment or farther than :data:`CARRIER_GAP_S` from that state."""
     for seg in segments:
         if seg.t[0] <= t <= seg.t[-1]:
             k = int(np.searchsorted(seg.t, t))
-            if abs(seg.t[k] - t) > CARRIER_GAP_S:
-                return None
-            j = max(k - 1, 0)
-            pair = (TruthSamples(seg.t[i:i + 1], None, seg.kep[i:i + 1]) for i in (k, j))
-            return chief_between(np.array([t]), *pair)[0], float(seg.t[k])
+            return None if abs(seg.t[k] - t) > CARRIER_GAP_S else (seg, k)
     return None
+
+
+def carrier_at(segments, t):
+    """The carrier's mean elements at sim time ``t`` [s] from the first state at or after ``t`` of the segment that
+    holds it and the state before it, each carried to ``t`` and blended linearly in time
+    (:func:`~roe_sep.core.od.sensor.chief_from_samples`; a segment ends at a maneuver: none is crossed), as radar_od
+    carries its truth samples (the sensor simulated its measurements from them, so a closed-loop run's files are read
+    as they were made), and the later state's time; None outside every segment."""
+    found = _bracket(segments, t)
+    if found is None:
+        return None
+    seg = found[0]
+    return chief_from_samples(seg.t, seg.kep, (), t)  # no burn inside a segment
 
 
 def carrier_state_at(segments, t):
@@ -242,16 +248,14 @@ def carrier_state_at(segments, t):
     (:func:`~roe_sep.core.od.osculating.carrier_state`: that state itself when ``t`` is its epoch) blended with the
     state before it (:func:`~roe_sep.core.od.osculating.carrier_between`), and that state's time; None outside every
     segment or farther than :data:`CARRIER_GAP_S` from its states."""
-    for seg in segments:
-        if seg.t[0] <= t <= seg.t[-1]:
-            k = int(np.searchsorted(seg.t, t))
-            if abs(seg.t[k] - t) > CARRIER_GAP_S:
-                return None
-            if seg.t[k] == t:
-                return seg.kep[k], seg.state[k], float(seg.t[k])
-            kep, state = osculating.carrier_between(seg.state[k - 1:k + 1], seg.kep[k - 1:k + 1], seg.t[k - 1:k + 1], t)
-            return kep, state, float(seg.t[k])
-    return None
+    found = _bracket(segments, t)
+    if found is None:
+        return None
+    seg, k = found
+    if seg.t[k] == t:
+        return seg.kep[k], seg.state[k], float(seg.t[k])
+    kep, state = osculating.carrier_between(seg.state[k - 1:k + 1], seg.kep[k - 1:k + 1], seg.t[k - 1:k + 1], t)
+    return kep, state, float(seg.t[k])
 
 
 def tdm_epoch(paths, target=None):

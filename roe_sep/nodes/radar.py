@@ -251,8 +251,9 @@ class RadarNode(ManagedNode):
             return TruthSamples(*(np.repeat(np.array([c[j][x] for c in calls]), sizes, axis=0) for x in range(3)))
 
         rate = np.repeat([truth_da_rate(c[3][0], c[3][1], c[1][0], c[1][1]) for c in calls], sizes)
-        roe, chief = truth_between(epochs, samples(1), samples(3), rate)
-        kep_tr = samples(1).kep
+        after = samples(1)
+        roe, chief = truth_between(epochs, after, samples(3), rate)
+        kep_tr = after.kep
         earth = gcrs_to_itrs(self.jd0, epochs)
         # the relative position serves the separation and every station's look angles: formed once
         rel = rtn_position(roe, chief[:, 4] + chief[:, 5])

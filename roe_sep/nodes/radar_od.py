@@ -46,7 +46,7 @@ from .. import interfaces
 from ..core.constants import R_EARTH
 from ..core.frames import gcrs_to_itrs
 from ..core.od.batch import DragModel, DriftPrior, RadarBatch, RangeBiasPrior, batch_least_squares, station_index
-from ..core.od.sensor import RadarRecord, TruthSamples, chief_between, counted_passes, sample_pair
+from ..core.od.sensor import RadarRecord, chief_from_samples, counted_passes
 from ..core.relmotion.roe import wrap_angle
 from ..core.truth.nonlinear import vallado_band
 from .convert import array_to_elements, roe_to_msg, sec_to_time, time_to_sec
@@ -169,11 +169,8 @@ class RadarODNode(ManagedNode):
         if problem:
             raise ValueError(problem)
         # the chief as the sensor simulated a measurement at that epoch: from the first truth sample at or after it
-        # (the latest if none), blended with the one before (sample_pair, chief_between)
-        k, j = sample_pair(self.history_t, self.burn_epochs, t)
-        t_tr = self.history_t[k]
-        chief = chief_between([t], *(TruthSamples(np.array([self.history_t[i]]), None,
-                                                  np.array([self.history_kep[i]])) for i in (k, j)))[0]
+        # (the latest if none), blended with the one before (chief_from_samples)
+        chief, t_tr = chief_from_samples(self.history_t, self.history_kep, self.burn_epochs, t)
         earth = gcrs_to_itrs(self.jd0, t)
         return RadarRecord(t=t, station=self.names.index(msg.station), pass_id=pass_id, z=z, chief=chief,
                            earth=earth, truth_t=t_tr)

@@ -19,7 +19,7 @@ from roe_sep.core.constants import MU_EARTH, R_EARTH
 from roe_sep.core.frames import gcrf_to_eme2000, gcrs_to_itrs
 from roe_sep.core.od.batch import DragModel, RadarBatch, batch_least_squares
 from roe_sep.core.od.radar import TIRA, julian_date
-from roe_sep.core.od.sensor import TruthSamples, chief_between, sample_pair
+from roe_sep.core.od.sensor import chief_from_samples
 from roe_sep.core.relmotion.maneuvers import delta_roe
 from roe_sep.core.relmotion.orbit import mean_motion
 from roe_sep.core.relmotion.roe import kepler_to_roe, roe_to_kepler
@@ -327,16 +327,11 @@ def _radar_rows(run, t_from, t_to):
 def _radar_chief(truth: Truth, t, burns):
     """The chief radar_od used at each epoch: under lockstep the truth stream is its clock, so a measurement at t
     was simulated from the first truth sample at or after t (of two at one epoch, the post-burn one) and the sample
-    before it, each propagated to t with its secular model and blended in time (sample_pair, chief_between; the
+    before it, each propagated to t with its secular model and blended in time (chief_from_samples; the
     later sample alone across a burn of ``burns``, the executed epochs)."""
     last = np.searchsorted(truth.t, np.unique(truth.t), side="right") - 1  # the post-burn sample of an epoch
     hist_t, hist_kep = truth.t[last].tolist(), truth.chief[last]
-    out = []
-    for tk in np.atleast_1d(t):
-        k, j = sample_pair(hist_t, sorted(burns), float(tk))
-        pair = (TruthSamples(np.array([hist_t[i]]), None, hist_kep[i:i + 1]) for i in (k, j))
-        out.append(chief_between(np.array([tk]), *pair)[0])
-    return np.array(out)
+    return np.array([chief_from_samples(hist_t, hist_kep, sorted(burns), float(tk))[0] for tk in np.atleast_1d(t)])
 
 
 def _batch(t, z, sigma, truth: Truth, burns):

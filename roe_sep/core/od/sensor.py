@@ -131,6 +131,31 @@ def chief_between(epochs: ArrayLike, after: TruthSamples, before: TruthSamples) 
     return kep
 
 
+def chief_from_samples(history_t: Sequence[float], history_kep: ArrayLike, burns: Sequence[float],
+                       t: float) -> tuple[np.ndarray, float]:
+    """The chief's elements at one epoch from a sorted history of samples: the pair of :func:`sample_pair`
+    blended by :func:`chief_between` (how the sensor simulated a measurement at ``t``).
+
+    Parameters
+    ----------
+    history_t, burns : sequence of float
+        As for :func:`sample_pair`.
+    history_kep : array_like, shape (n, 6)
+        The samples' mean elements ``[a, e, i, raan, argp, M]``.
+    t : float
+        The epoch [s].
+
+    Returns
+    -------
+    tuple
+        (the elements (6,), the later sample's epoch [s]).
+    """
+    k, j = sample_pair(history_t, burns, t)
+    kep = np.asarray(history_kep, dtype=float)
+    pair = (TruthSamples(np.array([history_t[i]], dtype=float), None, kep[i:i + 1]) for i in (k, j))
+    return chief_between(np.array([t], dtype=float), *pair)[0], float(history_t[k])
+
+
 def truth_between(epochs: ArrayLike, after: TruthSamples, before: TruthSamples, da_dot: ArrayLike) -> tuple:
     """The truth at measurement epochs between two samples: each sample carried to the epoch with the J2 secular
     rates (:func:`~roe_sep.core.relmotion.dynamics.propagate` with the truth's own drift of da ``da_dot``,

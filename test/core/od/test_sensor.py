@@ -12,6 +12,7 @@ from roe_sep.core.od.sensor import (
     RadarRecord,
     TruthSamples,
     chief_between,
+    chief_from_samples,
     counted_passes,
     noisy_measurement,
     pass_lost,
@@ -154,3 +155,13 @@ def test_the_sample_pair_is_the_later_sample_and_the_one_before_unless_a_burn_pa
     assert sample_pair(history, [450.0], 400.0) == (2, 2)  # the burn at 450 s: its post-burn sample alone
     assert sample_pair(history, [450.0], 500.0) == (3, 2)  # after it: blended from the post-burn sample on
     assert sample_pair(history, [100.0, 450.0], 200.0) == (1, 1)
+
+
+def test_the_chief_from_a_history_is_the_pair_blended():
+    before, after = two_samples()
+    hist_t, hist_kep = [0.0, 300.0], np.vstack([before.kep, after.kep])
+    kep, t_after = chief_from_samples(hist_t, hist_kep, [], 120.0)
+    np.testing.assert_array_equal(kep, chief_between(np.array([120.0]), after, before)[0])
+    assert t_after == 300.0
+    kep, _ = chief_from_samples(hist_t, hist_kep, [200.0], 120.0)  # a burn between them: the later sample alone
+    np.testing.assert_array_equal(kep, propagate_chief(after.kep[0], np.array([-180.0]))[0])
