@@ -27,7 +27,7 @@ SUBSCRIBERS = {
     "/sim/camera/pose": ("planner", "recorder"),
     "/sim/executed_maneuvers": ("planner", "radar", "radar_od", "ic_planner", "safety_monitor", "recorder",
                                 "ground_bridge"),
-    "/separation/ejection": ("ejector", "planner", "safety_monitor", "sim", "recorder", "ground_bridge"),
+    "/separation/ejection": ("ejector", "planner", "ic_planner", "safety_monitor", "sim", "recorder", "ground_bridge"),
     "/separation/drift_stop_plan": ("ic_planner", "safety_monitor", "sim", "recorder", "ground_bridge"),
     "/acquisition/plan": ("ic_planner", "safety_monitor", "sim", "recorder", "ground_bridge"),
     "/od/estimate": ("ic_planner", "safety_monitor", "sim", "recorder", "ground_bridge"),

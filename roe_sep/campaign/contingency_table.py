@@ -30,13 +30,13 @@ HARD_BODY_RADIUS = 1.0
 the bodies' :data:`~roe_sep.core.safety.approach.COLLISION_RADIUS`."""
 
 EXPECTED_DETECTIONS = {
-    "spl_weak": ("weak_ejection", "od_inconsistent"),
+    "spl_weak": ("ejection_off", "stuck_ejection", "weak_ejection", "od_inconsistent"),
     "drift_stop_delayed": ("burn_missing", "burn_late"),
     "drift_stop_missed": ("burn_missing",),
     "burn_underperformance": ("burn_magnitude", "burn_pointing"),
     "radar_pass_missed": ("radar_pass_missed",),
     "radar_bias": ("od_residuals",),
-    "ejection_pointing": ("weak_ejection", "od_inconsistent"),
+    "ejection_pointing": ("ejection_off", "weak_ejection", "od_inconsistent"),
     "carrier_safe_mode": ("burn_missing",),
     "drift_stop_overperformance": ("burn_magnitude",),
     "density_storm": ("od_inconsistent",),

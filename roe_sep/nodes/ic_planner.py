@@ -28,14 +28,19 @@ Parameters (YAML via ``--ros-args --params-file``): :data:`roe_sep.nodes.paramet
 max_burn_dv, planning_margin < window) are :func:`roe_sep.core.acquisition.planner.validate_config`'s.
 """
 
+import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
-from roe_sep_msgs.msg import ImpulsiveManeuver, ManeuverPlan, OrbitDetermination
+from geometry_msgs.msg import TwistWithCovarianceStamped
+from roe_sep_msgs.msg import EjectionEvent, ImpulsiveManeuver, ManeuverPlan, OrbitDetermination
 from std_msgs.msg import String
 
 from .. import interfaces
 from ..core.acquisition.planner import AcquisitionConfig, InvalidAcquisitionConfig, validate_config
+from ..core.config import ConfigError, load_scenario
+from ..core.constants import ARCSEC
 from ..core.decisions import ic_planner as rules
 from ..core.od.radar import DEFAULT_EPOCH_UTC, julian_date
+from ..core.relmotion.dynamics import drag_da_dot
 from ..core.relmotion.roe import wrap_angle
 from .convert import (
     array_to_elements,
@@ -46,6 +51,7 @@ from .convert import (
     roe_to_msg,
     sec_to_time,
     time_to_sec,
+    vector_to_array,
 )
 from .decision_record import DecisionRecord
 from .diagnostics import OK, publish_status, report
@@ -77,6 +83,12 @@ class IcPlannerNode(ManagedNode):
         jd0 = julian_date(DEFAULT_EPOCH_UTC)  # sim time 0, as the simulator's and radar_od's default
         extra = {name: declare(self, name) for name in ("trim", "burn_sigma", "final_od_arc", "replan_on_burn",
                                                         "ei_margin_sigmas", "ic_drift_tolerance")}
+        extra["blind_after"] = declare(self, "blind_acquisition_after")
+        scenario_file = declare(self, "scenario_file")
+        try:
+            self.scenario = load_scenario(scenario_file or None)
+        except ConfigError as exc:
+            raise ParameterError(f"parameter 'scenario_file': {exc}") from exc
         try:
             cfg = AcquisitionConfig(**values)
             validate_config(cfg)
@@ -93,7 +105,7 @@ class IcPlannerNode(ManagedNode):
                                                                  interfaces.LATCHED),
                                      interfaces.IC_PLANNER_DECISIONS_TOPIC, rules.IcPlannerState,
                                      timeout=self.recover_timeout, start=self.start)
-        self.lockstep = Lockstep(self)
+        self.lockstep = Lockstep(self, on_step=self.on_step)
         self.plan_pub = self.lockstep.publisher(ManeuverPlan, interfaces.ACQUISITION_PLAN_TOPIC, interfaces.LATCHED)
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
         self.record.subscription = self.create_subscription(String, interfaces.IC_PLANNER_DECISIONS_TOPIC,
@@ -112,6 +124,13 @@ class IcPlannerNode(ManagedNode):
             ls.subscribe(ManeuverPlan, interfaces.ACQUISITION_PLAN_TOPIC, self.on_own_plan, interfaces.LATCHED)
             ls.subscribe(OrbitDetermination, interfaces.OD_TOPIC, self.on_estimate, interfaces.LATCHED,
                          what="OD estimate")
+            # what a blind acquisition starts from (issue 41 part 3): the ejection, measured where the footage has it
+            ls.subscribe(EjectionEvent, interfaces.EJECTION_TOPIC, self.on_ejection, interfaces.LATCHED,
+                         what="ejection event")
+            ls.subscribe(TwistWithCovarianceStamped, interfaces.EJECTION_ESTIMATE_TOPIC, self.on_measured,
+                         interfaces.LATCHED, what="ejection estimate")
+            # without lockstep steps (a free-running clock) the blind acquisition's check runs on a timer
+            self.free_timer = self.create_timer(1.0, self._free_running_step)
 
         self.activated_later(subscribe)
         if recovered is not None:
@@ -133,6 +152,49 @@ class IcPlannerNode(ManagedNode):
 
     def on_executed(self, m: ImpulsiveManeuver):
         self.apply(rules.on_executed(self.state, planned_burn(m), self.config))
+
+    def on_ejection(self, event: EjectionEvent):
+        """The commanded ejection with the SPL's magnitude and direction errors (the scenario's spl_sigma and
+        attitude_sigma_arcsec) and the nominal differential drag (its ballistic_sigma): the blind acquisition's
+        prior (:class:`roe_sep.core.decisions.ic_planner.EjectionPrior`)."""
+        dv = vector_to_array(event.ejection.dv_rtn)
+        kep = elements_to_array(event.chief)
+        if not (np.all(np.isfinite(dv)) and np.all(np.isfinite(kep)) and kep[0] > 6.4e6):
+            publish_status(self, self.diag_pub, 2, "ejection event rejected: non-finite dv or invalid chief",
+                           part="input")
+            return
+        sep, mc = self.scenario.separation, self.scenario.monte_carlo
+        mag2 = float(dv @ dv)
+        cov = sep.spl_sigma ** 2 * np.outer(dv, dv) + (mc.attitude_sigma_arcsec * ARCSEC) ** 2 * (
+            mag2 * np.eye(3) - np.outer(dv, dv))
+        a_da_dot = float(drag_da_dot(mc.delta_b, mc.density, kep[0])) * kep[0] if mc.drag else 0.0
+        prior = rules.EjectionPrior(time_to_sec(event.header.stamp), tuple(float(x) for x in kep),
+                                    float(event.ejection.mean_arg_latitude), tuple(float(x) for x in dv),
+                                    tuple(float(x) for x in cov.reshape(-1)), a_da_dot,
+                                    abs(a_da_dot) * mc.ballistic_sigma)
+        self.apply(rules.on_ejection(self.state, prior, self.config))
+
+    def on_measured(self, msg: TwistWithCovarianceStamped):
+        """The executed ejection the planner's ground filter measured from the footage."""
+        dv = vector_to_array(msg.twist.twist.linear)
+        cov = [msg.twist.covariance[6 * i + j] for i in range(3) for j in range(3)]
+        if not (np.all(np.isfinite(dv)) and np.all(np.isfinite(cov))):
+            publish_status(self, self.diag_pub, 2, "ejection estimate rejected: non-finite", part="input")
+            return
+        self.apply(rules.on_measured(self.state, dv, cov, self.config))
+
+    def on_step(self, t):
+        """Sim-time checks (each lockstep step; a timer without one): the blind acquisition
+        (:func:`roe_sep.core.decisions.ic_planner.on_step`)."""
+        self.apply(rules.on_step(self.state, t, self.config))
+
+    def _free_running_step(self):
+        """The sim-time check each second without lockstep steps; cancelled once a step has come (as the
+        planner's)."""
+        if self.lockstep.active:
+            self.free_timer.cancel()
+            return
+        self.on_step(self.now())
 
     def on_separation_plan(self, plan: ManeuverPlan):
         self.apply(rules.on_separation_plan(self.state, [time_to_sec(m.epoch) for m in plan.maneuvers], self.config))

@@ -252,6 +252,28 @@ PLANNER = (
     Param("footage_window", "double", FOOTAGE_WINDOW, "the footage of the ejection contact is complete this long "
           "after its first pose: the filter runs then (the simulator's pose_window, the same default)", "s",
           range=(1.0, 86400.0)),
+    Param("collision_avoidance", "bool", True, "once the footage's estimate is made, an ejection off its command "
+          "whose measured trajectory comes back inside the keep-out gets a carrier along-track CAM of cam_dv, "
+          "cam_latency later (core.decisions.cam.cam_decision; docs/run.md, \"The ejection camera\")"),
+    Param("cam_latency", "double", 300.0, "from the footage's estimate (the end of the footage, the last minutes "
+          "of seed 001's ejection contact) to the CAM: a time-tagged command uplinked before the contact ends", "s",
+          range=(0.0, 86400.0)),
+    Param("cam_dv", "double", 0.1, "the CAM's along-track dv, its sign the one with the larger predicted "
+          "clearance", "m/s", range=(0.001, 5.0)),
+    Param("cam_sigmas", "double", 3.0, "the CAM is decided and checked on the measured trajectory's distance less "
+          "this many of its 1-sigma", range=(0.0, 10.0)),
+    Param("ejection_pointing_sigma_deg", "double", 1.0, "1-sigma direction error of a nominal ejection (the SPL's "
+          "mounting and the carrier's attitude): an ejection more than 3 sigma off it, or 3 sigma of the "
+          "scenario's spl_sigma off in magnitude, is off its command", "deg", range=(0.001, 90.0)),
+    Param("ejection_completion", "bool", True, "an ejection off its command (not stuck) is completed by the "
+          "carrier (commanded minus measured at the release's u, whole orbits later), the CAM undone after it, and "
+          "the designed drift-stop flown after both (core.decisions.planner.ejection_response); false: the CAM "
+          "alone, added to the plan in force"),
+    Param("completion_max_pulse", "double", 0.3, "the completion is split into pulses of at most this on "
+          "successive orbits", "m/s", range=(0.001, 10.0)),
+    Param("stuck_fraction", "double", 0.05, "a measured ejection below this fraction of the commanded one is a "
+          "stuck picosatellite (seed 004's jamming): reported, its drift-stop withdrawn, no completion",
+          range=(0.0, 1.0)),
 )
 
 SIM = (
@@ -386,6 +408,7 @@ RADAR_OD = (
 IC_PLANNER = (
     AUTOSTART,
     RECOVER_TIMEOUT,
+    SCENARIO_FILE,
     Param("a_dl_min", "double", _ACQ.a_dl_min, "minimum mean along-track separation, at the ICs and throughout the "
           "acquisition (below a_dl_max)", "m", range=(1.0, 1.0e6)),
     Param("a_dl_max", "double", _ACQ.a_dl_max, "maximum mean along-track separation at the ICs", "m",
@@ -433,6 +456,11 @@ IC_PLANNER = (
     Param("final_od_arc", "double", 36000.0, "burn-free radar arc kept before the IC epoch for the final OD "
           "(radar_od's min_arc; radar_od restarts its arc at every burn); 0: none, the final OD is then the first "
           "solution within two planning margins of t_F", "s", range=(0.0, 604800.0)),
+    Param("blind_acquisition_after", "double", 86400.0, "without any OD this long after the release (a radar "
+          "outage), the acquisition is planned blind from the ejection on record (the footage's measured one, else "
+          "the commanded one with the SPL's errors) and the carrier burns executed since; the first OD after it "
+          "plans anew (core.decisions.ic_planner.on_step; seed 001 Sec. 5: the acquisition within a day); 0: never",
+          "s", range=(0.0, 2592000.0)),
 )
 
 SAFETY_MONITOR = (

@@ -135,9 +135,13 @@ class PlannerNode(ManagedNode):
                  ("makeup_pointing", "makeup_pointing_deg"), ("hold", "weak_ejection_hold"),
                  ("camera_sigma", "camera_sigma_deg"), ("camera_floor", "camera_model_floor"),
                  ("hold_sigmas", "hold_sigmas"), ("hold_alpha", "hold_alpha"), ("hold_lead", "hold_lead"),
-                 ("footage", "ejection_footage"), ("footage_window", "footage_window"))
+                 ("footage", "ejection_footage"), ("footage_window", "footage_window"),
+                 ("cam", "collision_avoidance"), ("cam_latency", "cam_latency"), ("cam_dv", "cam_dv"),
+                 ("cam_sigmas", "cam_sigmas"), ("pointing_sigma", "ejection_pointing_sigma_deg"),
+                 ("completion", "ejection_completion"), ("completion_max_pulse", "completion_max_pulse"),
+                 ("stuck_fraction", "stuck_fraction"))
         checks = {field: declare(self, name) for field, name in names}  # the contingency checks' parameters
-        for field in ("makeup_pointing", "camera_sigma"):
+        for field in ("makeup_pointing", "camera_sigma", "pointing_sigma"):
             checks[field] = math.radians(checks[field])
         try:
             self.scenario = load_scenario(scenario_file or None)

@@ -21,6 +21,7 @@ import math
 import numpy as np
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import TwistWithCovarianceStamped
 from roe_sep_msgs.msg import (
     EjectionEvent,
     ImpulsiveManeuver,
@@ -46,6 +47,7 @@ from .managed import ManagedNode
 from .params import ParameterError, declare
 
 PLAN_TOPICS = (interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.ACQUISITION_PLAN_TOPIC)
+MEASURED_PURPOSES = ("collision_avoidance", "ejection_completion")  # burns of a plan made on the measured ejection
 DIAG_KEYS = ("t_s", "along_track_m", "min_distance_m", "min_rn_m", "nearest_crossing_m")  # an assessment's status
 
 
@@ -97,7 +99,8 @@ class SafetyMonitorNode(ManagedNode):
         self.last_truth = -math.inf
         self.last_estimate = -math.inf
         self.estimate = None  # Knowledge from the OD
-        self.ejection = None  # Knowledge from the commanded ejection
+        self.ejection = None  # Knowledge from the commanded ejection, or from the measured one once there is one
+        self.measured = None  # the footage's executed ejection: (dv (3,) [m/s], covariance (3, 3) [m^2/s^2])
         self.executed = []  # Burns executed so far
         anomaly = AnomalyLimits(declare(self, "burn_epoch_tolerance"), declare(self, "burn_magnitude_z"),
                                 declare(self, "burn_pointing_deg"), declare(self, "od_alpha"),
@@ -122,6 +125,8 @@ class SafetyMonitorNode(ManagedNode):
         ls.subscribe(OrbitDetermination, interfaces.OD_TOPIC, self.on_estimate, interfaces.LATCHED, what="OD estimate")
         ls.subscribe(EjectionEvent, interfaces.EJECTION_TOPIC, self.on_ejection, interfaces.LATCHED,
                      what="ejection event")
+        ls.subscribe(TwistWithCovarianceStamped, interfaces.EJECTION_ESTIMATE_TOPIC, self.on_measured_ejection,
+                     interfaces.LATCHED, what="ejection estimate")
         for topic in PLAN_TOPICS:
             ls.subscribe(ManeuverPlan, topic, lambda m, tp=topic: self.on_plan(tp, m), interfaces.LATCHED,
                          what=f"plan on {topic}")
@@ -176,7 +181,8 @@ class SafetyMonitorNode(ManagedNode):
                            stamp=d.epoch)
 
     def knowledge(self):
-        """The newest ground knowledge: the OD estimate, else the commanded ejection."""
+        """The newest ground knowledge: the OD estimate, else the ejection (the footage's measured one once there is
+        one, else the commanded one)."""
         return self.estimate or self.ejection
 
     # ----------------------------------------------------------------- inputs
@@ -237,9 +243,35 @@ class SafetyMonitorNode(ManagedNode):
                 raise ValueError("non-finite ejection")
             self.ejection = Knowledge(roe, t, chief, self.nominal_da_dot(chief.a))
             self.detect("ejection event", lambda: self.watch.ejection(t, dv, chief, self.ejection.da_dot) or [])
+            self.take_measured()
             self.recheck_pending()
         except (ValueError, ZeroDivisionError) as exc:
             self.reject("ejection event", exc)
+
+    def on_measured_ejection(self, msg: TwistWithCovarianceStamped):
+        """The executed ejection the planner's ground filter measured from the footage: from now on the knowledge of
+        the ejection (plans are judged from it until an OD; issue 41 part 2)."""
+        try:
+            dv = vector_to_array(msg.twist.twist.linear)
+            cov = np.array([[msg.twist.covariance[6 * i + j] for j in range(3)] for i in range(3)], dtype=float)
+            if not (np.all(np.isfinite(dv)) and np.all(np.isfinite(cov))):
+                raise ValueError("non-finite ejection estimate")
+        except (ValueError, IndexError) as exc:
+            self.reject("ejection estimate", exc)
+            return
+        self.measured = (dv, cov)
+        self.take_measured()
+        self.recheck_pending()
+
+    def take_measured(self):
+        """The measured ejection replaces the commanded one's knowledge (both must have come)."""
+        if self.measured is None or self.ejection is None:
+            return
+        dv, cov = self.measured
+        k = self.ejection
+        self.ejection = Knowledge(delta_roe(dv, k.chief.u0, k.chief.a, mean_motion(k.chief.a)), k.t, k.chief,
+                                  k.da_dot)
+        self.detect("ejection estimate", lambda: self.watch.measured_ejection(dv, cov) or [])
 
     def on_executed(self, m: ImpulsiveManeuver):
         try:
@@ -268,8 +300,8 @@ class SafetyMonitorNode(ManagedNode):
         """Predict the trajectory under ``plan`` from the newest knowledge; False while there is none."""
         topic, _ = key
         k = self.knowledge()
-        if k is None:
-            return False
+        if k is None or self.measured is None and any(m.purpose in MEASURED_PURPOSES for m in plan.maneuvers):
+            return False  # a plan made on the measured ejection waits for it
         source = f"plan:{topic}"
         try:
             burns = plan_burns(plan.maneuvers)

@@ -1,5 +1,6 @@
 """A collision-avoidance manoeuvre (CAM) of the carrier within the first orbit, decided on the ejection the footage
-measured (issue 41 part 2, its first rule; not wired to a node yet): docs/run.md, "The ejection camera".
+measured (issue 41 part 2; the planner acts on it: :func:`~.planner.ejection_response`): docs/run.md, "The ejection
+camera".
 
 The rule (:func:`cam_decision`), from the ground filter's executed ejection (dv and its covariance,
 :func:`~roe_sep.core.od.pose.estimate_ejection`):
@@ -15,7 +16,7 @@ The rule (:func:`cam_decision`), from the ground filter's executed ejection (dv 
 3. Then the CAM: a carrier along-track burn of ``dv_cam`` at that earliest epoch, its sign the one whose predicted
    lower-bound distance over the horizon is the larger; ``cleared`` says whether it keeps the keep-out.
 
-Only the decision: the CAM's uplink, its safety check and the drift-stop re-planned after it are part 2's rest.
+The completion of the ejection after it (:func:`completion_burns`) and the CAM undone (:func:`reversal_burn`).
 """
 
 import math
@@ -200,4 +201,69 @@ def cam_decision(dv: ArrayLike, cov: ArrayLike, dv_commanded: ArrayLike, chief: 
     return CamDecision(*args, burn, low, cleared,
                        f"off its command ({magnitude_z:.1f} sigma in magnitude, {pointing_z:.1f} in direction) and "
                        f"{why}: a carrier along-track CAM of {sign * c.dv_cam:+.3f} m/s at t = {t_cam:.0f} s "
-                       f"({'clears' if cleared else 'does not clear'} the keep-out: {low:.0f} m at {c.sigmas:g} sigma)")
+                       f"({'clears' if cleared else 'does not clear'} the keep-out: " + (
+                           "no return over the horizon" if math.isinf(low) and low > 0 else f"{low:.0f} m")
+                       + f" at {c.sigmas:g} sigma)")
+
+
+def completion_burns(dv: ArrayLike, dv_commanded: ArrayLike, *, t_release: float, u_release: float, period: float,
+                     t_earliest: float, max_pulse: float) -> tuple:
+    """The carrier's completion of an ejection measured off its command (issue 41 part 2): the rest, commanded minus
+    measured, flown by the carrier at the release's argument of latitude whole orbits after the release (seed 002
+    Eq. 2 is linear in the impulse at a given u, so the pair's e/i vectors and drift become the commanded ejection's;
+    only the along-track offset grown meanwhile differs), split into equal pulses of at most ``max_pulse`` on
+    successive orbits, the first at or after ``t_earliest``.
+
+    Parameters
+    ----------
+    dv, dv_commanded : array_like, shape (3,)
+        The measured and the commanded ejection [m/s], RTN (the picosatellite's).
+    t_release, u_release : float
+        The release's epoch [s] and mean argument of latitude [rad].
+    period : float
+        The orbit's period in argument of latitude [s] (with J2 when the plan has it).
+    t_earliest : float
+        The first pulse's earliest epoch [s].
+    max_pulse : float
+        The largest pulse [m/s], > 0.
+
+    Returns
+    -------
+    tuple of PlannedBurn
+        The carrier's pulses (purpose ``ejection_completion``; a carrier burn enters the relative motion as -dv, so
+        each is (measured - commanded) / pulses); empty when the rest is zero.
+    """
+    if not max_pulse > 0.0:
+        raise ValueError(f"the completion's largest pulse must be > 0 m/s, got {max_pulse}")
+    rest = np.asarray(dv_commanded, dtype=float) - np.asarray(dv, dtype=float)
+    norm = float(np.linalg.norm(rest))
+    if norm == 0.0:
+        return ()
+    pulses = max(1, math.ceil(norm / max_pulse - 1e-12))
+    first = max(1, math.ceil((t_earliest - t_release) / period - 1e-9))
+    return tuple(PlannedBurn.at(t_release + (first + j) * period, u_release, -rest / pulses, "carrier",
+                                "ejection_completion") for j in range(pulses))
+
+
+def reversal_burn(cam: PlannedBurn, period: float, t_after: float) -> PlannedBurn:
+    """The CAM undone: the opposite carrier burn at the CAM's argument of latitude, the first whole orbit after the
+    CAM later than ``t_after`` [s] (seed 002 Eq. 2: the two cancel in every ROE, only the along-track offset grown
+    meanwhile stays).
+
+    Parameters
+    ----------
+    cam : PlannedBurn
+        The CAM.
+    period : float
+        The orbit's period in argument of latitude [s].
+    t_after : float
+        The reversal comes after this epoch [s] (the completion's last pulse).
+
+    Returns
+    -------
+    PlannedBurn
+        The reversal (purpose ``collision_avoidance_reversal``).
+    """
+    orbits = max(1, math.floor((t_after - cam.epoch) / period + 1e-9) + 1)
+    return PlannedBurn.at(cam.epoch + orbits * period, cam.u, -np.asarray(cam.dv_rtn, dtype=float), "carrier",
+                          "collision_avoidance_reversal")

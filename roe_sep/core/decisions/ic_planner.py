@@ -41,6 +41,8 @@ from ..acquisition.trim import (
 )
 from ..constants import SECONDS_PER_DAY
 from ..relmotion.dynamics import propagate_chief
+from ..relmotion.maneuvers import delta_roe
+from ..relmotion.orbit import mean_motion
 from ..relmotion.roe import wrap_angle
 from ..relmotion.trajectory import Chief, state_at
 from .common import (
@@ -75,6 +77,7 @@ class IcPlannerConfig:
     ei_margin_sigmas: float
     ic_drift_tolerance: float
     jd0: float
+    blind_after: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -117,6 +120,36 @@ class PublishPlan:
 
 
 @dataclass(frozen=True)
+class EjectionPrior:
+    """What the ground knows of the pair before any OD (issue 41 part 3): the release epoch ``t`` [s], the chief's
+    mean elements ``kep`` ``[a, e, i, raan, argp, M]`` and mean argument of latitude ``u`` [rad] there, the
+    picosatellite's ejection ``dv`` (3,) [m/s] RTN and its covariance ``cov`` (9,) [m^2/s^2] (the commanded one with
+    the SPL's errors, or the footage's measured one), the nominal differential drag ``a_da_dot`` [m/s] and its
+    1-sigma ``a_da_dot_sigma`` [m/s], and ``source`` ("commanded" or "footage")."""
+
+    t: float
+    kep: tuple
+    u: float
+    dv: tuple
+    cov: tuple
+    a_da_dot: float
+    a_da_dot_sigma: float
+    source: str = "commanded"
+
+    def solution(self, stamp: float) -> "OdSolution":
+        """The prior as an OD solution at the release, made at ``stamp`` [s]: the ROE of the ejection (seed 002
+        Eq. 2 at the release: :func:`~roe_sep.core.relmotion.maneuvers.delta_roe`) and their a-scaled covariance
+        mapped linearly from the dv's."""
+        a = self.kep[0]
+        n = float(mean_motion(a))
+        roe = delta_roe(np.array(self.dv, dtype=float), self.u, a, n)
+        jac = np.stack([delta_roe(e, self.u, a, n) for e in np.eye(3)], axis=1) * a  # (6, 3), m per m/s
+        cov = jac @ np.array(self.cov, dtype=float).reshape(3, 3) @ jac.T
+        return OdSolution(float(stamp), float(self.t), tuple(self.kep), float(self.u), tuple(float(x) for x in roe),
+                          tuple(float(x) for x in cov.reshape(-1)), float(self.a_da_dot), float(self.a_da_dot_sigma))
+
+
+@dataclass(frozen=True)
 class IcPlannerState(State):
     """What the ic_planner knows between events: the separation plan's last burn ``separation_end`` [s] (None: no
     separation plan), the carrier burns ``executed`` (relative impulses), the IC epoch ``t_final`` [s], the newest OD's
@@ -124,7 +157,9 @@ class IcPlannerState(State):
     1-sigma ``plan_sigma`` [m] of a da at t_F from its OD at ``plan_od_epoch``), whether the final OD decided
     (``final_decided``), the newest OD after the separation ``last_od``, a deferred re-plan ``replan_pending``, the
     last plan's ``summary`` ((key, value) pairs as the status shows them), the ``plans`` published and the last one,
-    ``last_plan`` (the plan in force as the topic latches it). A restart keeps it all."""
+    ``last_plan`` (the plan in force as the topic latches it), the knowledge of the ejection before any OD
+    ``ejection`` (:class:`EjectionPrior`) and whether the blind acquisition was planned (``blind``). A restart
+    keeps it all."""
 
     separation_end: float | None = None
     executed: tuple = ()
@@ -140,11 +175,15 @@ class IcPlannerState(State):
     summary: tuple = ()
     plans: int = 0
     last_plan: PublishPlan | None = None
+    ejection: EjectionPrior | None = None
+    blind: bool = False
 
     @classmethod
     def from_dict(cls, d: dict) -> "IcPlannerState":
         """The state of :meth:`to_dict`."""
         return cls(**{**d, "executed": tuple(burn_from_dict(b) for b in d["executed"]),
+                      "ejection": optional(lambda e: EjectionPrior(**{k: tuples(v) for k, v in e.items()}),
+                                           d.get("ejection")),
                       "last_key": optional(tuples, d["last_key"]), "burn_epochs": optional(tuples, d["burn_epochs"]),
                       "plan_in_force": optional(lambda p: tuple(planned_from_dict(b) for b in p), d["plan_in_force"]),
                       "last_od": optional(lambda o: OdSolution(**{k: tuples(v) for k, v in o.items()}), d["last_od"]),
@@ -166,6 +205,88 @@ def _shown(value):
     """A summary value as the status shows it: a float to 6 significant digits, else its Python value."""
     value = scalar(value)
     return f"{value:.6g}" if isinstance(value, float) else value
+
+
+def on_ejection(state: IcPlannerState, prior: EjectionPrior, config: IcPlannerConfig) -> tuple:
+    """The commanded ejection, the knowledge a blind acquisition starts from (:func:`on_step`); a measured one on
+    record is kept (the latched event again after a restart, or after the estimate).
+
+    Parameters
+    ----------
+    state, config
+        As every rule takes them (module docstring).
+    prior : EjectionPrior
+        The commanded ejection with the SPL's errors as its covariance.
+
+    Returns
+    -------
+    tuple
+        ``(new state, actions)``.
+    """
+    if state.ejection is not None and (state.ejection.source != "commanded" or state.ejection == prior):
+        return state, ()
+    return dataclasses.replace(state, ejection=prior), ()
+
+
+def on_measured(state: IcPlannerState, dv: ArrayLike, cov: ArrayLike, config: IcPlannerConfig) -> tuple:
+    """The executed ejection the footage measured (the planner's ground filter): it replaces the commanded one.
+
+    Parameters
+    ----------
+    state, config
+        As every rule takes them (module docstring).
+    dv : array_like, shape (3,)
+        The measured ejection [m/s] RTN.
+    cov : array_like, shape (9,)
+        Its covariance [m^2/s^2], row-major.
+
+    Returns
+    -------
+    tuple
+        ``(new state, actions)``; without the commanded ejection on record, nothing (its chief is needed).
+    """
+    if state.ejection is None:
+        return state, ()
+    measured = dataclasses.replace(state.ejection, dv=tuple(float(x) for x in dv), cov=tuple(float(x) for x in cov),
+                                   source="footage")
+    return (state, ()) if measured == state.ejection else (dataclasses.replace(state, ejection=measured), ())
+
+
+def on_step(state: IcPlannerState, now: float, config: IcPlannerConfig) -> tuple:
+    """A blind acquisition through a radar outage (issue 41 part 3): ``blind_after`` after the release without any
+    OD solution (and no acquisition plan yet), plan the acquisition from the ejection on record (the measured one
+    where there is one, else the commanded one: :class:`EjectionPrior`) and the carrier burns executed since, as if
+    it were an OD at the release (:func:`decide`). The plan's first burns stop most of the drift; the first OD after
+    the outage then plans the acquisition anew, in a window of its own (the blind plan's IC epoch is not kept).
+
+    Parameters
+    ----------
+    state, config
+        As every rule takes them (module docstring).
+    now : float
+        The sim time [s] of the step.
+
+    Returns
+    -------
+    tuple
+        ``(new state, actions)``.
+    """
+    prior = state.ejection
+    if (config.blind_after <= 0.0 or state.blind or prior is None or state.last_key is not None or state.plans
+            or now < prior.t + config.blind_after
+            or (state.separation_end is not None and now < state.separation_end)):
+        return state, ()
+    state = dataclasses.replace(state, blind=True)
+    od = prior.solution(now)
+    finding = status(WARN, f"blind_acquisition: no OD {(now - prior.t) / 3600.0:.1f} h after the release: the "
+                           f"acquisition planned from the {prior.source} ejection and the {len(state.executed)} "
+                           "carrier burn(s) on record", {**values(state), "contingency": "blind_acquisition",
+                                                         "epoch_s": f"{now:.1f}", "source": prior.source},
+                     "warning", part="contingency", stamp=now)
+    state, actions, _ = decide(state, od, now, config)
+    # the first OD after the outage opens its own window: the blind plan's IC epoch and knowledge are not kept
+    state = dataclasses.replace(state, t_final=None, plan_sigma=None, plan_od_epoch=None)
+    return state, (finding, *actions)
 
 
 def on_separation_plan(state: IcPlannerState, burn_epochs: Iterable[float], config: IcPlannerConfig) -> tuple:

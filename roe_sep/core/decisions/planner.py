@@ -24,11 +24,13 @@ from ..od.pose import estimate_ejection
 from ..relmotion.dynamics import arg_latitude_rate, drag_da_dot, propagate_chief, raan_rate
 from ..relmotion.orbit import angle_between
 from ..relmotion.roe import wrap_angle
+from ..relmotion.trajectory import Chief
 from ..safety.anomaly import magnitude_z
 from ..safety.ejection_check import check_ejection, nominal_fraction
 from ..separation.double_impulse import plan_drift_stop, reduction_bounds
 from ..separation.multi_impulse import multi_config, plan_carrier_burns
 from ..truth.secular import error_references
+from .cam import CamConfig, cam_decision, completion_burns, reversal_burn
 from .common import (
     ERROR,
     OK,
@@ -74,6 +76,14 @@ class PlannerConfig:
     hold_lead: float = 0.0
     footage: bool = False
     footage_window: float = 0.0
+    cam: bool = False
+    cam_latency: float = 300.0
+    cam_dv: float = 0.1
+    cam_sigmas: float = 3.0
+    pointing_sigma: float = math.radians(1.0)
+    completion: bool = False
+    completion_max_pulse: float = 0.3
+    stuck_fraction: float = 0.05
 
 
 @dataclass(frozen=True)
@@ -163,6 +173,7 @@ class PlannerState(State):
     poses: tuple = ()  # the footage's (t [s], position (3,) [m], covariance (9,) [m^2]) until the estimate
     estimate: tuple | None = None  # the footage's (dv (3,) [m/s], covariance (9,) [m^2/s^2], poses used)
     footage_done: bool = False
+    responded: bool = False  # the response to the footage's ejection (:func:`ejection_response`) is decided
 
     @classmethod
     def from_dict(cls, d: dict) -> "PlannerState":
@@ -408,6 +419,8 @@ def on_step(state: PlannerState, t: float, wall: float, lockstep: bool, config: 
     recovered = record_recovered(state, wall, lockstep)
     try:
         state, actions = footage_estimate(state, t, config)
+        state, more = ejection_response(state, t, config)
+        actions += more
         if state.in_force is not None and not state.camera_done and t >= state.in_force.t_stop - config.hold_lead:
             state, actions = dataclasses.replace(state, camera_done=True), actions + (StopBearings(),)
             state, more = camera_decision(state, t, config)
@@ -532,6 +545,99 @@ def footage_decision(state: PlannerState, t: float, config: PlannerConfig) -> tu
         f"({z:.1f} sigma below the nominal set f1 >= {bound:.3f}): drift-stop at t = {f.t_stop:.0f} s withdrawn, "
         "the acquisition starts from the first OD",
         {"f1": f"{frac:.3f}", "gain": f"{z * z:.2f}", "samples": state.estimate[2], "source": "footage"}))
+
+
+def ejection_response(state: PlannerState, t: float, config: PlannerConfig) -> tuple:
+    """The response to the executed ejection the footage measured (issue 41 part 2; docs/run.md, "The ejection
+    camera"), decided once, as soon as the estimate is made (``cam``, ``completion``):
+
+    1. :func:`~.cam.cam_decision`: an ejection off its command whose measured trajectory comes back inside the
+       keep-out gets a carrier CAM ``cam_latency`` after the estimate (with ``cam``);
+    2. a stuck picosatellite (the measured fraction of the commanded ejection below ``stuck_fraction``: seed 004's
+       jamming) is reported as such and its drift-stop withdrawn (the carrier keeps the CAM's drift; the acquisition
+       starts from the first OD);
+    3. otherwise (with ``completion``, double impulse) the ejection is completed
+       (:func:`~.cam.completion_burns`: commanded minus measured at the release's u, whole orbits later, in pulses of
+       at most ``completion_max_pulse``), the CAM undone after it (:func:`~.cam.reversal_burn`), and the designed
+       drift-stop (seed 002 Eqs. 9, 18) flown the first odd number of half orbits after both: the pair reaches the
+       designed e/i vectors and drift. The plan in force becomes that one, and the camera's later hold test is
+       moot.
+
+    Without ``completion`` (or for the multi-impulse plan) the CAM is added to the plan in force. A nominal ejection
+    (within its command) changes nothing.
+
+    Parameters
+    ----------
+    state, t, config
+        As every rule takes them (module docstring).
+
+    Returns
+    -------
+    tuple
+        ``(new state, actions)``.
+    """
+    if state.responded or state.estimate is None or state.commanded is None or not (config.cam or config.completion):
+        return state, ()
+    state = dataclasses.replace(state, responded=True)
+    ej = state.commanded
+    dv, cov = np.array(state.estimate[0]), np.array(state.estimate[1]).reshape(3, 3)
+    cmd = np.array(ej.dv_rtn, dtype=float)
+    chief = Chief(ej.kep[0], ej.kep[2], ej.u1, ej.epoch)
+    mc, sep = config.scenario.monte_carlo, config.scenario.separation
+    da_dot = float(drag_da_dot(mc.delta_b, mc.density, chief.a)) if mc.drag else 0.0
+    cam_config = CamConfig(spl_sigma=sep.spl_sigma, pointing_sigma=config.pointing_sigma, latency=config.cam_latency,
+                           sigmas=config.cam_sigmas, dv_cam=config.cam_dv, j2=config.j2)
+    found = cam_decision(dv, cov, cmd, chief, t, da_dot=da_dot, config=cam_config)
+    if not found.off:
+        return state, (Log("info", f"footage: {found.reason}"),)
+    frac = float(dv @ cmd) / float(cmd @ cmd)
+    cam = found.burn if config.cam else None
+    f, last = state.in_force, state.last_plan
+    stuck = frac < config.stuck_fraction
+    values_ = {"f1": f"{frac:.3f}", "magnitude_z": f"{found.magnitude_z:.1f}", "pointing_z": f"{found.pointing_z:.1f}",
+               "cam_m_s": "0" if cam is None else f"{cam.dv_rtn[1]:+.3f}"}
+    stamp = (ej.sec, ej.nanosec)
+    if stuck or not config.completion or config.strategy == "multi_impulse" or f is None:
+        keep = () if stuck or last is None else last.burns
+        if cam is None and not stuck:
+            return state, (Log("warning", f"footage: {found.reason}; nothing to change in the plan in force"),)
+        plan = PublishPlan(config.strategy, stamp, sec_nanosec(t), 0.0 if stuck or last is None else last.p_reduction,
+                           tuple(sorted(((cam,) if cam else ()) + keep, key=lambda b: b.epoch)),
+                           None if stuck or last is None else last.aimed)
+        state = published(state, plan)
+        if stuck:
+            state = dataclasses.replace(state, in_force=None, camera_done=True)
+        name = "stuck_ejection" if stuck else "ejection_off"
+        text = (f"the footage measured f1 = {frac:.3f} of the commanded ejection (below {config.stuck_fraction:g}: "
+                "stuck), drift-stop withdrawn, the acquisition starts from the first OD" if stuck else found.reason)
+        return state, (plan, *((StopBearings(),) if stuck else ()), finding(name, t, f"{text}; {found.reason}"
+                                                                              if stuck else text, values_))
+    period = 2.0 * math.pi / float(arg_latitude_rate(chief.a, chief.inc, config.j2))
+    pulses = completion_burns(dv, cmd, t_release=ej.epoch, u_release=ej.u1, period=period,
+                              t_earliest=t + config.cam_latency + (1.0 if cam else 0.0),
+                              max_pulse=config.completion_max_pulse)
+    extra = (cam,) if cam else ()
+    end = max([b.epoch for b in pulses], default=t + config.cam_latency)
+    extra += pulses
+    if cam is not None:
+        undo = reversal_burn(cam, period, end)
+        extra, end = extra + (undo,), max(end, undo.epoch)
+    k = config.k if f.k is None else f.k
+    stop = separation_plan(ej, config, k=k, p=f.p)
+    while stop.burns[0].epoch <= end:
+        k += 2
+        stop = separation_plan(ej, config, k=k, p=f.p)
+    plan = PublishPlan("double_impulse", stamp, sec_nanosec(t), stop.p_reduction, extra + stop.burns, stop.aimed)
+    t_stop = stop.burns[0].epoch
+    done = state.camera_done
+    state = published(dataclasses.replace(state, in_force=InForce(ej, k, f.p, t_stop), camera_done=True), plan)
+    rest = float(np.linalg.norm(cmd - dv))
+    values_.update(completion_m_s=f"{rest:.4f}", pulses=len(pulses), drift_stop_epoch_s=f"{t_stop:.1f}")
+    return state, (plan, *(() if done else (StopBearings(),)), finding(
+        "ejection_off", t, f"{found.reason}; the rest of the ejection, {rest:.4f} m/s, in {len(pulses)} carrier "
+        f"pulse(s) from t = {pulses[0].epoch if pulses else t:.0f} s" + ("" if cam is None else ", the CAM undone at "
+                                                        f"t = {extra[-1].epoch:.0f} s") +
+        f", the drift-stop {k} half orbits after the release at t = {t_stop:.0f} s", values_))
 
 
 def orbits_later(ejection: Ejection, t: float, t_burn: float, config: PlannerConfig) -> tuple:

@@ -144,6 +144,7 @@ class AnomalyWatch:
         self.matched = set()  # (source, purpose, epoch to the ms) of the planned burns executed
         self.knowledge = None  # (t, dimensionless ROE, Chief, a*e/i covariance [m^2], da_dot)
         self.burns = []  # (Burn, a*e/i covariance [m^2] it adds) executed after the knowledge's epoch
+        self.measured_from = None  # what replaced the commanded ejection as the knowledge: "footage", "od"
 
     # ------------------------------------------------------------------ burns
     def plan(self, source: str, burns: Iterable[tuple[float, ArrayLike, str, str]], p_reduction: float) -> None:
@@ -273,6 +274,32 @@ class AnomalyWatch:
         cov = self.spl_sigma ** 2 * np.outer(x, x) + (self.attitude_sigma ** 2) * float(x @ x) * np.eye(4)
         self.knowledge = (float(t), roe, chief, cov, float(da_dot))
         self.burns = []
+        self.measured_from = None  # the knowledge is the commanded ejection's (measured_ejection: the footage's)
+
+    def measured_ejection(self, dv: ArrayLike, cov: ArrayLike) -> None:
+        """The executed ejection the footage measured (:func:`~roe_sep.core.od.pose.estimate_ejection`): it replaces
+        the commanded one as the knowledge the first OD is predicted from, with its own covariance (seed 002 Eq. 2,
+        linear in dv), until an OD does; ignored before the commanded ejection or after an OD.
+
+        Parameters
+        ----------
+        dv : array_like, shape (3,)
+            The measured ejection [m/s], the picosatellite's RTN.
+        cov : array_like, shape (3, 3)
+            Its covariance [m^2/s^2].
+
+        Returns
+        -------
+        None
+        """
+        if self.knowledge is None or self.measured_from == "od":
+            return
+        t, _, chief, _, da_dot = self.knowledge
+        n = mean_motion(chief.a)
+        roe = delta_roe(np.asarray(dv, dtype=float), chief.u0, chief.a, n)
+        jac = np.stack([delta_roe(e, chief.u0, chief.a, n) for e in np.eye(3)], axis=1)[EI] * chief.a  # (4, 3)
+        self.knowledge = (t, roe, chief, jac @ np.asarray(cov, dtype=float) @ jac.T, da_dot)
+        self.measured_from = "footage"
 
     def od(self, t_now: float, t_od: float, roe: ArrayLike, cov6: ArrayLike, chief: Chief, *, da_dot: float,
            residual_rms: float, measurements: int) -> list[Detection]:
@@ -347,5 +374,6 @@ class AnomalyWatch:
                                       "estimate": (roe[EI] * a).tolist()}))
         if np.all(np.isfinite(cov6)):
             self.knowledge = (float(t_od), roe, chief, cov6[EI, EI].copy(), float(da_dot))
+            self.measured_from = "od"
             self.burns = [(b, c) for b, c in self.burns if b.epoch > t_od]
         return out

@@ -23,10 +23,11 @@ def planned(config):
     return state
 
 
-def footage(state, f1, config, seed=5):
-    """The poses of an ejection of ``f1`` released at RELEASE (the house's response as the truth; the filter's
-    accuracy against a numerical truth: test/core/od/test_pose.py), one per second while in view."""
-    dv = f1 * np.array(D.dv1_rtn)
+def footage(state, f1, config, seed=5, dv=None):
+    """The poses of an ejection of ``f1`` (or ``dv`` [m/s] RTN) released at RELEASE (the house's response as the
+    truth; the filter's accuracy against a numerical truth: test/core/od/test_pose.py), one per second while in
+    view."""
+    dv = f1 * np.array(D.dv1_rtn) if dv is None else np.asarray(dv, dtype=float)
     times = np.arange(1.0, 270.0, CAM.frame_period)
     pos = pose.ejection_response(times - RELEASE, D.a, D.inc, EJECTION.u1) @ dv
     axes = pose.camera_axes(D.dv1_rtn)

@@ -346,6 +346,26 @@ def test_a_weak_ejection_makes_the_first_od_inconsistent():
     assert w.od(**od_of(propagate(truth, 3600.0, D.a, D.inc, True, da_dot=0.0), t + 3600.0, chief)) == []
 
 
+def test_the_measured_ejection_is_the_knowledge_until_an_od():
+    """The footage's executed ejection (issue 41 part 2) replaces the commanded one: a weak ejection's first OD is
+    consistent with it; after an OD a late estimate changes nothing."""
+    from roe_sep.core.relmotion.dynamics import propagate
+
+    chief = Chief(D.a, D.inc, D.u1, 100.0)
+    dv = np.array([0.0, 0.0, 1.41])
+    t = 100.0 + 0.5 * 86400
+    truth = propagate(0.2 * delta_roe(dv, D.u1, D.a, mean_motion(D.a)), t - 100.0, D.a, D.inc, True, da_dot=0.0)
+    w = AnomalyWatch(AnomalyLimits(), *SIGMAS)
+    w.ejection(100.0, dv, chief, 0.0)
+    w.measured_ejection(0.2 * dv, np.eye(3) * (0.001 * 0.28) ** 2)
+    assert w.measured_from == "footage" and w.od(**od_of(truth, t, chief)) == []
+    w.measured_ejection(dv, np.eye(3) * 1e-8)  # after an OD: ignored
+    assert w.measured_from == "od" and w.knowledge[0] == t
+    fresh = AnomalyWatch(AnomalyLimits(), *SIGMAS)
+    fresh.measured_ejection(dv, np.eye(3))  # before the commanded ejection: nothing to replace
+    assert fresh.knowledge is None
+
+
 def test_od_residuals_beyond_their_chi_square():
     w = AnomalyWatch(AnomalyLimits(), *SIGMAS)
     roe = np.zeros(6)
