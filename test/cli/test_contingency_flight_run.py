@@ -13,14 +13,21 @@ DRIFT_STOP = 9156.4  # s, its drift-stop's epoch
 ORBIT = 5690.0  # s, about
 
 
-def short_run(tmp_path, name, block, duration=12000.0):
-    """Seed 5 for ``duration`` [s] with the ``contingency:`` block ``block`` (YAML lines; ``block`` None: none),
-    completed: the report and its findings by name."""
+RESPONSE_OFF = "planner:\n  ros__parameters:\n    collision_avoidance: false\n    ejection_completion: false\n"
+
+
+def short_run(tmp_path, name, block, duration=12000.0, params=None):
+    """Seed 5 for ``duration`` [s] with the ``contingency:`` block ``block`` (YAML lines; ``block`` None: none) and
+    the node-parameter YAML text ``params``, completed: the report and its findings by name."""
     config = None
     if block is not None:
         config = tmp_path / f"{name}.yaml"
         config.write_text("contingency:\n" + "".join(f"  {line}\n" for line in block), encoding="utf-8")
-    rep = run(config=config, out=tmp_path / name, seed=5, duration=duration, timeout=900)
+    params_file = None
+    if params is not None:
+        params_file = tmp_path / f"{name}_params.yaml"
+        params_file.write_text(params, encoding="utf-8")
+    rep = run(config=config, out=tmp_path / name, params=params_file, seed=5, duration=duration, timeout=900)
     assert rep["run"]["completed"], rep["run"]["reason"]
     return rep, {d["name"]: d for d in rep["contingencies_detected"]}
 
@@ -28,14 +35,31 @@ def short_run(tmp_path, name, block, duration=12000.0):
 @pytest.mark.dds
 def test_ejection_pointing_minus_7_deg_comes_back_at_one_orbit(tmp_path):
     """-7 deg about N cancels the design's along-track ejection component (-6.98 deg): no drift, the pair is back
-    at the carrier one orbit after the release (6.1 m, seed 5), before the drift-stop."""
-    rep, _ = short_run(tmp_path, "pointing", ["name: ejection_pointing", "angle_deg: -7.0"])
+    at the carrier one orbit after the release (6.1 m, seed 5), before the drift-stop; the planner's response to the
+    footage off (the next test has it)."""
+    rep, _ = short_run(tmp_path, "pointing", ["name: ejection_pointing", "angle_deg: -7.0"], params=RESPONSE_OFF)
     c = rep["contingency"]
     assert c["parameters"] == {"angle_deg": -7.0} and "turned by -7.00 deg about N" in c["events"][0]
     ejection = rep["maneuvers"][0]
     assert ejection["purpose"] == "ejection" and abs(ejection["dv_rtn"][1]) < 0.005  # the nominal T: -0.14 m/s
     closest = rep["actual_approach"]["closest_approach"]
     assert closest["distance"] < 20.0 and closest["epoch"] - EJECTION == pytest.approx(ORBIT, abs=100.0)
+
+
+@pytest.mark.dds
+def test_ejection_pointing_minus_7_deg_gets_the_cam(tmp_path):
+    """The same turn with the planner's response (the default): the footage measures the ejection off its command
+    in direction, its trajectory back inside the keep-out, so the carrier flies a CAM, one completion pulse and the
+    CAM's reversal before the drift-stop; the truth never comes back inside the keep-out."""
+    rep, detected = short_run(tmp_path, "pointing_cam", ["name: ejection_pointing", "angle_deg: -7.0"])
+    assert "ejection_off" in detected and "in direction" in detected["ejection_off"]["text"]
+    purposes = [m["purpose"] for m in rep["maneuvers"] if m["spacecraft"] == "carrier"]
+    assert purposes[:4] == ["collision_avoidance", "ejection_completion", "collision_avoidance_reversal",
+                            "drift_stop"]
+    cam = rep["maneuvers"][1]
+    assert cam["epoch"] - detected["ejection_off"]["epoch"] == pytest.approx(300.0, abs=1e-3)
+    ap = rep["actual_approach"]
+    assert not ap["keep_out_violated"] and ap["closest_approach"]["distance"] > 1000.0
 
 
 @pytest.mark.dds

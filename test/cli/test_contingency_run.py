@@ -4,9 +4,10 @@ report, the safety monitor's named diagnostic, and what the seeds promise about 
 
 Seed 000 Sec. IV: the same plan stays valid when an anomaly prevents the drift-stop (the picosatellite drifts away
 with its e/i separation). The planner replaces the missing drift-stop (``drift_stop_retry``: the same burn whole
-orbits later), so the drift stops before the formation evaporates. A weak ejection (``spl_weak``, f1 = 0.3) is seen
-by the carrier camera's bearings before the blind drift-stop, which is withheld (``weak_ejection_hold``); the
-acquisition then starts from the first OD.
+orbits later), so the drift stops before the formation evaporates. A weak ejection (``spl_weak``, f1 = 0.3) is
+measured by the ejection footage at once: a carrier CAM, the ejection completed and the designed drift-stop
+(``collision_avoidance``, ``ejection_completion``); with that response off, the blind drift-stop is withheld
+(``weak_ejection_hold``) and the acquisition starts from the first OD.
 """
 
 import json
@@ -79,10 +80,31 @@ def test_drift_stop_missed_whole_run_safe(missed):
 
 @pytest.mark.dds
 @pytest.mark.slow
-def test_spl_weak_holds_the_blind_drift_stop_and_stays_safe(tmp_path):
-    """f1 = 0.3: the blind drift-stop would reverse the drift into an approach (50 m in the secular model); the
-    camera's bearings fit f1 = 0.3, the drift-stop is withdrawn before its epoch and the pair drifts apart."""
+def test_spl_weak_gets_the_cam_and_the_completion(tmp_path):
+    """f1 = 0.3 with the planner's response (the default): the footage measures it at once, the carrier flies a CAM
+    before the picosatellite's relative orbit comes back, completes the ejection in pulses, undoes the CAM and flies
+    the designed drift-stop; the truth never comes back inside the keep-out and the ICs are reached."""
     rep, detected = run_with(tmp_path, ["name: spl_weak", "spl_fraction: 0.3"])
+    assert "ejection_off" in detected and "weak_ejection" not in detected
+    purposes = [m["purpose"] for m in rep["maneuvers"] if m["spacecraft"] == "carrier"]
+    first = purposes.index("drift_stop")
+    assert purposes[0] == "collision_avoidance" and purposes[first - 1] == "collision_avoidance_reversal"
+    assert set(purposes[1:first - 1]) == {"ejection_completion"} and first >= 3
+    ap = rep["actual_approach"]
+    assert not ap["keep_out_violated"] and ap["closest_approach"]["distance"] > 1000.0
+    assert rep["criteria"]["ic_reached"] and rep["criteria"]["plans_approved"]
+
+
+@pytest.mark.dds
+@pytest.mark.slow
+def test_spl_weak_without_the_response_holds_the_blind_drift_stop(tmp_path):
+    """f1 = 0.3 with the response off (collision_avoidance, ejection_completion false): the blind drift-stop would
+    reverse the drift into an approach (50 m in the secular model); the footage's f1 = 0.3 withdraws the drift-stop
+    before its epoch and the pair drifts apart."""
+    params = tmp_path / "response_off.yaml"
+    params.write_text("planner:\n  ros__parameters:\n    collision_avoidance: false\n    ejection_completion: false\n",
+                      encoding="utf-8")
+    rep, detected = run_with(tmp_path, ["name: spl_weak", "spl_fraction: 0.3"], params=params)
     assert rep["contingency"]["parameters"]["spl_fraction"] == 0.3
     assert "weak_ejection" in detected and detected["weak_ejection"]["epoch"] < 9156.4
     assert "f1 = 0.2" in detected["weak_ejection"]["text"] or "f1 = 0.3" in detected["weak_ejection"]["text"]
