@@ -252,12 +252,59 @@ def on_measured(state: IcPlannerState, dv: ArrayLike, cov: ArrayLike, config: Ic
     return (state, ()) if measured == state.ejection else (dataclasses.replace(state, ejection=measured), ())
 
 
+def blind_burn(state: IcPlannerState, prior: EjectionPrior, now: float, config: IcPlannerConfig) -> tuple:
+    """The blind acquisition's one burn (:func:`on_step`): a carrier tangential burn at the first grid epoch
+    ``planning_margin`` after ``now`` that makes the mean along-track separation as large again ``blind_after``
+    later as at the burn, under the nominal drag (seed 002 Eq. 2 and the secular model, affine in the burn: two
+    propagations give it). With the drag's da decaying at a da_dot, that is a da = -a_da_dot H / 2 after the burn
+    (H = ``blind_after``), so the separation dips by about 1.5 n a_da_dot H^2 / 8 and comes back: the pair neither
+    drifts off to evaporation nor turns back on the carrier, for another outage as long, whatever the first OD finds.
+    Quantized to ``dv_quantum`` and at most ``max_burn_dv``.
+
+    Parameters
+    ----------
+    state, config
+        As every rule takes them (module docstring).
+    prior : EjectionPrior
+        The ejection on record.
+    now : float
+        The decision's sim time [s].
+
+    Returns
+    -------
+    tuple
+        ``(burn, roe_at_burn, chief_at_burn)``: the :class:`~.common.PlannedBurn` (None when none is needed), the
+        predicted dimensionless ROE and :class:`Chief` at its epoch; ValueError on a bad prior.
+    """
+    cfg = config.cfg
+    od = prior.solution(now)
+    roe0, chief, da_dot = start_state(state, od, now, config)
+    t_burn = float(grid_epochs(now + cfg.planning_margin, now + cfg.planning_margin + cfg.window, chief,
+                               cfg.grid_per_orbit, cfg.j2)[0])
+    roe_b = state_at(roe0, chief.t0, (), t_burn, chief, j2=cfg.j2, da_dot=da_dot)
+    chief_b = Chief(chief.a, chief.inc, float(chief.u_at(t_burn, cfg.j2)), t_burn)
+    horizon = t_burn + config.blind_after
+
+    def dl_at_horizon(dv_t):
+        burns = [PlannedBurn.at(t_burn, chief_b.u0, (0.0, dv_t, 0.0), "carrier", "ic_acquisition").relative()]
+        return float(state_at(roe_b, t_burn, burns, horizon, chief_b, j2=cfg.j2, da_dot=da_dot)[1])
+
+    base, unit = dl_at_horizon(0.0), dl_at_horizon(1.0)
+    dv_t = (float(roe_b[1]) - base) / (unit - base)
+    dv_t = float(np.clip(np.round(dv_t / cfg.dv_quantum) * cfg.dv_quantum, -cfg.max_burn_dv, cfg.max_burn_dv))
+    if dv_t == 0.0:
+        return None, roe_b, chief_b
+    return PlannedBurn.at(t_burn, chief_b.u0, (0.0, dv_t, 0.0), "carrier", "ic_acquisition"), roe_b, chief_b
+
+
 def on_step(state: IcPlannerState, now: float, config: IcPlannerConfig) -> tuple:
     """A blind acquisition through a radar outage (issue 41 part 3): ``blind_after`` after the release without any
-    OD solution (and no acquisition plan yet), plan the acquisition from the ejection on record (the measured one
-    where there is one, else the commanded one: :class:`EjectionPrior`) and the carrier burns executed since, as if
-    it were an OD at the release (:func:`decide`). The plan's first burns stop most of the drift; the first OD after
-    the outage then plans the acquisition anew, in a window of its own (the blind plan's IC epoch is not kept).
+    OD solution (and no acquisition plan yet), the along-track separation is held from the ejection on record (the
+    measured one where there is one, else the commanded one: :class:`EjectionPrior`) and the carrier burns executed
+    since, by one tangential burn (:func:`blind_burn`): the pair neither evaporates nor turns back on the carrier
+    before the first OD after the outage, which then plans the acquisition in a window of its own. (An acquisition
+    planned to the ICs from this knowledge would aim the separation down to a_dl_min on a prediction whose drag and
+    ejection errors grow to kilometres: tried, it took the pair inside the keep-out in 10 of 100 runs.)
 
     Parameters
     ----------
@@ -277,17 +324,30 @@ def on_step(state: IcPlannerState, now: float, config: IcPlannerConfig) -> tuple
             or (state.separation_end is not None and now < state.separation_end)):
         return state, ()
     state = dataclasses.replace(state, blind=True)
-    od = prior.solution(now)
-    finding = status(WARN, f"blind_acquisition: no OD {(now - prior.t) / 3600.0:.1f} h after the release: the "
-                           f"acquisition planned from the {prior.source} ejection and the {len(state.executed)} "
-                           "carrier burn(s) on record", {**values(state), "contingency": "blind_acquisition",
-                                                         "epoch_s": f"{now:.1f}", "source": prior.source},
-                     "warning", part="contingency", stamp=now)
-    state, actions, _ = decide(state, od, now, config)
-    # the first OD after the outage opens its own window: the blind plan's IC epoch and knowledge are not kept
-    state = dataclasses.replace(state, t_final=None, plan_sigma=None, plan_od_epoch=None)
-    return state, (finding, *actions)
-
+    made, failed = guarded("blind acquisition rejected", "blind acquisition failed", values(state), blind_burn,
+                           state, prior, now, config)
+    if made is None:
+        return state, failed
+    burn, roe_b, chief_b = made
+    a = chief_b.a
+    text = (f"blind_acquisition: no OD {(now - prior.t) / 3600.0:.1f} h after the release: from the {prior.source} "
+            f"ejection and the {len(state.executed)} carrier burn(s) on record, a dl = {roe_b[1] * a:.0f} m and a da "
+            f"= {roe_b[0] * a:.1f} m at t = {chief_b.t0:.0f} s")
+    extra = {**values(state), "contingency": "blind_acquisition", "epoch_s": f"{now:.1f}", "source": prior.source}
+    if burn is None:
+        return state, (status(WARN, text + ": the separation holds without a burn", extra, "warning",
+                              part="contingency", stamp=now),)
+    t_hold = chief_b.t0 + config.blind_after
+    kep = propagate_chief(np.array(prior.kep, dtype=float), t_hold - prior.t, config.cfg.j2)
+    kep[3:] = wrap_angle(kep[3:])
+    roe_hold = state_at(roe_b, chief_b.t0, [burn.relative()], t_hold, chief_b, j2=config.cfg.j2,
+                        da_dot=prior.a_da_dot / a)
+    publish = PublishPlan(now, (burn,), tuple(float(x) for x in roe_hold), tuple(float(x) for x in kep), t_hold)
+    state = dataclasses.replace(state, last_plan=publish, plan_in_force=(burn,), burn_epochs=(burn.epoch,),
+                                plans=state.plans + 1)
+    text += (f": a tangential burn of {burn.dv_rtn[1]:+.3f} m/s at t = {burn.epoch:.0f} s holds a dl until "
+             f"t = {t_hold:.0f} s (predicted {roe_hold[1] * a:.0f} m); the first OD plans the acquisition")
+    return state, (status(WARN, text, extra, "warning", part="contingency", stamp=now), publish)
 
 def on_separation_plan(state: IcPlannerState, burn_epochs: Iterable[float], config: IcPlannerConfig) -> tuple:
     """The separation plan: the acquisition starts from an OD made after its last burn.
@@ -325,7 +385,7 @@ def on_own_plan(state: IcPlannerState, burns: Sequence[PlannedBurn], t_final: fl
     tuple
         ``(new state, actions)``.
     """
-    if state.t_final is not None or not burns:
+    if state.t_final is not None or not burns or state.blind:  # the blind burn's plan fixes no IC epoch (on_step)
         return state, ()
     return dataclasses.replace(state, t_final=t_final, burn_epochs=tuple(b.epoch for b in burns),
                                plan_in_force=tuple(burns)), ()

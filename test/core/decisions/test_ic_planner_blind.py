@@ -55,29 +55,39 @@ def test_no_od_a_day_after_the_release_plans_the_acquisition_blind():
     early, actions = rules.on_step(state, 86399.0, CONFIG)
     assert early == state and actions == ()
     blind, actions = rules.on_step(state, 86400.0, CONFIG)
-    assert kinds(actions)[:2] == ["Status", "PublishPlan"]
+    assert kinds(actions) == ["Status", "PublishPlan"]
     finding = dict(actions[0].values)
     assert actions[0].level == WARN and finding["contingency"] == "blind_acquisition"
-    assert finding["source"] == "commanded"
+    assert finding["source"] == "commanded" and "holds a dl" in actions[0].message
     plan = actions[1]
-    assert plan.burns and plan.burns[0].epoch >= 86400.0 + CONFIG.cfg.planning_margin
+    (burn,) = plan.burns
+    assert burn.epoch >= 86400.0 + CONFIG.cfg.planning_margin and burn.dv_rtn[0] == burn.dv_rtn[2] == 0.0
+    assert burn.purpose == "ic_acquisition" and abs(burn.dv_rtn[1]) <= CONFIG.cfg.max_burn_dv
+    assert round(burn.dv_rtn[1] / CONFIG.cfg.dv_quantum, 9) % 1 == 0.0  # quantized
     assert blind.blind and blind.plans == 1 and blind.t_final is None and blind.plan_in_force == plan.burns
     # the drift it stops: without it the pair passes 50 km before the first OD after a 24-h outage (about 45 h);
-    # with it, never within 3 days
+    # with it the separation is back to its value a day after the burn, and stays far from both bounds
     times = np.arange(86400.0, 3 * 86400.0, 600.0)
     free = along_track((), times)
     assert free[times <= 45 * 3600.0].max() > 50e3
-    flown = along_track(tuple(b.relative() for b in plan.burns), times)
-    assert np.abs(flown).max() < 50e3 and np.abs(flown).min() > 1000.0
+    flown = along_track((burn.relative(),), times)
+    at_burn = along_track((), np.array([burn.epoch]))[0]
+    # within the quantization: half a quantum is a da of q / n, which moves dl by 1.5 n (q / n) H = 1.5 q H
+    assert along_track((burn.relative(),), np.array([burn.epoch + CONFIG.blind_after]))[0] == pytest.approx(
+        at_burn, abs=1.5 * CONFIG.cfg.dv_quantum * CONFIG.blind_after)
+    assert np.abs(flown).max() < 0.8 * 50e3 and np.abs(flown).min() > 10e3
+    assert plan.t_final == pytest.approx(burn.epoch + CONFIG.blind_after)
     again, actions = rules.on_step(blind, 90000.0, CONFIG)
     assert again == blind and actions == ()  # once
+    # its own latched plan read back fixes no IC epoch: the first OD after the outage opens the acquisition's window
+    latched, _ = rules.on_own_plan(blind, plan.burns, plan.t_final, CONFIG)
+    assert latched == blind and latched.t_final is None
 
 
 def test_the_first_od_after_the_outage_plans_in_a_window_of_its_own():
     blind, actions = rules.on_step(after_drift_stop(), 86400.0, CONFIG)
     plan = actions[1]
-    for b in plan.burns[:1]:
-        blind, _ = rules.on_executed(blind, b, CONFIG)
+    blind, _ = rules.on_executed(blind, plan.burns[0], CONFIG)
     t_od = 45 * 3600.0
     roe = trajectory(delta_roe(DV, CHIEF.u0, D.a, mean_motion(D.a)), 0.0,
                      (Burn(STOP.epoch, tuple(-np.array(STOP.dv_carrier_rtn))), plan.burns[0].relative()),
