@@ -457,9 +457,10 @@ IC_PLANNER = (
           "(radar_od's min_arc; radar_od restarts its arc at every burn); 0: none, the final OD is then the first "
           "solution within two planning margins of t_F", "s", range=(0.0, 604800.0)),
     Param("blind_acquisition_after", "double", 86400.0, "without any OD this long after the release (a radar "
-          "outage), the acquisition is planned blind from the ejection on record (the footage's measured one, else "
-          "the commanded one with the SPL's errors) and the carrier burns executed since; the first OD after it "
-          "plans anew (core.decisions.ic_planner.on_step; seed 001 Sec. 5: the acquisition within a day); 0: never",
+          "outage), one tangential burn, planned from the ejection on record (the footage's measured one, else the "
+          "commanded one) and the carrier burns executed since, holds the along-track separation for as long again; "
+          "the first OD after it plans the acquisition (core.decisions.ic_planner.on_step; seed 001 Sec. 5: the "
+          "acquisition within a day); 0: never",
           "s", range=(0.0, 2592000.0)),
 )
 
