@@ -1,11 +1,12 @@
 """The acquisition's continuous LP handed to HiGHS the way ``scipy.optimize.linprog(method="highs")`` hands it over,
 without linprog's copy of the matrix.
 
-The acquisition LP has about 400,000 nonzeros (the path rows are dense: a burn moves the along-track separation at
-every later epoch) and is solved in a few simplex iterations, so the solve itself is mostly HiGHS's presolve
-(about 0.12 s). ``linprog`` adds about 0.05 s a solve around it: its wrapper copies the matrix into HiGHS's model
-element by element (``HighsLp.a_matrix_.index_``/``value_`` are assigned from arrays through a list conversion)
-and builds per-column marginals in a Python loop. :func:`solve_lp` passes the same model, arrays through the
+With its dense path rows (a burn moves the along-track separation at every later epoch) the acquisition LP had
+about 400,000 nonzeros and the solve was mostly HiGHS's presolve (about 0.12 s); their recursive form
+(:func:`roe_sep.core.acquisition.planner._recursive_path`) leaves a few thousand. ``linprog`` adds about 0.05 s a
+solve around the dense form: its wrapper copies the matrix into HiGHS's model element by element
+(``HighsLp.a_matrix_.index_``/``value_`` are assigned from arrays through a list conversion) and builds per-column
+marginals in a Python loop. :func:`solve_lp` passes the same model, arrays through the
 buffer protocol (``Highs.passModel``), with the same options, to the same HiGHS (the one scipy ships), and so gets
 the same solution to the bit (``test/core/acquisition/test_acquisition.py`` checks it against ``linprog`` on real
 acquisition problems). Where that binding is not there (another scipy), it falls back to ``linprog`` itself.

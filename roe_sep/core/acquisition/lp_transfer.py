@@ -29,7 +29,8 @@ AXES = {"R": 0, "T": 1, "N": 2}
 """RTN axis letters -> column of ``dv_rtn``."""
 
 MAX_GRID_EPOCHS = 2500
-"""Guard on the candidate grid (about 10 days at 16 per orbit): the path-constraint block is O(K^2) in memory."""
+"""Guard on the candidate grid (about 10 days at 16 per orbit): the dense path-constraint block (``grid_response``,
+built only with the acquisition LP's ``SPARSE_PATH`` off) is O(K^2) in memory."""
 
 
 def parse_axes(axes: str) -> tuple[int, ...]:

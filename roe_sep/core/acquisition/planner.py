@@ -20,6 +20,10 @@ named blocks. i^ is iterated from the burn-free final di to the planned one (J2 
 :func:`ei_magnitude_floor` keeps Eq. (25) >= min_ei under the angle tolerance. The window is used whole and the
 dl target is mid-range (measured in docs/campaigns.md); re-planning on each newer OD and a final trim
 (:mod:`roe_sep.core.acquisition.trim`, its OD's radar arc kept free of burns by ``no_burns``) absorb OD errors.
+The path constraint s a dl >= a_dl_min at every grid epoch enters the continuous LP in a sparse recursive form
+(:func:`_recursive_path`: two more variables per epoch, a few nonzeros per row, where the dense rows have one entry
+per earlier candidate): the same feasible set, so the same optimum (issue 42, docs/benchmarks.md "The acquisition
+LP"; ``SPARSE_PATH`` off gives the dense rows).
 
 Quantization. The LP optimum is re-solved as a mixed-integer program (HiGHS) in multiples of ``dv_quantum`` on the
 LP's support and its neighbouring epochs, the equalities relaxed to tolerances a quantized plan can meet:
@@ -42,7 +46,15 @@ from ..relmotion.orbit import mean_motion
 from ..relmotion.trajectory import Burn, Chief, trajectory
 from ..safety.metrics import fov_limit, min_rn_distance
 from .highs import solve_lp
-from .lp_transfer import carrier_burn_effects, grid_epochs, grid_response, parse_axes, response_at, sagitta
+from .lp_transfer import (
+    carrier_burn_effects,
+    grid_epochs,
+    grid_response,
+    parse_axes,
+    response_at,
+    sagitta,
+    transition_matrices,
+)
 
 if TYPE_CHECKING:  # scipy.sparse is imported where the program is built: the nodes import this module for its config
     from scipy import sparse
@@ -231,7 +243,7 @@ class _Problem:
     axes: tuple
     final: np.ndarray  # (6, K*J) a*ROE at t_F per quantum of each candidate
     free_final: np.ndarray  # (6,) a*ROE at t_F without burns (drag included)
-    path: np.ndarray  # (K, K*J) s a dl at each grid epoch (post-burn) per quantum
+    path: np.ndarray | None  # (K, K*J) s a dl at each grid epoch (post-burn) per quantum (None: not built)
     path_pre: np.ndarray | None  # same, pre-burn (only differs with radial burns)
     free_path: np.ndarray  # (K,) s a dl at the grid epochs without burns
     path_floor: float  # m, a_dl_min plus the between-epoch sagitta
@@ -241,6 +253,7 @@ class _Problem:
     quanta_max: int  # largest burn in quanta
     ei_floor: float  # m
     rows: dict = field(default_factory=dict, repr=False)  # _path_and_burn_rows by candidate columns (the memo)
+    path_lags: np.ndarray | None = None  # (2, K*J) s a dl per quantum at lags 0 and 1 (the recursive form's)
 
 
 def _unit(v, what):
@@ -277,12 +290,16 @@ def _build(roe0, chief, da_dot, cfg, t_earliest, *, no_burns=()):
     final = a * response_at(effects, epochs, t_f, a, chief.inc, j2=cfg.j2).reshape(k_count * j_count, 6).T
     free = a * propagate(x0, np.concatenate([epochs, [t_f]]) - chief.t0, a, chief.inc, cfg.j2, da_dot=da_dot)
     step = float(epochs[1] - epochs[0])
-    path = s * a * grid_response(effects, step, a, chief.inc, cfg.j2, component=1).reshape(k_count, -1)
-    path_pre = None
-    if 0 in axes:  # a radial burn moves dl at once: constrain the state just before each burn too
-        path_pre = path.copy()
-        own = np.repeat(np.arange(k_count), j_count)
-        path_pre[own, np.arange(k_count * j_count)] = 0.0
+    # s a dl per quantum one candidate on, at lags 0 and 1: the recursive form's coefficients (_recursive_path)
+    lag_rows = transition_matrices(np.array([0.0, step]), a, chief.inc, cfg.j2)[:, 1, :]  # (2, 6)
+    path_lags = s * a * np.einsum("mc,kjc->mkj", lag_rows, effects).reshape(2, -1)
+    path = path_pre = None
+    if not SPARSE_PATH:  # the dense rows: every grid epoch against every earlier candidate
+        path = s * a * grid_response(effects, step, a, chief.inc, cfg.j2, component=1).reshape(k_count, -1)
+        if 0 in axes:  # a radial burn moves dl at once: constrain the state just before each burn too
+            path_pre = path.copy()
+            own = np.repeat(np.arange(k_count), j_count)
+            path_pre[own, np.arange(k_count * j_count)] = 0.0
     gamma = math.radians(cfg.ei_angle_tol_deg)
     return _Problem(
         cfg=cfg, epochs=epochs, axes=axes, final=final, free_final=free[-1], path=path, path_pre=path_pre,
@@ -291,7 +308,8 @@ def _build(roe0, chief, da_dot, cfg, t_earliest, *, no_burns=()):
         epoch_of=np.repeat(np.arange(k_count), j_count), s=s,
         barred=np.any([(epochs >= lo) & (epochs <= hi) for lo, hi in no_burns], axis=0) if len(no_burns)
         else np.zeros(k_count, dtype=bool),
-        quanta_max=int(math.floor(cfg.max_burn_dv / q + 1e-9)), ei_floor=ei_magnitude_floor(cfg.min_ei, gamma))
+        quanta_max=int(math.floor(cfg.max_burn_dv / q + 1e-9)), ei_floor=ei_magnitude_floor(cfg.min_ei, gamma),
+        path_lags=path_lags)
 
 
 @dataclass(frozen=True)
@@ -433,11 +451,13 @@ def _assemble(pb: _Problem, cols, ihat, exact, path=True, *, target=True, ei=Tru
     blocks = [sparse.csr_matrix(np.vstack([g.a for g in groups]))]
     lb = list(np.concatenate([g.lb for g in groups]))
     ub = list(np.concatenate([g.ub for g in groups]))
-    path_blocks, path_lb, burn_block, burn_ub = _path_and_burn_rows(pb, cols)
     if path:  # s a dl >= a_dl_min at every grid epoch (plus the sagitta between epochs)
+        path_blocks, path_lb, burn_block, burn_ub = _path_and_burn_rows(pb, cols)
         blocks += path_blocks
         lb += path_lb
         ub += [np.inf] * len(path_lb)
+    else:  # the dense path rows are not built (the recursive form's LP, a diagnosis)
+        burn_block, burn_ub = _burn_magnitude_rows(pb, cols)
     blocks.append(burn_block)
     lb += [-np.inf] * len(burn_ub)
     ub += burn_ub
@@ -466,15 +486,28 @@ def signed_rows(sub: np.ndarray) -> "sparse.csr_matrix":
     return sparse.csr_matrix((data, indices, 2 * a.indptr), shape=(len(sub), 2 * n + 3))
 
 
+def _dense_path(pb: _Problem, cols):
+    """The dense path rows' columns ``cols`` (post-burn, and pre-burn with radial burns; ``(K, len(cols))`` each):
+    ``pb.path``'s where it was built, else from the two lags of the recursive form (the secular dl is affine in the
+    lag: path[i, c] = lag0 + (i - e) (lag1 - lag0) for i >= e, the candidate's epoch e; 0 before it)."""
+    cols = np.asarray(cols)
+    if pb.path is not None:
+        return pb.path[:, cols], None if pb.path_pre is None else pb.path_pre[:, cols]
+    own = pb.epoch_of[cols]
+    lag = np.arange(len(pb.epochs))[:, None] - own[None, :]
+    post = np.where(lag >= 0, pb.path_lags[0, cols] + lag * (pb.path_lags[1, cols] - pb.path_lags[0, cols]), 0.0)
+    return post, (np.where(lag > 0, post, 0.0) if 0 in pb.axes else None)
+
+
 def _path_rows(pb: _Problem, cols):
     """s a dl >= a_dl_min at every grid epoch, raised by the sagitta between epochs (module docstring, Formulation):
     the post-burn rows and, with radial burns, the pre-burn rows, as :func:`signed_rows` blocks with their lower
     bounds ``path_floor - free_path``."""
     blocks, lb = [], []
-    for mat in (pb.path, pb.path_pre):
+    for mat in _dense_path(pb, cols):
         if mat is None:
             continue
-        blocks.append(signed_rows(mat[:, cols]))
+        blocks.append(signed_rows(mat))
         lb += list(pb.path_floor - pb.free_path)
     return blocks, lb
 
@@ -504,10 +537,101 @@ def _path_and_burn_rows(pb: _Problem, cols):
     return pb.rows[key]
 
 
-def _linprog(pb, cols, ihat, use_linprog=False, **flags):
-    """The continuous LP in linprog's form (a_ub v <= b_ub, a_eq v = b_eq), solved by :func:`.highs.solve_lp`."""
+#: The continuous LP's path constraints in their sparse recursive form (:func:`_recursive_path`); False: the dense
+#: rows of :func:`_path_rows` (``bench/bench_lp.py`` compares the two)
+SPARSE_PATH = True
+
+
+def _recursive_path(pb: _Problem, cols, n_v: int):
+    """The path constraints s a dl_i >= path_floor at every grid epoch i in a sparse recursive form: the same
+    feasible set as :func:`_path_rows`, over 2 K - 1 more variables (issue 42; docs/benchmarks.md, "The acquisition
+    LP").
+
+    Between grid epochs the secular model moves dl by the drift of da and, with J2, of di_x (seed 002 Eq. 2;
+    ``transition_matrices``: the dl row of Phi(t) is (c_a t, 1, 0, 0, c_ix t, 0), and the da and di rows are the
+    identity), so the burn part of s a dl at epoch i, Lambda_i, obeys
+
+    * Lambda_i = Lambda_(i-1) + B_(i-1) + sum over the candidates c at epoch i of path[i, c] x_c,
+    * B_i = B_(i-1) + sum over the candidates c at epoch i of (path[i + 1, c] - path[i, c]) x_c,
+
+    with x_c = p_c - m_c and B the per-step growth of the burns' dl. Both coefficients are the dense rows' own
+    entries at lags 0 and 1 (Phi is affine in the lag, so path[i, c] = path[e, c] + (i - e) (path[e + 1, c] -
+    path[e, c]) for a candidate at epoch e), so no new physics enters. The bound Lambda_i >= path_floor - free_path
+    replaces the dense row; with radial burns the pre-burn row is Lambda_i - (the epoch's own terms) >= the same.
+    Each row has a handful of nonzeros: about 2 K (2 + J) in all where the dense block has about K^2 J.
+
+    Parameters
+    ----------
+    pb : _Problem
+        The problem.
+    cols : array_like of int
+        The candidate columns of the LP.
+    n_v : int
+        The LP's variables before the new ones (2 S + 3).
+
+    Returns
+    -------
+    tuple
+        ``(a_eq, b_eq, a_ge, b_ge, lo, hi)``: the recursion rows (CSR, ``n_v + 2 K - 1`` columns) with their
+        right-hand sides, the pre-burn rows ``a_ge v >= b_ge`` (None without radial burns) and the new variables'
+        bounds (Lambda_0..K-1, then B_0..K-2).
+    """
     from scipy import sparse
 
+    cols = np.asarray(cols)
+    k_count, n_s = len(pb.epochs), len(cols)
+    own = pb.epoch_of[cols]  # each candidate's epoch
+    lam0, b0 = n_v, n_v + k_count  # the columns of Lambda_0 and B_0
+    w = n_v + 2 * k_count - 1
+    x_idx = np.arange(n_s)
+    nxt = np.minimum(own + 1, k_count - 1)
+    if pb.path_lags is not None:
+        c_lam, c_lag1 = pb.path_lags[0, cols], pb.path_lags[1, cols]
+    else:  # the dense rows' own entries
+        c_lam, c_lag1 = pb.path[own, cols], pb.path[nxt, cols]
+    c_b = np.where(own + 1 < k_count, c_lag1 - c_lam, 0.0)  # lag 1 minus lag 0
+    radial = (0 in pb.axes) if pb.path is None else pb.path_pre is not None
+    rows, cidx, vals = [], [], []
+
+    def put(r, c, v):
+        r = np.atleast_1d(r)
+        rows.append(r), cidx.append(np.broadcast_to(c, r.shape)), vals.append(np.broadcast_to(v, r.shape).astype(float))
+
+    # Lambda rows 0..K-1: Lambda_i - Lambda_(i-1) - B_(i-1) - sum c_lam x = 0
+    i = np.arange(k_count)
+    put(i, lam0 + i, 1.0)
+    put(i[1:], lam0 + i[1:] - 1, -1.0)
+    put(i[1:], b0 + i[1:] - 1, -1.0)
+    put(own, x_idx, -c_lam)
+    put(own, n_s + x_idx, c_lam)
+    # B rows K..2K-2: B_i - B_(i-1) - sum c_b x = 0 (i = 0..K-2)
+    ib = np.arange(k_count - 1)
+    put(k_count + ib, b0 + ib, 1.0)
+    put(k_count + ib[1:], b0 + ib[1:] - 1, -1.0)
+    keep = own < k_count - 1
+    put(k_count + own[keep], x_idx[keep], -c_b[keep])
+    put(k_count + own[keep], n_s + x_idx[keep], c_b[keep])
+    r, c, v = (np.concatenate(z) for z in (rows, cidx, vals))
+    a_eq = sparse.csr_matrix((v, (r, c)), shape=(2 * k_count - 1, w))
+    floor = pb.path_floor - pb.free_path
+    lo = np.concatenate([floor, np.full(k_count - 1, -np.inf)])
+    hi = np.full(2 * k_count - 1, np.inf)
+    a_ge = b_ge = None
+    if radial:  # Lambda_i minus the epoch's own burns >= the floor: the state just before them
+        r = np.concatenate([i, own, own])
+        c = np.concatenate([lam0 + i, x_idx, n_s + x_idx])
+        v = np.concatenate([np.ones(k_count), -c_lam, c_lam])
+        a_ge, b_ge = sparse.csr_matrix((v, (r, c)), shape=(k_count, w)), floor
+    return a_eq, np.zeros(2 * k_count - 1), a_ge, b_ge, lo, hi
+
+
+def _linprog(pb, cols, ihat, use_linprog=False, **flags):
+    """The continuous LP in linprog's form (a_ub v <= b_ub, a_eq v = b_eq), solved by :func:`.highs.solve_lp`; its
+    path constraints in the sparse recursive form (:func:`_recursive_path`) unless :data:`SPARSE_PATH` is off."""
+    from scipy import sparse
+
+    if SPARSE_PATH and flags.get("path", True):
+        return _linprog_recursive(pb, cols, ihat, use_linprog, **{k: v for k, v in flags.items() if k != "path"})
     cost, lo_v, hi_v, a_mat, lb, ub = _assemble(pb, cols, ihat, exact=True, **flags)
     eq = lb == ub
     up = ~eq & np.isfinite(ub)
@@ -517,7 +641,35 @@ def _linprog(pb, cols, ihat, use_linprog=False, **flags):
     return solve_lp(cost, a_ub, b_ub, a_mat[np.flatnonzero(eq)], ub[eq], lo=lo_v, hi=hi_v, use_linprog=use_linprog)
 
 
+def _linprog_recursive(pb, cols, ihat, use_linprog=False, **flags):
+    """:func:`_linprog` with the path constraints of :func:`_recursive_path`: the other rows of :func:`_assemble`
+    (without its dense path rows) over the same variables, then the recursion's; the solution's first 2 S + 3
+    entries are the dense LP's variables."""
+    from scipy import sparse
+
+    cost, lo_v, hi_v, a_mat, lb, ub = _assemble(pb, cols, ihat, exact=True, path=False, **flags)
+    n_v = len(cost)
+    a_eq_p, b_eq_p, a_ge, b_ge, lo_p, hi_p = _recursive_path(pb, cols, n_v)
+    w = a_eq_p.shape[1]
+    a_mat = sparse.hstack([a_mat, sparse.csr_matrix((a_mat.shape[0], w - n_v))]).tocsr()
+    eq = lb == ub
+    up = ~eq & np.isfinite(ub)
+    low = ~eq & np.isfinite(lb)
+    ub_blocks = [a_mat[np.flatnonzero(up)], -a_mat[np.flatnonzero(low)]]
+    b_ub = [ub[up], -lb[low]]
+    if a_ge is not None:
+        ub_blocks.append(-a_ge)
+        b_ub.append(-b_ge)
+    a_ub = sparse.vstack(ub_blocks).tocsr()
+    a_eq = sparse.vstack([a_mat[np.flatnonzero(eq)], a_eq_p]).tocsr()
+    return solve_lp(np.concatenate([cost, np.zeros(w - n_v)]), a_ub, np.concatenate(b_ub), a_eq,
+                    np.concatenate([ub[eq], b_eq_p]), lo=np.concatenate([lo_v, lo_p]),
+                    hi=np.concatenate([hi_v, hi_p]), use_linprog=use_linprog)
+
+
 def _milp(pb, cols, ihat):
+    """The quantized program over the candidate columns ``cols`` (a neighbourhood of the LP's support, a few dozen):
+    its path rows dense (:func:`_dense_path`), small at that size."""
     from scipy.optimize import Bounds, LinearConstraint, milp
 
     cost, lo_v, hi_v, a_mat, lb, ub = _assemble(pb, cols, ihat, exact=False)

@@ -2,6 +2,7 @@
 bounds checked against a small hand-computed problem (two candidate columns on two grid epochs), and the assembled
 program equal to the blocks stacked in their documented order."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -131,3 +132,68 @@ def test_the_program_stacks_the_blocks_in_order(exact, flags):
     np.testing.assert_array_equal(cost, P._objective(lay))
     np.testing.assert_array_equal((lo, hi), P._variable_bounds(pb, lay, COLS, exact=exact, target=True,
                                                                ei=flags.get("ei", True)))
+
+
+# ----------------------------------------------------------------------------------- the recursive path (issue 42)
+def _dense_problem(roe, chief, da_dot, cfg):
+    """The problem with its dense path rows built (SPARSE_PATH off), as before issue 42."""
+    saved = P.SPARSE_PATH
+    P.SPARSE_PATH = False
+    try:
+        return P._build(np.asarray(roe, dtype=float), chief, da_dot, cfg, chief.t0 + 11400.0)
+    finally:
+        P.SPARSE_PATH = saved
+
+
+@pytest.mark.parametrize("axes", ["TN", "RTN"])
+def test_the_recursive_path_is_the_dense_path(axes):
+    """Every burn vector x: the recursion's variables (Lambda_i = the dense row i times x, B_i the burns' growth of
+    dl per step) satisfy its equality rows, and the two lags give back every dense entry, pre-burn rows included."""
+    from test_acquisition import CHIEF, DA_DOT, TYPICAL
+
+    cfg = P.AcquisitionConfig(axes=axes)
+    pb = _dense_problem(TYPICAL, CHIEF, DA_DOT, cfg)
+    cols = np.arange(pb.final.shape[1])
+    post, pre = P._dense_path(dataclasses.replace(pb, path=None, path_pre=None), cols)
+    scale = np.abs(pb.path).max()
+    np.testing.assert_allclose(post, pb.path, rtol=0, atol=1e-12 * scale)
+    if "R" in axes:
+        np.testing.assert_allclose(pre, pb.path_pre, rtol=0, atol=1e-12 * scale)
+    n_v = 2 * len(cols) + 3
+    a_eq, b_eq, a_ge, b_ge, lo, hi = P._recursive_path(pb, cols, n_v)
+    k = len(pb.epochs)
+    assert a_eq.shape == (2 * k - 1, n_v + 2 * k - 1) and a_eq.nnz < 0.05 * pb.path.size
+    rng = np.random.default_rng(3)
+    x = rng.normal(size=len(cols)) * (rng.random(len(cols)) < 0.05)
+    lam = pb.path @ x
+    c_b = np.zeros(len(cols))
+    own = pb.epoch_of
+    nxt = own + 1 < k
+    c_b[nxt] = pb.path[own[nxt] + 1, cols[nxt]] - pb.path[own, cols][nxt]
+    b = np.array([c_b[own <= i] @ x[own <= i] for i in range(k - 1)])
+    v = np.concatenate([np.maximum(x, 0), np.maximum(-x, 0), np.zeros(3), lam, b])
+    np.testing.assert_allclose(a_eq @ v, b_eq, rtol=0, atol=1e-9 * scale)
+    np.testing.assert_array_equal(lo[:k], pb.path_floor - pb.free_path)
+    assert (a_ge is not None) == ("R" in axes)
+    if a_ge is not None:
+        np.testing.assert_allclose(a_ge @ v, pb.path_pre @ x, rtol=0, atol=1e-9 * scale)
+
+
+@pytest.mark.parametrize("state", ["typical", "trailing", "fast"])
+def test_both_forms_reach_the_same_optimum(state):
+    """The recursive form is the same program: the continuous LP's optimum to 1e-9 (its vertex may differ: the LP
+    is degenerate) and the quantized plan's delta-v."""
+    from test_acquisition import CHIEF, DA_DOT, TYPICAL, roe_from
+
+    roe = {"typical": TYPICAL, "trailing": roe_from(150.0, -20000.0, 550.0, 1.2, 420.0, 1.2),
+           "fast": roe_from(-300.0, 15000.0, 480.0, -2.0, 380.0, -2.0)}[state]
+    plans = {}
+    saved = P.SPARSE_PATH
+    try:
+        for form in (False, True):
+            P.SPARSE_PATH = form
+            plans[form] = P.plan_acquisition(roe, CHIEF, DA_DOT, P.AcquisitionConfig())
+    finally:
+        P.SPARSE_PATH = saved
+    assert plans[True].lp_dv == pytest.approx(plans[False].lp_dv, rel=1e-9)
+    assert plans[True].total_dv == pytest.approx(plans[False].total_dv, rel=1e-9)
