@@ -20,10 +20,8 @@ named blocks. i^ is iterated from the burn-free final di to the planned one (J2 
 :func:`ei_magnitude_floor` keeps Eq. (25) >= min_ei under the angle tolerance. The window is used whole and the
 dl target is mid-range (measured in docs/campaigns.md); re-planning on each newer OD and a final trim
 (:mod:`roe_sep.core.acquisition.trim`, its OD's radar arc kept free of burns by ``no_burns``) absorb OD errors.
-The path constraint s a dl >= a_dl_min at every grid epoch enters the continuous LP in a sparse recursive form
-(:func:`_recursive_path`: two more variables per epoch, a few nonzeros per row, where the dense rows have one entry
-per earlier candidate): the same feasible set, so the same optimum (issue 42, docs/benchmarks.md "The acquisition
-LP"; ``SPARSE_PATH`` off gives the dense rows).
+The path constraint enters the continuous LP in a sparse recursive form with the same feasible set
+(:func:`_recursive_path`; docs/benchmarks.md, issue 42).
 
 Quantization. The LP optimum is re-solved as a mixed-integer program (HiGHS) in multiples of ``dv_quantum`` on the
 LP's support and its neighbouring epochs, the equalities relaxed to tolerances a quantized plan can meet:
@@ -544,21 +542,14 @@ SPARSE_PATH = True
 
 def _recursive_path(pb: _Problem, cols, n_v: int):
     """The path constraints s a dl_i >= path_floor at every grid epoch i in a sparse recursive form: the same
-    feasible set as :func:`_path_rows`, over 2 K - 1 more variables (issue 42; docs/benchmarks.md, "The acquisition
-    LP").
+    feasible set as :func:`_path_rows`, over 2 K - 1 more variables (issue 42; docs/benchmarks.md).
 
-    Between grid epochs the secular model moves dl by the drift of da and, with J2, of di_x (seed 002 Eq. 2;
-    ``transition_matrices``: the dl row of Phi(t) is (c_a t, 1, 0, 0, c_ix t, 0), and the da and di rows are the
-    identity), so the burn part of s a dl at epoch i, Lambda_i, obeys
-
-    * Lambda_i = Lambda_(i-1) + B_(i-1) + sum over the candidates c at epoch i of path[i, c] x_c,
-    * B_i = B_(i-1) + sum over the candidates c at epoch i of (path[i + 1, c] - path[i, c]) x_c,
-
-    with x_c = p_c - m_c and B the per-step growth of the burns' dl. Both coefficients are the dense rows' own
-    entries at lags 0 and 1 (Phi is affine in the lag, so path[i, c] = path[e, c] + (i - e) (path[e + 1, c] -
-    path[e, c]) for a candidate at epoch e), so no new physics enters. The bound Lambda_i >= path_floor - free_path
-    replaces the dense row; with radial burns the pre-burn row is Lambda_i - (the epoch's own terms) >= the same.
-    Each row has a handful of nonzeros: about 2 K (2 + J) in all where the dense block has about K^2 J.
+    The secular model's dl row of Phi(t) is (c_a t, 1, 0, 0, c_ix t, 0) and its da and di rows the identity (seed
+    002 Eq. 2), so the burns' part of s a dl at epoch i, Lambda_i, obeys Lambda_i = Lambda_(i-1) + B_(i-1) + the
+    epoch's terms lag0_c x_c and B_i = B_(i-1) + (lag1_c - lag0_c) x_c (x_c = p_c - m_c), lag0 and lag1 the dense
+    rows' own entries one candidate on (``path_lags``; no new physics). The bound Lambda_i >= path_floor -
+    free_path replaces the dense row; with radial burns the pre-burn row is Lambda_i - the epoch's terms >= the
+    same. About 2 K (2 + J) nonzeros in all, where the dense block has about K^2 J.
 
     Parameters
     ----------
