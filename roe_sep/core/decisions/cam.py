@@ -174,7 +174,10 @@ def cam_decision(dv: ArrayLike, cov: ArrayLike, dv_commanded: ArrayLike, chief: 
 
     t_cam = float(t_now) + c.latency
     period = 2.0 * math.pi / float(arg_latitude_rate(chief.a, chief.inc, c.j2))
-    t_end = max(chief.t0 + c.horizon_orbits * period, t_cam)
+    t_end = chief.t0 + c.horizon_orbits * period
+    if not t_cam < t_end:  # decided too late for a CAM in the horizon (a late estimate, another clock): none
+        return CamDecision(off, magnitude_z, pointing_z, False, True, None, math.inf, None, None, False,
+                           f"the earliest CAM (t = {t_cam:.0f} s) is past the horizon (t = {t_end:.0f} s): no CAM")
     times = np.arange(chief.t0, t_end + c.step / 2, c.step)
     rho, sig = predicted_distance(dv, cov, chief, times, da_dot=da_dot, j2=c.j2)
     departs, t_inside, closest = _approach(times, rho - c.sigmas * sig, t_cam, c.keep_out)

@@ -579,6 +579,9 @@ def ejection_response(state: PlannerState, t: float, config: PlannerConfig) -> t
     if state.responded or state.estimate is None or state.commanded is None or not (config.cam or config.completion):
         return state, ()
     state = dataclasses.replace(state, responded=True)
+    if state.in_force is not None and t >= state.in_force.t_stop:  # the drift-stop is due: too late to act before it
+        return state, (Log("warning", f"footage: the estimate came at t = {t:.0f} s, after the drift-stop's epoch "
+                                      f"t = {state.in_force.t_stop:.0f} s: no response"),)
     ej = state.commanded
     dv, cov = np.array(state.estimate[0]), np.array(state.estimate[1]).reshape(3, 3)
     cmd = np.array(ej.dv_rtn, dtype=float)
@@ -623,8 +626,9 @@ def ejection_response(state: PlannerState, t: float, config: PlannerConfig) -> t
         undo = reversal_burn(cam, period, end)
         extra, end = extra + (undo,), max(end, undo.epoch)
     k = config.k if f.k is None else f.k
+    k += 2 * max(0, math.ceil((end - (ej.epoch + k * period / 2.0)) / period))  # the first odd k after ``end``
     stop = separation_plan(ej, config, k=k, p=f.p)
-    while stop.burns[0].epoch <= end:
+    while stop.burns[0].epoch <= end:  # at most once: the drift-stop's own rate against ``period``
         k += 2
         stop = separation_plan(ej, config, k=k, p=f.p)
     plan = PublishPlan("double_impulse", stamp, sec_nanosec(t), stop.p_reduction, extra + stop.burns, stop.aimed)

@@ -149,3 +149,21 @@ def test_completion_and_reversal_helpers():
     undo = reversal_burn(cam, 5000.0, 20100.0)
     assert undo.epoch == 20600.0 and undo.dv_rtn == (-0.0, -0.1, -0.0) and undo.u == cam.u
     assert reversal_burn(cam, 5000.0, 0.0).epoch == 5600.0
+
+
+def test_a_late_estimate_is_not_acted_on_and_costs_nothing():
+    """An estimate after the drift-stop's epoch (or on another clock: a standalone planner on wall time, 1.8e9 s)
+    gets no response, at once (the CAM rule's horizon is not stretched to it)."""
+    import time
+
+    state, dv, times = footage(planned(RESPONSE), 0.2, RESPONSE)
+    done, actions = rules.on_step(state, times[0] + 270.0, 101.0, True, dataclasses.replace(RESPONSE, cam=False,
+                                                                                            completion=False))
+    tic = time.process_time()
+    after, actions = rules.ejection_response(done, 1.8e9, RESPONSE)
+    assert time.process_time() - tic < 1.0
+    assert kinds(actions) == ["Log"] and "no response" in actions[0].text and after.responded
+    from roe_sep.core.decisions.cam import cam_decision
+
+    late = cam_decision(dv, np.eye(3) * 1e-8, D.dv1_rtn, CHIEF, 1.8e9)
+    assert late.burn is None and "past the horizon" in late.reason
