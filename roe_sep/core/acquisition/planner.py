@@ -618,44 +618,32 @@ def _recursive_path(pb: _Problem, cols, n_v: int):
 
 def _linprog(pb, cols, ihat, use_linprog=False, **flags):
     """The continuous LP in linprog's form (a_ub v <= b_ub, a_eq v = b_eq), solved by :func:`.highs.solve_lp`; its
-    path constraints in the sparse recursive form (:func:`_recursive_path`) unless :data:`SPARSE_PATH` is off."""
+    path constraints in the sparse recursive form (:func:`_recursive_path`: the rows after :func:`_assemble`'s, over
+    2 K - 1 more variables after its 2 S + 3) unless :data:`SPARSE_PATH` is off or ``path`` is (the diagnosis)."""
     from scipy import sparse
 
-    if SPARSE_PATH and flags.get("path", True):
-        return _linprog_recursive(pb, cols, ihat, use_linprog, **{k: v for k, v in flags.items() if k != "path"})
-    cost, lo_v, hi_v, a_mat, lb, ub = _assemble(pb, cols, ihat, exact=True, **flags)
+    recursive = SPARSE_PATH and flags.get("path", True)
+    cost, lo_v, hi_v, a_mat, lb, ub = _assemble(pb, cols, ihat, exact=True,
+                                                **{**flags, "path": flags.get("path", True) and not recursive})
+    if recursive:
+        n_v = len(cost)
+        a_eq, b_eq, a_ge, b_ge, lo_p, hi_p = _recursive_path(pb, cols, n_v)
+        w = a_eq.shape[1]
+        blocks = [sparse.hstack([a_mat, sparse.csr_matrix((a_mat.shape[0], w - n_v))]), a_eq]
+        lb, ub = [lb, b_eq], [ub, b_eq]
+        if a_ge is not None:  # a_ge v >= b_ge
+            blocks.append(a_ge)
+            lb.append(b_ge)
+            ub.append(np.full(len(b_ge), np.inf))
+        a_mat, lb, ub = sparse.vstack(blocks).tocsr(), np.concatenate(lb), np.concatenate(ub)
+        cost = np.concatenate([cost, np.zeros(w - n_v)])
+        lo_v, hi_v = np.concatenate([lo_v, lo_p]), np.concatenate([hi_v, hi_p])
     eq = lb == ub
     up = ~eq & np.isfinite(ub)
     low = ~eq & np.isfinite(lb)
     a_ub = sparse.vstack([a_mat[np.flatnonzero(up)], -a_mat[np.flatnonzero(low)]]).tocsr()
     b_ub = np.concatenate([ub[up], -lb[low]])
     return solve_lp(cost, a_ub, b_ub, a_mat[np.flatnonzero(eq)], ub[eq], lo=lo_v, hi=hi_v, use_linprog=use_linprog)
-
-
-def _linprog_recursive(pb, cols, ihat, use_linprog=False, **flags):
-    """:func:`_linprog` with the path constraints of :func:`_recursive_path`: the other rows of :func:`_assemble`
-    (without its dense path rows) over the same variables, then the recursion's; the solution's first 2 S + 3
-    entries are the dense LP's variables."""
-    from scipy import sparse
-
-    cost, lo_v, hi_v, a_mat, lb, ub = _assemble(pb, cols, ihat, exact=True, path=False, **flags)
-    n_v = len(cost)
-    a_eq_p, b_eq_p, a_ge, b_ge, lo_p, hi_p = _recursive_path(pb, cols, n_v)
-    w = a_eq_p.shape[1]
-    a_mat = sparse.hstack([a_mat, sparse.csr_matrix((a_mat.shape[0], w - n_v))]).tocsr()
-    eq = lb == ub
-    up = ~eq & np.isfinite(ub)
-    low = ~eq & np.isfinite(lb)
-    ub_blocks = [a_mat[np.flatnonzero(up)], -a_mat[np.flatnonzero(low)]]
-    b_ub = [ub[up], -lb[low]]
-    if a_ge is not None:
-        ub_blocks.append(-a_ge)
-        b_ub.append(-b_ge)
-    a_ub = sparse.vstack(ub_blocks).tocsr()
-    a_eq = sparse.vstack([a_mat[np.flatnonzero(eq)], a_eq_p]).tocsr()
-    return solve_lp(np.concatenate([cost, np.zeros(w - n_v)]), a_ub, np.concatenate(b_ub), a_eq,
-                    np.concatenate([ub[eq], b_eq_p]), lo=np.concatenate([lo_v, lo_p]),
-                    hi=np.concatenate([hi_v, hi_p]), use_linprog=use_linprog)
 
 
 def _milp(pb, cols, ihat):
