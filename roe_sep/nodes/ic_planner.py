@@ -37,10 +37,8 @@ from std_msgs.msg import String
 from .. import interfaces
 from ..core.acquisition.planner import AcquisitionConfig, InvalidAcquisitionConfig, validate_config
 from ..core.config import ConfigError, load_scenario
-from ..core.constants import ARCSEC
 from ..core.decisions import ic_planner as rules
 from ..core.od.radar import DEFAULT_EPOCH_UTC, julian_date
-from ..core.relmotion.dynamics import drag_da_dot
 from ..core.relmotion.roe import wrap_angle
 from .convert import (
     array_to_elements,
@@ -163,15 +161,8 @@ class IcPlannerNode(ManagedNode):
             publish_status(self, self.diag_pub, 2, "ejection event rejected: non-finite dv or invalid chief",
                            part="input")
             return
-        sep, mc = self.scenario.separation, self.scenario.monte_carlo
-        mag2 = float(dv @ dv)
-        cov = sep.spl_sigma ** 2 * np.outer(dv, dv) + (mc.attitude_sigma_arcsec * ARCSEC) ** 2 * (
-            mag2 * np.eye(3) - np.outer(dv, dv))
-        a_da_dot = float(drag_da_dot(mc.delta_b, mc.density, kep[0])) * kep[0] if mc.drag else 0.0
-        prior = rules.EjectionPrior(time_to_sec(event.header.stamp), tuple(float(x) for x in kep),
-                                    float(event.ejection.mean_arg_latitude), tuple(float(x) for x in dv),
-                                    tuple(float(x) for x in cov.reshape(-1)), a_da_dot,
-                                    abs(a_da_dot) * mc.ballistic_sigma)
+        prior = rules.EjectionPrior.commanded(time_to_sec(event.header.stamp), kep,
+                                              event.ejection.mean_arg_latitude, dv, self.scenario)
         self.apply(rules.on_ejection(self.state, prior, self.config))
 
     def on_measured(self, msg: TwistWithCovarianceStamped):

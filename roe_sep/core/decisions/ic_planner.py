@@ -14,6 +14,7 @@ import functools
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -39,8 +40,8 @@ from ..acquisition.trim import (
     radar_passes,
     trim_problems,
 )
-from ..constants import SECONDS_PER_DAY
-from ..relmotion.dynamics import propagate_chief
+from ..constants import ARCSEC, SECONDS_PER_DAY
+from ..relmotion.dynamics import drag_da_dot, propagate_chief
 from ..relmotion.maneuvers import delta_roe
 from ..relmotion.orbit import mean_motion
 from ..relmotion.roe import wrap_angle
@@ -135,6 +136,22 @@ class EjectionPrior:
     a_da_dot: float
     a_da_dot_sigma: float
     source: str = "commanded"
+
+    @classmethod
+    def commanded(cls, t: float, kep: ArrayLike, u: float, dv: ArrayLike, scenario: Any) -> "EjectionPrior":
+        """The commanded ejection ``dv`` (3,) [m/s] at ``t`` [s] (the chief's mean elements ``kep``, mean argument of
+        latitude ``u`` [rad]) with the ``scenario``'s SPL magnitude error ``spl_sigma`` along it and its attitude
+        error ``attitude_sigma_arcsec`` across it as the covariance (seed 002 Eq. 22), and its nominal differential
+        drag with the ``ballistic_sigma`` fraction as its 1-sigma."""
+        dv = np.asarray(dv, dtype=float)
+        sep, mc = scenario.separation, scenario.monte_carlo
+        along = np.outer(dv, dv)
+        cov = sep.spl_sigma ** 2 * along + (mc.attitude_sigma_arcsec * ARCSEC) ** 2 * (float(dv @ dv) * np.eye(3)
+                                                                                        - along)
+        a = float(kep[0])
+        a_da_dot = float(drag_da_dot(mc.delta_b, mc.density, a)) * a if mc.drag else 0.0
+        return cls(float(t), tuple(float(x) for x in kep), float(u), tuple(float(x) for x in dv),
+                   tuple(float(x) for x in cov.reshape(-1)), a_da_dot, abs(a_da_dot) * mc.ballistic_sigma)
 
     def solution(self, stamp: float) -> "OdSolution":
         """The prior as an OD solution at the release, made at ``stamp`` [s]: the ROE of the ejection (seed 002
@@ -338,11 +355,9 @@ def on_step(state: IcPlannerState, now: float, config: IcPlannerConfig) -> tuple
         return state, (status(WARN, text + ": the separation holds without a burn", extra, "warning",
                               part="contingency", stamp=now),)
     t_hold = chief_b.t0 + config.blind_after
-    kep = propagate_chief(np.array(prior.kep, dtype=float), t_hold - prior.t, config.cfg.j2)
-    kep[3:] = wrap_angle(kep[3:])
     roe_hold = state_at(roe_b, chief_b.t0, [burn.relative()], t_hold, chief_b, j2=config.cfg.j2,
                         da_dot=prior.a_da_dot / a)
-    publish = PublishPlan(now, (burn,), tuple(float(x) for x in roe_hold), tuple(float(x) for x in kep), t_hold)
+    publish = PublishPlan(now, (burn,), *aimed(prior.solution(now), roe_hold, t_hold, config), t_hold)
     state = dataclasses.replace(state, last_plan=publish, plan_in_force=(burn,), burn_epochs=(burn.epoch,),
                                 plans=state.plans + 1)
     text += (f": a tangential burn of {burn.dv_rtn[1]:+.3f} m/s at t = {burn.epoch:.0f} s holds a dl until "

@@ -140,3 +140,24 @@ def test_the_blind_state_round_trips_through_strict_json():
 
 def kinds(actions):
     return [type(a).__name__ for a in actions]
+
+
+def test_the_commanded_prior_carries_the_spl_errors_and_the_nominal_drag():
+    """The covariance: spl_sigma of the magnitude along dv, the attitude sigma across it (seed 002 Eq. 22); the
+    drag: the scenario's nominal, its ballistic_sigma as 1-sigma."""
+    from roe_sep.core.config import load_scenario
+    from roe_sep.core.constants import ARCSEC
+
+    sc = load_scenario(None)
+    prior = rules.EjectionPrior.commanded(10.0, KEP, float(D.u1), DV, sc)
+    cov = np.array(prior.cov).reshape(3, 3)
+    unit = DV / np.linalg.norm(DV)
+    across = np.cross(unit, [0.0, 0.0, 1.0])
+    across /= np.linalg.norm(across)
+    assert unit @ cov @ unit == pytest.approx((sc.separation.spl_sigma * np.linalg.norm(DV)) ** 2)
+    assert across @ cov @ across == pytest.approx((sc.monte_carlo.attitude_sigma_arcsec * ARCSEC
+                                                   * np.linalg.norm(DV)) ** 2)
+    a = KEP[0]
+    assert prior.a_da_dot == pytest.approx(float(drag_da_dot(sc.monte_carlo.delta_b, sc.monte_carlo.density, a)) * a)
+    assert prior.a_da_dot_sigma == pytest.approx(abs(prior.a_da_dot) * sc.monte_carlo.ballistic_sigma)
+    assert prior.source == "commanded" and prior.t == 10.0 and prior.dv == pytest.approx(tuple(DV))
