@@ -128,7 +128,7 @@ class IcPlannerNode(ManagedNode):
             ls.subscribe(TwistWithCovarianceStamped, interfaces.EJECTION_ESTIMATE_TOPIC, self.on_measured,
                          interfaces.LATCHED, what="ejection estimate")
             # without lockstep steps (a free-running clock) the blind acquisition's check runs on a timer
-            self.free_timer = self.create_timer(1.0, self._free_running_step)
+            self.free_timer = ls.free_running(self.now)
 
         self.activated_later(subscribe)
         if recovered is not None:
@@ -178,14 +178,6 @@ class IcPlannerNode(ManagedNode):
         """Sim-time checks (each lockstep step; a timer without one): the blind acquisition
         (:func:`roe_sep.core.decisions.ic_planner.on_step`)."""
         self.apply(rules.on_step(self.state, t, self.config))
-
-    def _free_running_step(self):
-        """The sim-time check each second without lockstep steps; cancelled once a step has come (as the
-        planner's)."""
-        if self.lockstep.active:
-            self.free_timer.cancel()
-            return
-        self.on_step(self.now())
 
     def on_separation_plan(self, plan: ManeuverPlan):
         self.apply(rules.on_separation_plan(self.state, [time_to_sec(m.epoch) for m in plan.maneuvers], self.config))

@@ -103,6 +103,20 @@ class Lockstep:
         self._ack_topics = []
 
     # ------------------------------------------------------------------ declaration
+    def free_running(self, now, period=1.0):
+        """Without lockstep steps (a free-running clock) run ``on_step(now())`` on a timer every ``period`` wall
+        seconds. Once a step message has come (lockstep mode is never left) each step runs it and the timer is
+        cancelled: it had nothing left to do, and the EventsExecutor still fired it about 50 times per 600 s step of
+        sim time (24,000 callbacks a run). Returns the timer."""
+        def tick():
+            if self.active:
+                timer.cancel()
+                return
+            self.on_step_callback(now())
+
+        timer = self.node.create_timer(period, tick)
+        return timer
+
     def subscribe(self, msg_type, topic, callback, qos, stamp=header_stamp, *, what=None, raw=False):
         """Subscribe ``callback`` to ``topic`` through the lockstep buffer (inputs are ranked in declaration
         order for messages with equal stamps). Every message is validated first (:mod:`.validate`); a bad one,

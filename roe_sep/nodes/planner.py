@@ -192,7 +192,7 @@ class PlannerNode(ManagedNode):
             ls.subscribe(PoseWithCovarianceStamped, interfaces.POSE_TOPIC, self.on_pose, interfaces.STREAM,
                          what="footage pose")
             # without lockstep steps (a free-running clock) the sim-time checks run on a timer
-            self.free_timer = self.create_timer(1.0, self._free_running_step)
+            self.free_timer = ls.free_running(self.now)
 
         self.activated_later(subscribe)
         if recovered is not None:
@@ -227,15 +227,6 @@ class PlannerNode(ManagedNode):
         """s: the lockstep step's sim time, else the clock's."""
         ls = self.lockstep
         return ls.time if ls.active and ls.time is not None else self.now()
-
-    def _free_running_step(self):
-        """The sim-time checks each second of sim time without lockstep steps. Once a step message has come
-        (lockstep mode is never left) each step runs them and the timer is cancelled: it had nothing left to do, and
-        the EventsExecutor still fired it about 50 times per 600 s step of sim time (24,000 callbacks a run)."""
-        if self.lockstep.active:
-            self.free_timer.cancel()
-            return
-        self.on_step(self.now())
 
     def on_executed(self, m: ImpulsiveManeuver):
         self.apply(rules.on_executed(self.state, planned_burn(m), time.monotonic(), self.config))
