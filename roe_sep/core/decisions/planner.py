@@ -484,7 +484,7 @@ def camera_decision(state: PlannerState, t: float, config: PlannerConfig) -> tup
     ejection = f.ejection
     chief = propagate_chief(np.array(ejection.kep, dtype=float), state.released - ejection.epoch, config.j2)
     mc = config.scenario.monte_carlo
-    da_dot = float(drag_da_dot(mc.delta_b, mc.density, chief[0])) if mc.drag else 0.0
+    da_dot = nominal_da_dot(config, chief[0])
     times = np.array([b[0] for b in state.bearings])
     los = np.array([b[1] for b in state.bearings])
     bound = nominal_fraction(config.scenario.separation.spl_sigma, mc.ballistic_sigma, config.hold_sigmas)
@@ -586,10 +586,9 @@ def ejection_response(state: PlannerState, t: float, config: PlannerConfig) -> t
     dv, cov = np.array(state.estimate[0]), np.array(state.estimate[1]).reshape(3, 3)
     cmd = np.array(ej.dv_rtn, dtype=float)
     chief = Chief(ej.kep[0], ej.kep[2], ej.u1, ej.epoch)
-    mc, sep = config.scenario.monte_carlo, config.scenario.separation
-    da_dot = float(drag_da_dot(mc.delta_b, mc.density, chief.a)) if mc.drag else 0.0
-    cam_config = CamConfig(spl_sigma=sep.spl_sigma, pointing_sigma=config.pointing_sigma, latency=config.cam_latency,
-                           sigmas=config.cam_sigmas, dv_cam=config.cam_dv, j2=config.j2)
+    da_dot = nominal_da_dot(config, chief.a)
+    cam_config = CamConfig(spl_sigma=config.scenario.separation.spl_sigma, pointing_sigma=config.pointing_sigma,
+                           latency=config.cam_latency, sigmas=config.cam_sigmas, dv_cam=config.cam_dv, j2=config.j2)
     found = cam_decision(dv, cov, cmd, chief, t, da_dot=da_dot, config=cam_config)
     if not found.off:
         return state, (Log("info", f"footage: {found.reason}"),)
@@ -610,12 +609,12 @@ def ejection_response(state: PlannerState, t: float, config: PlannerConfig) -> t
         state = published(state, plan)
         if stuck:
             state = dataclasses.replace(state, in_force=None, camera_done=True)
-        name = "stuck_ejection" if stuck else "ejection_off"
+        if not stuck:
+            return state, (plan, finding("ejection_off", t, found.reason, values_))
         text = (f"the footage measured f1 = {frac:.3f} of the commanded ejection (below {config.stuck_fraction:g}: "
-                "stuck), drift-stop withdrawn, the acquisition starts from the first OD" if stuck else found.reason)
-        return state, (plan, *((StopBearings(),) if stuck else ()), finding(name, t, f"{text}; {found.reason}"
-                                                                              if stuck else text, values_))
-    period = 2.0 * math.pi / float(arg_latitude_rate(chief.a, chief.inc, config.j2))
+                f"stuck), drift-stop withdrawn, the acquisition starts from the first OD; {found.reason}")
+        return state, (plan, StopBearings(), finding("stuck_ejection", t, text, values_))
+    period = orbit_period(ej, config)
     pulses = completion_burns(dv, cmd, t_release=ej.epoch, u_release=ej.u1, period=period,
                               t_earliest=t + config.cam_latency + (1.0 if cam else 0.0),
                               max_pulse=config.completion_max_pulse)
@@ -662,8 +661,21 @@ def orbits_later(ejection: Ejection, t: float, t_burn: float, config: PlannerCon
         ``(orbits, period)``: the whole orbits (at least one) after ``t_burn`` to the first epoch ``retry_margin``
         after ``t``, and the period [s].
     """
-    period = 2.0 * math.pi / float(arg_latitude_rate(ejection.kep[0], ejection.kep[2], config.j2))
+    period = orbit_period(ejection, config)
     return max(1, math.ceil((t + config.retry_margin - t_burn) / period - 1e-9)), period
+
+
+def orbit_period(ejection: Ejection, config: PlannerConfig) -> float:
+    """The period [s] of the mean argument of latitude of the ejection's chief (its a and i; with J2 when
+    ``config.j2``)."""
+    return 2.0 * math.pi / float(arg_latitude_rate(ejection.kep[0], ejection.kep[2], config.j2))
+
+
+def nominal_da_dot(config: PlannerConfig, a: float) -> float:
+    """The nominal differential-drag rate of da [1/s] at the semi-major axis ``a`` [m] (the scenario's ballistic
+    difference and density; 0 without drag): what the planner predicts the pair with."""
+    mc = config.scenario.monte_carlo
+    return float(drag_da_dot(mc.delta_b, mc.density, a)) if mc.drag else 0.0
 
 
 def missing(state: PlannerState, t: float, config: PlannerConfig) -> bool:
@@ -787,8 +799,7 @@ def separation_plan(ejection: Ejection, config: PlannerConfig, *, k: int | None 
     stamp, epoch1 = (ejection.sec, ejection.nanosec), ejection.epoch
     if config.strategy == "multi_impulse":
         sep = multi_config(config.scenario.separation, config.multi)
-        mc = config.scenario.monte_carlo  # the pair is planned on the nominal differential drag
-        da_dot = float(drag_da_dot(mc.delta_b, mc.density, a)) if mc.drag else 0.0
+        da_dot = nominal_da_dot(config, a)  # the pair is planned on the nominal differential drag
         plan = plan_carrier_burns(dv1, ejection.u1, epoch1, a, inc, sep=sep, mcfg=config.multi, j2=config.j2,
                                   da_dot=da_dot)
         burns = tuple(PlannedBurn.at(b.epoch, b.u, b.dv_carrier_rtn, "carrier", b.purpose) for b in plan.burns)
