@@ -26,6 +26,16 @@ def vector_to_array(v: Vector3) -> np.ndarray:
     return np.array([v.x, v.y, v.z], dtype=float)
 
 
+def twist_linear(msg) -> tuple[np.ndarray, np.ndarray]:
+    """The linear part of a geometry_msgs/TwistWithCovarianceStamped: its vector (3,) and covariance (3, 3), the
+    upper-left block of the row-major 6x6 (the footage's ejection estimate: dv [m/s] RTN, [m^2/s^2]); ValueError for
+    a covariance of another size."""
+    cov = np.asarray(msg.twist.covariance, dtype=float)
+    if cov.size != 36:
+        raise ValueError(f"a twist covariance has 36 entries, got {cov.size}")
+    return vector_to_array(msg.twist.twist.linear), cov.reshape(6, 6)[:3, :3].copy()
+
+
 def array_to_vector(a) -> Vector3:
     x, y, z = (float(c) for c in a)
     return Vector3(x=x, y=y, z=z)

@@ -49,6 +49,7 @@ from .convert import (
     roe_to_msg,
     sec_to_time,
     time_to_sec,
+    twist_linear,
     vector_to_array,
 )
 from .decision_record import DecisionRecord
@@ -167,12 +168,14 @@ class IcPlannerNode(ManagedNode):
 
     def on_measured(self, msg: TwistWithCovarianceStamped):
         """The executed ejection the planner's ground filter measured from the footage."""
-        dv = vector_to_array(msg.twist.twist.linear)
-        cov = [msg.twist.covariance[6 * i + j] for i in range(3) for j in range(3)]
-        if not (np.all(np.isfinite(dv)) and np.all(np.isfinite(cov))):
-            publish_status(self, self.diag_pub, 2, "ejection estimate rejected: non-finite", part="input")
+        try:
+            dv, cov = twist_linear(msg)
+            if not (np.all(np.isfinite(dv)) and np.all(np.isfinite(cov))):
+                raise ValueError("non-finite")
+        except ValueError as exc:
+            publish_status(self, self.diag_pub, 2, f"ejection estimate rejected: {exc}", part="input")
             return
-        self.apply(rules.on_measured(self.state, dv, cov, self.config))
+        self.apply(rules.on_measured(self.state, dv, cov.reshape(-1), self.config))
 
     def on_step(self, t):
         """Sim-time checks (each lockstep step; a timer without one): the blind acquisition

@@ -40,7 +40,7 @@ from ..core.relmotion.orbit import mean_motion
 from ..core.relmotion.trajectory import Chief, burn_segments, segments_at, state_at
 from ..core.safety.anomaly import AnomalyLimits, AnomalyWatch
 from ..core.safety.monitor import MonitorLimits, assess
-from .convert import msg_to_roe, plan_burns, sec_to_time, time_to_sec, vector_to_array
+from .convert import msg_to_roe, plan_burns, sec_to_time, time_to_sec, twist_linear, vector_to_array
 from .diagnostics import WARN, StatusMessages, publish_status
 from .lockstep import Lockstep
 from .managed import ManagedNode
@@ -252,11 +252,10 @@ class SafetyMonitorNode(ManagedNode):
         """The executed ejection the planner's ground filter measured from the footage: from now on the knowledge of
         the ejection (plans are judged from it until an OD; issue 41 part 2)."""
         try:
-            dv = vector_to_array(msg.twist.twist.linear)
-            cov = np.array([[msg.twist.covariance[6 * i + j] for j in range(3)] for i in range(3)], dtype=float)
+            dv, cov = twist_linear(msg)
             if not (np.all(np.isfinite(dv)) and np.all(np.isfinite(cov))):
                 raise ValueError("non-finite ejection estimate")
-        except (ValueError, IndexError) as exc:
+        except ValueError as exc:
             self.reject("ejection estimate", exc)
             return
         self.measured = (dv, cov)

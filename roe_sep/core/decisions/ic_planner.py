@@ -42,7 +42,7 @@ from ..acquisition.trim import (
 )
 from ..constants import ARCSEC, SECONDS_PER_DAY
 from ..relmotion.dynamics import drag_da_dot, propagate_chief
-from ..relmotion.maneuvers import delta_roe
+from ..relmotion.maneuvers import control_matrix, delta_roe
 from ..relmotion.orbit import mean_motion
 from ..relmotion.roe import wrap_angle
 from ..relmotion.trajectory import Chief, state_at
@@ -160,7 +160,7 @@ class EjectionPrior:
         a = self.kep[0]
         n = float(mean_motion(a))
         roe = delta_roe(np.array(self.dv, dtype=float), self.u, a, n)
-        jac = np.stack([delta_roe(e, self.u, a, n) for e in np.eye(3)], axis=1) * a  # (6, 3), m per m/s
+        jac = control_matrix(self.u) / n  # (6, 3): a times Eq. 2's dROE / d dv, m per m/s
         cov = jac @ np.array(self.cov, dtype=float).reshape(3, 3) @ jac.T
         return OdSolution(float(stamp), float(self.t), tuple(self.kep), float(self.u), tuple(float(x) for x in roe),
                           tuple(float(x) for x in cov.reshape(-1)), float(self.a_da_dot), float(self.a_da_dot_sigma))

@@ -33,7 +33,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..relmotion.dynamics import propagate
-from ..relmotion.maneuvers import delta_roe
+from ..relmotion.maneuvers import control_matrix, delta_roe
 from ..relmotion.orbit import angle_between, mean_motion
 from ..relmotion.trajectory import Burn, Chief, state_at
 from ..truth.execution import relative_impulse
@@ -297,7 +297,7 @@ class AnomalyWatch:
         t, _, chief, _, da_dot = self.knowledge
         n = mean_motion(chief.a)
         roe = delta_roe(np.asarray(dv, dtype=float), chief.u0, chief.a, n)
-        jac = np.stack([delta_roe(e, chief.u0, chief.a, n) for e in np.eye(3)], axis=1)[EI] * chief.a  # (4, 3)
+        jac = control_matrix(chief.u0)[EI] / n  # (4, 3): a times Eq. 2's dROE / d dv
         self.knowledge = (t, roe, chief, jac @ np.asarray(cov, dtype=float) @ jac.T, da_dot)
         self.measured_from = "footage"
 
