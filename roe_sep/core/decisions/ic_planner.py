@@ -139,10 +139,28 @@ class EjectionPrior:
 
     @classmethod
     def commanded(cls, t: float, kep: ArrayLike, u: float, dv: ArrayLike, scenario: Any) -> "EjectionPrior":
-        """The commanded ejection ``dv`` (3,) [m/s] at ``t`` [s] (the chief's mean elements ``kep``, mean argument of
-        latitude ``u`` [rad]) with the ``scenario``'s SPL magnitude error ``spl_sigma`` along it and its attitude
+        """The commanded ejection with the scenario's SPL magnitude error ``spl_sigma`` along it and its attitude
         error ``attitude_sigma_arcsec`` across it as the covariance (seed 002 Eq. 22), and its nominal differential
-        drag with the ``ballistic_sigma`` fraction as its 1-sigma."""
+        drag with the ``ballistic_sigma`` fraction as its 1-sigma.
+
+        Parameters
+        ----------
+        t : float
+            The ejection's epoch [s].
+        kep : array_like, shape (6,)
+            The chief's mean elements ``[a, e, i, raan, argp, M]`` there.
+        u : float
+            Its mean argument of latitude [rad].
+        dv : array_like, shape (3,)
+            The commanded ejection [m/s] RTN.
+        scenario : Scenario
+            The scenario (:func:`~roe_sep.core.config.load_scenario`).
+
+        Returns
+        -------
+        EjectionPrior
+            The prior, ``source`` "commanded".
+        """
         dv = np.asarray(dv, dtype=float)
         sep, mc = scenario.separation, scenario.monte_carlo
         along = np.outer(dv, dv)
