@@ -67,6 +67,7 @@ EJECTION_ESTIMATE_TOPIC = "/separation/ejection_estimate"  # geometry_msgs/Twist
 # planner: the executed ejection dv [m/s] RTN estimated from the footage, its covariance, stamped at the release
 EXECUTED_TOPIC = "/sim/executed_maneuvers"  # ImpulsiveManeuver, EXECUTED, sim (as executed, with errors)
 RADAR_TOPIC = "/radar/measurements"  # RadarMeasurement, STREAM, radar -> radar_od
+CARRIER_RADAR_TOPIC = "/radar/carrier_ranges"  # RadarMeasurement, STREAM, radar (track_carrier) -> radar_od
 RADAR_PASS_TOPIC = "/radar/passes"  # RadarPass, STREAM, radar -> radar_od: a pass ended (after its measurements)
 EXTERNAL_RADAR_TOPIC = "/ground/radar_measurements"  # RadarMeasurement, BULK, ground_bridge (TDM in) -> radar_od
 OD_TOPIC = "/od/estimate"  # OrbitDetermination, LATCHED, radar_od

@@ -344,18 +344,19 @@ CONTINGENCY_STATUS = "roe_sep/safety_monitor/contingency"
 MITIGATION_STATUS = "roe_sep/planner/contingency"  # what the planner acted on (drift_stop_replaced, weak_ejection)
 RADAR_STATUS = "roe_sep/radar/contingency"  # what the radar station reported (radar_pass_missed)
 ACQUISITION_STATUS = "roe_sep/ic_planner/contingency"  # what the ic_planner acted on (blind_acquisition)
+OD_STATUS = "roe_sep/radar_od/contingency"  # what radar_od acted on (range_bias_estimated)
 
 
 def contingencies_detected(diagnostics):
     """What the safety monitor detected (its named diagnostics ``roe_sep/safety_monitor/contingency``,
-    :mod:`roe_sep.core.safety.anomaly`), what the planner and the ic_planner acted on (``roe_sep/planner/contingency``,
-    ``roe_sep/ic_planner/contingency``) and what the radar station reported (``roe_sep/radar/contingency``): per name
-    its first finding, ``{name, epoch [s], text, count}``, in the order of their first epochs; [] when nothing was
-    found."""
+    :mod:`roe_sep.core.safety.anomaly`), what the planner, the ic_planner and radar_od acted on
+    (``roe_sep/planner/contingency``, ``roe_sep/ic_planner/contingency``, ``roe_sep/radar_od/contingency``) and what
+    the radar station reported (``roe_sep/radar/contingency``): per name its first finding, ``{name, epoch [s], text,
+    count}``, in the order of their first epochs; [] when nothing was found."""
     found = {}
     for _, d in diagnostics:
         for s in d.status:
-            if s.name not in (CONTINGENCY_STATUS, MITIGATION_STATUS, RADAR_STATUS, ACQUISITION_STATUS):
+            if s.name not in (CONTINGENCY_STATUS, MITIGATION_STATUS, RADAR_STATUS, ACQUISITION_STATUS, OD_STATUS):
                 continue
             values = {kv.key: kv.value for kv in s.values}
             name = values.get("contingency")

@@ -35,7 +35,7 @@ EXPECTED_DETECTIONS = {
     "drift_stop_missed": ("burn_missing",),
     "burn_underperformance": ("burn_magnitude", "burn_pointing"),
     "radar_pass_missed": ("radar_pass_missed",),
-    "radar_bias": ("od_residuals",),
+    "radar_bias": ("od_residuals", "range_bias_estimated"),
     "ejection_pointing": ("ejection_off", "weak_ejection", "od_inconsistent"),
     "carrier_safe_mode": ("burn_missing",),
     "drift_stop_overperformance": ("burn_magnitude",),

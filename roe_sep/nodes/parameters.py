@@ -374,6 +374,9 @@ RADAR = (
     Param("min_pass_measurements", "int", 5, "epochs in view of a pass that delivered no measurement for it to be "
           "reported lost (radar_od's measurements for a pass to count)", range=(1, 100000)),
     Param("seed", "int", 0, "seed of the measurement noise", range=(0, SEED_MAX)),
+    Param("track_carrier", "bool", False, "each station also ranges the carrier at the epochs it measures the "
+          "picosatellite (/radar/carrier_ranges; its noise from the seed's own stream): radar_od's range biases from "
+          "the carrier's GPS orbit (issue 41 part 4)"),
     SCENARIO_FILE,
     _contingency("radar (radar_pass_missed, radar_bias; the others: none here), drawn from the noise seed's own "
                  "stream"),
@@ -402,7 +405,25 @@ RADAR_OD = (
           "drag-driven dix drift and short-periodic de (core.od.batch); false: the secular drift model alone"),
     Param("range_bias_sigma", "double", 0.0, "a priori 1-sigma of a constant range bias per station, estimated with "
           "the relative orbit (core.od.batch.RangeBiasPrior; the estimate on /diagnostics as range_bias_m); 0: no "
-          "bias estimated", "m", range=(0.0, 1.0e4)),
+          "bias estimated unless the residual test switches it on", "m", range=(0.0, 1.0e4)),
+    Param("range_bias_auto_sigma", "double", 100.0, "a priori 1-sigma of the range biases that an OD's failed "
+          "residual test switches on (core.od.batch.bias_state_switch: the OD is solved again with them, and every "
+          "later one; a range_bias_estimated finding); 0: never switched on", "m", range=(0.0, 1.0e4)),
+    Param("range_bias_alpha", "double", 1.0e-4, "level of that residual test (3 m r^2 against chi-square(3 m - 7), "
+          "as the safety monitor's od_residuals)", range=(1.0e-12, 0.5)),
+    SCENARIO_FILE,
+    Param("prior_od_after", "double", 86400.0, "without a full estimate (passes_required passes over min_arc) this "
+          "long after the release (a radar outage), each counted pass gives an OD with the prediction as its prior: "
+          "the ejection on record (the footage's, else the commanded one with the SPL's errors; the scenario_file's "
+          "nominal drag and its sigma) carried through the executed carrier burns (core.od.batch.predicted_prior); "
+          "0: never", "s", range=(0.0, 2.592e6)),
+    Param("prior_od_floor", "double", 10.0, "1-sigma added to each a-scaled ROE of the ejection on record in that "
+          "prediction (the ejection's three dv components alone span three of the six: what seed 002 Eq. 2 leaves "
+          "out, the release's offset, mean against osculating elements, drag on the e/i vectors)", "m",
+          range=(1.0e-3, 1.0e5)),
+    Param("carrier_position_sigma", "double", 1.0, "1-sigma of the carrier's GPS orbit along a station's line of "
+          "sight: with the range noise, the weight of its ranges (/radar/carrier_ranges) in the range biases",
+          "m", range=(0.0, 1.0e4)),
 )
 
 IC_PLANNER = (

@@ -20,6 +20,8 @@ stations' measurements; ``radar_od`` estimates from them (or from a ground segme
   ``/radar/passes`` (STREAM) says so, stamped with the tracking's sim time, after its last measurement.
 * ``/sim/executed_maneuvers`` (latched history): no measurement is simulated from a truth sample older than a burn
   for an epoch after it.
+* ``track_carrier``: each station also ranges the carrier at the same epochs (``/radar/carrier_ranges``; zero ROE,
+  :func:`~roe_sep.core.od.radar.carrier_earth_fixed_state`; a noise stream of its own) for radar_od's biases.
 * Contingencies (``contingency``: radar_pass_missed, radar_bias): lost passes and a station's range bias, drawn
   from the noise seed's own stream (:class:`~roe_sep.core.truth.contingency.RadarContingency`); a pass in view
   that delivered nothing is reported on ``/diagnostics`` (:func:`~roe_sep.core.od.sensor.pass_lost`).
@@ -39,7 +41,14 @@ from rosgraph_msgs.msg import Clock
 from .. import interfaces
 from ..core.config import ConfigError, load_scenario
 from ..core.frames import gcrs_to_itrs
-from ..core.od.radar import deputy_earth_fixed_state, relative_distance, truth_da_rate, two_way_look, visible
+from ..core.od.radar import (
+    carrier_earth_fixed_state,
+    deputy_earth_fixed_state,
+    relative_distance,
+    truth_da_rate,
+    two_way_look,
+    visible,
+)
 from ..core.od.sensor import (
     TruthSamples,
     noisy_measurement,
@@ -59,6 +68,7 @@ from .params import ParameterError, declare
 from .radar_stations import parse_truth, tracking_of
 
 CHUNK = 10000  # measurement epochs propagated at once
+CARRIER_STREAM = 2  # the carrier ranges' noise: a stream of the noise seed of its own (graph.RADAR_STREAM is 1)
 
 
 class RadarNode(ManagedNode):
@@ -76,6 +86,8 @@ class RadarNode(ManagedNode):
         scenario_file = declare(self, "scenario_file")
         contingency = declare(self, "contingency")
         self.rng = np.random.default_rng(seed)
+        self.track_carrier = declare(self, "track_carrier")
+        self.carrier_rng = np.random.default_rng([seed, CARRIER_STREAM])  # the picosatellite's noise unchanged
         self.contingency = self._contingency(scenario_file, contingency, seed, [s.name for s in self.stations])
 
         self._forget()
@@ -119,6 +131,8 @@ class RadarNode(ManagedNode):
         ls.on_batch_done = self.flush_tracks
         self.meas_pub = ls.publisher(RadarMeasurement, interfaces.RADAR_TOPIC, interfaces.STREAM)
         self.pass_pub = ls.publisher(RadarPass, interfaces.RADAR_PASS_TOPIC, interfaces.STREAM)
+        # always offered (the simulator waits for its readers, and the recorder subscribes to published topics)
+        self.carrier_pub = ls.publisher(RadarMeasurement, interfaces.CARRIER_RADAR_TOPIC, interfaces.STREAM)
         self.diag_pub = self.create_publisher(DiagnosticArray, interfaces.DIAGNOSTICS_TOPIC, interfaces.DIAGNOSTICS)
         # a burn and the truth right after it share a stamp: the burn is processed first
         ls.subscribe(ImpulsiveManeuver, interfaces.EXECUTED_TOPIC, self.on_maneuver, interfaces.EXECUTED,
@@ -260,6 +274,10 @@ class RadarNode(ManagedNode):
         sep = relative_distance(roe, kep_tr[:, 0], None, rel)
         state_ef = deputy_earth_fixed_state(roe, chief, earth, rel)
         z = [two_way_look(state_ef, self.site_ef[s], self.site_enu[s]) for s in range(len(self.stations))]
+        if self.track_carrier:  # the carrier's ranges at the same epochs, beside the picosatellite's triplets
+            carrier_ef = carrier_earth_fixed_state(chief, earth)
+            z = [np.column_stack([zs, two_way_look(carrier_ef, self.site_ef[s], self.site_enu[s])])
+                 for s, zs in enumerate(z)]
         # the pass logic reads the epochs and the visibility one epoch at a time: as Python values (the same
         # floats and truth values), not NumPy scalars
         seen = [visible(zs[:, 2], self.mask).tolist() for zs in z]
@@ -309,9 +327,20 @@ class RadarNode(ManagedNode):
         self.too_close = close_seen
 
     def measure(self, t, s, z_true):
+        """The measurement of station ``s`` at ``t`` [s] from its true ``z_true`` (range, azimuth, elevation, and
+        with ``track_carrier`` the carrier's three after them), published with the noise and the contingency's
+        bias."""
         bias = 0.0 if self.contingency is None else self.contingency.range_bias(s)  # radar_bias
-        z = noisy_measurement(z_true, self.sigma, self.rng, bias)
+        z = noisy_measurement(z_true[:3], self.sigma, self.rng, bias)
         name = self.stations[s].name
+        if self.track_carrier:
+            zc = noisy_measurement(z_true[3:], self.sigma, self.carrier_rng, bias)
+            c = RadarMeasurement(station=name, pass_id=self.pass_ids[s], range=float(zc[0]), azimuth=float(zc[1]),
+                                 elevation=float(zc[2]), sigma_range=float(self.sigma[0]),
+                                 sigma_angle=float(self.sigma[1]))
+            c.header.stamp = sec_to_time(t)
+            c.header.frame_id = name
+            self.carrier_pub.publish(c)
         m = RadarMeasurement(station=name, pass_id=self.pass_ids[s], range=float(z[0]), azimuth=float(z[1]),
                              elevation=float(z[2]), sigma_range=float(self.sigma[0]),
                              sigma_angle=float(self.sigma[1]))

@@ -14,27 +14,34 @@ measurements that arrive, wherever they come from; it never simulates one:
 * ``/ground/radar_measurements`` (RadarMeasurement, e.g. TDM files through ``ground_bridge``): a ground segment's
   measurements join the records as passes of their own (:meth:`RadarODNode.on_external`); one wall second after the
   last of a batch the OD runs on all usable records.
-* ``/sim/truth/roe``: the carrier's orbit (its chief elements) at each epoch, which the measurement model needs.
-* ``/sim/executed_maneuvers`` (latched history): a burn applies to the estimates from its epoch on; the
-  measurements before it are no longer used.
+* ``/radar/carrier_ranges`` (the radar's ``track_carrier``): ranges to the carrier, whose orbit its GPS gives:
+  information on the range biases alone (:class:`~roe_sep.core.od.batch.CarrierRanges`). The biases are states
+  with ``range_bias_sigma`` > 0, or from the first OD whose residual test, or its carrier ranges' test, fails
+  (:func:`~roe_sep.core.od.batch.bias_state_switch`; a ``range_bias_estimated`` finding; issue 41 part 4).
+* ``/separation/ejection(_estimate)``: without a full estimate ``prior_od_after`` after the release (an outage),
+  each counted pass gives an OD with the prediction from the ejection on record and the carrier burns as a prior
+  (:func:`~roe_sep.core.od.batch.predicted_prior`; an ``od_from_prediction`` finding; issue 41 part 3).
+* ``/sim/truth/roe``: the carrier's orbit (chief elements) at each epoch; ``/sim/executed_maneuvers`` (latched): a
+  burn applies to the estimates from its epoch on, the measurements before it are no longer used.
 
-Under lockstep the measurements and pass ends are counted inputs: the OD takes them in the round after the sensor
-published them, in their canonical order (docs/run.md), so the records, passes and estimates do not depend on
-timing.
+Under lockstep the inputs are counted: taken in their canonical order (docs/run.md), whatever the timing.
 
 Parameters: :data:`roe_sep.nodes.parameters.RADAR_OD` (``radar_od --help``, docs/parameters.md).
 """
 
 import bisect
 import collections
+import dataclasses
 import json
 import math
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import TwistWithCovarianceStamped
 from rclpy.clock import Clock as RclpyClock
 from rclpy.clock import ClockType
 from roe_sep_msgs.msg import (
+    EjectionEvent,
     ImpulsiveManeuver,
     OrbitDetermination,
     RadarMeasurement,
@@ -43,17 +50,42 @@ from roe_sep_msgs.msg import (
 )
 
 from .. import interfaces
+from ..core.config import ConfigError, load_scenario
 from ..core.constants import R_EARTH
+from ..core.decisions.ic_planner import EjectionPrior
 from ..core.frames import gcrs_to_itrs
-from ..core.od.batch import DragModel, DriftPrior, RadarBatch, RangeBiasPrior, batch_least_squares, station_index
+from ..core.od.batch import (
+    CarrierRanges,
+    DragModel,
+    DriftPrior,
+    RadarBatch,
+    RangeBiasPrior,
+    batch_least_squares,
+    bias_state_switch,
+    carrier_bias_tail,
+    predicted_prior,
+    residual_tail,
+    station_index,
+)
+from ..core.od.radar import carrier_earth_fixed_state, two_way_look
 from ..core.od.sensor import RadarRecord, chief_from_samples, counted_passes
 from ..core.relmotion.roe import wrap_angle
+from ..core.relmotion.trajectory import Chief
 from ..core.truth.nonlinear import vallado_band
-from .convert import array_to_elements, roe_to_msg, sec_to_time, time_to_sec
-from .diagnostics import ERROR, OK, publish_status
+from .convert import (
+    array_to_elements,
+    elements_to_array,
+    planned_burn,
+    roe_to_msg,
+    sec_to_time,
+    time_to_sec,
+    twist_linear,
+    vector_to_array,
+)
+from .diagnostics import ERROR, OK, WARN, publish_status
 from .lockstep import Lockstep
 from .managed import ManagedNode
-from .params import declare
+from .params import ParameterError, declare
 from .radar_stations import parse_truth, tracking_of
 
 
@@ -74,6 +106,16 @@ class RadarODNode(ManagedNode):
         self.density_walk = declare(self, "density_walk")
         self.drag_terms = declare(self, "od_drag_terms")
         self.bias_sigma = declare(self, "range_bias_sigma")
+        self.bias_auto_sigma = declare(self, "range_bias_auto_sigma")
+        self.bias_alpha = declare(self, "range_bias_alpha")
+        self.gps_sigma = declare(self, "carrier_position_sigma")
+        self.prior_od_after = declare(self, "prior_od_after")
+        self.prior_floor = declare(self, "prior_od_floor")
+        scenario_file = declare(self, "scenario_file")
+        try:
+            self.scenario = load_scenario(scenario_file or None)
+        except ConfigError as exc:
+            raise ParameterError(f"parameter 'scenario_file': {exc}") from exc
         self.drag = (scale_height, ratio)
         self.estimates = 0
         self.received = 0
@@ -86,12 +128,17 @@ class RadarODNode(ManagedNode):
         self.burn_epochs = []  # every executed burn's epoch [s], sorted
         self.last_burn = -math.inf  # the latest applied burn (one at or before the latest estimate's time)
         self.records = []  # RadarRecord, in arrival order
+        self.carrier_records = []  # RadarRecord of the carrier's ranges (the radar's track_carrier), in arrival order
         self.closed = set()  # (station index, pass_id) of the sensor's passes whose end has arrived
         self.arrived = collections.Counter()  # (station index, pass_id) -> measurements received
         self.ends = {}  # (station index, pass_id) -> (measurements, t [s]) of a pass end waiting for them
         self.last_solution = None  # (ODResult, carrier a [m]) of the latest estimate
         self.prior = None  # DriftPrior from the last solution before the latest burn
         self.range_bias = {}  # station name -> (bias [m], 1-sigma [m]) of the latest estimate (range_bias_sigma > 0)
+        self.bias_switched = None  # the epoch [s] of the OD whose residual test switched the bias state on
+        self.ejection = None  # EjectionPrior: the ejection on record (commanded, then the footage's)
+        self.carrier_burns = []  # relative impulses (Burn) of the executed carrier burns, in arrival order
+        self.full_estimates = 0  # estimates from enough passes over the arc, without the prediction
 
     def activate(self):
         """Publishers, subscriptions (the ``activate`` transition)."""
@@ -106,6 +153,13 @@ class RadarODNode(ManagedNode):
         ls.subscribe(RadarMeasurement, interfaces.RADAR_TOPIC, self.on_measurement, interfaces.STREAM,
                      what="radar measurement")
         ls.subscribe(RadarPass, interfaces.RADAR_PASS_TOPIC, self.on_pass, interfaces.STREAM, what="radar pass")
+        ls.subscribe(RadarMeasurement, interfaces.CARRIER_RADAR_TOPIC, self.on_carrier, interfaces.STREAM,
+                     what="carrier range")
+        # the prediction a first OD after an outage starts from (issue 41 part 3): the ejection on record
+        ls.subscribe(EjectionEvent, interfaces.EJECTION_TOPIC, self.on_ejection, interfaces.LATCHED,
+                     what="ejection event")
+        ls.subscribe(TwistWithCovarianceStamped, interfaces.EJECTION_ESTIMATE_TOPIC, self.on_measured_ejection,
+                     interfaces.LATCHED, what="ejection estimate")
         self.create_subscription(RadarMeasurement, interfaces.EXTERNAL_RADAR_TOPIC, self.on_external,
                                  interfaces.BULK)
         self.external_timer = None
@@ -135,9 +189,43 @@ class RadarODNode(ManagedNode):
             self.history_t.insert(k, t)
             self.history_kep.insert(k, kep)
 
+    def on_ejection(self, event: EjectionEvent):
+        """The commanded ejection with the SPL's errors (as the ic_planner takes it: :class:`EjectionPrior`); a
+        measured one on record is kept."""
+        dv = vector_to_array(event.ejection.dv_rtn)
+        kep = elements_to_array(event.chief)
+        if not (np.all(np.isfinite(dv)) and np.all(np.isfinite(kep)) and kep[0] > 6.4e6):
+            self._rejected("ejection event", event, "non-finite dv or invalid chief")
+            return
+        if self.ejection is None or self.ejection.source == "commanded":
+            self.ejection = EjectionPrior.commanded(time_to_sec(event.header.stamp), kep,
+                                                    event.ejection.mean_arg_latitude, dv, self.scenario)
+
+    def on_measured_ejection(self, msg: TwistWithCovarianceStamped):
+        """The executed ejection the footage measured: it replaces the commanded one (needs its chief)."""
+        try:
+            dv, cov = twist_linear(msg)
+            if not (np.all(np.isfinite(dv)) and np.all(np.isfinite(cov))):
+                raise ValueError("non-finite")
+        except ValueError as exc:
+            self._rejected("ejection estimate", msg, exc)
+            return
+        if self.ejection is not None:
+            self.ejection = dataclasses.replace(self.ejection, dv=tuple(float(x) for x in dv),
+                                                cov=tuple(float(x) for x in cov.reshape(-1)), source="footage")
+
     def on_maneuver(self, msg: ImpulsiveManeuver):
         """A burn: applied to the estimates from its epoch on (:meth:`apply_burns`), whenever it arrives."""
         t = time_to_sec(msg.epoch)
+        if msg.spacecraft == "carrier":
+            try:
+                flown = planned_burn(msg).relative()
+                if flown.epoch not in {b.epoch for b in self.carrier_burns}:
+                    self.carrier_burns.append(flown)
+            except ValueError as exc:
+                self.get_logger().error(f"executed maneuver at t = {t:.1f} s rejected: {exc}")
+                publish_status(self, self.diag_pub, ERROR, f"executed maneuver rejected: {exc}", self._values())
+                return
         bisect.insort(self.burns, t)
         bisect.insort(self.burn_epochs, t)
         self.get_logger().info(f"{msg.spacecraft} {msg.purpose} burn at t = {t:.1f} s: earlier measurements "
@@ -192,6 +280,27 @@ class RadarODNode(ManagedNode):
         if key in self.ends and self.arrived[key] >= self.ends[key][0]:  # run alone: the end came first
             self.pass_closed(key, self.ends.pop(key)[1])
 
+    def on_carrier(self, msg: RadarMeasurement):
+        """A station's range to the carrier (the radar's ``track_carrier``): information on its range bias."""
+        try:
+            self.carrier_records.append(self.record(msg, int(msg.pass_id)))
+        except ValueError as exc:
+            self._rejected("carrier range", msg, exc)
+
+    def carrier_ranges(self, t_last):
+        """The carrier's ranges up to ``t_last`` [s] as :class:`~roe_sep.core.od.batch.CarrierRanges` (a bias is
+        constant: every one so far, burns or not), None without any."""
+        recs = [r for r in self.carrier_records if r.t <= t_last]
+        if not recs:
+            return None
+        chief = np.array([r.chief for r in recs])
+        earth = np.array([r.earth for r in recs])
+        site_ef = np.array([self.site_ef[r.station] for r in recs])
+        site_enu = np.array([self.site_enu[r.station] for r in recs])
+        h = two_way_look(carrier_earth_fixed_state(chief, earth), site_ef, site_enu)[..., 0]
+        sigma = np.full(len(recs), math.hypot(self.sigma[0], self.gps_sigma))
+        return CarrierRanges(site_ef=site_ef, residual=np.array([r.z[0] for r in recs]) - h, sigma=sigma)
+
     def on_pass(self, msg: RadarPass):
         """The end of one of the sensor's passes, stamped with the sensor's time: the pass counts, and the OD runs
         on it, once its measurements are in (at once under lockstep; run alone, when the last arrives)."""
@@ -244,10 +353,11 @@ class RadarODNode(ManagedNode):
         tracking that closed the pass), after the burns at or before ``now`` (:meth:`apply_burns`)."""
         self.apply_burns(now)
         recs, passes = self.usable()
-        if len(passes) < self.passes_required:
+        if not passes:
             return
         recs.sort(key=lambda r: r.t)
-        if recs[-1].t - recs[0].t < self.min_arc:
+        full = len(passes) >= self.passes_required and recs[-1].t - recs[0].t >= self.min_arc
+        if not (full or self.prediction_due(now)):
             return
         s_idx = [r.station for r in recs]
         batch = RadarBatch(t=np.array([r.t for r in recs]), z=np.array([r.z for r in recs]),
@@ -256,17 +366,23 @@ class RadarODNode(ManagedNode):
                            site_ef=np.array([self.site_ef[s] for s in s_idx]),
                            site_enu=np.array([self.site_enu[s] for s in s_idx]))
         prior = (self.prior.carried(float(np.max(batch.t)), self.density_walk)
-                 if self.prior is not None and self.use_prior else None)
+                 if self.prior is not None and self.use_prior and full else None)
         try:
-            result = batch_least_squares(batch, prior=prior, drag=self.drag_terms,
-                                         model=self.drag_model(batch.chief[-1, 0]),
-                                         bias=RangeBiasPrior(self.bias_sigma) if self.bias_sigma > 0.0 else None)
+            predicted = None if full else self.predicted(float(np.max(batch.t)))
+            result = self.solve(batch, prior, self.bias_prior(), predicted)
+            carrier = self.carrier_ranges(float(np.max(batch.t)))
+            if self.bias_auto_sigma > 0.0 and bias_state_switch(result, self.bias_alpha, carrier):
+                self.switch_bias_on(result, now, carrier)
+                result = self.solve(batch, prior, self.bias_prior(), predicted)
         except ValueError as exc:
             self.get_logger().error(f"orbit determination failed: {exc}")
             publish_status(self, self.diag_pub, ERROR, f"orbit determination failed: {exc}", self._values())
             return
         self.od_pub.publish(self.od_msg(result, batch.chief[-1], len(passes), now))
         self.estimates += 1
+        self.full_estimates += int(full)
+        if not full:
+            self.report_prediction(result, len(passes), now)
         if result.range_bias:
             index, n = station_index(batch)
             first = [int(np.argmax(index == k)) for k in range(n)]
@@ -280,8 +396,69 @@ class RadarODNode(ManagedNode):
             f"measurements: a*ROE = {np.array2string(result.x[:6] * a, precision=1)} m, a*da_dot = "
             f"{result.x[6] * a:.3e} m/s, residual RMS {result.residual_rms:.2f}"
             + ("" if prior is None else f", drift prior from t = {self.prior.t:.0f} s")
+            + ("" if full else f", with the prediction from the {self.ejection.source} ejection as its prior")
             + "".join(f", {name} range bias {b:+.2f} +- {sb:.2f} m" for name, (b, sb) in self.range_bias.items()))
         publish_status(self, self.diag_pub, OK, f"estimate {self.estimates} published", self._values())
+
+    def solve(self, batch, prior, bias, predicted=None):
+        """The batch OD of ``batch`` with the drift ``prior``, the range-bias prior ``bias`` and the state prior
+        ``predicted`` (each or None), and the carrier's ranges where the radar gives them."""
+        carrier = self.carrier_ranges(float(np.max(batch.t))) if bias is not None else None
+        return batch_least_squares(batch, prior=prior, drag=self.drag_terms,
+                                   model=self.drag_model(batch.chief[-1, 0]), bias=bias, carrier=carrier,
+                                   state_prior=predicted)
+
+    def prediction_due(self, now):
+        """Whether an OD from fewer passes than ``passes_required`` (or a shorter arc) may start from the prediction:
+        no full estimate yet, ``prior_od_after`` (> 0) after the release on record (a radar outage)."""
+        return (self.prior_od_after > 0.0 and self.full_estimates == 0 and self.ejection is not None
+                and now >= self.ejection.t + self.prior_od_after)
+
+    def predicted(self, t_est):
+        """The state prior at ``t_est`` [s]: the ejection on record (its ROE and covariance, the nominal drag and its
+        sigma) carried through the carrier burns executed since (:func:`~roe_sep.core.od.batch.predicted_prior`)."""
+        ej = self.ejection
+        od = ej.solution(t_est)
+        a = od.kep[0]
+        chief = Chief(a, od.kep[2], od.u, od.epoch)
+        # the ejection's six ROE come from its three dv components: a floor on each (prior_od_floor) stands for
+        # what Eq. 2 leaves out (the release's position offset, mean and osculating elements, unmodelled drag on
+        # the e/i vectors over the outage) and makes the prior positive definite
+        cov0 = np.reshape(od.covariance, (6, 6)) + self.prior_floor**2 * np.eye(6)
+        return predicted_prior(np.array(od.roe), cov0 / a**2, chief, od.a_da_dot / a, od.a_da_dot_sigma / a,
+                               burns=self.carrier_burns, t=t_est)
+
+    def report_prediction(self, result, passes, now):
+        """An OD from the prediction and ``passes`` pass(es): an ``od_from_prediction`` finding."""
+        a = result.a_est
+        text = (f"od_from_prediction: OD at t = {result.t_est:.0f} s from {passes} pass(es) after "
+                f"{(now - self.ejection.t) / 3600.0:.1f} h without one, with the prediction from the "
+                f"{self.ejection.source} ejection and {len(self.carrier_burns)} carrier burn(s) as its prior: "
+                f"a dl = {result.x[1] * a:.0f} +- {math.sqrt(result.cov[1, 1]) * a:.0f} m")
+        publish_status(self, self.diag_pub, WARN, text, {"contingency": "od_from_prediction", "epoch_s": now,
+                                                          "passes": passes}, part="contingency")
+
+    def bias_prior(self):
+        """The range-bias state's prior: ``range_bias_sigma`` when set, else ``range_bias_auto_sigma`` once the
+        residual test has switched it on (:func:`~roe_sep.core.od.batch.bias_state_switch`), else None."""
+        if self.bias_sigma > 0.0:
+            return RangeBiasPrior(self.bias_sigma)
+        return RangeBiasPrior(self.bias_auto_sigma) if self.bias_switched is not None else None
+
+    def switch_bias_on(self, result, now, carrier):
+        """The residual test of ``result`` (or the ``carrier``'s ranges') rejected the model: the range biases are
+        estimated from this OD on (a ``range_bias_estimated`` finding on ``roe_sep/radar_od/contingency``)."""
+        self.bias_switched = result.t_est
+        p = residual_tail(result.residual_rms, result.measurements)
+        p_c = 1.0 if carrier is None else carrier_bias_tail(carrier)
+        text = (f"OD at t = {result.t_est:.0f} s: residual RMS {result.residual_rms:.2f} sigma over "
+                f"{result.measurements} measurements (p = {p:.1e})"
+                + ("" if carrier is None else f", carrier ranges p = {p_c:.1e}")
+                + f" (level {self.bias_alpha:g}): range biases estimated from now on (a priori 1-sigma "
+                f"{self.bias_auto_sigma:g} m)")
+        self.get_logger().warning(text)
+        publish_status(self, self.diag_pub, WARN, text, {"contingency": "range_bias_estimated", "epoch_s": now,
+                                                          "p": p, "p_carrier": p_c}, part="contingency")
 
     def drag_model(self, a_chief):
         """The drift rate's drag model at the carrier's semi-major axis ``a_chief`` [m]: the configured scale

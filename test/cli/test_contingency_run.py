@@ -11,6 +11,8 @@ measured by the ejection footage at once: a carrier CAM, the ejection completed 
 """
 
 import json
+import re
+from pathlib import Path
 
 import pytest
 from rosutil import rclpy  # noqa: F401  (skips without rclpy)
@@ -19,6 +21,8 @@ from roe_sep import interfaces
 from roe_sep.report import read_topics
 from roe_sep.run import run
 from roe_sep.stamps import time_to_sec
+
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def violations_before(bag, t_end):
@@ -172,12 +176,67 @@ def test_radar_pass_missed_is_reported_and_the_od_waits(tmp_path):
     assert rep["safe"] is True and rep["criteria"]["ic_reached"], rep["criteria"]
 
 
+def range_bias_estimates(bag):
+    """radar_od's range-bias estimates ``[(stamp [s], {station: {bias, sigma}})]`` from its statuses."""
+    out = []
+    for _, d in read_topics(bag, [interfaces.DIAGNOSTICS_TOPIC])[interfaces.DIAGNOSTICS_TOPIC]:
+        for s in d.status:
+            values = {kv.key: kv.value for kv in s.values}
+            if s.name == "roe_sep/radar_od" and "range_bias_m" in values:
+                out.append((time_to_sec(d.header.stamp), json.loads(values["range_bias_m"])))
+    return out
+
+
 @pytest.mark.dds
 @pytest.mark.slow
-def test_radar_bias_is_detected_in_the_residuals(tmp_path):
-    """A 50 m range bias at TIRA (five range sigmas): the monitor finds the OD's post-fit residuals beyond their
-    chi-square bound (od_residuals); the run stays safe."""
+def test_radar_bias_switches_the_bias_state_on_from_the_residuals(tmp_path):
+    """A 50 m range bias at TIRA (five range sigmas): radar_od's residual test rejects its first OD, which it solves
+    again with the bias as a state (range_bias_estimated), and every later one; the bias is found within 3 sigma and
+    the run stays safe and reaches the ICs."""
     rep, detected = run_with(tmp_path, ["name: radar_bias", "bias_m: 50.0"])
     assert rep["contingency"]["parameters"]["bias_m"] == 50.0
-    assert "od_residuals" in detected and detected["od_residuals"]["epoch"] >= rep["od"]["epoch"]
+    switched = detected["range_bias_estimated"]
+    assert switched["count"] == 1 and switched["epoch"] == pytest.approx(rep["od"]["epoch"], abs=600.0)
+    estimates = range_bias_estimates(tmp_path / "run" / "bag")
+    assert estimates
+    tira = estimates[-1][1]["TIRA"]
+    assert abs(tira["bias"] - 50.0) < 3.0 * tira["sigma"] and tira["sigma"] < 3.0, tira
     assert rep["safe"] is True, rep["violations_seen"]
+    assert rep["criteria"]["ic_reached"], rep["criteria"]
+
+
+@pytest.mark.dds
+@pytest.mark.slow
+def test_a_one_sigma_bias_is_seen_in_the_carriers_ranges(tmp_path):
+    """A 10 m bias (one range sigma, which the residual test misses) with the stations ranging the carrier too
+    (the radar's ``track_carrier``): the carrier ranges' test switches the bias state on at the first OD and the
+    bias is found to about a metre."""
+    params = tmp_path / "params.yaml"
+    params.write_text("radar:\n  ros__parameters:\n    track_carrier: true\n", encoding="utf-8")
+    rep, detected = run_with(tmp_path, ["name: radar_bias", "bias_m: 10.0"], params=params)
+    switched = detected["range_bias_estimated"]
+    assert "carrier ranges p =" in switched["text"]
+    assert switched["epoch"] == pytest.approx(rep["od"]["epoch"], abs=600.0)
+    tira = range_bias_estimates(tmp_path / "run" / "bag")[-1][1]["TIRA"]
+    assert abs(tira["bias"] - 10.0) < 3.0 * tira["sigma"] and tira["sigma"] < 1.0, tira
+    assert rep["safe"] is True and rep["criteria"]["ic_reached"], rep["criteria"]
+
+
+@pytest.mark.dds
+@pytest.mark.slow
+def test_a_24_h_outage_holds_blind_and_the_first_pass_after_it_gives_an_od(tmp_path):
+    """A 24-h radar outage from the first pass (config/radar_outage_24h.yaml, issue 41 part 3): the ic_planner holds
+    the along-track separation with one blind burn a day after the release, and the first pass after the outage
+    gives the first OD, with the prediction (the measured ejection, the carrier burns) as its prior, instead of
+    the 2 passes over 10 h a full estimate needs; the acquisition reaches the ICs and the run stays safe."""
+    rep = run(config=ROOT / "config" / "radar_outage_24h.yaml", out=tmp_path / "run", seed=5, timeout=1500,
+              duration=432000.0)
+    assert rep["run"]["completed"], rep["run"]["reason"]
+    detected = {d["name"]: d for d in rep["contingencies_detected"]}
+    assert "blind_acquisition" in detected
+    first = detected["od_from_prediction"]
+    assert "from 1 pass(es)" in first["text"] and "footage ejection" in first["text"]
+    outage = next(e for e in rep["contingency"]["events"] if e.startswith("radar outage"))
+    outage_end = float(re.search(r"to t = ([0-9.]+) s", outage).group(1))
+    assert outage_end < rep["od"]["epoch"] < outage_end + 6 * 3600.0, (outage_end, rep["od"]["epoch"])
+    assert rep["safe"] is True and rep["criteria"]["ic_reached"], rep["criteria"]

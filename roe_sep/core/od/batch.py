@@ -27,6 +27,7 @@ widens its variance by (beta density_walk)^2 dt / 1 day (state noise compensatio
 worth, measured: docs/campaigns.md, "The OD model's terms, measured".
 """
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -43,6 +44,7 @@ from ..relmotion.dynamics import (
 )
 from ..relmotion.orbit import mean_motion
 from ..relmotion.roe import roe_to_rtn, wrap_angle
+from ..relmotion.trajectory import Burn, Chief, state_at
 from .osculating import deputy_state
 from .radar import chief_from_kepler, chief_position_velocity, observe, rtn_matrix, two_way_look, two_way_position
 
@@ -200,6 +202,74 @@ class DriftPrior:
 
 
 @dataclass(frozen=True)
+class StatePrior:
+    """A priori information on the whole state at the batch's estimate epoch (issue 41 part 3): a prediction
+    ``x`` (7,) [dimensionless ROE, da_dot 1/s] with covariance ``cov`` (7, 7), e.g. the ejection on record carried
+    through an outage (:func:`predicted_prior`). It enters as seven whitened pseudo-measurement rows C^-1 (x_p - x),
+    cov = C C^T (Tapley et al. Sec. 4.6, Eq. 4.6.1), so that one radar pass, which alone does not determine the
+    drift rate, gives a solution."""
+
+    x: np.ndarray
+    cov: np.ndarray
+
+    def rows(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The whitened residual (7,) and its partials (7, 7) at state ``x``; ValueError for a covariance that is
+        not positive definite."""
+        try:
+            c = np.linalg.cholesky(np.asarray(self.cov, dtype=float))
+        except np.linalg.LinAlgError as exc:
+            raise ValueError(f"the state prior's covariance is not positive definite: {exc}") from None
+        w = np.linalg.inv(c)
+        return w @ (np.asarray(self.x, dtype=float) - x), w
+
+
+def predicted_prior(roe0: ArrayLike, cov0: ArrayLike, chief: Chief, da_dot: float, da_dot_sigma: float, *,
+                    burns: Iterable[Burn], t: float, j2: bool = True) -> StatePrior:
+    """The state prior at ``t`` [s] of a prediction from ``roe0`` at the chief's epoch through the executed
+    ``burns``, with a constant drift rate: the secular model (:func:`~roe_sep.core.relmotion.trajectory.state_at`)
+    is affine in the ROE and in da_dot, so its Jacobian Phi from unit differences is exact and P = Phi P0 Phi^T
+    carries the ROE covariance and the drift rate's variance (the drag's along-track error grows as
+    0.75 n sigma t^2).
+
+    Parameters
+    ----------
+    roe0 : array_like, shape (6,)
+        The dimensionless ROE at ``chief.t0``.
+    cov0 : array_like, shape (6, 6)
+        Their covariance (dimensionless squared).
+    chief : Chief
+        The chief at ``roe0``'s epoch.
+    da_dot, da_dot_sigma : float
+        The drift rate of da [1/s] and its 1-sigma.
+    burns : iterable of Burn
+        The relative impulses executed between ``chief.t0`` and ``t``.
+    t : float
+        The prior's epoch [s], >= ``chief.t0``.
+    j2 : bool
+        With the J2 secular rates.
+
+    Returns
+    -------
+    StatePrior
+        x = [ROE at t, da_dot] and its covariance.
+    """
+    burns = [b for b in burns if chief.t0 < b.epoch <= t]
+    x0 = np.append(np.asarray(roe0, dtype=float), float(da_dot))
+
+    def state(x):
+        return np.append(state_at(x[:6], chief.t0, burns, t, chief, j2=j2, da_dot=float(x[6])), x[6])
+
+    x = state(x0)
+    step = 1e-6
+    phi = np.column_stack([(state(x0 + step * e) - x) / step for e in np.eye(STATE_SIZE)])
+    p0 = np.zeros((STATE_SIZE, STATE_SIZE))
+    p0[:6, :6] = np.asarray(cov0, dtype=float)
+    p0[6, 6] = float(da_dot_sigma) ** 2
+    cov = phi @ p0 @ phi.T
+    return StatePrior(x, 0.5 * (cov + cov.T))
+
+
+@dataclass(frozen=True)
 class RangeBiasPrior:
     """A constant range bias per station, estimated with the state (issue 41 part 4): each station's bias b_s [m]
     enters its ranges as z = h(x) + b_s + noise, with the a priori information b_s ~ N(0, sigma squared), sigma =
@@ -208,6 +278,116 @@ class RangeBiasPrior:
     the RTN frame turns from pass to pass while a bias does not); ``sigma`` [m] > 0."""
 
     sigma: float
+
+
+@dataclass(frozen=True)
+class CarrierRanges:
+    """The stations' ranges to the carrier, whose orbit its GPS gives (issue 41 part 4): with the carrier's modelled
+    range h_c (its GPS orbit through the same two-way measurement model), z_c - h_c = b_s + v, v ~ N(0, sigma^2),
+    sigma^2 = sigma_range^2 + sigma_gps^2, measures each station's bias b_s free of the relative orbit. With a
+    :class:`RangeBiasPrior`, each becomes one more whitened row of the batch, (z_c - h_c - b_s) / sigma, with the
+    partial 1 / sigma on b_s alone; a station without ranges of the picosatellite in the batch has no bias state,
+    and its carrier ranges are left out. ``site_ef`` (k, 3) the station's Earth-fixed position [m], ``residual``
+    (k,) z_c - h_c [m], ``sigma`` (k,) [m] > 0."""
+
+    site_ef: np.ndarray
+    residual: np.ndarray
+    sigma: np.ndarray
+
+    def rows(self, batch: RadarBatch) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(station index (j,) in :func:`station_index` order, residual (j,) [m], sigma (j,) [m]) of the ranges at
+        the batch's stations."""
+        sites = np.unique(np.round(np.asarray(batch.site_ef, dtype=float), 3), axis=0)
+        own = np.round(np.asarray(self.site_ef, dtype=float).reshape(-1, 3), 3)
+        match = np.all(own[:, None, :] == sites[None, :, :], axis=2)  # (k, n_sites)
+        keep = match.any(axis=1)
+        return (np.argmax(match[keep], axis=1), np.asarray(self.residual, dtype=float).reshape(-1)[keep],
+                np.asarray(self.sigma, dtype=float).reshape(-1)[keep])
+
+
+def residual_tail(residual_rms: float, measurements: int, parameters: int = STATE_SIZE) -> float:
+    """The post-fit residual test (Tapley et al. Sec. 4.16): with m measurement triplets whitened by their sigmas,
+    3 m r^2 (r the residual RMS in sigmas) is chi-square with 3 m - ``parameters`` degrees of freedom when the
+    model holds; its upper tail P(chi2 >= 3 m r^2). A range bias of one to five range sigmas left out of the state
+    drives it below 1e-4 (docs/contingencies.md).
+
+    Parameters
+    ----------
+    residual_rms : float
+        The post-fit residual RMS in measurement sigmas (dimensionless).
+    measurements : int
+        The number m of measurement triplets.
+    parameters : int
+        The estimated parameters (the state's 7, plus one per estimated range bias).
+
+    Returns
+    -------
+    float
+        The tail probability; 1.0 when there are no degrees of freedom or the RMS is not finite.
+    """
+    # scipy.special's chdtrc is what scipy.stats.chi2.sf calls; scipy.stats costs about 0.3 CPU-s to import
+    from scipy.special import chdtrc
+
+    m = int(measurements)
+    dof = 3 * m - int(parameters)
+    if dof <= 0 or not np.isfinite(residual_rms):
+        return 1.0
+    return float(chdtrc(dof, 3.0 * m * float(residual_rms) ** 2))
+
+
+def carrier_bias_tail(carrier: CarrierRanges) -> float:
+    """The carrier's ranges' own test of a range bias: per station s, with weights w = 1 / sigma^2, the weighted
+    mean residual's (sum w r)^2 / sum w is chi-square(1) without a bias (the residuals are z_c - h_c = b_s + v);
+    summed over the stations, chi-square(stations). A few dozen ranges see a bias of one range sigma.
+
+    Parameters
+    ----------
+    carrier : CarrierRanges
+        The ranges.
+
+    Returns
+    -------
+    float
+        The upper tail P(chi2 >= statistic); 1.0 without ranges.
+    """
+    from scipy.special import chdtrc
+
+    res = np.asarray(carrier.residual, dtype=float).reshape(-1)
+    if not res.size:
+        return 1.0
+    w = 1.0 / np.square(np.asarray(carrier.sigma, dtype=float).reshape(-1))
+    _, index = np.unique(np.round(np.asarray(carrier.site_ef, dtype=float).reshape(-1, 3), 3), axis=0,
+                         return_inverse=True)
+    index = np.asarray(index).reshape(-1)
+    n = int(index.max()) + 1
+    stat = float(np.sum(np.bincount(index, w * res, n) ** 2 / np.bincount(index, w, n)))
+    return float(chdtrc(n, stat))
+
+
+def bias_state_switch(result: "ODResult", alpha: float, carrier: CarrierRanges | None = None) -> bool:
+    """Whether an OD solved without range biases calls for them (issue 41 part 4): its residual test
+    (:func:`residual_tail`), or the carrier's ranges' (:func:`carrier_bias_tail`) where the radar gives them,
+    rejects the model at level ``alpha``. A solution with biases never switches.
+
+    Parameters
+    ----------
+    result : ODResult
+        The solution.
+    alpha : float
+        The tests' level (the anomaly watch's ``residual_alpha``, 1e-4).
+    carrier : CarrierRanges, optional
+        The carrier's ranges so far.
+
+    Returns
+    -------
+    bool
+        True when the biases should be estimated from now on.
+    """
+    if result.range_bias:
+        return False
+    if carrier is not None and carrier_bias_tail(carrier) < alpha:
+        return True
+    return residual_tail(result.residual_rms, result.measurements) < alpha
 
 
 def station_index(batch: RadarBatch) -> tuple[np.ndarray, int]:
@@ -548,7 +728,8 @@ def _check(batch: RadarBatch):
 def batch_least_squares(batch: RadarBatch, t_est: float | None = None, x0: ArrayLike | None = None, j2: bool = True,
                         max_iterations: int = 20, *, tol: float = 1e-6, prior: DriftPrior | None = None,
                         drag: bool = True, model: DragModel | None = None,
-                        bias: RangeBiasPrior | None = None) -> ODResult:
+                        bias: RangeBiasPrior | None = None, carrier: CarrierRanges | None = None,
+                        state_prior: StatePrior | None = None) -> ODResult:
     """Gauss-Newton weighted least squares of x = [ROE at t_est (6), da_dot] (module docstring); converged when the
     step's Mahalanobis length sqrt(dx^T H^T W H dx) is below ``tol`` (a fraction of one sigma).
 
@@ -566,6 +747,10 @@ def batch_least_squares(batch: RadarBatch, t_est: float | None = None, x0: Array
         The a priori row (already carried to ``t_est``); the drift rate's growth (:func:`drift_growth`).
     bias : RangeBiasPrior, optional
         Estimate a range bias per station with its a priori information (the result's ``range_bias``).
+    carrier : CarrierRanges, optional
+        The stations' ranges to the carrier: more information on the biases (ignored without ``bias``).
+    state_prior : StatePrior, optional
+        A priori information on the whole state at ``t_est`` (a prediction: one pass then gives a solution).
 
     Returns
     -------
@@ -582,6 +767,9 @@ def batch_least_squares(batch: RadarBatch, t_est: float | None = None, x0: Array
     ecc = chief_eccentricity(batch, t_est) if drag and model is not None else None  # constants of the batch
     index, n_bias = station_index(batch) if bias is not None else (None, 0)
     b = np.zeros(n_bias)  # the stations' range biases [m]
+    c_index, c_res, c_sigma = carrier.rows(batch) if n_bias and carrier is not None else (np.zeros(0, int),) * 3
+    c_rows = np.zeros((c_index.size, STATE_SIZE + n_bias))  # the carrier's rows: partials on their station's bias
+    c_rows[np.arange(c_index.size), STATE_SIZE + c_index] = 1.0 / c_sigma if c_index.size else 0.0
 
     def unbiased(b: np.ndarray) -> np.ndarray:
         if not n_bias:
@@ -593,10 +781,16 @@ def batch_least_squares(batch: RadarBatch, t_est: float | None = None, x0: Array
     def whitened(x: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
         r = measurement_residual(unbiased(b), predict(x, batch, t_est, j2, drag, model=model, decay=decay,
                                                       ecc=ecc)).reshape(-1) * w
-        if prior is None:
+        rows = []  # the a priori rows: (residuals, partials over the state and the biases)
+        if prior is not None:
+            r_p, h_p = prior.residual_row(x, a_chief)
+            rows.append((np.atleast_1d(r_p), np.append(h_p, np.zeros(n_bias))[None, :]))
+        if state_prior is not None:
+            r_s, h_s = state_prior.rows(x)
+            rows.append((r_s, np.hstack([h_s, np.zeros((STATE_SIZE, n_bias))])))
+        if not rows:
             return r, None
-        r_p, h_p = prior.residual_row(x, a_chief)
-        return np.append(r, r_p), np.append(h_p, np.zeros(n_bias))
+        return np.concatenate([r, *(q for q, _ in rows)]), np.vstack([h for _, h in rows])
 
     for iteration in range(1, max_iterations + 1):
         r, h_p = whitened(x, b)
@@ -605,9 +799,9 @@ def batch_least_squares(batch: RadarBatch, t_est: float | None = None, x0: Array
             h = np.hstack([h, _bias_columns(index, n_bias, w)])
         if h_p is not None:
             h = np.vstack([h, h_p])
-        if n_bias:  # the biases' a priori rows
-            r = np.append(r, -b / bias.sigma)
-            h = np.vstack([h, np.hstack([np.zeros((n_bias, STATE_SIZE)), np.eye(n_bias) / bias.sigma])])
+        if n_bias:  # the biases' a priori rows, then the carrier's ranges
+            r = np.concatenate([r, -b / bias.sigma, (c_res - b[c_index]) / c_sigma])
+            h = np.vstack([h, np.hstack([np.zeros((n_bias, STATE_SIZE)), np.eye(n_bias) / bias.sigma]), c_rows])
         scale = np.linalg.norm(h, axis=0)
         if not np.all(scale > 0.0):
             raise ValueError(f"singular normal matrix: state component(s) {np.nonzero(~(scale > 0.0))[0].tolist()}"

@@ -403,6 +403,26 @@ def deputy_earth_fixed_state(roe: ArrayLike, chief_kep: ArrayLike, earth: ArrayL
     return np.stack(np.broadcast_arrays(r, v), axis=-2)
 
 
+def carrier_earth_fixed_state(chief_kep: ArrayLike, earth: ArrayLike) -> np.ndarray:
+    """The carrier's inertial position and velocity in the Earth-fixed axes of the epoch: the state of
+    :func:`deputy_earth_fixed_state` at zero ROE (the sensor's carrier ranges and the OD's model of them).
+
+    Parameters
+    ----------
+    chief_kep : array_like, shape (..., 6)
+        The chief's elements ``[a, e, i, raan, argp, M]``.
+    earth : array_like, shape (..., 3, 3)
+        The GCRS -> ITRS rotation of the epochs.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 2, 3)
+        Position [m] and velocity [m/s].
+    """
+    chief_kep = np.asarray(chief_kep, dtype=float)
+    return deputy_earth_fixed_state(np.zeros(chief_kep.shape[:-1] + (6,)), chief_kep, earth)
+
+
 def two_way_look(state_ef: ArrayLike, site_ef: ArrayLike, site_enu: ArrayLike, *, iterations: int = 2) -> np.ndarray:
     """[range, az, el] of a two-way radar measurement with the receive time tag.
 

@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..od.batch import residual_tail
 from ..relmotion.dynamics import propagate
 from ..relmotion.maneuvers import control_matrix, delta_roe
 from ..relmotion.orbit import angle_between, mean_motion
@@ -331,18 +332,16 @@ class AnomalyWatch:
         list of Detection
             ``od_residuals`` and ``od_inconsistent`` findings on this solution (empty when none).
         """
-        # chi-square tail and its inverse from scipy.special (what scipy.stats.chi2.sf/isf call, the same floats):
+        # the chi-square quantile from scipy.special (what scipy.stats.chi2.isf calls, the same floats):
         # scipy.stats costs about 0.3 CPU-s to import; here, not at import: every node process imports this module
-        from scipy.special import chdtrc, chdtri
+        from scipy.special import chdtri
 
         roe = np.asarray(roe, dtype=float)
         cov6 = np.asarray(cov6, dtype=float)
         out = []
         m = int(measurements)
-        dof = 3 * m - OD_PARAMETERS
-        if dof > 0 and math.isfinite(residual_rms):
-            chi2 = 3 * m * residual_rms * residual_rms
-            p = float(chdtrc(dof, chi2))
+        if 3 * m > OD_PARAMETERS and math.isfinite(residual_rms):
+            p = residual_tail(residual_rms, m, OD_PARAMETERS)
             if p < self.limits.residual_alpha:
                 out.append(Detection("od_residuals", t_now, f"OD at t = {t_od:.0f} s: residual RMS "
                                      f"{residual_rms:.2f} sigma over {m} measurements (p = {p:.1e})",
