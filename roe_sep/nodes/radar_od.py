@@ -139,6 +139,7 @@ class RadarODNode(ManagedNode):
         self.ejection = None  # EjectionPrior: the ejection on record (commanded, then the footage's)
         self.carrier_burns = []  # relative impulses (Burn) of the executed carrier burns, in arrival order
         self.full_estimates = 0  # estimates from enough passes over the arc, without the prediction
+        self.prediction_from = None  # the epoch [s] of the first OD from the prediction (an outage)
 
     def activate(self):
         """Publishers, subscriptions (the ``activate`` transition)."""
@@ -357,7 +358,8 @@ class RadarODNode(ManagedNode):
             return
         recs.sort(key=lambda r: r.t)
         full = len(passes) >= self.passes_required and recs[-1].t - recs[0].t >= self.min_arc
-        if not (full or self.prediction_due(now)):
+        use_prediction = self.prediction_due(now, full)
+        if not (full or use_prediction):
             return
         s_idx = [r.station for r in recs]
         batch = RadarBatch(t=np.array([r.t for r in recs]), z=np.array([r.z for r in recs]),
@@ -366,9 +368,9 @@ class RadarODNode(ManagedNode):
                            site_ef=np.array([self.site_ef[s] for s in s_idx]),
                            site_enu=np.array([self.site_enu[s] for s in s_idx]))
         prior = (self.prior.carried(float(np.max(batch.t)), self.density_walk)
-                 if self.prior is not None and self.use_prior and full else None)
+                 if self.prior is not None and self.use_prior and not use_prediction else None)
         try:
-            predicted = None if full else self.predicted(float(np.max(batch.t)))
+            predicted = self.predicted(float(np.max(batch.t))) if use_prediction else None
             result = self.solve(batch, prior, self.bias_prior(), predicted)
             carrier = self.carrier_ranges(float(np.max(batch.t)))
             if self.bias_auto_sigma > 0.0 and bias_state_switch(result, self.bias_alpha, carrier):
@@ -380,8 +382,10 @@ class RadarODNode(ManagedNode):
             return
         self.od_pub.publish(self.od_msg(result, batch.chief[-1], len(passes), now))
         self.estimates += 1
-        self.full_estimates += int(full)
-        if not full:
+        self.full_estimates += int(full and not use_prediction)
+        if use_prediction:
+            if self.prediction_from is None:
+                self.prediction_from = result.t_est
             self.report_prediction(result, len(passes), now)
         if result.range_bias:
             index, n = station_index(batch)
@@ -396,7 +400,7 @@ class RadarODNode(ManagedNode):
             f"measurements: a*ROE = {np.array2string(result.x[:6] * a, precision=1)} m, a*da_dot = "
             f"{result.x[6] * a:.3e} m/s, residual RMS {result.residual_rms:.2f}"
             + ("" if prior is None else f", drift prior from t = {self.prior.t:.0f} s")
-            + ("" if full else f", with the prediction from the {self.ejection.source} ejection as its prior")
+            + (f", with the prediction from the {self.ejection.source} ejection as its prior" if use_prediction else "")
             + "".join(f", {name} range bias {b:+.2f} +- {sb:.2f} m" for name, (b, sb) in self.range_bias.items()))
         publish_status(self, self.diag_pub, OK, f"estimate {self.estimates} published", self._values())
 
@@ -408,11 +412,16 @@ class RadarODNode(ManagedNode):
                                    model=self.drag_model(batch.chief[-1, 0]), bias=bias, carrier=carrier,
                                    state_prior=predicted)
 
-    def prediction_due(self, now):
-        """Whether an OD from fewer passes than ``passes_required`` (or a shorter arc) may start from the prediction:
-        no full estimate yet, ``prior_od_after`` (> 0) after the release on record (a radar outage)."""
-        return (self.prior_od_after > 0.0 and self.full_estimates == 0 and self.ejection is not None
-                and now >= self.ejection.t + self.prior_od_after)
+    def prediction_due(self, now, full):
+        """Whether this OD takes the prediction as its prior: without a full estimate (``full``: enough passes over
+        the arc) ``prior_od_after`` (> 0) after the release on record (a radar outage); then every OD until the
+        first carrier burn after the first such OD (the acquisition's), whose arc the drift prior of the last
+        solution carries on (a two-pass arc alone knows the drift rate a hundred times worse than the prediction)."""
+        if self.prior_od_after <= 0.0 or self.ejection is None:
+            return False
+        if self.prediction_from is not None:
+            return not any(b.epoch > self.prediction_from for b in self.carrier_burns)
+        return not full and self.full_estimates == 0 and now >= self.ejection.t + self.prior_od_after
 
     def predicted(self, t_est):
         """The state prior at ``t_est`` [s]: the ejection on record (its ROE and covariance, the nominal drag and its
