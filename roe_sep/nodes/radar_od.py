@@ -66,6 +66,7 @@ from ..core.od.batch import (
     predicted_prior,
     residual_tail,
     station_index,
+    uses_prediction,
 )
 from ..core.od.radar import carrier_earth_fixed_state, two_way_look
 from ..core.od.sensor import RadarRecord, chief_from_samples, counted_passes
@@ -413,15 +414,11 @@ class RadarODNode(ManagedNode):
                                    state_prior=predicted)
 
     def prediction_due(self, now, full):
-        """Whether this OD takes the prediction as its prior: without a full estimate (``full``: enough passes over
-        the arc) ``prior_od_after`` (> 0) after the release on record (a radar outage); then every OD until the
-        first carrier burn after the first such OD (the acquisition's), whose arc the drift prior of the last
-        solution carries on (a two-pass arc alone knows the drift rate a hundred times worse than the prediction)."""
-        if self.prior_od_after <= 0.0 or self.ejection is None:
-            return False
-        if self.prediction_from is not None:
-            return not any(b.epoch > self.prediction_from for b in self.carrier_burns)
-        return not full and self.full_estimates == 0 and now >= self.ejection.t + self.prior_od_after
+        """Whether this OD takes the prediction as its prior (:func:`~roe_sep.core.od.batch.uses_prediction`)."""
+        return uses_prediction(now, full, release=None if self.ejection is None else self.ejection.t,
+                               after=self.prior_od_after, full_estimates=self.full_estimates,
+                               first_prediction=self.prediction_from,
+                               burn_epochs=[b.epoch for b in self.carrier_burns])
 
     def predicted(self, t_est):
         """The state prior at ``t_est`` [s]: the ejection on record (its ROE and covariance, the nominal drag and its

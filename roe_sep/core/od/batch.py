@@ -269,6 +269,44 @@ def predicted_prior(roe0: ArrayLike, cov0: ArrayLike, chief: Chief, da_dot: floa
     return StatePrior(x, 0.5 * (cov + cov.T))
 
 
+def uses_prediction(now: float, full: bool, *, release: float | None, after: float, full_estimates: int,
+                    first_prediction: float | None, burn_epochs: Iterable[float]) -> bool:
+    """Whether an OD takes the prediction (:func:`predicted_prior`) as its prior (issue 41 part 3): without a full
+    estimate (``full``: enough passes over the arc; ``full_estimates`` made so far) ``after`` (> 0) after the
+    ``release`` (a radar outage); then every OD until the first carrier burn after the first such OD (the
+    acquisition's), whose arc the drift prior of the last solution carries on. A two-pass arc alone knows the drift
+    rate far worse than the prediction: dropped there, the acquisition kept the single-pass plan and its later
+    re-plans filled the final OD's arc (10 of 100 runs of the 24-h outage missed the ICs; docs/contingencies.md).
+
+    Parameters
+    ----------
+    now : float
+        The sim time [s] of the OD.
+    full : bool
+        Whether its passes alone make a full estimate.
+    release : float or None
+        The release epoch [s] on record (None: no ejection on record, no prediction).
+    after : float
+        ``prior_od_after`` [s] (<= 0: never).
+    full_estimates : int
+        The full estimates made without the prediction so far.
+    first_prediction : float or None
+        The epoch [s] of the first OD from the prediction, None before.
+    burn_epochs : iterable of float
+        The epochs [s] of the executed carrier burns.
+
+    Returns
+    -------
+    bool
+        True when the OD takes the prediction as its prior.
+    """
+    if after <= 0.0 or release is None:
+        return False
+    if first_prediction is not None:
+        return not any(t > first_prediction for t in burn_epochs)
+    return not full and full_estimates == 0 and now >= release + after
+
+
 @dataclass(frozen=True)
 class RangeBiasPrior:
     """A constant range bias per station, estimated with the state (issue 41 part 4): each station's bias b_s [m]

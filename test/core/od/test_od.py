@@ -29,6 +29,7 @@ from roe_sep.core.od.batch import (
     predicted_prior,
     propagate_state,
     residual_tail,
+    uses_prediction,
 )
 from roe_sep.core.od.radar import (
     TIRA,
@@ -606,3 +607,16 @@ def test_a_state_prior_that_is_not_positive_definite_is_refused(scenario):
     batch, x_true = scenario
     with pytest.raises(ValueError, match="positive definite"):
         batch_least_squares(noisy(last_pass(batch), 0), state_prior=StatePrior(x_true, np.zeros((7, 7))))
+
+
+def test_the_prediction_is_the_prior_from_the_outage_to_the_acquisitions_first_burn():
+    kw = dict(release=600.0, after=86400.0, full_estimates=0, first_prediction=None, burn_epochs=[9156.0, 99009.0])
+    assert not uses_prediction(80000.0, False, **kw)  # before prior_od_after
+    assert uses_prediction(120000.0, False, **kw)  # a single pass after the outage
+    assert not uses_prediction(120000.0, True, **kw)  # a full estimate needs no prediction
+    assert not uses_prediction(120000.0, False, **{**kw, "full_estimates": 1})  # an OD before the outage
+    assert not uses_prediction(120000.0, False, **{**kw, "after": 0.0})  # switched off
+    assert not uses_prediction(120000.0, False, **{**kw, "release": None})  # no ejection on record
+    later = {**kw, "first_prediction": 119950.0}
+    assert uses_prediction(161110.0, True, **later)  # the next OD of that arc keeps it, full or not
+    assert not uses_prediction(200000.0, True, **{**later, "burn_epochs": [9156.0, 99009.0, 170285.0]})
