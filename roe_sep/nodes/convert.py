@@ -7,6 +7,7 @@ from roe_sep_msgs.msg import ImpulsiveManeuver, OrbitalElements, RelativeOrbital
 
 from .. import interfaces
 from ..core.decisions.common import PlannedBurn
+from ..core.decisions.ic_planner import EjectionPrior
 from ..core.relmotion.roe import wrap_angle
 from ..core.truth.execution import relative_impulse
 from ..stamps import sec_nanosec, time_to_sec
@@ -29,11 +30,26 @@ def vector_to_array(v: Vector3) -> np.ndarray:
 def twist_linear(msg) -> tuple[np.ndarray, np.ndarray]:
     """The linear part of a geometry_msgs/TwistWithCovarianceStamped: its vector (3,) and covariance (3, 3), the
     upper-left block of the row-major 6x6 (the footage's ejection estimate: dv [m/s] RTN, [m^2/s^2]); ValueError for
-    a covariance of another size."""
+    a covariance of another size or a non-finite vector or block."""
     cov = np.asarray(msg.twist.covariance, dtype=float)
     if cov.size != 36:
         raise ValueError(f"a twist covariance has 36 entries, got {cov.size}")
-    return vector_to_array(msg.twist.twist.linear), cov.reshape(6, 6)[:3, :3].copy()
+    dv, block = vector_to_array(msg.twist.twist.linear), cov.reshape(6, 6)[:3, :3].copy()
+    if not (np.all(np.isfinite(dv)) and np.all(np.isfinite(block))):
+        raise ValueError("non-finite ejection estimate")
+    return dv, block
+
+
+def ejection_prior(event, scenario) -> EjectionPrior:
+    """The commanded ejection of a roe_sep_msgs/EjectionEvent with the scenario's SPL errors and nominal drag
+    (:meth:`EjectionPrior.commanded`, what the ic_planner and radar_od predict from before any OD); ValueError for a
+    non-finite dv or an invalid chief."""
+    dv = vector_to_array(event.ejection.dv_rtn)
+    kep = elements_to_array(event.chief)
+    if not (np.all(np.isfinite(dv)) and np.all(np.isfinite(kep)) and kep[0] > 6.4e6):
+        raise ValueError("non-finite dv or invalid chief")
+    return EjectionPrior.commanded(time_to_sec(event.header.stamp), kep, event.ejection.mean_arg_latitude, dv,
+                                   scenario)
 
 
 def array_to_vector(a) -> Vector3:

@@ -28,7 +28,6 @@ Parameters (YAML via ``--ros-args --params-file``): :data:`roe_sep.nodes.paramet
 max_burn_dv, planning_margin < window) are :func:`roe_sep.core.acquisition.planner.validate_config`'s.
 """
 
-import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import TwistWithCovarianceStamped
 from roe_sep_msgs.msg import EjectionEvent, ImpulsiveManeuver, ManeuverPlan, OrbitDetermination
@@ -42,6 +41,7 @@ from ..core.od.radar import DEFAULT_EPOCH_UTC, julian_date
 from ..core.relmotion.roe import wrap_angle
 from .convert import (
     array_to_elements,
+    ejection_prior,
     elements_to_array,
     maneuver,
     msg_to_roe,
@@ -50,7 +50,6 @@ from .convert import (
     sec_to_time,
     time_to_sec,
     twist_linear,
-    vector_to_array,
 )
 from .decision_record import DecisionRecord
 from .diagnostics import OK, publish_status, report
@@ -156,22 +155,17 @@ class IcPlannerNode(ManagedNode):
         """The commanded ejection with the SPL's magnitude and direction errors (the scenario's spl_sigma and
         attitude_sigma_arcsec) and the nominal differential drag (its ballistic_sigma): the blind acquisition's
         prior (:class:`roe_sep.core.decisions.ic_planner.EjectionPrior`)."""
-        dv = vector_to_array(event.ejection.dv_rtn)
-        kep = elements_to_array(event.chief)
-        if not (np.all(np.isfinite(dv)) and np.all(np.isfinite(kep)) and kep[0] > 6.4e6):
-            publish_status(self, self.diag_pub, 2, "ejection event rejected: non-finite dv or invalid chief",
-                           part="input")
+        try:
+            prior = ejection_prior(event, self.scenario)
+        except ValueError as exc:
+            publish_status(self, self.diag_pub, 2, f"ejection event rejected: {exc}", part="input")
             return
-        prior = rules.EjectionPrior.commanded(time_to_sec(event.header.stamp), kep,
-                                              event.ejection.mean_arg_latitude, dv, self.scenario)
         self.apply(rules.on_ejection(self.state, prior, self.config))
 
     def on_measured(self, msg: TwistWithCovarianceStamped):
         """The executed ejection the planner's ground filter measured from the footage."""
         try:
             dv, cov = twist_linear(msg)
-            if not (np.all(np.isfinite(dv)) and np.all(np.isfinite(cov))):
-                raise ValueError("non-finite")
         except ValueError as exc:
             publish_status(self, self.diag_pub, 2, f"ejection estimate rejected: {exc}", part="input")
             return

@@ -332,23 +332,23 @@ class RadarNode(ManagedNode):
         bias."""
         bias = 0.0 if self.contingency is None else self.contingency.range_bias(s)  # radar_bias
         z = noisy_measurement(z_true[:3], self.sigma, self.rng, bias)
-        name = self.stations[s].name
         if self.track_carrier:
             zc = noisy_measurement(z_true[3:], self.sigma, self.carrier_rng, bias)
-            c = RadarMeasurement(station=name, pass_id=self.pass_ids[s], range=float(zc[0]), azimuth=float(zc[1]),
-                                 elevation=float(zc[2]), sigma_range=float(self.sigma[0]),
-                                 sigma_angle=float(self.sigma[1]))
-            c.header.stamp = sec_to_time(t)
-            c.header.frame_id = name
-            self.carrier_pub.publish(c)
+            self.carrier_pub.publish(self.message(t, s, zc))
+        self.meas_pub.publish(self.message(t, s, z))
+        self.published += 1
+        self.pass_count[s] += 1
+
+    def message(self, t, s, z):
+        """The RadarMeasurement of station ``s``'s open pass at ``t`` [s]: ``z`` (range, azimuth, elevation) and this
+        sensor's sigmas."""
+        name = self.stations[s].name
         m = RadarMeasurement(station=name, pass_id=self.pass_ids[s], range=float(z[0]), azimuth=float(z[1]),
                              elevation=float(z[2]), sigma_range=float(self.sigma[0]),
                              sigma_angle=float(self.sigma[1]))
         m.header.stamp = sec_to_time(t)
         m.header.frame_id = name
-        self.meas_pub.publish(m)
-        self.published += 1
-        self.pass_count[s] += 1
+        return m
 
     def pass_closed(self, s, now):
         """The end of station ``s``'s open pass at the tracking's sim time ``now`` [s]: RadarPass on

@@ -31,7 +31,6 @@ Parameters: :data:`roe_sep.nodes.parameters.RADAR_OD` (``radar_od --help``, docs
 
 import bisect
 import collections
-import dataclasses
 import json
 import math
 
@@ -52,7 +51,6 @@ from roe_sep_msgs.msg import (
 from .. import interfaces
 from ..core.config import ConfigError, load_scenario
 from ..core.constants import R_EARTH
-from ..core.decisions.ic_planner import EjectionPrior
 from ..core.frames import gcrs_to_itrs
 from ..core.od.batch import (
     CarrierRanges,
@@ -75,13 +73,12 @@ from ..core.relmotion.trajectory import Chief
 from ..core.truth.nonlinear import vallado_band
 from .convert import (
     array_to_elements,
-    elements_to_array,
+    ejection_prior,
     planned_burn,
     roe_to_msg,
     sec_to_time,
     time_to_sec,
     twist_linear,
-    vector_to_array,
 )
 from .diagnostics import ERROR, OK, WARN, publish_status
 from .lockstep import Lockstep
@@ -194,27 +191,23 @@ class RadarODNode(ManagedNode):
     def on_ejection(self, event: EjectionEvent):
         """The commanded ejection with the SPL's errors (as the ic_planner takes it: :class:`EjectionPrior`); a
         measured one on record is kept."""
-        dv = vector_to_array(event.ejection.dv_rtn)
-        kep = elements_to_array(event.chief)
-        if not (np.all(np.isfinite(dv)) and np.all(np.isfinite(kep)) and kep[0] > 6.4e6):
-            self._rejected("ejection event", event, "non-finite dv or invalid chief")
+        try:
+            prior = ejection_prior(event, self.scenario)
+        except ValueError as exc:
+            self._rejected("ejection event", event, exc)
             return
         if self.ejection is None or self.ejection.source == "commanded":
-            self.ejection = EjectionPrior.commanded(time_to_sec(event.header.stamp), kep,
-                                                    event.ejection.mean_arg_latitude, dv, self.scenario)
+            self.ejection = prior
 
     def on_measured_ejection(self, msg: TwistWithCovarianceStamped):
         """The executed ejection the footage measured: it replaces the commanded one (needs its chief)."""
         try:
             dv, cov = twist_linear(msg)
-            if not (np.all(np.isfinite(dv)) and np.all(np.isfinite(cov))):
-                raise ValueError("non-finite")
         except ValueError as exc:
             self._rejected("ejection estimate", msg, exc)
             return
         if self.ejection is not None:
-            self.ejection = dataclasses.replace(self.ejection, dv=tuple(float(x) for x in dv),
-                                                cov=tuple(float(x) for x in cov.reshape(-1)), source="footage")
+            self.ejection = self.ejection.measured(dv, cov)
 
     def on_maneuver(self, msg: ImpulsiveManeuver):
         """A burn: applied to the estimates from its epoch on (:meth:`apply_burns`), whenever it arrives."""
@@ -368,15 +361,16 @@ class RadarODNode(ManagedNode):
                            earth=np.array([r.earth for r in recs]),
                            site_ef=np.array([self.site_ef[s] for s in s_idx]),
                            site_enu=np.array([self.site_enu[s] for s in s_idx]))
-        prior = (self.prior.carried(float(np.max(batch.t)), self.density_walk)
+        t_last = float(np.max(batch.t))
+        prior = (self.prior.carried(t_last, self.density_walk)
                  if self.prior is not None and self.use_prior and not use_prediction else None)
         try:
-            predicted = self.predicted(float(np.max(batch.t))) if use_prediction else None
-            result = self.solve(batch, prior, self.bias_prior(), predicted)
-            carrier = self.carrier_ranges(float(np.max(batch.t)))
+            predicted = self.predicted(t_last) if use_prediction else None
+            carrier = self.carrier_ranges(t_last)  # the carrier's modelled ranges: once per estimate
+            result = self.solve(batch, prior, self.bias_prior(), predicted, carrier)
             if self.bias_auto_sigma > 0.0 and bias_state_switch(result, self.bias_alpha, carrier):
                 self.switch_bias_on(result, now, carrier)
-                result = self.solve(batch, prior, self.bias_prior(), predicted)
+                result = self.solve(batch, prior, self.bias_prior(), predicted, carrier)
         except ValueError as exc:
             self.get_logger().error(f"orbit determination failed: {exc}")
             publish_status(self, self.diag_pub, ERROR, f"orbit determination failed: {exc}", self._values())
@@ -405,10 +399,9 @@ class RadarODNode(ManagedNode):
             + "".join(f", {name} range bias {b:+.2f} +- {sb:.2f} m" for name, (b, sb) in self.range_bias.items()))
         publish_status(self, self.diag_pub, OK, f"estimate {self.estimates} published", self._values())
 
-    def solve(self, batch, prior, bias, predicted=None):
-        """The batch OD of ``batch`` with the drift ``prior``, the range-bias prior ``bias`` and the state prior
-        ``predicted`` (each or None), and the carrier's ranges where the radar gives them."""
-        carrier = self.carrier_ranges(float(np.max(batch.t))) if bias is not None else None
+    def solve(self, batch, prior, bias, predicted, carrier):
+        """The batch OD of ``batch`` with the drift ``prior``, the range-bias prior ``bias``, the state prior
+        ``predicted`` and the carrier's ranges ``carrier`` (each or None; the ranges count only with ``bias``)."""
         return batch_least_squares(batch, prior=prior, drag=self.drag_terms,
                                    model=self.drag_model(batch.chief[-1, 0]), bias=bias, carrier=carrier,
                                    state_prior=predicted)

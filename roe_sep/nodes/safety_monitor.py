@@ -253,8 +253,6 @@ class SafetyMonitorNode(ManagedNode):
         the ejection (plans are judged from it until an OD; issue 41 part 2)."""
         try:
             dv, cov = twist_linear(msg)
-            if not (np.all(np.isfinite(dv)) and np.all(np.isfinite(cov))):
-                raise ValueError("non-finite ejection estimate")
         except ValueError as exc:
             self.reject("ejection estimate", exc)
             return

@@ -171,6 +171,13 @@ class EjectionPrior:
         return cls(float(t), tuple(float(x) for x in kep), float(u), tuple(float(x) for x in dv),
                    tuple(float(x) for x in cov.reshape(-1)), a_da_dot, abs(a_da_dot) * mc.ballistic_sigma)
 
+    def measured(self, dv: ArrayLike, cov: ArrayLike) -> "EjectionPrior":
+        """The same knowledge with the footage's measured ejection ``dv`` (3,) [m/s] RTN and its covariance (3, 3)
+        or (9,) [m^2/s^2] in place of the commanded one (``source`` "footage")."""
+        return dataclasses.replace(self, dv=tuple(float(x) for x in np.asarray(dv, dtype=float).reshape(-1)),
+                                   cov=tuple(float(x) for x in np.asarray(cov, dtype=float).reshape(-1)),
+                                   source="footage")
+
     def solution(self, stamp: float) -> "OdSolution":
         """The prior as an OD solution at the release, made at ``stamp`` [s]: the ROE of the ejection (seed 002
         Eq. 2 at the release: :func:`~roe_sep.core.relmotion.maneuvers.delta_roe`) and their a-scaled covariance
@@ -282,8 +289,7 @@ def on_measured(state: IcPlannerState, dv: ArrayLike, cov: ArrayLike, config: Ic
     """
     if state.ejection is None:
         return state, ()
-    measured = dataclasses.replace(state.ejection, dv=tuple(float(x) for x in dv), cov=tuple(float(x) for x in cov),
-                                   source="footage")
+    measured = state.ejection.measured(dv, cov)
     return (state, ()) if measured == state.ejection else (dataclasses.replace(state, ejection=measured), ())
 
 
