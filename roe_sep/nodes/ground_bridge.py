@@ -52,7 +52,6 @@ from rosgraph_msgs.msg import Clock
 from std_msgs.msg import String
 
 from .. import interfaces
-from ..core.config import ConfigError, load_scenario
 from ..core.decisions.common import read_record
 from ..errors import RoeSepError
 from ..ndm import frames
@@ -60,7 +59,7 @@ from ..ndm.live import LiveSet
 from ..ndm.options import Options
 from .convert import sec_to_time, time_to_sec
 from .diagnostics import ERROR, OK, publish_status
-from .params import ParameterError, declare
+from .params import ParameterError, declare, scenario_of
 from .scenario_end import final_status_of
 
 EXTERNAL_RADAR_TOPIC = interfaces.EXTERNAL_RADAR_TOPIC
@@ -125,10 +124,7 @@ class GroundBridgeNode(Node):
             frames.parse_epoch(epoch)
         except ValueError as exc:
             raise ParameterError(f"parameter 'epoch_utc': {exc}") from exc
-        try:
-            carrier = load_scenario(scenario_file or None).monte_carlo.carrier
-        except ConfigError as exc:
-            raise ParameterError(f"parameter 'scenario_file': {exc}") from exc
+        carrier = scenario_of(scenario_file).monte_carlo.carrier
         return Options(epoch_utc=str(epoch), carrier_mass=carrier.mass, carrier_drag_area=carrier.area,
                        carrier_drag_coeff=carrier.cd, carrier_isp=float(isp))
 

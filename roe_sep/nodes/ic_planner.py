@@ -35,7 +35,6 @@ from std_msgs.msg import String
 
 from .. import interfaces
 from ..core.acquisition.planner import AcquisitionConfig, InvalidAcquisitionConfig, validate_config
-from ..core.config import ConfigError, load_scenario
 from ..core.decisions import ic_planner as rules
 from ..core.od.radar import DEFAULT_EPOCH_UTC, julian_date
 from ..core.relmotion.roe import wrap_angle
@@ -55,7 +54,7 @@ from .decision_record import DecisionRecord
 from .diagnostics import OK, publish_status, report
 from .lockstep import Lockstep
 from .managed import ManagedNode
-from .params import ParameterError, declare
+from .params import ParameterError, declare, scenario_of
 
 
 def od_solution(msg: OrbitDetermination) -> rules.OdSolution:
@@ -83,10 +82,7 @@ class IcPlannerNode(ManagedNode):
                                                         "ei_margin_sigmas", "ic_drift_tolerance")}
         extra["blind_after"] = declare(self, "blind_acquisition_after")
         scenario_file = declare(self, "scenario_file")
-        try:
-            self.scenario = load_scenario(scenario_file or None)
-        except ConfigError as exc:
-            raise ParameterError(f"parameter 'scenario_file': {exc}") from exc
+        self.scenario = scenario_of(scenario_file)
         try:
             cfg = AcquisitionConfig(**values)
             validate_config(cfg)

@@ -14,6 +14,7 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from rclpy.exceptions import InvalidParameterTypeException
 from rclpy.parameter import Parameter
 
+from ..core.config import ConfigError, load_scenario
 from ..errors import ParameterError, plain, show
 from . import parameters
 
@@ -105,6 +106,15 @@ def declare(node, name, attr=None):
     if why:
         raise ParameterError(f"parameter '{name}' {why}, got {show(value)}")
     return value
+
+
+def scenario_of(scenario_file):
+    """The scenario of the ``scenario_file`` parameter's value ('' = the embedded default); ParameterError naming the
+    parameter for a file that cannot be read or is not a valid scenario."""
+    try:
+        return load_scenario(scenario_file or None)
+    except ConfigError as exc:
+        raise ParameterError(f"parameter 'scenario_file': {exc}") from exc
 
 
 def require(name, ok, value, what):

@@ -39,7 +39,6 @@ from roe_sep_msgs.srv import PlanSeparation
 from std_msgs.msg import String
 
 from .. import interfaces
-from ..core.config import ConfigError, load_scenario
 from ..core.decisions import planner as rules
 from ..core.montecarlo.sweep import p_best
 from ..core.od.pose import UNKNOWN
@@ -61,7 +60,7 @@ from .decision_record import DecisionRecord
 from .diagnostics import OK, publish_status, report
 from .lockstep import Lockstep
 from .managed import ManagedNode
-from .params import ParameterError, declare
+from .params import declare, scenario_of
 from .sweep_store import cache_dir, p_best_stored
 
 
@@ -143,10 +142,7 @@ class PlannerNode(ManagedNode):
         checks = {field: declare(self, name) for field, name in names}  # the contingency checks' parameters
         for field in ("makeup_pointing", "camera_sigma", "pointing_sigma"):
             checks[field] = math.radians(checks[field])
-        try:
-            self.scenario = load_scenario(scenario_file or None)
-        except ConfigError as exc:
-            raise ParameterError(f"parameter 'scenario_file': {exc}") from exc
+        self.scenario = scenario_of(scenario_file)
 
         multi, p = None, None  # p: computed from each commanded ejection (Eq. 21 for the multi-impulse plan)
         if self.strategy == "multi_impulse":

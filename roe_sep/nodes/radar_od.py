@@ -49,7 +49,6 @@ from roe_sep_msgs.msg import (
 )
 
 from .. import interfaces
-from ..core.config import ConfigError, load_scenario
 from ..core.constants import R_EARTH
 from ..core.frames import gcrs_to_itrs
 from ..core.od.batch import (
@@ -83,7 +82,7 @@ from .convert import (
 from .diagnostics import ERROR, OK, WARN, publish_status
 from .lockstep import Lockstep
 from .managed import ManagedNode
-from .params import ParameterError, declare
+from .params import declare, scenario_of
 from .radar_stations import parse_truth, tracking_of
 
 
@@ -110,10 +109,7 @@ class RadarODNode(ManagedNode):
         self.prior_od_after = declare(self, "prior_od_after")
         self.prior_floor = declare(self, "prior_od_floor")
         scenario_file = declare(self, "scenario_file")
-        try:
-            self.scenario = load_scenario(scenario_file or None)
-        except ConfigError as exc:
-            raise ParameterError(f"parameter 'scenario_file': {exc}") from exc
+        self.scenario = scenario_of(scenario_file)
         self.drag = (scale_height, ratio)
         self.estimates = 0
         self.received = 0

@@ -32,7 +32,6 @@ from roe_sep_msgs.msg import (
 )
 
 from .. import interfaces
-from ..core.config import ConfigError, load_scenario
 from ..core.constants import ARCSEC
 from ..core.relmotion.dynamics import drag_da_dot
 from ..core.relmotion.maneuvers import delta_roe
@@ -44,7 +43,7 @@ from .convert import msg_to_roe, plan_burns, sec_to_time, time_to_sec, twist_lin
 from .diagnostics import WARN, StatusMessages, publish_status
 from .lockstep import Lockstep
 from .managed import ManagedNode
-from .params import ParameterError, declare
+from .params import declare, scenario_of
 
 PLAN_TOPICS = (interfaces.DRIFT_STOP_PLAN_TOPIC, interfaces.ACQUISITION_PLAN_TOPIC)
 MEASURED_PURPOSES = ("collision_avoidance", "ejection_completion")  # burns of a plan made on the measured ejection
@@ -91,10 +90,7 @@ class SafetyMonitorNode(ManagedNode):
         self.j2 = declare(self, "j2")
         self.limits = MonitorLimits(fov_half_r=math.radians(fov_r), fov_half_n=math.radians(fov_n),
                                     **{k: float(v) for k, v in values.items()})
-        try:
-            self.scenario = load_scenario(scenario_file or None)
-        except ConfigError as exc:
-            raise ParameterError(f"parameter 'scenario_file': {exc}") from exc
+        self.scenario = scenario_of(scenario_file)
 
         self.last_truth = -math.inf
         self.last_estimate = -math.inf
